@@ -1,0 +1,69 @@
+"""regrasp: planar multifingered hands that plan feasible contacts, control sliding
+fingertips and regrasp dynamically (after "Dynamic regrasping by sliding")."""
+
+from .collision import UrdfCollisionChecker, segment_hits_polygon
+from .envelope import (
+    Condition,
+    EdgeLine,
+    EnvelopeSample,
+    FingerEnvelope,
+    Geometry,
+    condition_of,
+    reachable_on_line,
+)
+from .exceptions import (
+    FingerModelError,
+    InvalidParameterError,
+    PolygonError,
+    RegraspError,
+    ScenarioError,
+    TrajectoryError,
+    UnknownEdgeError,
+    UnreachableError,
+)
+from .finger import Configuration, Finger, LinkShape
+from .finger_urdf import planar_2r_urdf
+from .planner import FingerPlan, InfeasibleInterval, PlanResult, plan, plan_scenario
+from .polygon import ConvexPolygon, Edge
+from .scenario import FingerContact, Scenario, load_scenario
+from .trajectory import EllipseTrajectory, Trajectory, TrajectorySample, WaypointTrajectory
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Condition",
+    "Configuration",
+    "ConvexPolygon",
+    "Edge",
+    "EdgeLine",
+    "EllipseTrajectory",
+    "EnvelopeSample",
+    "Finger",
+    "FingerContact",
+    "FingerEnvelope",
+    "FingerModelError",
+    "FingerPlan",
+    "Geometry",
+    "InfeasibleInterval",
+    "InvalidParameterError",
+    "LinkShape",
+    "PlanResult",
+    "PolygonError",
+    "RegraspError",
+    "Scenario",
+    "ScenarioError",
+    "Trajectory",
+    "TrajectoryError",
+    "TrajectorySample",
+    "UnknownEdgeError",
+    "UnreachableError",
+    "UrdfCollisionChecker",
+    "WaypointTrajectory",
+    "condition_of",
+    "load_scenario",
+    "plan",
+    "plan_scenario",
+    "planar_2r_urdf",
+    "reachable_on_line",
+    "segment_hits_polygon",
+]

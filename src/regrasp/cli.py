@@ -1,0 +1,152 @@
+"""The ``regrasp`` command line.
+
+``regrasp plan SCENARIO [--json] [--plot DIR] [--samples N] [--geometry ideal|urdf]``
+
+Exit status: 0 when the trajectory is feasible, 1 when it is not (the result is still
+printed), 2 on bad input (a typed error, printed as one line on stderr).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+
+import numpy as np
+
+from .exceptions import RegraspError
+
+__all__ = ["main"]
+
+
+class _ProgressBar:
+    """A one-line progress bar on stderr, drawn only when stderr is a terminal."""
+
+    def __init__(self, label: str, stream=sys.stderr):
+        self.label, self.stream = label, stream
+        self.enabled = stream.isatty()
+        self._last = -1
+
+    def __call__(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        pct = int(100 * done / total)
+        if pct != self._last:
+            self._last = pct
+            bar = "#" * (pct // 4) + "." * (25 - pct // 4)
+            self.stream.write(f"\r{self.label} [{bar}] {pct:3d}%")
+            if done == total:
+                self.stream.write("\n")
+            self.stream.flush()
+
+
+def _condition_runs(times, finger) -> str:
+    parts, start = [], 0
+    conds = [s.condition.value for s in finger.samples]
+    for k in range(1, len(conds) + 1):
+        if k == len(conds) or conds[k] != conds[start]:
+            parts.append(f"{conds[start]} [{times[start]:.2f}, {times[k - 1]:.2f}]")
+            start = k
+    if len(parts) > 6:
+        parts = parts[:3] + [f"... ({len(parts) - 5} more) ..."] + parts[-2:]
+    return " ".join(parts)
+
+
+def _summary(plan, scenario, figures) -> str:
+    times = plan.times
+    mm = 1000.0
+    lines = [
+        f"regrasp plan: {plan.scenario}" + (f" ({scenario.path})" if scenario.path else ""),
+        f"  object: {plan.polygon.n_vertices}-gon, {plan.polygon.mass:.3g} kg; trajectory t in "
+        f"[{times[0]:.4g}, {times[-1]:.4g}] s, {len(times)} samples; geometry: {plan.geometry.value}",
+        "",
+        "  verdict: " + ("FEASIBLE - every finger has a feasible contact at every sample" if plan.feasible
+                         else "INFEASIBLE - some finger has no feasible contact at some samples"),
+        "",
+    ]
+    for f in plan.fingers:
+        widths = np.array([sum(hi - lo for lo, hi in s.feasible) for s in f.samples]) * mm
+        l1, l2 = f.link_lengths
+        lines.append(f"  {f.name}: edge {f.edge}, {f.configuration} configuration, l1 = {l1 * mm:.1f} mm, "
+                     f"l2 = {l2 * mm:.1f} mm")
+        lines.append(f"    conditions: {_condition_runs(times, f)}")
+        lines.append(f"    feasible width [mm]: min {widths.min():.2f}, median {np.median(widths):.2f}, "
+                     f"max {widths.max():.2f} (edge length {(f.samples[0].edge_range[1] - f.samples[0].edge_range[0]) * mm:.1f})")
+        for iv in f.infeasible_intervals:
+            lines.append(f"    infeasible: t in [{iv.start:.3f}, {iv.end:.3f}] s - {iv.reason}")
+        if f.initial_xi is None:
+            lines.append("    initial contact: none (infeasible at the first sample)")
+        else:
+            lines.append(f"    initial contact: xi = {f.initial_xi * mm:.2f} mm, feasible until "
+                         f"t = {f.initial_xi_feasible_until:.3f} s")
+            if f.fixed_grasp:
+                ivs = ", ".join(f"[{lo * mm:.2f}, {hi * mm:.2f}]" for lo, hi in f.fixed_grasp)
+                lines.append(f"    fixed grasp possible for the whole trajectory: xi in {ivs} mm")
+            else:
+                lines.append("    no fixed grasp survives the whole trajectory: the finger must regrasp (slide)")
+        lines.append("")
+    lines.append(f"  planner: {plan.seconds_per_sample * 1e6:.0f} us per finger per sample (median)")
+    if figures:
+        lines.append("  figures: " + ", ".join(str(p) for p in figures))
+    return "\n".join(lines)
+
+
+def _cmd_plan(args) -> int:
+    from .planner import plan_scenario
+    from .scenario import load_scenario
+
+    scenario = load_scenario(args.scenario)
+    progress = _ProgressBar(f"planning {scenario.name}") if not args.json else None
+    result = plan_scenario(scenario, samples=args.samples, geometry=args.geometry, progress=progress)
+    figures = []
+    if args.plot:
+        from .plotting import write_plan_figures
+
+        figures = write_plan_figures(result, args.plot)
+    if args.json:
+        doc = result.to_json_dict()
+        doc["figures"] = [str(p) for p in figures]
+        json.dump(doc, sys.stdout)
+        sys.stdout.write("\n")
+    else:
+        print(_summary(result, scenario, figures))
+    return 0 if result.feasible else 1
+
+
+def _samples(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 2, got {text!r}") from None
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 2, got {value}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="regrasp", description=__doc__.split("\n\n")[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("plan", help="feasibility and contact envelope of an object trajectory (paper §2)",
+                       description="Check a trajectory's feasibility and compute each finger's feasible-contact "
+                                   "envelope. Exit status 0: feasible, 1: infeasible, 2: bad input.")
+    p.add_argument("scenario", help="scenario file (TOML), e.g. examples/scenarios/paper_trajectory_2.toml")
+    p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
+    p.add_argument("--plot", metavar="DIR", help="write d.png, reachable.png and feasible.png into DIR")
+    p.add_argument("--samples", type=_samples, help="number of time samples (default: the scenario's)")
+    p.add_argument("--geometry", choices=("ideal", "urdf"), help="link collision model (default: the scenario's)")
+    p.set_defaults(func=_cmd_plan)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except RegraspError as exc:
+        print(f"regrasp: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,397 @@
+r"""The envelope of feasible contacts of one finger on one edge (paper §2.2).
+
+Frames and parameters (eqs. 2.1.1–2.1.2). Let :math:`o_1` be the finger's first joint
+in the hand frame, :math:`n` the edge's inward normal and :math:`x_i` the edge's ξ origin,
+both mapped to the hand frame by the object pose :math:`X = (x_o, \beta)`:
+:math:`x_i = x_o + R(\beta) c_i`. Then
+
+.. math:: d = (x_i - o_1)^T n, \qquad \lambda = \angle n \text{ in the finger base frame}.
+
+The edge's line is :math:`p(s) = o_1 + d\,n + s\,t` with :math:`t = \perp n` (the ξ
+direction); :math:`s = \xi + s_0` with :math:`s_0 = (x_i - o_1)^T t`.
+
+**Reachable set (Definition 2.1, exact form).** A point :math:`p(s)` is reachable in
+configuration :math:`\sigma` (+1 left, -1 right) iff :math:`|l_1 - l_2| \le r \le l_1 + l_2`
+(:math:`r = |p - o_1| = \sqrt{d^2 + s^2}`) and the elbow of the inverse-kinematics
+solution is not in the open interior half-plane :math:`\{y : n^T (y - o_1) > d\}`. With
+:math:`a = (l_1^2 - l_2^2 + r^2) / 2r` and :math:`h = \sqrt{l_1^2 - a^2}`, the elbow is
+:math:`e = o_1 + a u + \sigma h \perp u` (:math:`u` the unit vector to the tip), and
+:math:`n^T(e - o_1) \le d` reduces to
+
+.. math:: g(s) = \sigma\, s\, K(r) - d\,(l_1^2 - l_2^2 - r^2) \ge 0,\qquad
+          K(r) = \sqrt{((l_1 + l_2)^2 - r^2)(r^2 - (l_1 - l_2)^2)} = 2 r h.
+
+:math:`g` is continuous on the annulus and vanishes only where the elbow lies on the line,
+i.e. where the second link lies on the line: :math:`s = \pm c \pm l_2` with
+:math:`c = \sqrt{l_1^2 - d^2}` (only when :math:`|d| \le l_1`). So the interval ends are among
+
+* :math:`\pm\sqrt{(l_1 + l_2)^2 - d^2}` (full stretch: the paper's ξ1, ξ2, ξ4),
+* :math:`\pm\sqrt{(l_1 - l_2)^2 - d^2}` (full fold, only when :math:`|d| < |l_1 - l_2|`),
+* :math:`\pm c \pm l_2` (second link on the line: ξ3, ξ5, ξ6),
+
+and which of the pieces between them belong to the set is decided by the sign of
+:math:`g` at the piece's midpoint (exact, since :math:`g` has no other zero). For the
+left configuration this gives condition II: :math:`[-S, S]`; III: :math:`[c - l_2, S]`;
+IV: :math:`[l_2 - c, l_2 + c]` (each minus the inner disc when :math:`l_1 \ne l_2`, which may
+split it in two), and the right configuration is the mirror image :math:`s \to -s`.
+Isolated points (zero-length pieces) are dropped. ``docs/derivations.md`` has the
+derivation.
+
+**Feasible set (Definition 2.2).** Reachable, on the actual edge (ξ within the edge's
+range), and no link collides with the object (:mod:`regrasp.collision`). In ``ideal``
+mode link 2 never collides (it lies in the closed outer half-plane of a convex object),
+and link 1 changes between colliding and free only where it passes through a vertex
+:math:`v` (:math:`|v - o_1| \le l_1`): the elbow is then :math:`o_1 + l_1 (v - o_1)/|v - o_1|`
+and the tip is one of the two points of the line at distance :math:`l_2` from it. These
+points (Example 2.2's "limiting vertex") join the breakpoints, and each piece is
+classified at its midpoint. In ``urdf`` mode the pieces of reachable ∩ edge are sampled
+on a grid (plus the ``ideal`` feasible ends) and every change of coal's verdict is
+bisected to ``1e-4`` of the edge length or finer.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+
+from .collision import UrdfCollisionChecker, segment_hits_polygon
+from .exceptions import InvalidParameterError
+from .finger import Finger
+from .intervals import Intervals, intersect, merge
+from .planar import perp, rotation, wrap_angle
+from .polygon import ConvexPolygon
+from .validation import as_finite_array
+
+__all__ = [
+    "Condition",
+    "EdgeLine",
+    "EnvelopeSample",
+    "FingerEnvelope",
+    "Geometry",
+    "condition_of",
+    "reachable_on_line",
+]
+
+
+class Condition(str, Enum):
+    r"""The paper's conditions I–IV on :math:`d` and :math:`l_1` (§2.2).
+
+    I: :math:`d < -l_1`; II: :math:`d > l_1`; III: :math:`0 \le d \le l_1`;
+    IV: :math:`-l_1 \le d < 0`. (The paper uses strict inequalities; the boundaries are
+    assigned to the side written here.)
+    """
+
+    I = "I"  # noqa: E741
+    II = "II"
+    III = "III"
+    IV = "IV"
+
+
+class Geometry(str, Enum):
+    """How links are modelled for collision: segments (``ideal``) or URDF shapes (``urdf``)."""
+
+    IDEAL = "ideal"
+    URDF = "urdf"
+
+
+def condition_of(d: float, l1: float) -> Condition:
+    """The condition (I–IV) for signed line distance ``d`` [m] and first link ``l1`` [m]."""
+    if d < -l1:
+        return Condition.I
+    if d > l1:
+        return Condition.II
+    return Condition.III if d >= 0.0 else Condition.IV
+
+
+def _elbow_margin(s: float, d: float, l1: float, l2: float, sign: int) -> float:
+    """g(s) of the module docstring, or -inf outside the annulus."""
+    r2 = d * d + s * s
+    k2 = ((l1 + l2) ** 2 - r2) * (r2 - (l1 - l2) ** 2)
+    if k2 < 0.0:
+        return -math.inf
+    return sign * s * math.sqrt(k2) - d * (l1 * l1 - l2 * l2 - r2)
+
+
+def reachable_on_line(d: float, l1: float, l2: float, sign: int) -> Intervals:
+    r"""Reachable set (Definition 2.1) on the line at signed distance ``d`` [m], in ``s`` [m].
+
+    ``s`` is measured along :math:`t = \perp n` from the foot of the perpendicular from
+    the first joint; ``sign`` is +1 for the left and -1 for the right configuration.
+    See the module docstring for the closed form.
+    """
+    outer2 = (l1 + l2) ** 2 - d * d
+    if outer2 <= 0.0:
+        return ()
+    big = math.sqrt(outer2)
+    cuts = [-big, big]
+    inner2 = (l1 - l2) ** 2 - d * d
+    if inner2 > 0.0:
+        cuts += [-math.sqrt(inner2), math.sqrt(inner2)]
+    if abs(d) <= l1:
+        c = math.sqrt(l1 * l1 - d * d)
+        cuts += [c + l2, c - l2, -c + l2, -c - l2]
+    cuts = sorted(x for x in cuts if -big <= x <= big)
+    pieces = []
+    for lo, hi in zip(cuts[:-1], cuts[1:]):
+        if hi > lo and _elbow_margin(0.5 * (lo + hi), d, l1, l2, sign) >= 0.0:
+            pieces.append((lo, hi))
+    return merge(pieces)
+
+
+@dataclass(frozen=True)
+class EdgeLine:
+    """The contact edge's line seen from a finger at one object pose (eqs. 2.1.1–2.1.2).
+
+    Attributes:
+        d: Signed distance [m] of the line from the first joint along the inward normal.
+        lam: Angle λ [rad] of the inward normal in the finger's base frame.
+        normal_in_hand: Inward normal n (unit) in the hand frame.
+        tangent_in_hand: ξ direction t = ⊥n (unit) in the hand frame.
+        s0: Line coordinate s [m] of the edge's ξ origin (s = ξ + s0).
+    """
+
+    d: float
+    lam: float
+    normal_in_hand: np.ndarray
+    tangent_in_hand: np.ndarray
+    s0: float
+
+
+@dataclass(frozen=True)
+class EnvelopeSample:
+    """The envelope of one finger on its edge at one object pose.
+
+    All sets are tuples of closed ξ-intervals ``(lo, hi)`` [m] on the edge's ξ axis.
+
+    Attributes:
+        time: Sample time [s].
+        d: Signed line distance [m] (eq. 2.1.2).
+        lam: Inward normal angle λ [rad] in the finger base frame.
+        condition: Condition I–IV.
+        reachable: Reachable set (Definition 2.1) on the edge's whole line.
+        edge_range: ξ range of the actual edge.
+        feasible: Feasible set (Definition 2.2).
+        reason: None when ``feasible`` is non-empty, else why it is empty:
+            ``"condition I"``, ``"out of reach"``, ``"off the edge"`` or ``"collision"``.
+        seconds: Wall time [s] spent computing this sample.
+    """
+
+    time: float
+    d: float
+    lam: float
+    condition: Condition
+    reachable: Intervals
+    edge_range: tuple[float, float]
+    feasible: Intervals
+    reason: str | None
+    seconds: float = 0.0
+
+    @property
+    def is_feasible(self) -> bool:
+        """Whether the feasible set is non-empty."""
+        return bool(self.feasible)
+
+    def margin(self, xi: float) -> float:
+        """Distance [m] from ``xi`` to the nearest bound of the feasible interval holding it
+        (negative: distance to the nearest feasible interval; -inf if none)."""
+        best = -math.inf
+        for lo, hi in self.feasible:
+            best = max(best, min(xi - lo, hi - xi))
+        return best
+
+
+class FingerEnvelope:
+    r"""Computes the feasible-contact envelope of one finger on one polygon edge.
+
+    Build once for a (finger, object, edge) and call :meth:`at` for each object pose.
+
+    Args:
+        finger: The finger (its configuration selects the reachable set).
+        polygon: The object.
+        edge: Index of the contact edge (edge k runs from vertex k to vertex k+1).
+        geometry: ``"ideal"`` (links are segments, closed form) or ``"urdf"`` (the URDF
+            collision shapes against the object with coal).
+        tip_clearance: :math:`\rho` [m] of :mod:`regrasp.collision` (``urdf`` only);
+            default: three times the largest distal-link shape radius.
+        urdf_grid: Grid points per piece of reachable ∩ edge in ``urdf`` mode.
+        urdf_tolerance: Bisection tolerance in ``urdf`` mode, as a fraction of the edge length.
+    """
+
+    def __init__(
+        self,
+        finger: Finger,
+        polygon: ConvexPolygon,
+        edge: int,
+        *,
+        geometry: Geometry | str = Geometry.IDEAL,
+        tip_clearance: float | None = None,
+        urdf_grid: int = 33,
+        urdf_tolerance: float = 5e-5,
+    ):
+        self.finger = finger
+        self.polygon = polygon
+        self.edge = polygon.edge(edge)
+        try:
+            self.geometry = Geometry(geometry)
+        except ValueError:
+            raise InvalidParameterError("geometry", geometry, "'ideal' or 'urdf'") from None
+        if int(urdf_grid) < 2:
+            raise InvalidParameterError("urdf_grid", urdf_grid, "an integer >= 2")
+        if not 0.0 < urdf_tolerance <= 1e-4:
+            raise InvalidParameterError("urdf_tolerance", urdf_tolerance, "a fraction in (0, 1e-4]")
+        self.urdf_grid = int(urdf_grid)
+        self.urdf_tolerance = float(urdf_tolerance)
+        self.l1, self.l2 = finger.link_lengths
+        self.sign = finger.configuration.sign
+        self._eps = 1e-12 * (polygon.scale + self.l1 + self.l2)
+        self.checker: UrdfCollisionChecker | None = None
+        if self.geometry is Geometry.URDF:
+            if tip_clearance is None:
+                radii = [float(getattr(s.geometry, "radius", 0.0)) for s in finger.link_shapes() if s.link == 1]
+                tip_clearance = 3.0 * max(radii, default=0.0)
+            self.checker = UrdfCollisionChecker(finger, polygon, float(tip_clearance))
+        self.tip_clearance = None if self.checker is None else self.checker.tip_clearance
+
+    # ------------------------------------------------------------------ geometry
+    def line(self, pose_object_in_hand) -> EdgeLine:
+        """The edge's line parameters at an object pose ``(x, y, beta)`` in the hand frame."""
+        pose = as_finite_array("pose_object_in_hand", pose_object_in_hand, (3,))
+        rot = rotation(pose[2])
+        normal = rot @ self.edge.inward_normal
+        tangent = perp(normal)
+        rel = pose[:2] + rot @ self.edge.xi_origin - self.finger.joint1_in_hand
+        lam = wrap_angle(math.atan2(normal[1], normal[0]) - self.finger.base_in_hand[2])
+        return EdgeLine(float(rel @ normal), float(lam), normal, tangent, float(rel @ tangent))
+
+    def tip_in_hand(self, line: EdgeLine, s: float) -> np.ndarray:
+        """Point [m] of the edge's line with coordinate ``s``, in the hand frame."""
+        return self.finger.joint1_in_hand + line.d * line.normal_in_hand + s * line.tangent_in_hand
+
+    def elbow_in_hand(self, line: EdgeLine, s: float) -> np.ndarray:
+        """Elbow [m] of the configured IK solution for the tip at ``s`` (inside the annulus)."""
+        o1 = self.finger.joint1_in_hand
+        rel = line.d * line.normal_in_hand + s * line.tangent_in_hand
+        r = math.hypot(rel[0], rel[1])
+        u = rel / r
+        a = (self.l1**2 - self.l2**2 + r * r) / (2.0 * r)
+        h = math.sqrt(max(self.l1**2 - a * a, 0.0))
+        return o1 + a * u + self.sign * h * perp(u)
+
+    def _vertex_breakpoints(self, line: EdgeLine, vertices_in_hand: np.ndarray) -> list[float]:
+        """Tip coordinates s where link 1 passes through a vertex (Example 2.2)."""
+        out = []
+        o1 = self.finger.joint1_in_hand
+        for v in vertices_in_hand:
+            w = v - o1
+            dist = math.hypot(w[0], w[1])
+            if dist == 0.0 or dist > self.l1:
+                continue
+            elbow = self.l1 * w / dist
+            en, et = float(elbow @ line.normal_in_hand), float(elbow @ line.tangent_in_hand)
+            disc = self.l2**2 - (line.d - en) ** 2
+            if disc >= 0.0:
+                root = math.sqrt(disc)
+                out += [et - root, et + root]
+        return out
+
+    def _ideal_free(self, line: EdgeLine, s: float, normals: np.ndarray, offsets: np.ndarray) -> bool:
+        o1 = self.finger.joint1_in_hand
+        elbow = self.elbow_in_hand(line, s)
+        tip = self.tip_in_hand(line, s)
+        return not (
+            segment_hits_polygon(o1, elbow, normals, offsets, eps=self._eps)
+            or segment_hits_polygon(elbow, tip, normals, offsets, eps=self._eps)
+        )
+
+    def _urdf_free(self, line: EdgeLine, s: float, pose: np.ndarray) -> bool:
+        q = self.finger.inverse_kinematics(self.tip_in_hand(line, s))
+        return not self.checker.collides(q, pose)
+
+    def _ideal_feasible(self, line, base: Intervals, pose) -> Intervals:
+        verts = self.polygon.vertices_in(pose)
+        rot = rotation(pose[2])
+        normals = np.array([rot @ e.inward_normal for e in self.polygon.edges])
+        offsets = np.einsum("ij,ij->i", normals, verts)  # n_k . v_k
+        extra = self._vertex_breakpoints(line, verts)
+        pieces = []
+        for lo, hi in base:
+            cuts = sorted({lo, hi, *(x for x in extra if lo < x < hi)})
+            for a, b in zip(cuts[:-1], cuts[1:]):
+                if b > a and self._ideal_free(line, 0.5 * (a + b), normals, offsets):
+                    pieces.append((a, b))
+        return merge(pieces)
+
+    def _urdf_feasible(self, line, base: Intervals, pose, hints: Intervals) -> Intervals:
+        tol = self.urdf_tolerance * self.edge.length
+        hint_points = [x for iv in hints for x in iv]
+        pieces = []
+        for lo, hi in base:
+            grid = set(np.linspace(lo, hi, self.urdf_grid).tolist())
+            grid.update(x for x in hint_points if lo < x < hi)
+            pts = sorted(grid)
+            free = [self._urdf_free(line, s, pose) for s in pts]
+            start = pts[0] if free[0] else None
+            for k in range(1, len(pts)):
+                if free[k] == free[k - 1]:
+                    continue
+                a, b = pts[k - 1], pts[k]  # verdict flips in (a, b): bisect
+                fa = free[k - 1]
+                while b - a > tol:
+                    m = 0.5 * (a + b)
+                    if self._urdf_free(line, m, pose) == fa:
+                        a = m
+                    else:
+                        b = m
+                if fa:  # free -> colliding: close the piece at the free side
+                    pieces.append((start, a))
+                    start = None
+                else:  # colliding -> free: open a piece at the free side
+                    start = b
+            if start is not None:
+                pieces.append((start, pts[-1]))
+        return merge(pieces)
+
+    # ------------------------------------------------------------------ envelope
+    def at(self, pose_object_in_hand, time: float = 0.0) -> EnvelopeSample:
+        """The envelope at one object pose ``(x [m], y [m], beta [rad])`` in the hand frame."""
+        t_start = _time.perf_counter()
+        pose = as_finite_array("pose_object_in_hand", pose_object_in_hand, (3,))
+        line = self.line(pose)
+        condition = condition_of(line.d, self.l1)
+        reach_s = reachable_on_line(line.d, self.l1, self.l2, self.sign)
+        lo_xi, hi_xi = self.edge.xi_range
+        base = intersect(reach_s, ((lo_xi + line.s0, hi_xi + line.s0),))
+        feasible_s = self._ideal_feasible(line, base, pose) if base else ()
+        if self.checker is not None and base:
+            feasible_s = self._urdf_feasible(line, base, pose, feasible_s)
+        if feasible_s:
+            reason = None
+        elif condition is Condition.I:
+            reason = "condition I"
+        elif not reach_s:
+            reason = "out of reach"
+        elif not base:
+            reason = "off the edge"
+        else:
+            reason = "collision"
+        shift = line.s0
+        return EnvelopeSample(
+            time=float(time),
+            d=line.d,
+            lam=line.lam,
+            condition=condition,
+            reachable=tuple((a - shift, b - shift) for a, b in reach_s),
+            edge_range=(lo_xi, hi_xi),
+            feasible=tuple((a - shift, b - shift) for a, b in feasible_s),
+            reason=reason,
+            seconds=_time.perf_counter() - t_start,
+        )
+
+    def tip_at(self, pose_object_in_hand, xi: float) -> np.ndarray:
+        """Tip position [m] in the hand frame for contact ``xi`` [m] at an object pose."""
+        pose = as_finite_array("pose_object_in_hand", pose_object_in_hand, (3,))
+        return pose[:2] + rotation(pose[2]) @ self.edge.point(xi)

@@ -1,0 +1,115 @@
+"""Typed errors raised by regrasp.
+
+Every error the library raises on purpose derives from :class:`RegraspError`;
+subclasses carry the diagnostics a caller needs to fix the input (the file, the
+key, the joint, the offending value) as attributes, not only in the message.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+
+class RegraspError(Exception):
+    """Base class of every error raised by regrasp."""
+
+
+class InvalidParameterError(RegraspError, ValueError):
+    """A numeric argument is out of its domain (negative length, non-finite value...).
+
+    Attributes:
+        name: Name of the parameter.
+        value: The rejected value.
+    """
+
+    def __init__(self, name: str, value: Any, expected: str):
+        self.name = name
+        self.value = value
+        self.expected = expected
+        super().__init__(f"invalid {name} = {value!r}: expected {expected}")
+
+
+class FingerModelError(RegraspError):
+    """A finger model (URDF) is not a planar two-revolute-joint chain we can use.
+
+    Attributes:
+        source: The URDF path (or ``"<model>"`` for an in-memory model).
+        joint: Name of the offending joint or frame, or None when the problem is global.
+    """
+
+    def __init__(self, message: str, *, source: str | Path = "<model>", joint: str | None = None):
+        self.source = str(source)
+        self.joint = joint
+        where = f"{self.source}" + (f", joint '{joint}'" if joint is not None else "")
+        super().__init__(f"{where}: {message}")
+
+
+class UnreachableError(RegraspError, ValueError):
+    """A fingertip target lies outside the finger's workspace annulus.
+
+    Attributes:
+        finger: Finger name.
+        target: The requested tip position [m] in the hand frame.
+        distance: Distance [m] from the first joint to the target.
+        reach: (inner, outer) radii [m] of the workspace annulus.
+    """
+
+    def __init__(self, finger: str, target, distance: float, reach: tuple[float, float]):
+        self.finger = finger
+        self.target = target
+        self.distance = distance
+        self.reach = reach
+        super().__init__(
+            f"finger '{finger}': target {list(map(float, target))} is at {distance:.6g} m from the "
+            f"first joint, outside the reachable annulus [{reach[0]:.6g}, {reach[1]:.6g}] m"
+        )
+
+
+class PolygonError(RegraspError, ValueError):
+    """Polygon vertices do not describe a valid convex polygon.
+
+    Attributes:
+        vertices: The vertices as given.
+        index: Index of the offending vertex, or None.
+    """
+
+    def __init__(self, message: str, *, vertices=None, index: int | None = None):
+        self.vertices = vertices
+        self.index = index
+        super().__init__(message)
+
+
+class UnknownEdgeError(RegraspError, IndexError):
+    """An edge index does not exist on the polygon.
+
+    Attributes:
+        edge: The requested edge index.
+        n_edges: Number of edges of the polygon.
+    """
+
+    def __init__(self, edge: int, n_edges: int):
+        self.edge = edge
+        self.n_edges = n_edges
+        super().__init__(f"edge {edge} does not exist: the polygon has edges 0..{n_edges - 1}")
+
+
+class TrajectoryError(RegraspError, ValueError):
+    """A trajectory is ill-defined (bad waypoints, time outside its domain...)."""
+
+
+class ScenarioError(RegraspError):
+    """A scenario file is malformed.
+
+    Attributes:
+        path: The scenario file.
+        key: Dotted key of the offending entry (``"fingers[1].edge"``), or None.
+        expected: What was expected there.
+    """
+
+    def __init__(self, path: str | Path, key: str | None, expected: str):
+        self.path = str(path)
+        self.key = key
+        self.expected = expected
+        where = f"{self.path}" + (f": key '{key}'" if key else "")
+        super().__init__(f"{where}: {expected}")

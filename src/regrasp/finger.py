@@ -1,0 +1,384 @@
+r"""A planar two-link finger loaded from URDF through Pinocchio.
+
+A finger is a URDF (a serial chain of two revolute joints about z whose links lie in
+the xy-plane, with a ``tip`` frame on the second link) plus its base pose in the hand
+frame plus a configuration:
+
+* ``left``: :math:`-\pi < \theta_2 < 0`, the elbow lies on the left of the ray from the
+  first joint to the fingertip;
+* ``right``: :math:`0 < \theta_2 < \pi`, the elbow lies on the right of that ray.
+
+:math:`\theta_2` is the *geometric* angle from the first link's direction (joint 1 →
+joint 2) to the second link's direction (joint 2 → tip). For URDFs whose links lie
+along x with identity joint origins it equals the joint coordinate ``q2``; otherwise it
+differs by a constant offset read from the model (see :attr:`Finger.theta2_offset`).
+
+All positions are in the hand frame [m]. The caller's ``pin.Model`` is never mutated:
+the finger keeps its own copy with the base pose folded into the first joint's
+placement.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .exceptions import FingerModelError, InvalidParameterError, UnreachableError
+from .planar import se3_from_planar, wrap_angle
+from .validation import as_finite_array
+
+__all__ = ["Configuration", "Finger", "LinkShape"]
+
+_PLANAR_TOL = 1e-9
+
+
+class Configuration(str, Enum):
+    """Elbow configuration of a two-link finger (paper §2.2)."""
+
+    LEFT = "left"
+    RIGHT = "right"
+
+    @property
+    def sign(self) -> int:
+        r"""+1 for left (elbow left of the joint-1→tip ray), -1 for right."""
+        return 1 if self is Configuration.LEFT else -1
+
+    @classmethod
+    def parse(cls, value: "Configuration | str") -> "Configuration":
+        """Accept an enum member or its name (``"left"``/``"right"``)."""
+        if isinstance(value, Configuration):
+            return value
+        try:
+            return cls(str(value).lower())
+        except ValueError:
+            raise InvalidParameterError("configuration", value, "'left' or 'right'") from None
+
+
+@dataclass(frozen=True)
+class LinkShape:
+    """One collision shape of a finger link, from the URDF's collision geometry.
+
+    Attributes:
+        link: 0 for the proximal link (moved by joint 1), 1 for the distal link.
+        name: Geometry object name in the URDF.
+        geometry: The coal collision geometry.
+        placement_in_joint: Placement of the shape in its parent joint frame.
+    """
+
+    link: int
+    name: str
+    geometry: object
+    placement_in_joint: pin.SE3
+
+
+def _planar_angle(placement: pin.SE3) -> float:
+    return float(np.arctan2(placement.rotation[1, 0], placement.rotation[0, 0]))
+
+
+def _is_planar(placement: pin.SE3) -> bool:
+    rot, trans = placement.rotation, placement.translation
+    return (
+        abs(trans[2]) <= _PLANAR_TOL
+        and abs(rot[2, 2] - 1.0) <= _PLANAR_TOL
+        and np.allclose(rot[2, :2], 0.0, atol=_PLANAR_TOL)
+        and np.allclose(rot[:2, 2], 0.0, atol=_PLANAR_TOL)
+    )
+
+
+_JOINT_KIND = {
+    "JointModelRZ": None,
+    "JointModelRUBZ": "is continuous; declare it 'revolute' with limits (a planar finger needs nq = 1 per joint)",
+    "JointModelRX": "rotates about x; a planar finger's joints must rotate about +z",
+    "JointModelRY": "rotates about y; a planar finger's joints must rotate about +z",
+    "JointModelRevoluteUnaligned": "has an axis other than +z; a planar finger's joints must rotate about +z",
+    "JointModelRUBX": "is continuous about x; a planar finger's joints must be revolute about +z",
+    "JointModelRUBY": "is continuous about y; a planar finger's joints must be revolute about +z",
+    "JointModelPX": "is prismatic; a planar 2R finger has revolute joints only",
+    "JointModelPY": "is prismatic; a planar 2R finger has revolute joints only",
+    "JointModelPZ": "is prismatic; a planar 2R finger has revolute joints only",
+    "JointModelPrismaticUnaligned": "is prismatic; a planar 2R finger has revolute joints only",
+}
+
+
+def _validate_model(model: pin.Model, source: str, tip_frame: str) -> None:
+    """Raise FingerModelError unless ``model`` is a planar serial 2R chain with a tip frame."""
+    for jid in range(1, model.njoints):
+        name = model.names[jid]
+        kind = model.joints[jid].shortname()
+        if kind not in _JOINT_KIND:
+            raise FingerModelError(
+                f"joint type {kind} is not supported; a planar 2R finger has revolute joints about +z",
+                source=source,
+                joint=name,
+            )
+        if _JOINT_KIND[kind] is not None:
+            raise FingerModelError(f"this joint {_JOINT_KIND[kind]}", source=source, joint=name)
+        if jid > 2:
+            raise FingerModelError(
+                f"a planar 2R finger has exactly two actuated joints; this is actuated joint number {jid}",
+                source=source,
+                joint=name,
+            )
+        if model.parents[jid] != jid - 1:
+            raise FingerModelError(
+                "the joints do not form a serial chain (this joint hangs off "
+                f"'{model.names[model.parents[jid]]}')",
+                source=source,
+                joint=name,
+            )
+        if not _is_planar(model.jointPlacements[jid]):
+            raise FingerModelError(
+                "the joint origin leaves the xy-plane (non-zero z offset or a roll/pitch rotation)",
+                source=source,
+                joint=name,
+            )
+    if model.njoints != 3:
+        raise FingerModelError(
+            f"a planar 2R finger has exactly two actuated joints; found {model.njoints - 1}", source=source
+        )
+    if not model.existFrame(tip_frame):
+        raise FingerModelError(
+            f"no frame named '{tip_frame}' (add a fixed joint to a link named '{tip_frame}' at the fingertip)",
+            source=source,
+            joint=tip_frame,
+        )
+    frame = model.frames[model.getFrameId(tip_frame)]
+    if frame.parentJoint != 2:
+        raise FingerModelError(
+            f"the tip frame must hang off the second joint, not '{model.names[frame.parentJoint]}'",
+            source=source,
+            joint=tip_frame,
+        )
+    if abs(frame.placement.translation[2]) > _PLANAR_TOL:
+        raise FingerModelError("the tip frame leaves the xy-plane", source=source, joint=tip_frame)
+    if np.linalg.norm(model.jointPlacements[2].translation[:2]) <= _PLANAR_TOL:
+        raise FingerModelError("the first link has zero length", source=source, joint=model.names[2])
+    if np.linalg.norm(frame.placement.translation[:2]) <= _PLANAR_TOL:
+        raise FingerModelError("the second link has zero length", source=source, joint=tip_frame)
+
+
+class Finger:
+    r"""A planar two-link finger: URDF model, base pose in the hand frame and configuration.
+
+    Args:
+        model: The finger's Pinocchio model (copied, never mutated).
+        collision_model: Its collision geometry (copied), or None.
+        base_in_hand: Base pose ``(x [m], y [m], theta [rad])`` in the hand frame; it is
+            composed with the URDF's first joint origin.
+        configuration: ``"left"`` or ``"right"`` (see the module docstring).
+        name: Finger name used in messages and results.
+        tip_frame: Name of the fingertip frame.
+        source: Where the model came from (for error messages).
+    """
+
+    def __init__(
+        self,
+        model: pin.Model,
+        collision_model: pin.GeometryModel | None = None,
+        *,
+        base_in_hand=(0.0, 0.0, 0.0),
+        configuration: Configuration | str = Configuration.LEFT,
+        name: str = "finger",
+        tip_frame: str = "tip",
+        source: str | Path = "<model>",
+    ):
+        self.source = str(source)
+        _validate_model(model, self.source, tip_frame)
+        self.name = str(name)
+        self.configuration = Configuration.parse(configuration)
+        self.base_in_hand = as_finite_array("base_in_hand", base_in_hand, (3,))
+        self.tip_frame = tip_frame
+
+        self._model_unplaced = pin.Model(model)
+        self.model = pin.Model(model)
+        self.model.jointPlacements[1] = se3_from_planar(self.base_in_hand) * self.model.jointPlacements[1]
+        self.data = self.model.createData()
+        self.tip_frame_id = self.model.getFrameId(tip_frame)
+        self.collision_model = collision_model.copy() if collision_model is not None else None
+
+        joint1 = self.model.jointPlacements[1]
+        elbow_in_j1 = self.model.jointPlacements[2].translation[:2].copy()
+        tip_in_j2 = self.model.frames[self.tip_frame_id].placement.translation[:2].copy()
+        #: Position [m] of joint 1's axis in the hand frame.
+        self.joint1_in_hand = joint1.translation[:2].copy()
+        self._l1 = float(np.linalg.norm(elbow_in_j1))
+        self._l2 = float(np.linalg.norm(tip_in_j2))
+        self._alpha1 = float(np.arctan2(elbow_in_j1[1], elbow_in_j1[0]))
+        alpha2 = float(np.arctan2(tip_in_j2[1], tip_in_j2[0]))
+        gamma2 = _planar_angle(self.model.jointPlacements[2])
+        #: Absolute angle [rad] of link 1 at q1 = 0 in the hand frame.
+        self.psi1_offset = _planar_angle(joint1) + self._alpha1
+        #: Geometric elbow angle theta2 [rad] minus q2.
+        self.theta2_offset = float(wrap_angle(gamma2 + alpha2 - self._alpha1))
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_urdf(
+        cls,
+        path: str | Path,
+        *,
+        base_in_hand=(0.0, 0.0, 0.0),
+        configuration: Configuration | str = Configuration.LEFT,
+        name: str | None = None,
+        tip_frame: str = "tip",
+    ) -> "Finger":
+        """Load a finger from a URDF file (kinematics, dynamics and collision geometry)."""
+        path = Path(path)
+        if not path.is_file():
+            raise FingerModelError("URDF file not found", source=path)
+        try:
+            model = pin.buildModelFromUrdf(str(path))
+            geom = pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.COLLISION)
+        except Exception as exc:  # Pinocchio raises bare ValueError/RuntimeError
+            raise FingerModelError(f"Pinocchio could not parse the URDF: {exc}", source=path) from exc
+        return cls(
+            model,
+            geom,
+            base_in_hand=base_in_hand,
+            configuration=configuration,
+            name=name if name is not None else path.stem,
+            tip_frame=tip_frame,
+            source=path,
+        )
+
+    @classmethod
+    def from_urdf_string(
+        cls,
+        urdf: str,
+        *,
+        base_in_hand=(0.0, 0.0, 0.0),
+        configuration: Configuration | str = Configuration.LEFT,
+        name: str = "finger",
+        tip_frame: str = "tip",
+    ) -> "Finger":
+        """Build a finger from URDF text (for generated fingers, see :mod:`regrasp.finger_urdf`)."""
+        try:
+            model = pin.buildModelFromXML(urdf)
+            geom = pin.buildGeomFromUrdfString(model, urdf, pin.GeometryType.COLLISION)
+        except Exception as exc:
+            raise FingerModelError(f"Pinocchio could not parse the URDF: {exc}", source="<string>") from exc
+        return cls(
+            model,
+            geom,
+            base_in_hand=base_in_hand,
+            configuration=configuration,
+            name=name,
+            tip_frame=tip_frame,
+            source="<string>",
+        )
+
+    def with_placement(self, base_in_hand=None, configuration=None, name=None) -> "Finger":
+        """A copy of this finger with another base pose, configuration or name."""
+        return Finger(
+            self._model_unplaced,
+            self.collision_model,
+            base_in_hand=self.base_in_hand if base_in_hand is None else base_in_hand,
+            configuration=self.configuration if configuration is None else configuration,
+            name=self.name if name is None else name,
+            tip_frame=self.tip_frame,
+            source=self.source,
+        )
+
+    # ------------------------------------------------------------------ geometry
+    @property
+    def link_lengths(self) -> tuple[float, float]:
+        """(l1, l2) [m]: joint 1 to joint 2, and joint 2 to the tip frame, read from the model."""
+        return (self._l1, self._l2)
+
+    @property
+    def reach(self) -> tuple[float, float]:
+        """Inner and outer radii [m] of the workspace annulus, |l1 - l2| and l1 + l2."""
+        return (abs(self._l1 - self._l2), self._l1 + self._l2)
+
+    def link_shapes(self) -> tuple[LinkShape, ...]:
+        """The URDF collision shapes of both links (empty if the model has none)."""
+        if self.collision_model is None:
+            return ()
+        return tuple(
+            LinkShape(
+                link=obj.parentJoint - 1,
+                name=obj.name,
+                geometry=obj.geometry,
+                placement_in_joint=obj.placement,
+            )
+            for obj in self.collision_model.geometryObjects
+            if obj.parentJoint in (1, 2)
+        )
+
+    def _check_q(self, q) -> np.ndarray:
+        return as_finite_array("q", q, (2,))
+
+    def theta2(self, q) -> float:
+        """Geometric elbow angle theta2 [rad] in (-pi, pi] for joint positions ``q``."""
+        q = self._check_q(q)
+        return float(wrap_angle(q[1] + self.theta2_offset))
+
+    def configuration_of(self, q) -> Configuration | None:
+        """The configuration ``q`` is in, or None when the finger is stretched or folded."""
+        t2 = self.theta2(q)
+        if 0.0 < -t2 < np.pi:
+            return Configuration.LEFT
+        if 0.0 < t2 < np.pi:
+            return Configuration.RIGHT
+        return None
+
+    def joint_positions_in_hand(self, q) -> np.ndarray:
+        """(3, 2) array [m]: joint 1, joint 2 (elbow) and the tip in the hand frame (closed form)."""
+        q = self._check_q(q)
+        psi1 = self.psi1_offset + q[0]
+        psi2 = psi1 + q[1] + self.theta2_offset
+        o1 = self.joint1_in_hand
+        elbow = o1 + self._l1 * np.array([np.cos(psi1), np.sin(psi1)])
+        tip = elbow + self._l2 * np.array([np.cos(psi2), np.sin(psi2)])
+        return np.stack([o1, elbow, tip])
+
+    def forward_kinematics(self, q) -> np.ndarray:
+        """Tip position [m] in the hand frame, computed by Pinocchio."""
+        q = self._check_q(q)
+        pin.forwardKinematics(self.model, self.data, q)
+        return pin.updateFramePlacement(self.model, self.data, self.tip_frame_id).translation[:2].copy()
+
+    def tip_jacobian(self, q) -> np.ndarray:
+        r"""The 2x2 tip Jacobian :math:`J = \partial p_{tip} / \partial q` [m/rad] in the hand frame."""
+        q = self._check_q(q)
+        jac = pin.computeFrameJacobian(self.model, self.data, q, self.tip_frame_id, pin.LOCAL_WORLD_ALIGNED)
+        return jac[:2, :].copy()
+
+    def inverse_kinematics(self, tip_in_hand) -> np.ndarray:
+        r"""Joint positions ``q`` [rad] that put the tip at ``tip_in_hand`` in this configuration.
+
+        Closed form: with :math:`r = p - o_1`,
+        :math:`\cos\theta_2 = (|r|^2 - l_1^2 - l_2^2) / (2 l_1 l_2)`, :math:`\theta_2 = -\sigma
+        \arccos(\cdot)` (:math:`\sigma = +1` left, :math:`-1` right) and
+        :math:`\psi_1 = \mathrm{atan2}(r) - \mathrm{atan2}(l_2 \sin\theta_2, l_1 + l_2\cos\theta_2)`.
+        Angles are wrapped to (-pi, pi]; joint limits are not applied.
+
+        Raises:
+            UnreachableError: the target is outside the annulus |l1 - l2| <= |r| <= l1 + l2
+                (a relative slack of 1e-12 is accepted and clamped onto the boundary).
+        """
+        target = as_finite_array("tip_in_hand", tip_in_hand, (2,))
+        r = target - self.joint1_in_hand
+        dist = float(np.hypot(r[0], r[1]))
+        l1, l2 = self._l1, self._l2
+        inner, outer = self.reach
+        slack = 1e-12 * outer
+        if dist > outer + slack or dist < inner - slack:
+            raise UnreachableError(self.name, target, dist, (inner, outer))
+        cos2 = np.clip((dist**2 - l1**2 - l2**2) / (2.0 * l1 * l2), -1.0, 1.0)
+        theta2 = -self.configuration.sign * float(np.arccos(cos2))
+        psi1 = float(np.arctan2(r[1], r[0]) - np.arctan2(l2 * np.sin(theta2), l1 + l2 * np.cos(theta2)))
+        q1 = wrap_angle(psi1 - self.psi1_offset)
+        q2 = wrap_angle(theta2 - self.theta2_offset)
+        return np.array([q1, q2])
+
+    def __repr__(self) -> str:
+        l1, l2 = self.link_lengths
+        return (
+            f"Finger(name={self.name!r}, l1={l1:.4g} m, l2={l2:.4g} m, "
+            f"base_in_hand={self.base_in_hand.tolist()}, configuration={self.configuration.value!r})"
+        )

@@ -1,0 +1,66 @@
+"""Finite unions of closed intervals on the real line, as sorted tuples of (lo, hi).
+
+An interval set is a ``tuple[tuple[float, float], ...]`` with ``lo < hi`` in every
+pair, sorted and pairwise disjoint; ``()`` is the empty set. These small functions
+keep that invariant; they are used for contact envelopes in ξ [m].
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+Intervals = tuple[tuple[float, float], ...]
+
+__all__ = [
+    "Intervals",
+    "contains",
+    "intersect",
+    "merge",
+    "total_length",
+    "widest",
+]
+
+
+def merge(pieces: Iterable[tuple[float, float]], *, gap: float = 0.0) -> Intervals:
+    """Union of ``pieces``; pieces closer than ``gap`` are joined, empty ones dropped."""
+    items = sorted((float(lo), float(hi)) for lo, hi in pieces if hi > lo)
+    out: list[list[float]] = []
+    for lo, hi in items:
+        if out and lo <= out[-1][1] + gap:
+            out[-1][1] = max(out[-1][1], hi)
+        else:
+            out.append([lo, hi])
+    return tuple((lo, hi) for lo, hi in out)
+
+
+def intersect(a: Intervals, b: Intervals) -> Intervals:
+    """Intersection of two interval sets."""
+    out = []
+    i = j = 0
+    while i < len(a) and j < len(b):
+        lo = max(a[i][0], b[j][0])
+        hi = min(a[i][1], b[j][1])
+        if hi > lo:
+            out.append((lo, hi))
+        if a[i][1] < b[j][1]:
+            i += 1
+        else:
+            j += 1
+    return tuple(out)
+
+
+def contains(a: Intervals, x: float, *, tol: float = 0.0) -> bool:
+    """Whether ``x`` lies in ``a`` (closed intervals, widened by ``tol``)."""
+    return any(lo - tol <= x <= hi + tol for lo, hi in a)
+
+
+def total_length(a: Intervals) -> float:
+    """Sum of the interval lengths."""
+    return float(sum(hi - lo for lo, hi in a))
+
+
+def widest(a: Intervals) -> tuple[float, float] | None:
+    """The widest interval of ``a`` (the first one on ties), or None if ``a`` is empty."""
+    if not a:
+        return None
+    return max(a, key=lambda iv: iv[1] - iv[0])

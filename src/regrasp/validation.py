@@ -1,0 +1,41 @@
+"""Argument checks that raise typed errors (never ``assert``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .exceptions import InvalidParameterError
+
+
+def as_finite_array(name: str, value, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    """``value`` as a float array of the given shape with only finite entries."""
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(name, value, "an array of numbers") from exc
+    if shape is not None:
+        if len(shape) != arr.ndim or any(s != -1 and s != a for s, a in zip(shape, arr.shape)):
+            want = "x".join("n" if s == -1 else str(s) for s in shape)
+            raise InvalidParameterError(name, value, f"an array of shape ({want})")
+    if not np.all(np.isfinite(arr)):
+        raise InvalidParameterError(name, value, "finite numbers (no NaN or inf)")
+    return arr
+
+
+def as_finite_float(name: str, value) -> float:
+    """``value`` as a finite float."""
+    try:
+        out = float(value)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(name, value, "a number") from exc
+    if not np.isfinite(out):
+        raise InvalidParameterError(name, value, "a finite number")
+    return out
+
+
+def as_positive_float(name: str, value, *, allow_zero: bool = False) -> float:
+    """``value`` as a finite float > 0 (or >= 0 with ``allow_zero``)."""
+    out = as_finite_float(name, value)
+    if out < 0.0 or (out == 0.0 and not allow_zero):
+        raise InvalidParameterError(name, value, ">= 0" if allow_zero else "> 0")
+    return out
