@@ -617,6 +617,40 @@ def test_branch_extra_joint_from_the_base(tmp_path):
     expect_model_error(tmp_path, text, model.names[3])
 
 
+@pytest.mark.parametrize("n_revolute", [0, 1])
+def test_too_few_joints(tmp_path, n_revolute):
+    joints = [joint_xml("joint1", "base", "link1", jtype="revolute" if n_revolute else "fixed")]
+    joints.append(joint_xml("tip_joint", "link1", "tip", jtype="fixed", xyz=(0.1, 0, 0)))
+    text = robot_xml(joints, [link_xml("base", None), link_xml("link1"), link_xml("tip", None)])
+    assert pin.buildModelFromXML(text).njoints == 1 + n_revolute
+    expect_model_error(tmp_path, text, None, f"found {n_revolute}")
+
+
+def test_direct_construction_from_a_model_without_geometry():
+    model = pin.buildModelFromUrdf(str(shipped_path(SHIPPED_NAMES[0])))
+    finger = Finger(model, base_in_hand=[0.01, 0.0, 0.0])
+    assert finger.source == "<model>"
+    assert finger.link_shapes() == ()
+    assert finger.collision_model is None
+    bad = pin.Model(model)
+    bad.jointPlacements[2] = pin.SE3(np.eye(3), np.array([0.12, 0.0, 0.003]))
+    with pytest.raises(FingerModelError) as info:
+        Finger(bad, source="hand.urdf")
+    assert info.value.joint == "joint2" and "hand.urdf" in str(info.value)
+
+
+@pytest.mark.parametrize("j1", OFFSET_J1_VARIANTS)
+def test_unreachable_with_geometry_offsets(j1):
+    rng = np.random.default_rng(20)
+    finger = Finger.from_urdf_string(offset_urdf(j1), base_in_hand=(0.02, 0.03, -0.4))
+    o1, _, _ = planar_chain((0.02, 0.03, -0.4), j1, OFFSET_J2, OFFSET_TIP, (0.0, 0.0))
+    np.testing.assert_allclose(finger.joint1_in_hand, o1, rtol=0, atol=1e-16)
+    for target, dist in _unreachable_cases(finger, rng):
+        with pytest.raises(UnreachableError) as info:
+            finger.inverse_kinematics(target)
+        assert info.value.distance == pytest.approx(dist, rel=1e-12, abs=1e-17)
+
+
 def test_bad_configuration_string():
     path = shipped_path(SHIPPED_NAMES[0])
     for bad in ("up", "", "l", None, 3):

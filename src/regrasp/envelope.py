@@ -29,13 +29,12 @@ i.e. where the second link lies on the line: :math:`s = \pm c \pm l_2` with
 * :math:`\pm\sqrt{(l_1 - l_2)^2 - d^2}` (full fold, only when :math:`|d| < |l_1 - l_2|`),
 * :math:`\pm c \pm l_2` (second link on the line: ξ3, ξ5, ξ6),
 
-and which of the pieces between them belong to the set is decided by the sign of
-:math:`g` at the piece's midpoint (exact, since :math:`g` has no other zero). For the
-left configuration this gives condition II: :math:`[-S, S]`; III: :math:`[c - l_2, S]`;
+and the sign of :math:`g` between them selects the pieces. For the left configuration
+this gives condition II: :math:`[-S, S]`; III: :math:`[c - l_2, S] \cup [-S, -c - l_2]`;
 IV: :math:`[l_2 - c, l_2 + c]` (each minus the inner disc when :math:`l_1 \ne l_2`, which may
-split it in two), and the right configuration is the mirror image :math:`s \to -s`.
-Isolated points (zero-length pieces) are dropped. ``docs/derivations.md`` has the
-derivation.
+split it in two), and the right configuration is the mirror image :math:`s \to -s`
+(:func:`reachable_on_line`). Isolated points (zero-length pieces) are dropped.
+``docs/derivations.md`` has the derivation.
 
 **Feasible set (Definition 2.2).** Reachable, on the actual edge (ξ within the edge's
 range), and no link collides with the object (:mod:`regrasp.collision`). In ``ideal``
@@ -73,6 +72,7 @@ __all__ = [
     "FingerEnvelope",
     "Geometry",
     "condition_of",
+    "elbow_margin",
     "reachable_on_line",
 ]
 
@@ -107,8 +107,13 @@ def condition_of(d: float, l1: float) -> Condition:
     return Condition.III if d >= 0.0 else Condition.IV
 
 
-def _elbow_margin(s: float, d: float, l1: float, l2: float, sign: int) -> float:
-    """g(s) of the module docstring, or -inf outside the annulus."""
+def elbow_margin(s: float, d: float, l1: float, l2: float, sign: int) -> float:
+    r"""The reachability function :math:`g(s)` of the module docstring (-inf outside the annulus).
+
+    :math:`g(s) \ge 0` iff the elbow of the configured IK solution for the tip at line
+    coordinate ``s`` is not in the open interior half-plane. Kept as an independent
+    check of :func:`reachable_on_line`.
+    """
     r2 = d * d + s * s
     k2 = ((l1 + l2) ** 2 - r2) * (r2 - (l1 - l2) ** 2)
     if k2 < 0.0:
@@ -121,24 +126,34 @@ def reachable_on_line(d: float, l1: float, l2: float, sign: int) -> Intervals:
 
     ``s`` is measured along :math:`t = \perp n` from the foot of the perpendicular from
     the first joint; ``sign`` is +1 for the left and -1 for the right configuration.
-    See the module docstring for the closed form.
+    With :math:`S = \sqrt{(l_1 + l_2)^2 - d^2}`, :math:`c = \sqrt{l_1^2 - d^2}` and
+    :math:`S_{in} = \sqrt{(l_1 - l_2)^2 - d^2}`, for the left configuration:
+
+    * I (:math:`d < -l_1`): empty;
+    * II (:math:`d > l_1`): :math:`[-S, S]` (ξ1, ξ2);
+    * III (:math:`0 \le d \le l_1`): :math:`[c - l_2, S]` (ξ3, ξ4) and the sliver
+      :math:`[-S, -c - l_2]` near full stretch on the other side;
+    * IV (:math:`-l_1 \le d < 0`): :math:`[l_2 - c, l_2 + c]` (ξ5, ξ6);
+
+    each minus the open inner disc :math:`(-S_{in}, S_{in})` when :math:`|d| < |l_1 - l_2|`
+    (which can split an interval in two). The right configuration is the mirror image
+    :math:`s \to -s`. Zero-length pieces are dropped.
     """
     outer2 = (l1 + l2) ** 2 - d * d
-    if outer2 <= 0.0:
+    if outer2 <= 0.0 or d < -l1:
         return ()
     big = math.sqrt(outer2)
-    cuts = [-big, big]
+    if d > l1:
+        pieces = [(-big, big)]
+    else:
+        c = math.sqrt(l1 * l1 - d * d)
+        pieces = [(c - l2, big), (-big, -c - l2)] if d >= 0.0 else [(l2 - c, l2 + c)]
     inner2 = (l1 - l2) ** 2 - d * d
     if inner2 > 0.0:
-        cuts += [-math.sqrt(inner2), math.sqrt(inner2)]
-    if abs(d) <= l1:
-        c = math.sqrt(l1 * l1 - d * d)
-        cuts += [c + l2, c - l2, -c + l2, -c - l2]
-    cuts = sorted(x for x in cuts if -big <= x <= big)
-    pieces = []
-    for lo, hi in zip(cuts[:-1], cuts[1:]):
-        if hi > lo and _elbow_margin(0.5 * (lo + hi), d, l1, l2, sign) >= 0.0:
-            pieces.append((lo, hi))
+        hole = math.sqrt(inner2)
+        pieces = [p for lo, hi in pieces for p in ((lo, min(hi, -hole)), (max(lo, hole), hi))]
+    if sign < 0:
+        pieces = [(-hi, -lo) for lo, hi in pieces]
     return merge(pieces)
 
 

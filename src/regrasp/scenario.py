@@ -56,7 +56,7 @@ from typing import Any
 import numpy as np
 
 from .envelope import Geometry
-from .exceptions import RegraspError, ScenarioError
+from .exceptions import InvalidParameterError, RegraspError, ScenarioError
 from .finger import Finger
 from .polygon import ConvexPolygon
 from .trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
@@ -166,6 +166,9 @@ def _wrap(reader: _Reader, name: str | None, build):
     except ScenarioError:
         raise
     except RegraspError as exc:
+        param = getattr(exc, "name", None)
+        if isinstance(exc, InvalidParameterError) and param in reader.table:
+            name = param  # e.g. a negative mass is reported at object.mass
         raise reader.fail(name, str(exc)) from exc
 
 
