@@ -146,11 +146,15 @@ class UrdfCollisionChecker:
         self._request.enable_signed_distance = True
         self._result = coal.DistanceResult()
 
-    def signed_distances(self, q: np.ndarray, pose_object_in_hand: np.ndarray) -> np.ndarray:
-        """Signed distance [m] of each kept shape to the object (negative: penetration)."""
+    def signed_distances(self, q: np.ndarray, pose_object_in_hand: np.ndarray | pin.SE3) -> np.ndarray:
+        """Signed distance [m] of each kept shape to the object (negative: penetration).
+
+        ``pose_object_in_hand`` is the planar pose (x, y, beta) or its ``pin.SE3``.
+        """
         model, data = self.finger.model, self.finger.data
         pin.forwardKinematics(model, data, q)
-        object_placement = se3_from_planar(pose_object_in_hand)
+        object_placement = (pose_object_in_hand if isinstance(pose_object_in_hand, pin.SE3)
+                            else se3_from_planar(pose_object_in_hand))
         out = np.empty(len(self.shapes))
         for i, shape in enumerate(self.shapes):
             placement = data.oMi[shape.link + 1] * shape.placement_in_joint
@@ -159,6 +163,6 @@ class UrdfCollisionChecker:
                                    self._request, self._result)
         return out
 
-    def collides(self, q: np.ndarray, pose_object_in_hand: np.ndarray) -> bool:
+    def collides(self, q: np.ndarray, pose_object_in_hand: np.ndarray | pin.SE3) -> bool:
         """Whether any link shape penetrates the object."""
         return bool(np.min(self.signed_distances(q, pose_object_in_hand), initial=np.inf) < 0.0)

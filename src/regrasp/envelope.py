@@ -61,7 +61,7 @@ from .collision import UrdfCollisionChecker, segment_hits_polygon
 from .exceptions import InvalidParameterError
 from .finger import Finger
 from .intervals import Intervals, intersect, merge
-from .planar import perp, rotation, wrap_angle
+from .planar import perp, rotation, se3_from_planar, wrap_angle
 from .polygon import ConvexPolygon
 from .validation import as_finite_array
 
@@ -322,9 +322,9 @@ class FingerEnvelope:
             or segment_hits_polygon(elbow, tip, normals, offsets, eps=self._eps)
         )
 
-    def _urdf_free(self, line: EdgeLine, s: float, pose: np.ndarray) -> bool:
-        q = self.finger.inverse_kinematics(self.tip_in_hand(line, s))
-        return not self.checker.collides(q, pose)
+    def _urdf_free(self, line: EdgeLine, s: float, object_placement) -> bool:
+        q = self.finger.joint_positions_from_points(self.elbow_in_hand(line, s), self.tip_in_hand(line, s))
+        return not self.checker.collides(q, object_placement)
 
     def _ideal_feasible(self, line, base: Intervals, pose) -> Intervals:
         verts = self.polygon.vertices_in(pose)
@@ -342,13 +342,14 @@ class FingerEnvelope:
 
     def _urdf_feasible(self, line, base: Intervals, pose, hints: Intervals) -> Intervals:
         tol = self.urdf_tolerance * self.edge.length
+        placement = se3_from_planar(pose)
         hint_points = [x for iv in hints for x in iv]
         pieces = []
         for lo, hi in base:
             grid = set(np.linspace(lo, hi, self.urdf_grid).tolist())
             grid.update(x for x in hint_points if lo < x < hi)
             pts = sorted(grid)
-            free = [self._urdf_free(line, s, pose) for s in pts]
+            free = [self._urdf_free(line, s, placement) for s in pts]
             start = pts[0] if free[0] else None
             for k in range(1, len(pts)):
                 if free[k] == free[k - 1]:
@@ -357,7 +358,7 @@ class FingerEnvelope:
                 fa = free[k - 1]
                 while b - a > tol:
                     m = 0.5 * (a + b)
-                    if self._urdf_free(line, m, pose) == fa:
+                    if self._urdf_free(line, m, placement) == fa:
                         a = m
                     else:
                         b = m

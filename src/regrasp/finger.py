@@ -376,6 +376,19 @@ class Finger:
         q2 = wrap_angle(theta2 - self.theta2_offset)
         return np.array([q1, q2])
 
+    def joint_positions_from_points(self, elbow_in_hand: np.ndarray, tip_in_hand: np.ndarray) -> np.ndarray:
+        """Joint positions q [rad] that place the elbow and the tip at the given points.
+
+        The points must be consistent (|elbow - joint 1| = l1, |tip - elbow| = l2); this is
+        the cheap inverse of :meth:`joint_positions_in_hand` used on hot paths where the
+        elbow is already known, and it does not validate its input.
+        """
+        v1 = elbow_in_hand - self.joint1_in_hand
+        v2 = tip_in_hand - elbow_in_hand
+        psi1 = np.arctan2(v1[1], v1[0])
+        psi2 = np.arctan2(v2[1], v2[0])
+        return np.array([wrap_angle(psi1 - self.psi1_offset), wrap_angle(psi2 - psi1 - self.theta2_offset)])
+
     def __repr__(self) -> str:
         l1, l2 = self.link_lengths
         return (

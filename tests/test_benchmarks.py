@@ -1,0 +1,19 @@
+"""The benchmarks run (quick mode) and their built-in correctness check passes. No timing assertions."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+def test_planner_benchmark_quick_smoke():
+    proc = subprocess.run([sys.executable, str(BENCH / "bench_planner.py"), "--quick", "--json"],
+                          capture_output=True, text=True, timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    for mode in ("ideal", "urdf", "brute_force"):
+        assert doc[mode]["median_us"] > 0
+    assert set(doc["ratios"]) == {"brute_over_urdf", "brute_over_ideal", "urdf_over_ideal"}
+    assert doc["check"]["ok"] is True and doc["check"]["max_diff_steps"] <= doc["check"]["allowed_steps"]
