@@ -352,3 +352,23 @@ def test_urdf_mode_needs_collision_geometry(with_link1_collision):
     sample = FingerEnvelope(finger, sc["rect"], 1).at(sc["pose"])
     assert sample.condition is Condition.IV
     assert sample.feasible
+
+
+def test_default_tip_clearance_for_a_box_distal_link():
+    """A box-shaped distal link gets a non-zero default clearance (3 x its middle half-side), so
+    its end face does not straddle the edge and the urdf envelope is not empty."""
+    from regrasp import ConvexPolygon, Finger, FingerEnvelope
+    from regrasp.finger_urdf import planar_2r_urdf
+
+    box = '<geometry><box size="0.045 0.010 0.008"/></geometry>'
+    text = planar_2r_urdf(0.12, 0.045, radius1=0.006, radius2=0.005)
+    head, tail = text.split('<link name="link2">')
+    tail = tail.replace('<geometry><cylinder radius="0.005" length="0.045"/></geometry>', box)
+    tail = tail.replace('rpy="0 1.5707963267948966 0"', 'rpy="0 0 0"')
+    finger = Finger.from_urdf_string(head + '<link name="link2">' + tail, base_in_hand=(-0.05, 0.0, np.pi / 2))
+    rect = ConvexPolygon.rectangle(0.10, 0.04, mass=0.08)
+    env = FingerEnvelope(finger, rect, 1, geometry="urdf")
+    assert env.tip_clearance == pytest.approx(3 * 0.005)
+    sample = env.at(np.array([0.03, 0.12, 0.0]))
+    ideal = FingerEnvelope(finger, rect, 1).at(np.array([0.03, 0.12, 0.0]))
+    assert sample.feasible and sample.feasible[0][1] - sample.feasible[0][0] > 0.5 * (ideal.feasible[0][1] - ideal.feasible[0][0])

@@ -219,6 +219,15 @@ class EnvelopeSample:
         return best
 
 
+def _half_width(geometry) -> float:
+    """Half the thickness [m] of a link shape across the link: a radius, or a box's middle half-side."""
+    if hasattr(geometry, "radius"):
+        return float(geometry.radius)
+    if hasattr(geometry, "halfSide"):
+        return float(sorted(np.asarray(geometry.halfSide, dtype=float))[1])
+    return 0.0
+
+
 class FingerEnvelope:
     r"""Computes the feasible-contact envelope of one finger on one polygon edge.
 
@@ -231,7 +240,8 @@ class FingerEnvelope:
         geometry: ``"ideal"`` (links are segments, closed form) or ``"urdf"`` (the URDF
             collision shapes against the object with coal).
         tip_clearance: :math:`\rho` [m] of :mod:`regrasp.collision` (``urdf`` only);
-            default: three times the largest distal-link shape radius.
+            default: three times the distal link's half-width (a cylinder's or capsule's
+            radius, a box's middle half-side).
         urdf_grid: Grid points per piece of reachable ∩ edge in ``urdf`` mode.
         urdf_tolerance: Bisection tolerance in ``urdf`` mode, as a fraction of the edge length.
     """
@@ -266,8 +276,8 @@ class FingerEnvelope:
         self.checker: UrdfCollisionChecker | None = None
         if self.geometry is Geometry.URDF:
             if tip_clearance is None:
-                radii = [float(getattr(s.geometry, "radius", 0.0)) for s in finger.link_shapes() if s.link == 1]
-                tip_clearance = 3.0 * max(radii, default=0.0)
+                tip_clearance = 3.0 * max((_half_width(s.geometry) for s in finger.link_shapes() if s.link == 1),
+                                          default=0.0)
             self.checker = UrdfCollisionChecker(finger, polygon, float(tip_clearance))
         self.tip_clearance = None if self.checker is None else self.checker.tip_clearance
 
