@@ -17,14 +17,20 @@ from .exceptions import (
     PolygonError,
     RegraspError,
     ScenarioError,
+    SingularFingerError,
+    SlidingContactCountError,
     TrajectoryError,
     UnknownEdgeError,
     UnreachableError,
 )
 from .finger import Configuration, Finger, LinkShape
 from .finger_urdf import planar_2r_urdf
+from .grasp import ContactMode, Grasp
+from .hand import Hand, HandDynamics
 from .planner import FingerPlan, InfeasibleInterval, PlanResult, plan, plan_scenario
+from .plant import Plant, PlantContact, PlantEvent, PlantState, PlantStep
 from .polygon import ConvexPolygon, Edge
+from .reduced import ReducedModel, ReducedState
 from .scenario import FingerContact, Scenario, load_scenario
 from .trajectory import EllipseTrajectory, Trajectory, TrajectorySample, WaypointTrajectory
 
@@ -33,6 +39,7 @@ __version__ = "0.1.0"
 __all__ = [
     "Condition",
     "Configuration",
+    "ContactMode",
     "ConvexPolygon",
     "Edge",
     "EdgeLine",
@@ -44,14 +51,26 @@ __all__ = [
     "FingerModelError",
     "FingerPlan",
     "Geometry",
+    "Grasp",
+    "Hand",
+    "HandDynamics",
     "InfeasibleInterval",
     "InvalidParameterError",
     "LinkShape",
     "PlanResult",
+    "Plant",
+    "PlantContact",
+    "PlantEvent",
+    "PlantState",
+    "PlantStep",
     "PolygonError",
+    "ReducedModel",
+    "ReducedState",
     "RegraspError",
     "Scenario",
     "ScenarioError",
+    "SingularFingerError",
+    "SlidingContactCountError",
     "Trajectory",
     "TrajectoryError",
     "TrajectorySample",

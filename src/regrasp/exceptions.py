@@ -113,3 +113,41 @@ class ScenarioError(RegraspError):
         self.expected = expected
         where = f"{self.path}" + (f": key '{key}'" if key else "")
         super().__init__(f"{where}: {expected}")
+
+
+class SlidingContactCountError(RegraspError, ValueError):
+    """Too many sliding contacts: the sliding grasp needs 2m >= 3 + p (paper Remark 3.2).
+
+    Attributes:
+        m: Number of fingers (contacts).
+        p: Number of sliding contacts.
+    """
+
+    def __init__(self, m: int, p: int):
+        self.m = m
+        self.p = p
+        super().__init__(
+            f"{p} sliding contact(s) with {m} finger(s): the grasp needs 2m >= 3 + p (Remark 3.2), "
+            f"so at most {max(2 * m - 3, 0)} contact(s) may slide at once"
+        )
+
+
+class SingularFingerError(RegraspError):
+    """A finger's tip Jacobian is (nearly) singular, so H = J^-1 [...] does not exist.
+
+    Attributes:
+        finger: Finger name.
+        q: The finger's joint positions [rad].
+        condition: Condition number of its 2x2 tip Jacobian.
+        threshold: The threshold it exceeded.
+    """
+
+    def __init__(self, finger: str, q, condition: float, threshold: float):
+        self.finger = finger
+        self.q = q
+        self.condition = condition
+        self.threshold = threshold
+        super().__init__(
+            f"finger '{finger}' is singular at q = {list(map(float, q))}: its tip Jacobian has condition "
+            f"number {condition:.3g} > {threshold:.3g} (stretched or folded)"
+        )

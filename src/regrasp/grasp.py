@@ -1,0 +1,207 @@
+r"""Contacts on a polygon and the grasp matrices of paper §3.1 and §3.4.
+
+A grasp is m contacts, one per finger, each on an object edge and either ``fixed`` (the
+fingertip stays at one point of the object) or ``sliding`` (it moves along the edge).
+Contact i sits at :math:`c_i(\xi_i) = o_i + \xi_i t^o_i` in the object frame (the edge's ξ
+origin and direction, :mod:`regrasp.polygon`). In the hand frame, with
+:math:`R = R(\beta)`:
+
+* lever arm :math:`r_i = R c_i(\xi_i)` (from the centre of mass to the contact);
+* surface frame :math:`R_{fi} = R\,[n^o_i\ t^o_i] = [n_i\ t_i]` (x = inward normal,
+  y = tangent = ξ direction; a proper rotation, :math:`t_i = \perp n_i`).
+
+Velocity of the contact point, for :math:`\dot X = (v_o, \omega)` (eqs. 3.1.2–3.1.4):
+
+.. math:: \dot x_{ci} = v_o + \omega \perp r_i + t_i \dot\xi_i
+          = U_i^T \dot X + R_{fi} B_{vi} \dot\xi_i,\qquad
+          U_i^T = [\,I_2 \mid \perp r_i\,],\ B_{vi} = (0, 1)^T.
+
+(:math:`\dot R R^T = \omega [[0, -1], [1, 0]] = \omega\perp`: the paper's ``ω×`` matrix has the
+opposite sign.) The grasp matrix :math:`G = [U_1 \dots U_m] \in \mathbb R^{3 \times 2m}` maps
+contact forces on the object (hand frame) to the wrench at the centre of mass:
+:math:`G f = \sum_i (f_i,\ r_i \times f_i)`. ``R_f`` is block-diagonal with :math:`R_{fi}` for
+sliding contacts and :math:`I_2` for fixed ones, :math:`B_v \in \mathbb R^{2m \times p}` has a
+:math:`(0, 1)^T` block per sliding contact (eq. 3.1.7). Contacts keep the fingers' order;
+the paper lists sliding contacts first, which only permutes rows.
+
+Friction (§3.4): a sliding contact's force on the object is
+:math:`f_i = R_{fi} B_{fi} \eta_i`, :math:`B_{fi} = (1, \mathrm{sign}(\dot\xi_i)\mu)^T`
+(eq. 3.4.1: the fingertip drags the object along its sliding direction), a fixed one is
+:math:`f_i = \eta_i \in \mathbb R^2`; :math:`G_f = G R_f B_f` (3.4.5) and, for m = 2, p = 1,
+:math:`P = B_v^T B_f G_f^{-1}` (3.4.9) gives the friction force
+:math:`f_\xi = P (M_o \ddot X - f_g)`.
+
+Time derivatives are exact (no numerical differentiation):
+:math:`\dot r_i = \omega \perp r_i + t_i \dot\xi_i`, :math:`\dot U_i^T = [\,0 \mid \perp\dot r_i\,]`,
+:math:`\dot R_{fi} = \omega \perp R_{fi}`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from enum import Enum
+
+import numpy as np
+
+from .exceptions import InvalidParameterError, SlidingContactCountError
+from .planar import perp, rotation
+from .polygon import ConvexPolygon
+from .validation import as_finite_array
+
+__all__ = ["ContactMode", "Grasp"]
+
+
+class ContactMode(str, Enum):
+    """How a fingertip touches the object."""
+
+    FIXED = "fixed"
+    SLIDING = "sliding"
+
+
+class Grasp:
+    r"""m contacts on a polygon's edges, each fixed or sliding, and their matrices.
+
+    Args:
+        polygon: The object.
+        edges: Edge index of each contact (one per finger, in finger order).
+        modes: ``"fixed"`` or ``"sliding"`` per contact.
+
+    Raises:
+        SlidingContactCountError: when :math:`2m < 3 + p` (Remark 3.2).
+    """
+
+    def __init__(self, polygon: ConvexPolygon, edges: Sequence[int], modes: Sequence[ContactMode | str]):
+        if len(edges) != len(modes) or len(edges) == 0:
+            raise InvalidParameterError("modes", modes, f"one mode per contact ({len(edges)} edges)")
+        try:
+            self.modes = tuple(ContactMode(m) for m in modes)
+        except ValueError:
+            raise InvalidParameterError("modes", modes, "'fixed' or 'sliding' for each contact") from None
+        self.polygon = polygon
+        self.edges = tuple(polygon.edge(k) for k in edges)
+        self.m = len(self.edges)
+        self.sliding = tuple(i for i, mode in enumerate(self.modes) if mode is ContactMode.SLIDING)
+        self.p = len(self.sliding)
+        if 2 * self.m < 3 + self.p:
+            raise SlidingContactCountError(self.m, self.p)
+        self._origins = np.array([e.xi_origin for e in self.edges])  # (m, 2) object frame
+        self._tangents = np.array([e.xi_direction for e in self.edges])
+        self._normals = np.array([e.inward_normal for e in self.edges])
+        bv = np.zeros((2 * self.m, self.p))
+        for j, i in enumerate(self.sliding):
+            bv[2 * i + 1, j] = 1.0
+        self._bv = bv
+
+    def with_modes(self, modes: Sequence[ContactMode | str]) -> "Grasp":
+        """The same contacts with other modes."""
+        return Grasp(self.polygon, [e.index for e in self.edges], modes)
+
+    # ------------------------------------------------------------------ state helpers
+    def _check(self, pose, xi):
+        pose = as_finite_array("pose", pose, (3,))
+        xi = as_finite_array("xi", xi, (self.m,))
+        return pose, xi
+
+    def points_in_object(self, xi) -> np.ndarray:
+        """Contact points c_i(ξ_i) [m] in the object frame, shape (m, 2)."""
+        xi = as_finite_array("xi", xi, (self.m,))
+        return self._origins + xi[:, None] * self._tangents
+
+    def lever_arms(self, pose, xi) -> np.ndarray:
+        """r_i = R(β) c_i(ξ_i) [m], hand-frame orientation, shape (m, 2)."""
+        pose, xi = self._check(pose, xi)
+        return self.points_in_object(xi) @ rotation(pose[2]).T
+
+    def points(self, pose, xi) -> np.ndarray:
+        """Contact points [m] in the hand frame, shape (m, 2)."""
+        pose = as_finite_array("pose", pose, (3,))
+        return pose[:2] + self.lever_arms(pose, xi)
+
+    def surface_frames(self, pose) -> np.ndarray:
+        """R_fi = R(β) [n_i t_i] per contact, shape (m, 2, 2) (columns: normal, tangent)."""
+        pose = as_finite_array("pose", pose, (3,))
+        rot = rotation(pose[2])
+        return np.stack([rot @ np.column_stack([n, t]) for n, t in zip(self._normals, self._tangents)])
+
+    # ------------------------------------------------------------------ matrices
+    def grasp_matrix(self, pose, xi) -> np.ndarray:
+        r"""G (3 x 2m): column pair i maps contact force f_i to :math:`(f_i, r_i \times f_i)`."""
+        r = self.lever_arms(pose, xi)
+        g = np.zeros((3, 2 * self.m))
+        for i in range(self.m):
+            g[:2, 2 * i:2 * i + 2] = np.eye(2)
+            g[2, 2 * i:2 * i + 2] = perp(r[i])
+        return g
+
+    def grasp_matrix_dot(self, pose, xi, pose_dot, xi_dot) -> np.ndarray:
+        r"""Exact :math:`\dot G` for object twist ``pose_dot`` = (v_o, ω) and contact rates ``xi_dot``."""
+        pose, xi = self._check(pose, xi)
+        pose_dot = as_finite_array("pose_dot", pose_dot, (3,))
+        xi_dot = as_finite_array("xi_dot", xi_dot, (self.m,))
+        r = self.lever_arms(pose, xi)
+        t = self._tangents @ rotation(pose[2]).T
+        r_dot = pose_dot[2] * perp(r) + xi_dot[:, None] * t
+        g = np.zeros((3, 2 * self.m))
+        for i in range(self.m):
+            g[2, 2 * i:2 * i + 2] = perp(r_dot[i])
+        return g
+
+    def surface_rotation(self, pose) -> np.ndarray:
+        """R_f (2m x 2m): block R_fi for sliding contacts, I_2 for fixed ones (eq. 3.1.7)."""
+        frames = self.surface_frames(pose)
+        rf = np.eye(2 * self.m)
+        for i in self.sliding:
+            rf[2 * i:2 * i + 2, 2 * i:2 * i + 2] = frames[i]
+        return rf
+
+    def surface_rotation_dot(self, pose, pose_dot) -> np.ndarray:
+        r"""Exact :math:`\dot R_f`: :math:`\omega \perp R_{fi}` on sliding blocks, 0 elsewhere."""
+        frames = self.surface_frames(pose)
+        omega = as_finite_array("pose_dot", pose_dot, (3,))[2]
+        rf = np.zeros((2 * self.m, 2 * self.m))
+        for i in self.sliding:
+            rf[2 * i:2 * i + 2, 2 * i:2 * i + 2] = omega * perp(frames[i].T).T
+        return rf
+
+    def sliding_directions(self) -> np.ndarray:
+        """B_v (2m x p): the sliding direction (0, 1) of each sliding contact in its surface frame."""
+        return self._bv.copy()
+
+    def force_basis(self, signs, mu: float) -> np.ndarray:
+        r"""B_f (2m x (2m - p)): :math:`(1, s_i \mu)^T` per sliding contact, :math:`I_2` per fixed one.
+
+        ``signs`` are the sliding directions :math:`s_i = \mathrm{sign}(\dot\xi_i) \in \{-1, +1\}`
+        of the sliding contacts, in order.
+        """
+        signs = as_finite_array("signs", signs, (self.p,))
+        if not np.all(np.isin(signs, (-1.0, 1.0))):
+            raise InvalidParameterError("signs", signs, "+1 or -1 per sliding contact")
+        if not np.isfinite(mu) or mu < 0:
+            raise InvalidParameterError("mu", mu, "a friction coefficient >= 0")
+        bf = np.zeros((2 * self.m, 2 * self.m - self.p))
+        col, k = 0, 0
+        for i, mode in enumerate(self.modes):
+            if mode is ContactMode.SLIDING:
+                bf[2 * i:2 * i + 2, col] = (1.0, signs[k] * mu)
+                col, k = col + 1, k + 1
+            else:
+                bf[2 * i:2 * i + 2, col:col + 2] = np.eye(2)
+                col += 2
+        return bf
+
+    def sliding_grasp_matrix(self, pose, xi, signs, mu: float) -> np.ndarray:
+        """G_f = G R_f B_f (3 x (2m - p)), the sliding grasp matrix (eq. 3.4.5)."""
+        return self.grasp_matrix(pose, xi) @ self.surface_rotation(pose) @ self.force_basis(signs, mu)
+
+    def friction_map(self, pose, xi, signs, mu: float) -> np.ndarray:
+        r"""P = B_v^T B_f G_f^{-1} (p x 3, eq. 3.4.9): :math:`f_\xi = P (M_o \ddot X - f_g)`.
+
+        Defined only when G_f is square (m = 2, p = 1): otherwise the friction force is not
+        determined by the object's motion alone.
+        """
+        if 2 * self.m - self.p != 3:
+            raise InvalidParameterError(
+                "grasp", f"m={self.m}, p={self.p}", "m = 2 fingers with p = 1 sliding contact for P (eq. 3.4.9)"
+            )
+        gf = self.sliding_grasp_matrix(pose, xi, signs, mu)
+        return self._bv.T @ self.force_basis(signs, mu) @ np.linalg.inv(gf)
