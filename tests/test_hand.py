@@ -99,3 +99,12 @@ def test_singular_finger_is_a_typed_error_carrying_q():
     assert "f1" in str(err.value) and "condition number" in str(err.value)
     conds = hand.check_singular(np.array([0.2, -1.0, 0.1, 1.0]))
     assert np.all(conds < 10)
+
+
+def test_link_mass_scale_scales_M_and_gravity_but_not_the_callers_model():
+    q, v = np.array([0.1, -0.5, 0.2, 0.6]), np.zeros(4)
+    base = make_hand(damping=False)
+    heavy = Hand(base.fingers, gravity_in_hand=(0.0, -9.81), damping=False, link_mass_scale=1.5)
+    np.testing.assert_allclose(heavy.dynamics(q, v).mass_matrix, 1.5 * base.dynamics(q, v).mass_matrix, rtol=1e-12)
+    np.testing.assert_allclose(heavy.dynamics(q, v).nonlinear, 1.5 * base.dynamics(q, v).nonlinear, rtol=1e-12)
+    assert base.fingers[0].model.inertias[1].mass == pytest.approx(make_hand().fingers[0].model.inertias[1].mass)

@@ -185,3 +185,24 @@ def test_singular_finger_raises_with_q():
     with pytest.raises(SingularFingerError) as err:
         model.state(S, np.zeros(3))
     assert err.value.finger == "f1" and err.value.q.shape == (2,)
+
+
+def test_plant_accepts_mismatched_parameters():
+    """A plant with other object mass, inertia, mu and link masses predicts other accelerations than
+    the nominal model, and agrees with a reduced model built with the same parameters."""
+    rng = np.random.default_rng(11)
+    model = make_model(2, ("sliding", "fixed"), np.zeros(2))
+    S, S_dot = random_state(rng, model)
+    st = model.state(S, S_dot)
+    tau = rng.normal(size=4) * 0.05
+    heavy_hand = Hand(model.hand.fingers, gravity_in_hand=(0.0, -9.81), link_mass_scale=1.3)
+    plant = Plant(heavy_hand, RECT, [PlantContact(1, "sliding", st.xi[0], float(np.sign(S_dot[3]))),
+                                     PlantContact(3, "fixed", st.xi[1])],
+                  mu=0.6, object_mass=0.1, object_inertia=2e-4, collision_check=False)
+    plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
+    _, X_plant, _ = plant.accelerations(plant.state, tau)
+    nominal, _ = model.forward_dynamics(st, tau, 0.3)
+    assert np.abs(nominal[:3] - X_plant).max() > 1e-3 * np.abs(X_plant).max()
+    same = ReducedModel(heavy_hand, model.grasp, xi=st.xi, object_mass=0.1, object_inertia=2e-4)
+    matched, _ = same.forward_dynamics(same.state(S, S_dot), tau, 0.6)
+    np.testing.assert_allclose(matched[:3], X_plant, rtol=1e-8, atol=1e-12)

@@ -57,6 +57,8 @@ class Hand:
         damping: Whether N includes the URDF's viscous joint damping.
         singular_threshold: Condition number of a tip Jacobian above which the finger is
             declared singular (:class:`~regrasp.exceptions.SingularFingerError`).
+        link_mass_scale: Multiplies every link's mass and rotational inertia (the centres
+            of mass stay): a plant whose links differ from the controller's model.
     """
 
     def __init__(
@@ -66,6 +68,7 @@ class Hand:
         gravity_in_hand=(0.0, -9.81),
         damping: bool = True,
         singular_threshold: float = 1e4,
+        link_mass_scale: float = 1.0,
     ):
         if len(fingers) == 0:
             raise InvalidParameterError("fingers", fingers, "at least one finger")
@@ -77,7 +80,14 @@ class Hand:
         self.nq = 2 * self.m
         self.singular_threshold = as_positive_float("singular_threshold", singular_threshold)
         self.damping_enabled = bool(damping)
+        self.link_mass_scale = as_positive_float("link_mass_scale", link_mass_scale)
         self._models = [pin.Model(f.model) for f in self.fingers]
+        if self.link_mass_scale != 1.0:
+            for model in self._models:
+                for j in range(1, model.njoints):
+                    inertia = model.inertias[j]
+                    model.inertias[j] = pin.Inertia(inertia.mass * self.link_mass_scale, inertia.lever,
+                                                    inertia.inertia * self.link_mass_scale)
         self._datas = [model.createData() for model in self._models]
         self._tip_ids = [f.tip_frame_id for f in self.fingers]
         self.gravity_in_hand = np.zeros(2)
