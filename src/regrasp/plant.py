@@ -170,13 +170,7 @@ class Plant:
             raise InvalidParameterError("contacts", contacts, f"one contact per finger ({hand.m})")
         self.hand = hand
         self.polygon = polygon
-        self.contacts = [PlantContact(c.edge, c.mode, float(c.xi), float(c.sign)) for c in contacts]
-        for c in self.contacts:
-            if c.mode not in _MODES:
-                raise InvalidParameterError("mode", c.mode, "'fixed', 'sliding' or 'separated'")
-            polygon.edge(c.edge)
-            if c.sign not in (-1.0, 1.0):
-                raise InvalidParameterError("sign", c.sign, "+1 or -1")
+        self.contacts = self._copy_contacts(contacts)
         if not np.isfinite(mu) or mu < 0:
             raise InvalidParameterError("mu", mu, "a friction coefficient >= 0")
         self.mu = float(mu)
@@ -202,15 +196,32 @@ class Plant:
         self.max_constraint_error = 0.0
 
     # ------------------------------------------------------------------ set-up
-    def reset(self, q, v, X, V, t: float = 0.0) -> PlantState:
-        """Set the state (q, v [rad, rad/s], X = (x, y, β), V = (vx, vy, ω)) and clear the log."""
+    def reset(self, q, v, X, V, t: float = 0.0, contacts: Sequence[PlantContact] | None = None) -> PlantState:
+        """Set the state (q, v [rad, rad/s], X = (x, y, β), V = (vx, vy, ω)) and clear the event log.
+
+        Contact modes persist across resets (events change them); pass ``contacts`` to set them anew.
+        """
         n = self.hand.nq
+        if contacts is not None:
+            if len(contacts) != self.hand.m:
+                raise InvalidParameterError("contacts", contacts, f"one contact per finger ({self.hand.m})")
+            self.contacts = self._copy_contacts(contacts)
         self.state = PlantState(float(t), as_finite_array("q", q, (n,)).copy(), as_finite_array("v", v, (n,)).copy(),
                                 as_finite_array("X", X, (3,)).copy(), as_finite_array("V", V, (3,)).copy())
         self.events = []
         self.stopped = False
         self.max_constraint_error = self.constraint_error(self.state)
         return self.state
+
+    def _copy_contacts(self, contacts: Sequence[PlantContact]) -> list[PlantContact]:
+        out = [PlantContact(c.edge, c.mode, float(c.xi), float(c.sign)) for c in contacts]
+        for c in out:
+            if c.mode not in _MODES:
+                raise InvalidParameterError("mode", c.mode, "'fixed', 'sliding' or 'separated'")
+            self.polygon.edge(c.edge)
+            if c.sign not in (-1.0, 1.0):
+                raise InvalidParameterError("sign", c.sign, "+1 or -1")
+        return out
 
     # ------------------------------------------------------------------ geometry
     def _edge(self, c: PlantContact):
@@ -251,17 +262,13 @@ class Plant:
         return worst
 
     # ------------------------------------------------------------------ dynamics
-    def accelerations(self, st: PlantState, tau, modes=None):
-        """(q̈, Ẍ, forces) at state ``st`` for torques ``tau``: ``forces`` (m, 2) are the contact
-        forces on the object in the hand frame (zeros for separated contacts)."""
-        tau = as_finite_array("tau", tau, (self.hand.nq,))
-        contacts = self.contacts if modes is None else modes
-        dyn = self.hand.dynamics(st.q, st.v)
-        n, m = self.hand.nq, self.hand.m
+    def _rows(self, st: PlantState, dyn, contacts):
+        """Per active contact: force columns W (generalized force per multiplier), constraint
+        rows C (acting on (q̈, Ẍ) or, at velocity level, on (q̇, V)), right-hand sides b, owners."""
+        n = self.hand.nq
         rot = rotation(st.X[2])
         omega = st.V[2]
-        w_cols, c_rows, b = [], [], []
-        owners = []
+        w_cols, c_rows, b, owners = [], [], [], []
         for i, c in enumerate(contacts):
             if c.mode == "separated":
                 continue
@@ -311,19 +318,32 @@ class Plant:
                          + normal @ jdv)
                 b.append(-drift - 2 * self.alpha * psi_dot - self.alpha**2 * psi)
                 owners.append((i, "n"))
-        k = len(w_cols)
+        return w_cols, c_rows, b, owners
+
+    def _full_mass(self, dyn) -> np.ndarray:
+        n = self.hand.nq
         mass = np.zeros((n + 3, n + 3))
         mass[:n, :n] = dyn.mass_matrix
         mass[n:, n:] = np.diag([self.mass, self.mass, self.inertia])
+        return mass
+
+    def accelerations(self, st: PlantState, tau, modes=None):
+        """(q̈, Ẍ, forces) at state ``st`` for torques ``tau``: ``forces`` (m, 2) are the contact
+        forces on the object in the hand frame (zeros for separated contacts)."""
+        tau = as_finite_array("tau", tau, (self.hand.nq,))
+        contacts = self.contacts if modes is None else modes
+        dyn = self.hand.dynamics(st.q, st.v)
+        n, m = self.hand.nq, self.hand.m
+        rot = rotation(st.X[2])
+        w_cols, c_rows, b, owners = self._rows(st, dyn, contacts)
+        k = len(w_cols)
         g = self.hand.gravity_in_hand
         rhs_dyn = np.concatenate([tau - dyn.nonlinear, [self.mass * g[0], self.mass * g[1], 0.0]])
         kkt = np.zeros((n + 3 + k, n + 3 + k))
-        kkt[:n + 3, :n + 3] = mass
+        kkt[:n + 3, :n + 3] = self._full_mass(dyn)
         if k:
-            W = np.array(w_cols).T
-            C = np.array(c_rows)
-            kkt[:n + 3, n + 3:] = -W
-            kkt[n + 3:, :n + 3] = C
+            kkt[:n + 3, n + 3:] = -np.array(w_cols).T
+            kkt[n + 3:, :n + 3] = np.array(c_rows)
         sol = np.linalg.solve(kkt, np.concatenate([rhs_dyn, b]))
         acc, lam = sol[:n + 3], sol[n + 3:]
         forces = np.zeros((m, 2))
@@ -335,6 +355,28 @@ class Plant:
             else:
                 forces[i, kind] = value
         return acc[:n], acc[n:], forces
+
+    def _project_velocities(self, st: PlantState) -> float:
+        """Remove the velocity that violates the active constraints (a plastic sticking impulse):
+        the mass-weighted projection of (q̇, V) onto C (q̇, V) = 0. Returns the kinetic energy [J]
+        it removes (negative), which is friction's doing and is booked as contact work."""
+        dyn = self.hand.dynamics(st.q, st.v)
+        _, c_rows, _, _ = self._rows(st, dyn, self.contacts)
+        if not c_rows:
+            return 0.0
+        n = self.hand.nq
+        C = np.array(c_rows)
+        mass = self._full_mass(dyn)
+        z = np.concatenate([st.v, st.V])
+        k = C.shape[0]
+        kkt = np.zeros((n + 3 + k, n + 3 + k))
+        kkt[:n + 3, :n + 3] = mass
+        kkt[:n + 3, n + 3:] = C.T
+        kkt[n + 3:, :n + 3] = C
+        z_new = np.linalg.solve(kkt, np.concatenate([mass @ z, np.zeros(k)]))[:n + 3]
+        delta = 0.5 * (z_new @ mass @ z_new - z @ mass @ z)
+        st.v, st.V = z_new[:n].copy(), z_new[n:].copy()
+        return float(delta)
 
     def _derivative(self, st: PlantState, tau):
         qdd, Xdd, forces = self.accelerations(st, tau)
@@ -420,6 +462,7 @@ class Plant:
                 if fn2 >= 0.0 and abs(ft2) <= self.mu * fn2:
                     self._event(st.t, i, "stick", f"xi_dot = {xi_dot:.3g} m/s crossed zero; force inside the cone", out)
                     c.mode, c.xi = "fixed", xi
+                    st.contact_work += self._project_velocities(st)
                 else:
                     c.sign = -c.sign
             lo, hi = self._edge(c).xi_range
