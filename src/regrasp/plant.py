@@ -149,6 +149,10 @@ class Plant:
         tip_clearance: Tip clearance [m] for the collision check (see :mod:`regrasp.collision`);
             default: three times the distal link's radius.
         stop_on: Event kinds that stop the simulation.
+        contact_events: Detect separation, slip and stick and switch modes. With False the
+            contacts are ideal bilateral constraints whose modes never change (for checking
+            the integrator's energy conservation, e.g. a torque-free motion, which pulls on
+            the contacts).
     """
 
     def __init__(
@@ -165,6 +169,7 @@ class Plant:
         collision_check: bool = True,
         tip_clearance: float | None = None,
         stop_on: Sequence[str] = ("separation", "left_edge", "collision", "singular"),
+        contact_events: bool = True,
     ):
         if len(contacts) != hand.m:
             raise InvalidParameterError("contacts", contacts, f"one contact per finger ({hand.m})")
@@ -180,6 +185,7 @@ class Plant:
         self.dt = as_positive_float("dt", dt)
         self.alpha = as_positive_float("baumgarte", baumgarte, allow_zero=True)
         self.stop_on = frozenset(stop_on)
+        self.contact_events = bool(contact_events)
         self.checkers = None
         if collision_check:
             self.checkers = []
@@ -441,30 +447,14 @@ class Plant:
         out: list[PlantEvent] = []
         _, _, forces = self.accelerations(st, tau)
         surface = self.surface_forces(st, forces)
-        tol = 1e-9
         for i, c in enumerate(self.contacts):
-            fn, ft = surface[i]
-            xi, xi_dot = self.contact_xi(st, i)
             if c.mode == "separated":
                 continue
-            if fn < -tol:
-                self._event(st.t, i, "separation", f"normal force {fn:.4g} N < 0", out)
-                c.mode = "separated"
-                continue
-            if c.mode == "fixed" and abs(ft) > self.mu * fn + tol * max(1.0, abs(fn)):
-                self._event(st.t, i, "slip", f"|f_t| = {abs(ft):.4g} N > mu f_n = {self.mu * fn:.4g} N", out)
-                c.mode, c.sign = "sliding", float(np.sign(ft) or 1.0)
-            elif c.mode == "sliding" and xi_dot * c.sign <= 0.0:
-                trial = [PlantContact(o.edge, o.mode, o.xi, o.sign) for o in self.contacts]
-                trial[i] = PlantContact(c.edge, "fixed", xi, c.sign)
-                _, _, f_fixed = self.accelerations(st, tau, modes=trial)
-                fn2, ft2 = self.surface_forces(st, f_fixed)[i]
-                if fn2 >= 0.0 and abs(ft2) <= self.mu * fn2:
-                    self._event(st.t, i, "stick", f"xi_dot = {xi_dot:.3g} m/s crossed zero; force inside the cone", out)
-                    c.mode, c.xi = "fixed", xi
-                    st.contact_work += self._project_velocities(st)
-                else:
-                    c.sign = -c.sign
+            xi, xi_dot = self.contact_xi(st, i)
+            if self.contact_events:
+                self._switch_mode(st, tau, i, surface[i], xi, xi_dot, out)
+                if c.mode == "separated":
+                    continue
             lo, hi = self._edge(c).xi_range
             if not lo <= xi <= hi:
                 self._event(st.t, i, "left_edge", f"xi = {xi:.5g} m outside [{lo:.5g}, {hi:.5g}]", out)
@@ -479,6 +469,29 @@ class Plant:
                 if dist.size and dist.min() < 0.0:
                     self._event(st.t, i, "collision", f"link penetrates the object by {-dist.min():.3g} m", out)
         return out
+
+    def _switch_mode(self, st: PlantState, tau, i: int, force_surface, xi: float, xi_dot: float, out) -> None:
+        """Separation, slip and stick of contact i (module docstring)."""
+        c = self.contacts[i]
+        fn, ft = force_surface
+        tol = 1e-9
+        if fn < -tol:
+            self._event(st.t, i, "separation", f"normal force {fn:.4g} N < 0", out)
+            c.mode = "separated"
+        elif c.mode == "fixed" and abs(ft) > self.mu * fn + tol * max(1.0, abs(fn)):
+            self._event(st.t, i, "slip", f"|f_t| = {abs(ft):.4g} N > mu f_n = {self.mu * fn:.4g} N", out)
+            c.mode, c.sign = "sliding", float(np.sign(ft) or 1.0)
+        elif c.mode == "sliding" and xi_dot * c.sign <= 0.0:
+            trial = [PlantContact(o.edge, o.mode, o.xi, o.sign) for o in self.contacts]
+            trial[i] = PlantContact(c.edge, "fixed", xi, c.sign)
+            _, _, f_fixed = self.accelerations(st, tau, modes=trial)
+            fn2, ft2 = self.surface_forces(st, f_fixed)[i]
+            if fn2 >= 0.0 and abs(ft2) <= self.mu * fn2:
+                self._event(st.t, i, "stick", f"xi_dot = {xi_dot:.3g} m/s crossed zero; force inside the cone", out)
+                c.mode, c.xi = "fixed", xi
+                st.contact_work += self._project_velocities(st)
+            else:
+                c.sign = -c.sign
 
     def energy(self, st: PlantState | None = None) -> float:
         """Kinetic + gravitational potential energy [J] of fingers and object."""
