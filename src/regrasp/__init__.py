@@ -1,7 +1,7 @@
 """regrasp: planar multifingered hands that plan feasible contacts, control sliding
 fingertips and regrasp dynamically (after "Dynamic regrasping by sliding")."""
 
-from .collision import UrdfCollisionChecker, segment_hits_polygon
+from .collision import UrdfCollisionChecker, default_tip_clearance, segment_hits_polygon
 from .envelope import (
     Condition,
     EdgeLine,
@@ -79,6 +79,7 @@ __all__ = [
     "UrdfCollisionChecker",
     "WaypointTrajectory",
     "condition_of",
+    "default_tip_clearance",
     "load_scenario",
     "plan",
     "plan_scenario",

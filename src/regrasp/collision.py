@@ -29,7 +29,7 @@ from .finger import Finger, LinkShape
 from .planar import se3_from_planar
 from .polygon import ConvexPolygon
 
-__all__ = ["UrdfCollisionChecker", "segment_hits_polygon"]
+__all__ = ["UrdfCollisionChecker", "default_tip_clearance", "segment_hits_polygon"]
 
 
 def segment_hits_polygon(a: np.ndarray, b: np.ndarray, normals: np.ndarray, offsets: np.ndarray,
@@ -105,6 +105,21 @@ def _truncate_distal(shape: LinkShape, tip_in_joint: np.ndarray, clearance: floa
         new_geom = coal.Box(*sides)
     new_placement = pin.SE3(placement.rotation, placement.translation - toward_tip * clearance / 2.0)
     return LinkShape(link=shape.link, name=shape.name, geometry=new_geom, placement_in_joint=new_placement)
+
+
+def _half_width(geometry) -> float:
+    """Half the thickness [m] of a link shape across the link: a radius, or a box's middle half-side."""
+    if hasattr(geometry, "radius"):
+        return float(geometry.radius)
+    if hasattr(geometry, "halfSide"):
+        return float(sorted(np.asarray(geometry.halfSide, dtype=float))[1])
+    return 0.0
+
+
+def default_tip_clearance(finger: Finger) -> float:
+    r"""The default tip clearance :math:`\rho` [m]: three times the distal link's half-width
+    (a cylinder's or capsule's radius, a box's middle half-side)."""
+    return 3.0 * max((_half_width(s.geometry) for s in finger.link_shapes() if s.link == 1), default=0.0)
 
 
 class UrdfCollisionChecker:

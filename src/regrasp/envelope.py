@@ -57,7 +57,7 @@ from enum import Enum
 
 import numpy as np
 
-from .collision import UrdfCollisionChecker, segment_hits_polygon
+from .collision import UrdfCollisionChecker, default_tip_clearance, segment_hits_polygon
 from .exceptions import InvalidParameterError
 from .finger import Finger
 from .intervals import Intervals, intersect, merge
@@ -219,15 +219,6 @@ class EnvelopeSample:
         return best
 
 
-def _half_width(geometry) -> float:
-    """Half the thickness [m] of a link shape across the link: a radius, or a box's middle half-side."""
-    if hasattr(geometry, "radius"):
-        return float(geometry.radius)
-    if hasattr(geometry, "halfSide"):
-        return float(sorted(np.asarray(geometry.halfSide, dtype=float))[1])
-    return 0.0
-
-
 class FingerEnvelope:
     r"""Computes the feasible-contact envelope of one finger on one polygon edge.
 
@@ -276,8 +267,7 @@ class FingerEnvelope:
         self.checker: UrdfCollisionChecker | None = None
         if self.geometry is Geometry.URDF:
             if tip_clearance is None:
-                tip_clearance = 3.0 * max((_half_width(s.geometry) for s in finger.link_shapes() if s.link == 1),
-                                          default=0.0)
+                tip_clearance = default_tip_clearance(finger)
             self.checker = UrdfCollisionChecker(finger, polygon, float(tip_clearance))
         self.tip_clearance = None if self.checker is None else self.checker.tip_clearance
 

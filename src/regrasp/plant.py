@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .collision import UrdfCollisionChecker
+from .collision import UrdfCollisionChecker, default_tip_clearance
 from .exceptions import InvalidParameterError
 from .hand import Hand
 from .planar import perp, rotation
@@ -147,7 +147,7 @@ class Plant:
         baumgarte: α [1/s] of the constraint stabilisation.
         collision_check: Check link–object collisions with coal after every step.
         tip_clearance: Tip clearance [m] for the collision check (see :mod:`regrasp.collision`);
-            default: three times the distal link's radius.
+            default: :func:`~regrasp.collision.default_tip_clearance`.
         stop_on: Event kinds that stop the simulation.
         contact_events: Detect separation, slip and stick and switch modes. With False the
             contacts are ideal bilateral constraints whose modes never change (for checking
@@ -190,11 +190,7 @@ class Plant:
         if collision_check:
             self.checkers = []
             for f in hand.fingers:
-                if tip_clearance is None:
-                    radii = [float(getattr(s.geometry, "radius", 0.0)) for s in f.link_shapes() if s.link == 1]
-                    clearance = 3.0 * max(radii, default=0.0)
-                else:
-                    clearance = tip_clearance
+                clearance = default_tip_clearance(f) if tip_clearance is None else tip_clearance
                 self.checkers.append(UrdfCollisionChecker(f, polygon, clearance))
         self.state: PlantState | None = None
         self.events: list[PlantEvent] = []

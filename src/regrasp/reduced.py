@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .exceptions import InvalidParameterError
-from .grasp import ContactMode, Grasp
+from .grasp import Grasp
 from .hand import Hand, HandDynamics
 from .validation import as_finite_array, as_positive_float
 
@@ -216,7 +216,3 @@ class ReducedModel:
         S_ddot = np.linalg.solve(lhs, rhs)
         forces = (f0 - K @ S_ddot).reshape(self.grasp.m, 2)
         return S_ddot, forces
-
-    def sliding_modes(self) -> tuple[ContactMode, ...]:
-        """The grasp's contact modes."""
-        return self.grasp.modes
