@@ -17,3 +17,12 @@ def test_planner_benchmark_quick_smoke():
         assert doc[mode]["median_us"] > 0
     assert set(doc["ratios"]) == {"brute_over_urdf", "brute_over_ideal", "urdf_over_ideal"}
     assert doc["check"]["ok"] is True and doc["check"]["max_diff_steps"] <= doc["check"]["allowed_steps"]
+
+
+def test_dynamics_benchmark_quick_smoke():
+    proc = subprocess.run([sys.executable, str(BENCH / "bench_dynamics.py"), "--quick", "--json"],
+                          capture_output=True, text=True, timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    for key in ("plant_step", "plant_accelerations", "reduced_state", "reduced_forward_dynamics"):
+        assert doc[key]["median_us"] > 0

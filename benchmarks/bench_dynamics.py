@@ -1,0 +1,79 @@
+"""Median time of one plant step and of one evaluation of the reduced model (paper §3).
+
+Run: python benchmarks/bench_dynamics.py [--quick] [--json]
+
+* ``plant_step``: one RK4 step of :class:`regrasp.Plant` (4 dynamics evaluations, event checks
+  and the coal collision check), the paper's hand holding the rectangle with one sliding contact.
+* ``reduced_state``: :meth:`ReducedModel.state` (IK, H, Ḣ Ṡ, Pinocchio M, N, J, J̇q̇).
+* ``reduced_forward_dynamics``: :meth:`ReducedModel.forward_dynamics` on that state.
+* ``plant_accelerations``: one :meth:`Plant.accelerations` (one dynamics evaluation of the plant).
+Medians over repeated calls (time.perf_counter), never means.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from regrasp import Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _median_us(fn, n: int) -> float:
+    fn()  # warm-up
+    samples = []
+    for _ in range(n):
+        t0 = time.perf_counter()
+        fn()
+        samples.append(time.perf_counter() - t0)
+    return float(np.median(samples) * 1e6)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="few iterations (CI smoke run)")
+    parser.add_argument("--json", action="store_true", help="one JSON document on stdout")
+    args = parser.parse_args()
+    n = 20 if args.quick else 500
+
+    sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
+    hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
+    model = ReducedModel(hand, Grasp(sc.polygon, [1, 3], ["sliding", "fixed"]), xi=[0.0, 0.0])
+    S, S_dot = np.array([0.0, 0.12, 0.0, 0.0]), np.array([0.0, 0.0, 0.0, 0.005])
+    st = model.state(S, S_dot)
+    # torques that keep the object still while finger 1 slides up: f from the object's balance
+    frames = model.grasp.surface_frames(S[:3])
+    forces = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
+    forces += 2.0 * np.concatenate([frames[0][:, 0], frames[1][:, 0]])
+    tau = st.hand.nonlinear + st.hand.jacobian.T @ forces
+    plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", 0.0, 1.0), PlantContact(3, "fixed", 0.0)],
+                  mu=0.0, stop_on=())
+
+    def plant_step():
+        if plant.state is None or plant.state.t > 0.05:
+            plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
+        plant.step(tau)
+
+    plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
+    results = {
+        "plant_step": _median_us(plant_step, n),
+        "plant_accelerations": _median_us(lambda: plant.accelerations(plant.state, tau), n),
+        "reduced_state": _median_us(lambda: model.state(S, S_dot), n),
+        "reduced_forward_dynamics": _median_us(lambda: model.forward_dynamics(st, tau, 0.3), n),
+    }
+    results["reduced_evaluation"] = results["reduced_state"] + results["reduced_forward_dynamics"]
+    if args.json:
+        print(json.dumps({k: {"median_us": v} for k, v in results.items()}))
+        return
+    print(f"median of {n} calls each (this machine):")
+    for key, value in results.items():
+        print(f"  {key:26s} {value:9.1f} us")
+
+
+if __name__ == "__main__":
+    main()
