@@ -62,7 +62,7 @@ def test_mass_matrix_and_nonlinear_effects_match_the_closed_form(seed):
 def test_damping_is_read_from_the_urdf():
     q, v = np.array([0.1, -0.5, 0.2, 0.6]), np.array([1.0, -2.0, 0.5, 0.3])
     with_d, without = make_hand(damping=True).dynamics(q, v), make_hand(damping=False).dynamics(q, v)
-    np.testing.assert_allclose(with_d.nonlinear - without.nonlinear, 0.002 * v, atol=1e-15)
+    np.testing.assert_allclose(with_d.nonlinear - without.nonlinear, 0.0005 * v, atol=1e-15)
 
 
 @pytest.mark.parametrize("seed", range(8))

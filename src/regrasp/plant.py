@@ -50,7 +50,7 @@ from .exceptions import InvalidParameterError
 from .hand import Hand
 from .planar import perp, rotation
 from .polygon import ConvexPolygon
-from .validation import as_finite_array, as_positive_float
+from .validation import as_finite_array, as_friction_coefficients, as_positive_float
 
 __all__ = ["Plant", "PlantContact", "PlantEvent", "PlantState", "PlantStep"]
 
@@ -141,7 +141,7 @@ class Plant:
             controller's hand, e.g. other link masses).
         polygon: The object (geometry; inertia unless overridden).
         contacts: One :class:`PlantContact` per finger.
-        mu: Coulomb friction coefficient [-].
+        mu: Coulomb friction coefficient [-], one for all contacts or one per contact.
         object_mass, object_inertia: Override the polygon's [kg], [kg m^2].
         dt: Time step [s].
         baumgarte: α [1/s] of the constraint stabilisation.
@@ -176,9 +176,7 @@ class Plant:
         self.hand = hand
         self.polygon = polygon
         self.contacts = self._copy_contacts(contacts)
-        if not np.isfinite(mu) or mu < 0:
-            raise InvalidParameterError("mu", mu, "a friction coefficient >= 0")
-        self.mu = float(mu)
+        self.mu = as_friction_coefficients(mu, hand.m)
         self.mass = as_positive_float("object_mass", polygon.mass if object_mass is None else object_mass)
         self.inertia = as_positive_float("object_inertia",
                                          polygon.inertia if object_inertia is None else object_inertia)
@@ -305,7 +303,7 @@ class Plant:
                 offset = e.inward_normal @ e.xi_origin
                 psi = normal @ r - offset
                 psi_dot = omega * (perp(normal) @ r) + normal @ (tip_vel - st.V[:2])
-                d = normal + self.mu * c.sign * tangent
+                d = normal + self.mu[i] * c.sign * tangent
                 col = np.zeros(n + 3)
                 col[sl] = -J.T @ d
                 col[n:n + 2] = d
@@ -353,7 +351,7 @@ class Plant:
             if kind == "n":
                 c = contacts[i]
                 normal = rot @ self.polygon.edge(c.edge).inward_normal
-                forces[i] = value * (normal + self.mu * c.sign * perp(normal))
+                forces[i] = value * (normal + self.mu[i] * c.sign * perp(normal))
             else:
                 forces[i, kind] = value
         return acc[:n], acc[n:], forces
@@ -474,15 +472,15 @@ class Plant:
         if fn < -tol:
             self._event(st.t, i, "separation", f"normal force {fn:.4g} N < 0", out)
             c.mode = "separated"
-        elif c.mode == "fixed" and abs(ft) > self.mu * fn + tol * max(1.0, abs(fn)):
-            self._event(st.t, i, "slip", f"|f_t| = {abs(ft):.4g} N > mu f_n = {self.mu * fn:.4g} N", out)
+        elif c.mode == "fixed" and abs(ft) > self.mu[i] * fn + tol * max(1.0, abs(fn)):
+            self._event(st.t, i, "slip", f"|f_t| = {abs(ft):.4g} N > mu f_n = {self.mu[i] * fn:.4g} N", out)
             c.mode, c.sign = "sliding", float(np.sign(ft) or 1.0)
         elif c.mode == "sliding" and xi_dot * c.sign <= 0.0:
             trial = [PlantContact(o.edge, o.mode, o.xi, o.sign) for o in self.contacts]
             trial[i] = PlantContact(c.edge, "fixed", xi, c.sign)
             _, _, f_fixed = self.accelerations(st, tau, modes=trial)
             fn2, ft2 = self.surface_forces(st, f_fixed)[i]
-            if fn2 >= 0.0 and abs(ft2) <= self.mu * fn2:
+            if fn2 >= 0.0 and abs(ft2) <= self.mu[i] * fn2:
                 self._event(st.t, i, "stick", f"xi_dot = {xi_dot:.3g} m/s crossed zero; force inside the cone", out)
                 c.mode, c.xi = "fixed", xi
                 st.contact_work += self._project_velocities(st)

@@ -35,7 +35,7 @@ import numpy as np
 from .exceptions import InvalidParameterError
 from .grasp import Grasp
 from .hand import Hand, HandDynamics
-from .validation import as_finite_array, as_positive_float
+from .validation import as_finite_array, as_friction_coefficients, as_positive_float
 
 __all__ = ["ReducedModel", "ReducedState"]
 
@@ -175,9 +175,10 @@ class ReducedModel:
         out[3:] = -(st.B_v.T @ st.R_f.T @ f)
         return out
 
-    def forward_dynamics(self, st: ReducedState, tau, mu: float = 0.0, *, signs=None,
+    def forward_dynamics(self, st: ReducedState, tau, mu=0.0, *, signs=None,
                          paper_friction_term: bool = False) -> tuple[np.ndarray, np.ndarray]:
-        r"""S̈ and the contact forces (m, 2) [N] for joint torques ``tau`` and Coulomb friction ``mu``.
+        r"""S̈ and the contact forces (m, 2) [N] for joint torques ``tau`` and Coulomb friction ``mu``
+        (one coefficient, or one per contact).
 
         Solves :math:`(H^T M H + M_s)\ddot S + N_s = H^T\tau + [f_g; -f_\xi]` with
         :math:`f_{\xi,j} = \mu s_j n_j^T f_j` and :math:`f = J^{-T}(\tau - M(H\ddot S + \dot H\dot S) - N)`,
@@ -186,12 +187,11 @@ class ReducedModel:
         :math:`+G R_f B_v f_\xi` to the object rows (eq. 3.2.11 as printed), to show it is wrong.
         """
         tau = as_finite_array("tau", tau, (self.hand.nq,))
-        if not np.isfinite(mu) or mu < 0:
-            raise InvalidParameterError("mu", mu, "a friction coefficient >= 0")
+        mu = as_friction_coefficients(mu, self.grasp.m)
         p = self.grasp.p
         if signs is None:
             signs = np.sign(st.S_dot[3:])
-            if p and mu > 0 and np.any(signs == 0):
+            if p and np.any(mu[list(self.grasp.sliding)] > 0) and np.any(signs == 0):
                 raise InvalidParameterError("signs", signs, "a sliding direction: ξ̇ = 0 at a sliding contact")
         signs = as_finite_array("signs", signs, (p,))
         M, J = st.hand.mass_matrix, st.hand.jacobian
@@ -202,7 +202,7 @@ class ReducedModel:
         frames = self.grasp.surface_frames(st.S[:3])
         Sn = np.zeros((p, self.hand.nq))
         for j, i in enumerate(self.grasp.sliding):
-            Sn[j, 2 * i:2 * i + 2] = mu * signs[j] * frames[i][:, 0]
+            Sn[j, 2 * i:2 * i + 2] = mu[i] * signs[j] * frames[i][:, 0]
         lhs = self.mass_matrix(st)
         rhs = st.H.T @ tau - self.bias(st)
         rhs[:3] += self.f_g

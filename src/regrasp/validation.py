@@ -39,3 +39,11 @@ def as_positive_float(name: str, value, *, allow_zero: bool = False) -> float:
     if out < 0.0 or (out == 0.0 and not allow_zero):
         raise InvalidParameterError(name, value, ">= 0" if allow_zero else "> 0")
     return out
+
+
+def as_friction_coefficients(mu, m: int) -> np.ndarray:
+    """Coulomb coefficients [-] per contact: one number for all ``m`` contacts, or one each; >= 0."""
+    arr = np.array(mu, dtype=float) if np.ndim(mu) else np.full(m, float(mu))
+    if arr.shape != (m,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
+        raise InvalidParameterError("mu", mu, f"a friction coefficient >= 0, or one per contact ({m})")
+    return arr

@@ -1,0 +1,228 @@
+r"""Control of the object and of sliding contacts (paper §3.3–3.4), corrected.
+
+All laws are computed torque on the reduced dynamics derived in ``docs/derivations.md``,
+
+.. math:: (H^T M H + M_s)\,\ddot S + N_s = H^T \tau + [f_g;\ -f_\xi].
+
+With :math:`a = \ddot S_d + K_v \dot E + K_s E` (:math:`E = S_d - S`) and an estimate
+:math:`\hat f_\xi` of the friction at the sliding contacts,
+
+.. math:: \tau = (H^T)^+ \big[(H^T M H + M_s)\,a + N_s - [f_g;\ -\hat f_\xi]\big] + J^T f_c,
+          \qquad (H^T)^+ = H (H^T H)^{-1},
+
+which gives :math:`(H^T M H + M_s)(\ddot S - a) = [0;\ \hat f_\xi - f_\xi]`, so
+:math:`\ddot E + K_v \dot E + K_s E = 0` whenever :math:`\hat f_\xi = f_\xi`. Written out,
+:math:`(H^T)^+ (H^T M H + M_s) a + (H^T)^+ N_s = [M H + (H^T)^+ M_s] a + M \dot H \dot S + N` plus a
+null-space term, which is the paper's form. The laws differ only in :math:`\hat f_\xi`:
+
+* :class:`FixedContactController`: p = 0 (the paper's reference [5]); no sliding contact.
+* :class:`Proposition1Controller`: :math:`\hat f_\xi = 0` (3.3.1).
+* :class:`Proposition2Controller`: :math:`\hat f_\xi` measured (3.3.8).
+* :class:`Proposition3Controller`: m = 2, p = 1, :math:`\hat f_\xi = P (M_o a_X - f_g)` (3.4.9,
+  3.4.11), with P for the commanded sliding direction.
+
+Two corrections to the printed laws (``docs/derivations.md``): the gravity term enters as
+:math:`-(H^T)^+[f_g; 0]`, where (3.3.1) and (3.3.8) print :math:`+`; and (3.3.8)/(3.4.11) drop
+the :math:`G R_f B_v f_\xi` terms, which count the friction twice.
+
+The internal force :math:`J^T f_c` (3.3.7) is chosen by :mod:`regrasp.internal_force`: the
+least squeeze that keeps every contact pushing and every fixed contact inside its friction
+cone with margins, given the contact forces :math:`f_m` the motion torque produces.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .exceptions import InvalidParameterError
+from .grasp import ContactMode
+from .internal_force import (
+    ConeEdge,
+    InternalForceResult,
+    InternalForceSettings,
+    build_internal_force_qp,
+    solve_internal_force_qp,
+)
+from .reduced import ReducedModel, ReducedState
+from .validation import as_finite_array, as_friction_coefficients
+
+__all__ = [
+    "ComputedTorqueController",
+    "ControlOutput",
+    "FixedContactController",
+    "Gains",
+    "Proposition1Controller",
+    "Proposition2Controller",
+    "Proposition3Controller",
+]
+
+
+@dataclass(frozen=True)
+class Gains:
+    """Diagonal gains per reduced coordinate: K_v [1/s] and K_s [1/s^2], each shape (3 + p,)."""
+
+    kv: np.ndarray
+    ks: np.ndarray
+
+    @classmethod
+    def critically_damped(cls, omega: float, n: int) -> "Gains":
+        """K_s = ω², K_v = 2ω on all n coordinates (ω [rad/s])."""
+        if not np.isfinite(omega) or omega <= 0:
+            raise InvalidParameterError("omega", omega, "a bandwidth > 0 [rad/s]")
+        return cls(np.full(n, 2.0 * omega), np.full(n, omega**2))
+
+
+@dataclass(frozen=True)
+class ControlOutput:
+    """One control step's torque and diagnostics.
+
+    Attributes:
+        tau: Joint torques (2m,) [N m].
+        command: a = S̈_d + K_v Ė + K_s E, the commanded S̈.
+        error: E = S_d - S.
+        error_rate: Ė = Ṡ_d - Ṡ.
+        friction_estimate: f̂_ξ at the sliding contacts (p,) [N] (force on the object along t).
+        contact_forces: Predicted contact forces on the object (m, 2) [N], hand frame.
+        contact_forces_surface: The same in each surface frame (normal, tangential).
+        cone_margins: μ f_n - |f_t| per contact [N] (≈ 0 at a sliding contact).
+        internal: The internal-force QP's result, or None when disabled.
+        seconds: Wall time of the step [s].
+    """
+
+    tau: np.ndarray
+    command: np.ndarray
+    error: np.ndarray
+    error_rate: np.ndarray
+    friction_estimate: np.ndarray
+    contact_forces: np.ndarray
+    contact_forces_surface: np.ndarray
+    cone_margins: np.ndarray
+    internal: InternalForceResult | None
+    seconds: float
+
+
+class ComputedTorqueController:
+    r"""Computed torque in the reduced coordinates, with a QP-chosen internal force.
+
+    Args:
+        model: The reduced model (its grasp sets which contacts slide).
+        gains: K_v and K_s, one per reduced coordinate.
+        mu: Friction coefficients the controller assumes (one, or one per contact).
+        internal_force: QP margins, or None to apply no internal force.
+        cone_edge: Put this contact on its cone edge (the transition before a slide).
+    """
+
+    law = "computed torque"
+
+    def __init__(self, model: ReducedModel, gains: Gains, mu=0.5, *,
+                 internal_force: InternalForceSettings | None = InternalForceSettings(),
+                 cone_edge: ConeEdge | None = None):
+        n = model.n
+        kv = as_finite_array("gains.kv", gains.kv, (n,))
+        ks = as_finite_array("gains.ks", gains.ks, (n,))
+        if np.any(kv <= 0) or np.any(ks <= 0):
+            raise InvalidParameterError("gains", gains, "positive K_v and K_s")
+        self.model = model
+        self.gains = Gains(kv, ks)
+        self.mu = as_friction_coefficients(mu, model.grasp.m)
+        self.internal_force = internal_force
+        self.cone_edge = cone_edge
+        self._fixed = np.array([mode is ContactMode.FIXED for mode in model.grasp.modes])
+
+    def friction_estimate(self, st: ReducedState, command: np.ndarray, friction) -> np.ndarray:
+        """f̂_ξ (p,) [N]; the laws override this."""
+        return np.zeros(self.model.grasp.p)
+
+    def __call__(self, S, S_dot, S_d, S_d_dot, S_d_ddot, *, friction=None) -> ControlOutput:
+        """Torques for the measured (S, Ṡ) and the desired (S_d, Ṡ_d, S̈_d).
+
+        ``friction``: the measured friction force at the sliding contacts (p,) [N], for
+        Proposition 2.
+        """
+        start = time.perf_counter()
+        model = self.model
+        n = model.n
+        st = model.state(S, S_dot)
+        error = as_finite_array("S_d", S_d, (n,)) - st.S
+        error_rate = as_finite_array("S_d_dot", S_d_dot, (n,)) - st.S_dot
+        command = as_finite_array("S_d_ddot", S_d_ddot, (n,)) + self.gains.kv * error_rate + self.gains.ks * error
+        f_hat = self.friction_estimate(st, command, friction)
+        H, M, J = st.H, st.hand.mass_matrix, st.hand.jacobian
+        rhs = model.mass_matrix(st) @ command + model.bias(st)
+        rhs[:3] -= model.f_g
+        rhs[3:] += f_hat
+        tau = H @ np.linalg.solve(H.T @ H, rhs)
+        q_ddot = H @ command + st.H_dot_S_dot
+        motion_forces = np.linalg.solve(J.T, tau - M @ q_ddot - st.hand.nonlinear)
+        frames = model.grasp.surface_frames(st.S[:3])
+        internal = None
+        if self.internal_force is not None:
+            A = np.hstack([st.G.T, st.R_f @ st.B_v])
+            qp = build_internal_force_qp(A, motion_forces, frames, self._fixed, self.mu, self.internal_force,
+                                         self.cone_edge)
+            internal = solve_internal_force_qp(qp, frames, self._fixed, self.mu, self.cone_edge)
+            tau = tau + J.T @ internal.f_c
+            forces = internal.forces
+        else:
+            forces = motion_forces.reshape(model.grasp.m, 2)
+        surface = np.einsum("mji,mj->mi", frames, forces)
+        margins = self.mu * surface[:, 0] - np.abs(surface[:, 1])
+        return ControlOutput(tau, command, error, error_rate, f_hat, forces, surface, margins, internal,
+                             time.perf_counter() - start)
+
+
+class FixedContactController(ComputedTorqueController):
+    """All contacts fixed (p = 0): the coordinated computed-torque law of the paper's reference [5]."""
+
+    law = "fixed contacts"
+
+    def __init__(self, model: ReducedModel, gains: Gains, mu=0.5, **kwargs):
+        if model.grasp.p != 0:
+            raise InvalidParameterError("model", model.grasp.modes, "only fixed contacts (p = 0)")
+        super().__init__(model, gains, mu, **kwargs)
+
+
+class Proposition1Controller(ComputedTorqueController):
+    """Proposition 1 (3.3.1, corrected): friction at the sliding contacts assumed zero."""
+
+    law = "Proposition 1"
+
+
+class Proposition2Controller(ComputedTorqueController):
+    """Proposition 2 (3.3.8, corrected): the measured friction force is fed forward."""
+
+    law = "Proposition 2"
+
+    def friction_estimate(self, st, command, friction) -> np.ndarray:
+        if friction is None:
+            raise InvalidParameterError("friction", None, "the measured friction force at each sliding contact")
+        return as_finite_array("friction", friction, (self.model.grasp.p,))
+
+
+class Proposition3Controller(ComputedTorqueController):
+    r"""Proposition 3 (3.4.11, corrected): m = 2, p = 1, :math:`\hat f_\xi = P (M_o a_X - f_g)`.
+
+    P is evaluated for the sliding direction of the desired (else the measured) ξ̇.
+    """
+
+    law = "Proposition 3"
+
+    def __init__(self, model: ReducedModel, gains: Gains, mu=0.5, **kwargs):
+        if model.grasp.m != 2 or model.grasp.p != 1:
+            raise InvalidParameterError("model", model.grasp.modes, "m = 2 fingers with p = 1 sliding contact")
+        super().__init__(model, gains, mu, **kwargs)
+        self._direction = 1.0
+
+    def __call__(self, S, S_dot, S_d, S_d_dot, S_d_ddot, *, friction=None) -> ControlOutput:
+        desired = float(np.asarray(S_d_dot, dtype=float)[3])
+        measured = float(np.asarray(S_dot, dtype=float)[3])
+        self._direction = float(np.sign(desired) or np.sign(measured) or self._direction)
+        return super().__call__(S, S_dot, S_d, S_d_dot, S_d_ddot, friction=friction)
+
+    def friction_estimate(self, st, command, friction) -> np.ndarray:
+        mu = self.mu[self.model.grasp.sliding[0]]
+        P = self.model.grasp.friction_map(st.S[:3], st.xi, [self._direction], mu)
+        return P @ (self.model.M_o @ command[:3] - self.model.f_g)

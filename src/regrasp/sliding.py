@@ -1,0 +1,136 @@
+r"""When is a slide possible? (paper Remark 3.3)
+
+A contact j can slide in direction :math:`s = \pm 1` only if the contact forces that produce the
+desired object acceleration can have contact j on the edge of its friction cone in that
+direction, :math:`t_j^T f_j = s\,\mu_j\, n_j^T f_j`, while every contact still pushes
+(:math:`n_i^T f_i \ge f_{min}`) and every fixed contact stays inside its cone. The forces must
+satisfy the object's equation :math:`G f = M_o \ddot X - f_g`. The fingers can produce any tip
+force (J is invertible), so this is a question about forces on the object alone:
+
+.. math:: \exists f:\quad \begin{bmatrix} G \\ e_j^T (t_j - s\mu_j n_j) \end{bmatrix} f
+          = \begin{bmatrix} M_o \ddot X - f_g \\ 0 \end{bmatrix},\quad
+          n_i^T f_i \ge f_{min},\ |t_i^T f_i| \le (\mu_i - \text{margin})\, n_i^T f_i\ (i \ne j\ \text{fixed}).
+
+With m = 2 the system is square and f is unique (the paper's P of eq. 3.4.9); with more
+fingers the least-squeeze f is found by the same QP as the internal force
+(:mod:`regrasp.internal_force`). For the paper's Figure 3.4, a block held against gravity,
+the predicate allows a slide in one direction and not in the other.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .exceptions import InvalidParameterError
+from .grasp import Grasp
+from .internal_force import (
+    InternalForceInfeasibleError,
+    InternalForceSettings,
+    build_internal_force_qp,
+    solve_internal_force_qp,
+)
+from .validation import as_finite_array, as_friction_coefficients
+
+__all__ = ["SlideFeasibility", "sliding_feasibility"]
+
+
+@dataclass(frozen=True)
+class SlideFeasibility:
+    """The verdict of :func:`sliding_feasibility`.
+
+    Attributes:
+        possible: Whether contact ``contact`` can slide in ``direction``.
+        contact: The contact that would slide.
+        direction: +1 (along the edge's ξ) or -1.
+        forces_surface: Predicted contact forces (normal, tangential) per contact [N]
+            (for an impossible slide: the least-norm forces that move the object as asked).
+        normal_forces: Their normal components [N].
+        cone_margins: μ f_n - |f_t| per contact [N] (0 at the sliding contact by construction).
+        reason: Why it is impossible, or None.
+    """
+
+    possible: bool
+    contact: int
+    direction: float
+    forces_surface: np.ndarray
+    normal_forces: np.ndarray
+    cone_margins: np.ndarray
+    reason: str | None
+
+
+def sliding_feasibility(
+    grasp: Grasp,
+    pose,
+    xi,
+    object_acceleration,
+    contact: int,
+    direction: float,
+    mu,
+    *,
+    object_mass: float,
+    object_inertia: float,
+    gravity_in_hand=(0.0, -9.81),
+    settings: InternalForceSettings = InternalForceSettings(f_min=0.0, margin=0.0),
+) -> SlideFeasibility:
+    r"""Whether contact ``contact`` can slide in ``direction`` while the object accelerates as asked.
+
+    Args:
+        grasp: The contacts (their modes are ignored: ``contact`` slides, the others are fixed).
+        pose: Object pose (x, y, β) in the hand frame.
+        xi: ξ [m] of every contact.
+        object_acceleration: Desired Ẍ = (a_x, a_y, α) [m/s², rad/s²].
+        contact: Index of the contact that would slide.
+        direction: +1 to slide along the edge's ξ direction, -1 against it.
+        mu: Friction coefficient(s).
+        object_mass, object_inertia: [kg], [kg m²].
+        gravity_in_hand: [m/s²].
+        settings: Minimum normal force and cone margin (default: the bare physics, 0 and 0).
+    """
+    m = grasp.m
+    if not 0 <= contact < m:
+        raise InvalidParameterError("contact", contact, f"a contact index in 0..{m - 1}")
+    if direction not in (-1, 1, -1.0, 1.0):
+        raise InvalidParameterError("direction", direction, "+1 or -1")
+    mu = as_friction_coefficients(mu, m)
+    pose = as_finite_array("pose", pose, (3,))
+    xi = as_finite_array("xi", xi, (m,))
+    acc = as_finite_array("object_acceleration", object_acceleration, (3,))
+    g = as_finite_array("gravity_in_hand", gravity_in_hand, (2,))
+    wrench = np.array([object_mass * (acc[0] - g[0]), object_mass * (acc[1] - g[1]), object_inertia * acc[2]])
+
+    frames = grasp.surface_frames(pose)
+    G = grasp.grasp_matrix(pose, xi)
+    row = np.zeros(2 * m)
+    n, t = frames[contact][:, 0], frames[contact][:, 1]
+    row[2 * contact:2 * contact + 2] = t - direction * mu[contact] * n
+    system = np.vstack([G, row])                      # system @ f = rhs
+    rhs = np.concatenate([wrench, [0.0]])
+    particular = np.linalg.lstsq(system, rhs, rcond=None)[0]
+    fixed = np.array([i != contact for i in range(m)])
+    qp = build_internal_force_qp(system.T, particular, frames, fixed, mu, settings)
+    reason = None
+    try:
+        result = solve_internal_force_qp(qp, frames, fixed, mu)
+        forces = result.forces
+        possible = result.feasible
+        if not possible:
+            reason = "the contact forces this motion requires leave a cone or pull"
+    except InternalForceInfeasibleError as exc:
+        forces = particular.reshape(m, 2)
+        possible = False
+        reason = f"no squeeze makes it possible ({exc.status})"
+    surface = np.einsum("mji,mj->mi", frames, forces)
+    if not possible and reason and "squeeze" not in reason:
+        worst = int(np.argmin(surface[:, 0]))
+        if surface[worst, 0] < settings.f_min:
+            reason = f"contact {worst} would pull (normal force {surface[worst, 0]:.3g} N)"
+        else:
+            margins = mu * surface[:, 0] - np.abs(surface[:, 1])
+            worst = int(np.argmin(np.where(fixed, margins, np.inf)))
+            reason = f"fixed contact {worst} would slip (cone margin {margins[worst]:.3g} N)"
+    margins = mu * surface[:, 0] - np.abs(surface[:, 1])
+    return SlideFeasibility(bool(possible), contact, float(direction), surface, surface[:, 0].copy(), margins,
+                            reason)
+
