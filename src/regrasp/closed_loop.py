@@ -32,6 +32,19 @@ def measure_reduced_state(plant: Plant, model: ReducedModel) -> tuple[np.ndarray
     return S, S_dot
 
 
+def _initial_friction_reading(plant: Plant, controller, reference: Reference, sliding) -> np.ndarray:
+    """The friction sensor's reading before the first step: the plant's tangential force at the
+    sliding contacts under the torque the controller would apply (two passes, so the reading and
+    the torque are consistent)."""
+    friction = np.zeros(len(sliding))
+    S, S_dot = measure_reduced_state(plant, controller.model)
+    for _ in range(2):
+        out = controller(S, S_dot, *reference(plant.state.t), friction=friction)
+        _, _, forces = plant.accelerations(plant.state, out.tau)
+        friction = plant.surface_forces(plant.state, forces)[sliding, 1].copy()
+    return friction
+
+
 @dataclass(frozen=True)
 class ClosedLoopLog:
     """A closed-loop run, one row per control step.
@@ -88,6 +101,8 @@ def run_closed_loop(
     rng = rng if rng is not None else np.random.default_rng(0)
     rows = []
     friction = np.zeros(len(sliding))
+    if isinstance(controller, Proposition2Controller) and sliding:
+        friction = _initial_friction_reading(plant, controller, reference, sliding)
     steps = int(round(duration / plant.dt))
     for _ in range(steps):
         if plant.stopped:

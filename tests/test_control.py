@@ -1,0 +1,137 @@
+"""Closed-loop tests of the control laws on the independent plant (paper §3.3–3.4).
+
+Every law is run on the full-coordinate plant (never on the model it inverts) from an initial
+error, with the reference moving at constant speed so that a sliding contact keeps sliding.
+The error must follow Ë + K_v Ė + K_s E = 0; the controller samples at the plant step dt
+(zero-order hold), so the match is to within ω·dt of the initial error, and for the laws whose
+model is exact the deviation halves when dt halves.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from regrasp import Finger, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+from regrasp.closed_loop import run_closed_loop
+from regrasp.control import (
+    FixedContactController,
+    Gains,
+    Proposition1Controller,
+    Proposition2Controller,
+    Proposition3Controller,
+)
+from regrasp.exceptions import InvalidParameterError
+
+ROOT = Path(__file__).resolve().parents[1]
+SC = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
+FINGER3 = Finger.from_urdf(ROOT / "urdf" / "planar_2r_finger.urdf", base_in_hand=(0.04, -0.02, np.pi / 2),
+                           configuration="left", name="finger3")
+OMEGA = 20.0  # closed-loop bandwidth [rad/s]: K_s = ω², K_v = 2ω
+E0 = np.array([0.002, -0.001, 0.02, 0.001])  # initial error: x, y [m], β [rad], ξ [m]
+
+# (law, m, modes, xi of every contact, mu per contact, sliding speed [m/s])
+CASES = {
+    "fixed": (FixedContactController, 2, ["fixed", "fixed"], [0.0, 0.0], [0.5, 0.5], 0.0),
+    "prop1_mu0": (Proposition1Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.0, 0.5, 0.5], 0.01),
+    "prop1_mu03": (Proposition1Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.3, 0.5, 0.5], 0.01),
+    "prop2": (Proposition2Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.3, 0.5, 0.5], 0.01),
+    "prop3_up": (Proposition3Controller, 2, ["sliding", "fixed"], [-0.0075, -0.0075], [0.3, 0.3], 0.01),
+    "prop3_down": (Proposition3Controller, 2, ["sliding", "fixed"], [0.005, 0.015], [0.05, 0.8], -0.01),
+}
+
+
+def run(name, duration=0.4, dt=1e-3, friction_noise=0.0):
+    law, m, modes, xi, mu, speed = CASES[name]
+    fingers = [c.finger for c in SC.contacts] + ([FINGER3] if m == 3 else [])
+    edges = [1, 3, 2][:m]
+    hand = Hand(fingers, gravity_in_hand=(0.0, -9.81))
+    grasp = Grasp(SC.polygon, edges, modes)
+    model = ReducedModel(hand, grasp, xi=np.array(xi, dtype=float))
+    n = model.n
+    start = np.concatenate([[0.0, 0.12, 0.0], np.array(xi)[list(grasp.sliding)]])
+    velocity = np.concatenate([np.zeros(3), np.full(grasp.p, speed)])
+
+    def reference(t):
+        return start + velocity * t, velocity, np.zeros(n)
+
+    S0 = start - E0[:n]
+    st = model.state(S0, velocity)
+    xi_plant = np.array(xi, dtype=float)
+    for j, i in enumerate(grasp.sliding):
+        xi_plant[i] = S0[3 + j]
+    contacts = [PlantContact(e, mode, x, float(np.sign(speed) or 1.0)) for e, mode, x in zip(edges, modes, xi_plant)]
+    plant = Plant(hand, SC.polygon, contacts, mu=mu, dt=dt)
+    plant.reset(st.q, st.q_dot, S0[:3], velocity[:3])
+    controller = law(model, Gains.critically_damped(OMEGA, n), mu=mu)
+    log = run_closed_loop(plant, controller, reference, duration, friction_noise=friction_noise,
+                          rng=np.random.default_rng(0))
+    t = log.times
+    predicted = (E0[None, :n] + OMEGA * E0[None, :n] * t[:, None]) * np.exp(-OMEGA * t)[:, None]
+    deviation = np.abs(log.errors - predicted).max() / np.abs(E0[:n]).max()
+    return log, deviation, np.array([mo == "fixed" for mo in modes])
+
+
+@pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop2", "prop3_up", "prop3_down"])
+def test_error_follows_the_closed_loop_ode(name):
+    log, deviation, fixed = run(name)
+    assert log.events == ()
+    assert deviation <= 1.5 * OMEGA * 1e-3  # zero-order hold: within ω·dt of the initial error
+    assert np.abs(log.errors[-1]).max() <= 1.5 * OMEGA * 1e-3 * np.abs(E0).max()  # settled to the ZOH bound
+    # fixed contacts stay inside their friction cones (the plant's forces)
+    assert log.cone_margins[:, fixed].min() > 0.0
+    assert log.plant_forces[:, :, 0].min() > 0.0  # every contact keeps pushing
+
+
+@pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop3_up"])
+def test_exact_laws_converge_to_the_ode_as_dt_shrinks(name):
+    _, coarse, _ = run(name, duration=0.2, dt=1e-3)
+    _, fine, _ = run(name, duration=0.2, dt=5e-4)
+    assert 1.6 < coarse / fine < 2.4  # first order in dt: the only error is the sampling
+
+
+@pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop3_up", "prop3_down"])
+def test_achieved_internal_force_equals_the_commanded_one(name):
+    """The plant's contact forces equal the controller's predicted ones (motion part + f_c), so the
+    internal force achieved is the commanded one (τ_I = τ_Ic)."""
+    log, _, _ = run(name, duration=0.2)
+    assert np.abs(log.plant_forces - log.predicted_forces).max() < 1e-6
+
+
+def test_proposition1_is_measurably_worse_with_friction():
+    _, exact, _ = run("prop1_mu0")
+    log, with_friction, _ = run("prop1_mu03")
+    assert with_friction > 10 * exact
+    assert with_friction > 0.05
+
+
+def test_proposition2_tracks_with_noisy_friction_measurements():
+    log, deviation, fixed = run("prop2", friction_noise=0.002)
+    assert log.events == ()
+    assert deviation < 0.05
+    assert log.cone_margins[:, fixed].min() > 0.0
+
+
+def test_three_fingers_use_a_nontrivial_internal_force():
+    """m = 3, p = 1: the null space of [G; B_vᵀ R_fᵀ] is two-dimensional and the QP squeezes."""
+    log, _, _ = run("prop1_mu0", duration=0.1)
+    norms = np.linalg.norm(log.internal_forces, axis=1)
+    assert norms.min() > 0.05  # [N]
+    assert np.abs(log.plant_forces - log.predicted_forces).max() < 1e-6
+
+
+def test_laws_check_their_preconditions():
+    hand = Hand([c.finger for c in SC.contacts])
+    sliding = ReducedModel(hand, Grasp(SC.polygon, [1, 3], ["sliding", "fixed"]), xi=[0.0, 0.0])
+    with pytest.raises(InvalidParameterError, match="p = 0"):
+        FixedContactController(sliding, Gains.critically_damped(10, 4))
+    fixed = ReducedModel(hand, Grasp(SC.polygon, [1, 3], ["fixed", "fixed"]), xi=[0.0, 0.0])
+    with pytest.raises(InvalidParameterError, match="p = 1"):
+        Proposition3Controller(fixed, Gains.critically_damped(10, 3))
+    with pytest.raises(InvalidParameterError, match="friction"):
+        Proposition2Controller(sliding, Gains.critically_damped(10, 4))(
+            np.array([0, 0.12, 0, 0]), np.zeros(4), np.array([0, 0.12, 0, 0]), np.zeros(4), np.zeros(4))
+    with pytest.raises(InvalidParameterError, match="positive"):
+        Proposition1Controller(sliding, Gains(np.ones(4), -np.ones(4)))
+    with pytest.raises(InvalidParameterError):
+        Proposition1Controller(sliding, Gains(np.ones(3), np.ones(3)))  # wrong size

@@ -1,0 +1,489 @@
+"""The internal-force QP (``regrasp.internal_force``, paper §3.3 eq. 3.3.7) against its definition.
+
+Set-up: the hand of ``examples/scenarios/paper_trajectory_2.toml`` holding its 0.10 x 0.04 m,
+0.08 kg rectangle (finger 1 on edge 1 = left side, ξ up; finger 2 on edge 3 = right side, ξ
+down), plus, for m = 3, a third finger of the same URDF under the object on edge 2 (the bottom,
+ξ pointing -x). States come from ``ReducedModel.state``; the QP data are
+:math:`A = [G^T \\mid R_f B_v]` and the surface frames of ``Grasp.surface_frames``.
+
+What is checked, on seeded random states of m = 2 (both fixed, k = 1), m = 3 with p = 0
+(k = 3) and p = 1 (k = 2), with motion forces f_m either from a controller's motion part or
+drawn around a particular solution of :math:`G f = M_o\\ddot X - f_g`:
+
+* :math:`A^T f_c = 0` (the object's wrench and the sliding contacts' tangential forces are
+  unchanged) and :math:`f = f_m + f_c`;
+* every constraint of the QP holds at f (normal ≥ f_min, |f_t| ≤ (μ - margin) f_n at fixed
+  contacts), to a tolerance tied to the OSQP tolerance;
+* optimality: :math:`\\|f_c\\|` equals the minimum found by an *exact* brute force written here:
+  the minimiser of a strictly convex QP is the least-norm point of the affine set of some
+  subset of at most k active constraints (plus :math:`A^T f_c = 0`), so enumerating every
+  subset, keeping the feasible least-norm points and taking the smallest gives the optimum
+  without any solver or the library's null-space basis;
+* the cone-edge option, infeasible problems (typed error carrying the problem and the status,
+  the status confirmed by an LP), and the empty null space of m = 2, p = 1.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pytest
+import qpsolvers
+import scipy.optimize
+
+from regrasp import Finger, Grasp, Hand, ReducedModel, load_scenario
+from regrasp.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.exceptions import InvalidParameterError, SingularFingerError, UnreachableError
+from regrasp.internal_force import (
+    ConeEdge,
+    InternalForceInfeasibleError,
+    InternalForceQP,
+    InternalForceSettings,
+    build_internal_force_qp,
+    solve_internal_force_qp,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIO = ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml"
+URDF = ROOT / "urdf" / "planar_2r_finger.urdf"
+EDGES = {2: (1, 3), 3: (1, 3, 2)}
+Y0 = 0.12  # the object's centre height in the scenario
+
+
+# ---------------------------------------------------------------------------- set-up
+@functools.lru_cache(maxsize=None)
+def scenario():
+    return load_scenario(SCENARIO)
+
+
+@functools.lru_cache(maxsize=None)
+def fingers():
+    f1, f2 = (c.finger for c in scenario().contacts)
+    f3 = Finger.from_urdf(URDF, base_in_hand=(0.04, -0.02, np.pi / 2), configuration="left", name="finger3")
+    return (f1, f2, f3)
+
+
+def polygon():
+    return scenario().polygon
+
+
+def make_hand(m: int, gravity=(0.0, -9.81)) -> Hand:
+    return Hand(list(fingers()[:m]), gravity_in_hand=gravity)
+
+
+def qp_data(model: ReducedModel, S, S_dot):
+    """(state, A, surface frames, fixed mask) at (S, Ṡ)."""
+    st = model.state(S, S_dot)
+    A = np.hstack([st.G.T, st.R_f @ st.B_v])
+    frames = model.grasp.surface_frames(st.S[:3])
+    fixed = np.array([mode.value == "fixed" for mode in model.grasp.modes])
+    return st, A, frames, fixed
+
+
+def to_surface(frames, forces) -> np.ndarray:
+    """Hand-frame forces (m, 2) -> (normal, tangential) per contact."""
+    forces = np.asarray(forces, float).reshape(len(frames), 2)
+    return np.stack([frames[i].T @ forces[i] for i in range(len(frames))])
+
+
+def from_surface(frames, surface) -> np.ndarray:
+    """(normal, tangential) per contact -> hand-frame forces, flattened (2m,)."""
+    return np.concatenate([frames[i] @ np.asarray(surface[i], float) for i in range(len(frames))])
+
+
+def constraint_rows(frames, fixed, mu, settings: InternalForceSettings):
+    """The QP's inequalities on the total force f = f_m + f_c as rows (a, lo): a . f >= lo.
+
+    Written from the module docstring: n_i . f_i >= f_min for every contact, and
+    (μ_i - margin) n_i . f_i ∓ t_i . f_i >= 0 for fixed contacts.
+    """
+    m = len(frames)
+    rows = []
+    for i in range(m):
+        n, t = frames[i][:, 0], frames[i][:, 1]
+        a = np.zeros(2 * m)
+        a[2 * i:2 * i + 2] = n
+        rows.append((a, settings.f_min))
+        if fixed[i]:
+            slope = mu[i] - settings.margin
+            for sgn in (1.0, -1.0):
+                a = np.zeros(2 * m)
+                a[2 * i:2 * i + 2] = slope * n - sgn * t
+                rows.append((a, 0.0))
+    return rows
+
+
+def worst_violation(forces, frames, fixed, mu, settings) -> float:
+    """Largest violation [N] of the QP's inequalities by the total forces (m, 2) (<= 0: all hold)."""
+    surface = to_surface(frames, forces)
+    worst = -np.inf
+    for i, (fn, ft) in enumerate(surface):
+        worst = max(worst, settings.f_min - fn)
+        if fixed[i]:
+            worst = max(worst, abs(ft) - (mu[i] - settings.margin) * fn)
+    return float(worst)
+
+
+def brute_force_min_norm(A, f_m, frames, fixed, mu, settings):
+    """Exact least-norm f_c with Aᵀ f_c = 0 and every constraint on f_m + f_c, by enumeration of
+    active sets (see the module docstring); returns (f_c, number of feasible candidates)."""
+    rows = constraint_rows(frames, fixed, mu, settings)
+    k = A.shape[0] - np.linalg.matrix_rank(A)
+    scale = max(1.0, np.abs(f_m).max())
+    best, candidates = None, 0
+    for r in range(k + 1):
+        for subset in itertools.combinations(range(len(rows)), r):
+            E = np.vstack([A.T] + [rows[j][0] for j in subset])
+            rhs = np.concatenate([np.zeros(A.shape[1]), [rows[j][1] - rows[j][0] @ f_m for j in subset]])
+            f_c = np.linalg.lstsq(E, rhs, rcond=None)[0]  # least-norm solution of the (consistent) system
+            if np.linalg.norm(E @ f_c - rhs) > 1e-9 * scale:
+                continue  # inconsistent active set
+            f = f_m + f_c
+            if all(a @ f >= lo - 1e-10 * scale for a, lo in rows):
+                candidates += 1
+                if best is None or np.linalg.norm(f_c) < np.linalg.norm(best):
+                    best = f_c
+    return best, candidates
+
+
+# ---------------------------------------------------------------------------- random cases
+KINDS = {
+    "m2": (2, ("fixed", "fixed")),
+    "m3p0": (3, ("fixed", "fixed", "fixed")),
+    "m3p1-left": (3, ("sliding", "fixed", "fixed")),
+    "m3p1-bottom": (3, ("fixed", "fixed", "sliding")),
+}
+
+
+def random_case(kind: str, seed: int):
+    """A seeded random state, friction, margins and motion forces f_m for grasp ``kind``."""
+    m, modes = KINDS[kind]
+    rng = np.random.default_rng(seed)
+    angle = rng.uniform(-0.4, 0.4)
+    hand = make_hand(m, gravity=9.81 * np.array([np.sin(angle), -np.cos(angle)]))
+    grasp = Grasp(polygon(), EDGES[m], modes)
+    while True:
+        xi = np.array([rng.uniform(-0.012, 0.012), rng.uniform(-0.012, 0.012), rng.uniform(-0.03, 0.03)][:m])
+        model = ReducedModel(hand, grasp, xi)
+        S = np.concatenate([[rng.uniform(-0.02, 0.02), Y0 + rng.uniform(-0.015, 0.015), rng.uniform(-0.15, 0.15)],
+                            xi[list(grasp.sliding)]])
+        S_dot = np.concatenate([rng.uniform(-0.05, 0.05, 2), [rng.uniform(-0.5, 0.5)],
+                                rng.uniform(-0.02, 0.02, grasp.p)])
+        try:
+            st, A, frames, fixed = qp_data(model, S, S_dot)
+        except (UnreachableError, SingularFingerError):
+            continue
+        break
+    mu = rng.uniform(0.45, 1.0, m)
+    settings = InternalForceSettings(f_min=rng.uniform(0.2, 1.0), margin=rng.uniform(0.0, 0.1))
+    if seed % 2 == 0:
+        # the motion part of a controller (no internal force): f_m = J^-T (τ_m - M q̈ - N)
+        gains = Gains.critically_damped(rng.uniform(5.0, 30.0), model.n)
+        cls = FixedContactController if grasp.p == 0 else Proposition1Controller
+        controller = cls(model, gains, mu, internal_force=None)
+        S_d = S + np.concatenate([rng.uniform(-0.005, 0.005, 2), [rng.uniform(-0.05, 0.05)],
+                                  rng.uniform(-0.003, 0.003, grasp.p)])
+        out = controller(S, S_dot, S_d, rng.uniform(-0.05, 0.05, model.n), rng.uniform(-1.0, 1.0, model.n))
+        assert out.internal is None
+        f_m = out.contact_forces.reshape(-1)
+        source = "controller"
+    else:
+        # random forces producing a random wrench: a particular solution of G f = M_o Ẍ - f_g plus
+        # random forces in null(G) (any tangential force at a sliding contact included)
+        wrench = model.M_o @ rng.uniform(-2.0, 2.0, 3) * np.array([1, 1, 10]) - model.f_g
+        f_m = np.linalg.lstsq(st.G, wrench, rcond=None)[0]
+        null_g = np.linalg.svd(st.G)[2][3:].T
+        f_m = f_m + null_g @ rng.normal(0.0, 1.0, null_g.shape[1])
+        assert np.allclose(st.G @ f_m, wrench, atol=1e-12)
+        source = "random"
+    return dict(kind=kind, m=m, model=model, st=st, A=A, frames=frames, fixed=fixed, mu=mu, settings=settings,
+                f_m=f_m, source=source, seed=seed)
+
+
+CASES = [(kind, seed) for kind in KINDS for seed in range(12)]
+
+
+@pytest.mark.parametrize("kind,seed", CASES)
+def test_qp_solution_is_internal_feasible_and_least_squeeze(kind, seed):
+    case = random_case(kind, seed)
+    A, f_m, frames, fixed, mu, settings = (case[k] for k in ("A", "f_m", "frames", "fixed", "mu", "settings"))
+    m = case["m"]
+    k = 2 * m - 3 - case["model"].grasp.p
+    qp = build_internal_force_qp(A, f_m, frames, fixed, mu, settings)
+    assert isinstance(qp.problem, qpsolvers.Problem)
+    assert qp.null_basis.shape == (2 * m, k)
+    best, candidates = brute_force_min_norm(A, f_m, frames, fixed, mu, settings)
+    if not lp_feasible(qp.problem):
+        # no squeeze works (e.g. a large random tangential force at a sliding contact): the
+        # enumeration agrees, and the library raises its typed error
+        assert best is None
+        with pytest.raises(InternalForceInfeasibleError):
+            solve_internal_force_qp(qp, frames, fixed, mu)
+        return
+    result = solve_internal_force_qp(qp, frames, fixed, mu)
+    scale = max(1.0, np.abs(f_m).max())
+
+    assert result.null_space_dim == k
+    assert result.feasible
+    assert result.status == "solved"
+    f_c = result.f_c
+    np.testing.assert_allclose(result.forces.reshape(-1), f_m + f_c, rtol=0, atol=1e-12 * scale)
+
+    # f_c changes neither the object's wrench nor the sliding contacts' tangential forces
+    assert np.linalg.norm(A.T @ f_c) <= 1e-9 * np.linalg.norm(A, 2) * max(np.linalg.norm(f_c), 1e-12)
+    assert np.allclose(case["st"].G @ result.forces.reshape(-1), case["st"].G @ f_m, rtol=0, atol=1e-9 * scale)
+
+    # every constraint holds (OSQP tolerance 1e-9, polished)
+    tol = 10 * settings.tolerance * scale
+    assert worst_violation(result.forces, frames, fixed, mu, settings) <= tol
+
+    # optimality against the exact enumeration
+    assert best is not None and candidates >= 1
+    gap = (np.linalg.norm(f_c) - np.linalg.norm(best)) / max(np.linalg.norm(best), 1e-9)
+    assert abs(gap) <= 1e-5, (gap, np.linalg.norm(f_c), np.linalg.norm(best))
+    # the minimiser of a strictly convex QP is unique: the vectors agree too
+    np.testing.assert_allclose(f_c, best, rtol=0, atol=1e-6 * max(np.linalg.norm(best), 1e-3))
+
+
+def test_qp_cases_cover_both_force_sources_and_active_squeezes():
+    """The random cases above are not trivial: both sources of f_m appear, and most need a squeeze."""
+    sources, squeezed, feasible = set(), 0, 0
+    for kind, seed in CASES:
+        case = random_case(kind, seed)
+        sources.add(case["source"])
+        violation = worst_violation(case["f_m"].reshape(case["m"], 2), case["frames"], case["fixed"], case["mu"],
+                                    case["settings"])
+        squeezed += violation > 0
+        qp = build_internal_force_qp(case["A"], case["f_m"], case["frames"], case["fixed"], case["mu"],
+                                     case["settings"])
+        feasible += lp_feasible(qp.problem)
+    assert sources == {"controller", "random"}
+    assert squeezed >= len(CASES) // 2
+    assert feasible >= len(CASES) - 8  # the optimality checks run on most cases
+
+
+def test_already_feasible_motion_forces_need_no_squeeze():
+    """f_m that already satisfies every constraint: the least squeeze is zero."""
+    model = ReducedModel(make_hand(3), Grasp(polygon(), EDGES[3], ["fixed"] * 3), [0.003, -0.004, 0.01])
+    st, A, frames, fixed = qp_data(model, [0.005, Y0, 0.05], [0.0, 0.0, 0.0])
+    mu = np.full(3, 0.8)
+    # a gravity hold with a generous squeeze: pick surface forces, then fix the wrench with null(G)
+    f = from_surface(frames, [[3.0, 0.1], [3.0, 0.1], [3.0, 0.1]])
+    f = f + np.linalg.lstsq(st.G, -model.f_g - st.G @ f, rcond=None)[0]
+    settings = InternalForceSettings()
+    assert worst_violation(f.reshape(3, 2), frames, fixed, mu, settings) < -0.1
+    result = solve_internal_force_qp(build_internal_force_qp(A, f, frames, fixed, mu, settings), frames, fixed, mu)
+    assert np.linalg.norm(result.f_c) <= 1e-7
+    assert result.feasible
+
+
+# ---------------------------------------------------------------------------- cone edge
+def cone_edge_case(seed: int):
+    rng = np.random.default_rng(1000 + seed)
+    model = ReducedModel(make_hand(3), Grasp(polygon(), EDGES[3], ["fixed"] * 3),
+                         [rng.uniform(-0.01, 0.01), rng.uniform(-0.01, 0.01), rng.uniform(-0.02, 0.02)])
+    S = [rng.uniform(-0.015, 0.015), Y0 + rng.uniform(-0.01, 0.01), rng.uniform(-0.1, 0.1)]
+    st, A, frames, fixed = qp_data(model, S, [0.0, 0.0, 0.0])
+    mu = rng.uniform(0.5, 1.0, 3)
+    f_m = np.linalg.lstsq(st.G, model.M_o @ rng.uniform(-1, 1, 3) - model.f_g, rcond=None)[0]
+    return A, f_m, frames, fixed, mu
+
+
+def cone_edge_brute_force(A, f_m, frames, others, mu, settings, j, sign):
+    """Least-norm f_c with Aᵀ f_c = 0, contact j on its cone edge and the other constraints (the
+    edge row is always active in the enumeration); None when infeasible."""
+    scale = max(1.0, np.abs(f_m).max())
+    rows = constraint_rows(frames, others, mu, settings)
+    e_row = np.zeros(A.shape[0])
+    e_row[2 * j:2 * j + 2] = frames[j][:, 1] - sign * mu[j] * frames[j][:, 0]
+    k = A.shape[0] - np.linalg.matrix_rank(A) - 1
+    best = None
+    for r in range(0, k + 1):
+        for subset in itertools.combinations(range(len(rows)), r):
+            E = np.vstack([A.T, e_row] + [rows[i][0] for i in subset])
+            rhs = np.concatenate([np.zeros(A.shape[1]), [-e_row @ f_m], [rows[i][1] - rows[i][0] @ f_m for i in subset]])
+            f_c = np.linalg.lstsq(E, rhs, rcond=None)[0]
+            if np.linalg.norm(E @ f_c - rhs) > 1e-9 * scale:
+                continue
+            if all(a @ (f_m + f_c) >= lo - 1e-10 * scale for a, lo in rows):
+                if best is None or np.linalg.norm(f_c) < np.linalg.norm(best):
+                    best = f_c
+    return best
+
+
+CONE_EDGE_SEEDS = range(6)
+
+
+@pytest.mark.parametrize("seed", CONE_EDGE_SEEDS)
+def test_cone_edge_puts_the_contact_on_its_cone_edge(seed):
+    """ConeEdge(j, s) for every fixed contact j and both s, m = 3, p = 0: when the problem is
+    feasible (independent LP), t_j . f_j = s μ_j n_j . f_j to tight tolerance, n_j . f_j >= f_min,
+    the other contacts keep their constraints, Aᵀ f_c = 0, and ‖f_c‖ is the enumeration's minimum;
+    otherwise the typed error."""
+    A, f_m, frames, fixed, mu = cone_edge_case(seed)
+    settings = InternalForceSettings(f_min=0.5, margin=0.05)
+    scale = max(1.0, np.abs(f_m).max())
+    for j in range(3):
+        for sign in (1.0, -1.0):
+            edge = ConeEdge(j, sign)
+            qp = build_internal_force_qp(A, f_m, frames, fixed, mu, settings, edge)
+            assert qp.problem.A is not None and qp.problem.A.shape[0] == 1  # one equality row
+            others = fixed.copy()
+            others[j] = False  # contact j: only its normal bound besides the equality
+            best = cone_edge_brute_force(A, f_m, frames, others, mu, settings, j, sign)
+            if not lp_feasible(qp.problem):
+                assert best is None
+                with pytest.raises(InternalForceInfeasibleError):
+                    solve_internal_force_qp(qp, frames, fixed, mu, edge)
+                continue
+            result = solve_internal_force_qp(qp, frames, fixed, mu, edge)
+            fn, ft = to_surface(frames, result.forces)[j]
+            assert abs(ft - sign * mu[j] * fn) <= 1e-9 * scale, (j, sign, ft, sign * mu[j] * fn)
+            assert fn >= settings.f_min - 10 * settings.tolerance * scale
+            assert worst_violation(result.forces, frames, others, mu, settings) <= 10 * settings.tolerance * scale
+            assert np.linalg.norm(A.T @ result.f_c) <= 1e-9 * np.linalg.norm(A, 2) * max(np.linalg.norm(result.f_c),
+                                                                                         1e-12)
+            assert best is not None
+            gap = abs(np.linalg.norm(result.f_c) - np.linalg.norm(best)) / max(np.linalg.norm(best), 1e-9)
+            assert gap <= 1e-5, (j, sign, gap)
+
+
+def test_cone_edge_cases_are_mostly_feasible():
+    """The cone-edge checks above do exercise solutions (not only the error)."""
+    settings = InternalForceSettings(f_min=0.5, margin=0.05)
+    feasible = total = 0
+    for seed in CONE_EDGE_SEEDS:
+        A, f_m, frames, fixed, mu = cone_edge_case(seed)
+        for j in range(3):
+            for sign in (1.0, -1.0):
+                total += 1
+                feasible += lp_feasible(build_internal_force_qp(A, f_m, frames, fixed, mu, settings,
+                                                                ConeEdge(j, sign)).problem)
+    assert feasible >= total // 2, (feasible, total)
+
+
+def test_cone_edge_two_finger_hold_one_direction_only():
+    """Two fixed side fingers holding the object against gravity: finger 1 (left, ξ up) can be put
+    on its upward cone edge (friction carries its share of the weight), not on the downward one
+    (that needs a pull)."""
+    model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
+    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0])
+    mu = np.array([0.5, 0.5])
+    settings = InternalForceSettings()
+    f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
+    up = ConeEdge(0, 1.0)
+    result = solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, fixed, mu, settings, up),
+                                     frames, fixed, mu, up)
+    surface = to_surface(frames, result.forces)
+    weight = model.object_mass * 9.81
+    # symmetric hold: each finger carries half the weight, finger 1 exactly on its cone edge
+    np.testing.assert_allclose(surface[0], [weight / 2 / 0.5, weight / 2], rtol=1e-8)
+    assert surface[0, 1] == pytest.approx(0.5 * surface[0, 0], rel=1e-10)
+    down = ConeEdge(0, -1.0)
+    with pytest.raises(InternalForceInfeasibleError):
+        solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, fixed, mu, settings, down),
+                                frames, fixed, mu, down)
+
+
+def test_cone_edge_contact_index_is_validated():
+    model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
+    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0])
+    with pytest.raises(InvalidParameterError):
+        build_internal_force_qp(A, np.zeros(4), frames, fixed, np.full(2, 0.5), InternalForceSettings(),
+                                ConeEdge(2, 1.0))
+
+
+# ---------------------------------------------------------------------------- infeasible
+def lp_feasible(problem: qpsolvers.Problem) -> bool:
+    """Whether G y <= h (and A y = b) has a solution, by an LP (HiGHS)."""
+    G = problem.G.toarray() if hasattr(problem.G, "toarray") else problem.G
+    kwargs = {}
+    if problem.A is not None:
+        kwargs = dict(A_eq=problem.A.toarray() if hasattr(problem.A, "toarray") else problem.A, b_eq=problem.b)
+    res = scipy.optimize.linprog(np.zeros(G.shape[1]), A_ub=G, b_ub=problem.h, bounds=(None, None),
+                                 method="highs", **kwargs)
+    assert res.status in (0, 2), res.message
+    return res.status == 0
+
+
+def osqp_status(problem: qpsolvers.Problem) -> str:
+    solution = qpsolvers.solve_problem(problem, solver="osqp", eps_abs=1e-9, eps_rel=1e-9, polishing=True,
+                                       verbose=False, max_iter=20000)
+    return solution.extras["info"].status
+
+
+def infeasible_cases():
+    hand = make_hand(2)
+    cases = []
+    # (a) μ = margin: no tangential force allowed at a fixed contact, yet the weight must be carried
+    model = ReducedModel(hand, Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
+    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0])
+    f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
+    cases.append(("mu=0.05", A, f_m, frames, fixed, np.full(2, 0.05), InternalForceSettings(f_min=0.5, margin=0.05)))
+    # (b) f_min huge for the geometry: contacts 30 mm apart vertically over 100 mm, so the squeeze
+    # direction is 16.7° off the normals, outside cones of slope 0.25; a big squeeze leaves the cones
+    model = ReducedModel(hand, Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [-0.015, -0.015])
+    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0])
+    f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
+    cases.append(("f_min=50", A, f_m, frames, fixed, np.full(2, 0.3), InternalForceSettings(f_min=50.0, margin=0.05)))
+    # (c) m = 3, sliding bottom finger, a large tangential motion force at the left fixed contact
+    # and low friction everywhere
+    model = ReducedModel(make_hand(3), Grasp(polygon(), EDGES[3], ["fixed", "fixed", "sliding"]),
+                         [0.0, 0.0, 0.01])
+    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0, 0.0])
+    f_m = from_surface(frames, [[0.0, 20.0], [0.0, 0.0], [0.0, 0.0]])
+    f_m = f_m + np.linalg.lstsq(st.G, -model.f_g - st.G @ f_m, rcond=None)[0]
+    cases.append(("m3 large tangential", A, f_m, frames, fixed, np.full(3, 0.1),
+                  InternalForceSettings(f_min=0.5, margin=0.05)))
+    return cases
+
+
+@pytest.mark.parametrize("index", range(3))
+def test_infeasible_problem_raises_typed_error(index):
+    name, A, f_m, frames, fixed, mu, settings = infeasible_cases()[index]
+    qp = build_internal_force_qp(A, f_m, frames, fixed, mu, settings)
+    assert not lp_feasible(qp.problem), name  # the problem really has no solution
+    with pytest.raises(InternalForceInfeasibleError) as info:
+        solve_internal_force_qp(qp, frames, fixed, mu)
+    exc = info.value
+    assert isinstance(exc.qp, InternalForceQP)
+    assert isinstance(exc.qp.problem, qpsolvers.Problem)
+    np.testing.assert_array_equal(exc.qp.motion_forces, f_m)
+    direct = osqp_status(exc.qp.problem)
+    assert "infeasible" in direct
+    assert direct in exc.status
+    message = str(exc)
+    # the message states the minimum normal force and the friction margin that were asked for
+    assert f">= {settings.f_min} N" in message
+    assert f"margin {settings.margin}" in message
+
+
+# ---------------------------------------------------------------------------- empty null space
+def test_empty_null_space_only_checks_the_given_forces():
+    """m = 2, p = 1: A is square and invertible, nothing to choose; the result reports whether the
+    motion forces satisfy the constraints (sliding contact: normal only; fixed: normal and cone)."""
+    model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["sliding", "fixed"]), [-0.005, 0.003])
+    st, A, frames, fixed = qp_data(model, [0.004, Y0 + 0.005, 0.08, -0.005], [0.01, 0.0, 0.1, 0.002])
+    assert A.shape == (4, 4) and np.linalg.matrix_rank(A) == 4
+    mu = np.array([0.5, 0.5])
+    settings = InternalForceSettings(f_min=0.5, margin=0.05)  # fixed contact: |f_t| <= 0.45 f_n
+    cases = {
+        # (normal, tangential) per contact -> expected feasibility
+        "inside": ([[1.0, 0.7], [1.0, 0.4]], True),  # sliding contact's tangential force is free
+        "fixed outside its cone": ([[1.0, 0.2], [1.0, 0.47]], False),
+        "sliding contact too light": ([[0.4, 0.0], [1.0, 0.0]], False),
+    }
+    for name, (surface, expected) in cases.items():
+        f_m = from_surface(frames, surface)
+        qp = build_internal_force_qp(A, f_m, frames, fixed, mu, settings)
+        assert qp.problem is None, name
+        assert qp.null_basis.shape == (4, 0), name
+        result = solve_internal_force_qp(qp, frames, fixed, mu)
+        assert result.null_space_dim == 0, name
+        assert result.status == "empty null space", name
+        np.testing.assert_array_equal(result.f_c, np.zeros(4))
+        np.testing.assert_allclose(result.forces, f_m.reshape(2, 2), rtol=0, atol=0)
+        assert result.feasible is expected, name
