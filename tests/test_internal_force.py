@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import functools
 import itertools
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -341,7 +342,9 @@ def test_cone_edge_puts_the_contact_on_its_cone_edge(seed):
                 continue
             result = solve_internal_force_qp(qp, frames, fixed, mu, edge)
             fn, ft = to_surface(frames, result.forces)[j]
-            assert abs(ft - sign * mu[j] * fn) <= 1e-9 * scale, (j, sign, ft, sign * mu[j] * fn)
+            # OSQP's primal residual bound: eps_abs + eps_rel * |row| (tolerance 1e-9)
+            tight = 10 * settings.tolerance * max(scale, np.abs(result.forces).max())
+            assert abs(ft - sign * mu[j] * fn) <= tight, (j, sign, ft, sign * mu[j] * fn)
             assert fn >= settings.f_min - 10 * settings.tolerance * scale
             assert worst_violation(result.forces, frames, others, mu, settings) <= 10 * settings.tolerance * scale
             assert np.linalg.norm(A.T @ result.f_c) <= 1e-9 * np.linalg.norm(A, 2) * max(np.linalg.norm(result.f_c),
@@ -370,8 +373,8 @@ def test_cone_edge_two_finger_hold_one_direction_only():
     on its upward cone edge (friction carries its share of the weight), not on the downward one
     (that needs a pull)."""
     model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
-    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0])
-    mu = np.array([0.5, 0.5])
+    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
+    mu = np.array([0.5, 0.6])  # finger 2 keeps |f_t| <= 0.55 f_n: room for the same f_t / f_n = 0.5
     settings = InternalForceSettings()
     f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
     up = ConeEdge(0, 1.0)
@@ -390,7 +393,7 @@ def test_cone_edge_two_finger_hold_one_direction_only():
 
 def test_cone_edge_contact_index_is_validated():
     model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
-    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0])
+    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
     with pytest.raises(InvalidParameterError):
         build_internal_force_qp(A, np.zeros(4), frames, fixed, np.full(2, 0.5), InternalForceSettings(),
                                 ConeEdge(2, 1.0))
@@ -410,8 +413,11 @@ def lp_feasible(problem: qpsolvers.Problem) -> bool:
 
 
 def osqp_status(problem: qpsolvers.Problem) -> str:
-    solution = qpsolvers.solve_problem(problem, solver="osqp", eps_abs=1e-9, eps_rel=1e-9, polishing=True,
-                                       verbose=False, max_iter=20000)
+    """The status OSQP itself reports on ``problem``."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # OSQP/qpsolvers warn on infeasibility
+        solution = qpsolvers.solve_problem(problem, solver="osqp", eps_abs=1e-9, eps_rel=1e-9, polishing=True,
+                                           verbose=False, max_iter=20000)
     return solution.extras["info"].status
 
 
@@ -420,20 +426,20 @@ def infeasible_cases():
     cases = []
     # (a) μ = margin: no tangential force allowed at a fixed contact, yet the weight must be carried
     model = ReducedModel(hand, Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
-    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0])
+    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
     f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
     cases.append(("mu=0.05", A, f_m, frames, fixed, np.full(2, 0.05), InternalForceSettings(f_min=0.5, margin=0.05)))
     # (b) f_min huge for the geometry: contacts 30 mm apart vertically over 100 mm, so the squeeze
     # direction is 16.7° off the normals, outside cones of slope 0.25; a big squeeze leaves the cones
     model = ReducedModel(hand, Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [-0.015, -0.015])
-    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0])
+    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
     f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
     cases.append(("f_min=50", A, f_m, frames, fixed, np.full(2, 0.3), InternalForceSettings(f_min=50.0, margin=0.05)))
-    # (c) m = 3, sliding bottom finger, a large tangential motion force at the left fixed contact
-    # and low friction everywhere
-    model = ReducedModel(make_hand(3), Grasp(polygon(), EDGES[3], ["fixed", "fixed", "sliding"]),
+    # (c) m = 3, sliding left finger, low friction, and a large upward tangential motion force at
+    # the sliding contact (which no squeeze may change): the moments cannot be balanced by pushes
+    model = ReducedModel(make_hand(3), Grasp(polygon(), EDGES[3], ["sliding", "fixed", "fixed"]),
                          [0.0, 0.0, 0.01])
-    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0, 0.0])
+    st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0])
     f_m = from_surface(frames, [[0.0, 20.0], [0.0, 0.0], [0.0, 0.0]])
     f_m = f_m + np.linalg.lstsq(st.G, -model.f_g - st.G @ f_m, rcond=None)[0]
     cases.append(("m3 large tangential", A, f_m, frames, fixed, np.full(3, 0.1),

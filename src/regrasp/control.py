@@ -205,24 +205,35 @@ class Proposition2Controller(ComputedTorqueController):
 class Proposition3Controller(ComputedTorqueController):
     r"""Proposition 3 (3.4.11, corrected): m = 2, p = 1, :math:`\hat f_\xi = P (M_o a_X - f_g)`.
 
-    P is evaluated for the sliding direction of the desired (else the measured) ξ̇.
+    P depends on the sliding direction. We use the direction the contact will slide in during
+    the next sample: the sign of the measured ξ̇, unless ξ̇ crosses zero within ``sample_time``
+    under the commanded ξ̈ (a reversal), in which case the sign of the commanded ξ̈. Using the
+    desired ξ̇ instead would predict the wrong friction for a step or two at every reversal, and
+    the contact would stick there.
     """
 
     law = "Proposition 3"
 
-    def __init__(self, model: ReducedModel, gains: Gains, mu=0.5, **kwargs):
+    def __init__(self, model: ReducedModel, gains: Gains, mu=0.5, *, sample_time: float = 1e-3, **kwargs):
         if model.grasp.m != 2 or model.grasp.p != 1:
             raise InvalidParameterError("model", model.grasp.modes, "m = 2 fingers with p = 1 sliding contact")
         super().__init__(model, gains, mu, **kwargs)
+        if not np.isfinite(sample_time) or sample_time <= 0:
+            raise InvalidParameterError("sample_time", sample_time, "a control period > 0 [s]")
+        self.sample_time = float(sample_time)
         self._direction = 1.0
 
-    def __call__(self, S, S_dot, S_d, S_d_dot, S_d_ddot, *, friction=None) -> ControlOutput:
-        desired = float(np.asarray(S_d_dot, dtype=float)[3])
-        measured = float(np.asarray(S_dot, dtype=float)[3])
-        self._direction = float(np.sign(desired) or np.sign(measured) or self._direction)
-        return super().__call__(S, S_dot, S_d, S_d_dot, S_d_ddot, friction=friction)
+    def sliding_direction(self, xi_dot: float, xi_ddot_command: float) -> float:
+        """±1: the sign of ξ̇ over the next sample (see the class docstring)."""
+        after = xi_dot + xi_ddot_command * self.sample_time
+        if xi_dot * after <= 0.0 and xi_ddot_command != 0.0:
+            self._direction = float(np.sign(xi_ddot_command))
+        elif xi_dot != 0.0:
+            self._direction = float(np.sign(xi_dot))
+        return self._direction
 
     def friction_estimate(self, st, command, friction) -> np.ndarray:
         mu = self.mu[self.model.grasp.sliding[0]]
-        P = self.model.grasp.friction_map(st.S[:3], st.xi, [self._direction], mu)
+        direction = self.sliding_direction(float(st.S_dot[3]), float(command[3]))
+        P = self.model.grasp.friction_map(st.S[:3], st.xi, [direction], mu)
         return P @ (self.model.M_o @ command[:3] - self.model.f_g)

@@ -8,7 +8,7 @@ is :math:`f = f_m + f_c`, :math:`f_c = N_c y` (:math:`N_c` an orthonormal basis 
 space, :math:`\dim = 2m - 3 - p`). The QP
 
 .. math:: \min_y \tfrac12 \|f_c\|^2 = \tfrac12 y^T y \quad \text{s.t.}\quad
-          n_i^T f_i \ge f_{min}\ \forall i,\qquad
+          f_{min} \le n_i^T f_i\ (\le f_{max})\ \forall i,\qquad
           |t_i^T f_i| \le (\mu_i - \text{margin})\, n_i^T f_i\ \text{for fixed } i
 
 keeps every contact pushing and every fixed contact inside a linearized friction cone with
@@ -54,11 +54,13 @@ class InternalForceSettings:
         f_min: Minimum normal force [N] at every contact.
         margin: Friction margin [-]: fixed contacts keep |f_t| <= (μ - margin) f_n.
         tolerance: OSQP absolute and relative tolerance.
+        f_max: Maximum normal force [N] at every contact (what the fingers can push), or inf.
     """
 
     f_min: float = 0.5
     margin: float = 0.05
     tolerance: float = 1e-9
+    f_max: float = float("inf")
 
 
 @dataclass(frozen=True)
@@ -131,6 +133,8 @@ def _constraint_rows(frames, fixed, mu, settings, cone_edge):
     for i, frame in enumerate(frames):
         n, t = frame[:, 0], frame[:, 1]
         ineq.append((i, n, settings.f_min))
+        if np.isfinite(settings.f_max):
+            ineq.append((i, -n, -settings.f_max))
         if fixed[i] and (cone_edge is None or cone_edge.contact != i):
             slope = mu[i] - settings.margin
             ineq.append((i, slope * n - t, 0.0))

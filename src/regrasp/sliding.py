@@ -109,6 +109,14 @@ def sliding_feasibility(
     rhs = np.concatenate([wrench, [0.0]])
     particular = np.linalg.lstsq(system, rhs, rcond=None)[0]
     fixed = np.array([i != contact for i in range(m)])
+    scale = max(1.0, float(np.abs(rhs).max()))
+    if np.abs(system @ particular - rhs).max() > 1e-9 * scale:
+        # no contact forces at all produce this motion with contact j on that cone edge (at this
+        # geometry the required force is unbounded)
+        surface = np.einsum("mji,mj->mi", frames, particular.reshape(m, 2))
+        return SlideFeasibility(False, contact, float(direction), surface, surface[:, 0].copy(),
+                                mu * surface[:, 0] - np.abs(surface[:, 1]),
+                                "no finite contact forces produce this motion with that slide (singular geometry)")
     qp = build_internal_force_qp(system.T, particular, frames, fixed, mu, settings)
     reason = None
     try:
@@ -124,8 +132,11 @@ def sliding_feasibility(
     surface = np.einsum("mji,mj->mi", frames, forces)
     if not possible and reason and "squeeze" not in reason:
         worst = int(np.argmin(surface[:, 0]))
+        strongest = int(np.argmax(surface[:, 0]))
         if surface[worst, 0] < settings.f_min:
             reason = f"contact {worst} would pull (normal force {surface[worst, 0]:.3g} N)"
+        elif surface[strongest, 0] > settings.f_max:
+            reason = f"contact {strongest} would need {surface[strongest, 0]:.3g} N > f_max = {settings.f_max:.3g} N"
         else:
             margins = mu * surface[:, 0] - np.abs(surface[:, 1])
             worst = int(np.argmin(np.where(fixed, margins, np.inf)))
