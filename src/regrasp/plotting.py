@@ -20,7 +20,7 @@ from matplotlib.patches import Patch  # noqa: E402
 
 from .planner import FingerPlan, PlanResult  # noqa: E402
 
-__all__ = ["plot_conditions", "plot_feasible", "plot_reachable", "write_plan_figures"]
+__all__ = ["plot_conditions", "plot_feasible", "plot_reachable", "plot_slide_feasibility", "write_plan_figures"]
 
 _CONDITION_COLORS = {"I": "#e41a1c", "II": "#ff7f00", "III": "#4daf4a", "IV": "#377eb8"}
 _MM = 1000.0  # plot lengths in millimetres
@@ -165,3 +165,67 @@ def write_plan_figures(plan: PlanResult, directory: str | Path) -> list[Path]:
         plot_reachable(plan, directory / "reachable.png"),
         plot_feasible(plan, directory / "feasible.png"),
     ]
+
+
+def plot_slide_feasibility(polygon, pose, fingers, points_in_hand, edges, mu, results, path, *,
+                           gravity_in_hand=(0.0, -9.81), title: str = "") -> Path:
+    """Figure 3.4: the object, the fingers and, per slide direction, the predicted contact forces
+    inside their friction cones, and whether the slide is possible.
+
+    Args:
+        polygon: The object; ``pose`` its pose (x, y, β) in the hand frame.
+        fingers: The fingers (drawn through their inverse kinematics to ``points_in_hand``).
+        points_in_hand: Contact points (m, 2) [m], on edges ``edges``.
+        mu: Friction coefficient per contact (cone half-angle atan μ).
+        results: One :class:`~regrasp.sliding.SlideFeasibility` per panel.
+        path: Output PNG.
+    """
+    from matplotlib.patches import Polygon as PolygonPatch  # noqa: PLC0415
+
+    from .planar import rotation  # noqa: PLC0415
+
+    pose = np.asarray(pose, dtype=float)
+    verts = polygon.vertices_in(pose) * _MM
+    rot = rotation(pose[2])
+    chains = [finger.joint_positions_in_hand(finger.inverse_kinematics(point)) * _MM
+              for finger, point in zip(fingers, points_in_hand)]
+    everything = np.vstack([verts, *chains])
+    fig, axes = plt.subplots(1, len(results), figsize=(5.2 * len(results), 5.6), squeeze=False)
+    for ax, res in zip(axes[0], results):
+        ax.add_patch(PolygonPatch(verts, closed=True, facecolor="#d9d9d9", edgecolor="k", lw=1.5))
+        for joints in chains:
+            ax.plot(joints[:, 0], joints[:, 1], "-o", color="#4d4d4d", lw=4, ms=5, solid_capstyle="round")
+        scale = 25.0 / max(1e-9, np.abs(res.forces_surface).max())  # [mm per N]
+        for i, (point, k) in enumerate(zip(points_in_hand, edges)):
+            n = rot @ polygon.edge(k).inward_normal
+            t = rot @ polygon.edge(k).xi_direction
+            p = np.asarray(point) * _MM
+            half = np.arctan(mu[i])
+            for side in (1.0, -1.0):  # the cone of forces the finger can push with, around n
+                d = np.cos(half) * n + side * np.sin(half) * t
+                ax.plot([p[0], p[0] + 30 * d[0]], [p[1], p[1] + 30 * d[1]], color="#66a61e", lw=1, ls=":")
+            force = res.forces_surface[i, 0] * n + res.forces_surface[i, 1] * t
+            color = "#1b9e77" if res.forces_surface[i, 0] >= 0 else "#d95f02"
+            ax.annotate("", xy=p + scale * force, xytext=p, arrowprops=dict(arrowstyle="-|>", color=color, lw=2.2))
+            ax.text(*(p + scale * force + 4 * n), f"{res.forces_surface[i, 0]:.2f} N", fontsize=8, color=color,
+                    ha="center")
+            if i == res.contact:
+                ax.annotate("", xy=p + 14 * res.direction * t - 6 * n, xytext=p - 6 * n,
+                            arrowprops=dict(arrowstyle="->", color="#7570b3", lw=1.8))
+        g = np.asarray(gravity_in_hand, dtype=float)
+        c = pose[:2] * _MM
+        unit = g / max(np.linalg.norm(g), 1e-9)
+        ax.annotate("", xy=c + 12 * unit, xytext=c, arrowprops=dict(arrowstyle="-|>", color="k", lw=1.2))
+        ax.text(*(c + 15 * unit), "g", ha="center", va="center")
+        verdict = "possible" if res.possible else "impossible"
+        ax.set_title(f"slide {'up' if res.direction > 0 else 'down'}: {verdict}"
+                     + ("" if res.possible else f"\n{res.reason}"), fontsize=9)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x [mm]")
+        ax.set_ylabel("y [mm]")
+        lo, hi = np.min(everything, axis=0) - 15, np.max(everything, axis=0) + 35
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+    if title:
+        fig.suptitle(title, fontsize=10)
+    return _save(fig, path)

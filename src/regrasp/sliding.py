@@ -133,14 +133,16 @@ def sliding_feasibility(
     if not possible and reason and "squeeze" not in reason:
         worst = int(np.argmin(surface[:, 0]))
         strongest = int(np.argmax(surface[:, 0]))
-        if surface[worst, 0] < settings.f_min:
+        if surface[worst, 0] < 0.0:
             reason = f"contact {worst} would pull (normal force {surface[worst, 0]:.3g} N)"
+        elif surface[worst, 0] < settings.f_min:
+            reason = f"contact {worst} would push only {surface[worst, 0]:.3g} N < f_min = {settings.f_min:.3g} N"
         elif surface[strongest, 0] > settings.f_max:
             reason = f"contact {strongest} would need {surface[strongest, 0]:.3g} N > f_max = {settings.f_max:.3g} N"
         else:
-            margins = mu * surface[:, 0] - np.abs(surface[:, 1])
+            margins = (mu - settings.margin) * surface[:, 0] - np.abs(surface[:, 1])
             worst = int(np.argmin(np.where(fixed, margins, np.inf)))
-            reason = f"fixed contact {worst} would slip (cone margin {margins[worst]:.3g} N)"
+            reason = f"fixed contact {worst} would slip (cone margin {margins[worst]:.3g} N with margin {settings.margin})"
     margins = mu * surface[:, 0] - np.abs(surface[:, 1])
     return SlideFeasibility(bool(possible), contact, float(direction), surface, surface[:, 0].copy(), margins,
                             reason)
