@@ -7,6 +7,9 @@ Run: python benchmarks/bench_dynamics.py [--quick] [--json]
 * ``reduced_state``: :meth:`ReducedModel.state` (IK, H, Ḣ Ṡ, Pinocchio M, N, J, J̇q̇).
 * ``reduced_forward_dynamics``: :meth:`ReducedModel.forward_dynamics` on that state.
 * ``plant_accelerations``: one :meth:`Plant.accelerations` (one dynamics evaluation of the plant).
+* ``control_step_qp`` / ``control_step_no_qp``: one call of the fixed-contact law (two fingers, both
+  fixed) with and without the internal-force QP (qpsolvers + OSQP, set up anew each call), and
+  ``control_step_m3_qp``: Proposition 1 with three fingers (a two-dimensional internal force).
 Medians over repeated calls (time.perf_counter), never means.
 """
 
@@ -19,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from regrasp import Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+from regrasp import Finger, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+from regrasp.control import FixedContactController, Gains, Proposition1Controller
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -67,6 +71,20 @@ def main() -> None:
         "reduced_forward_dynamics": _median_us(lambda: model.forward_dynamics(st, tau, 0.3), n),
     }
     results["reduced_evaluation"] = results["reduced_state"] + results["reduced_forward_dynamics"]
+
+    fixed = ReducedModel(hand, Grasp(sc.polygon, [1, 3], ["fixed", "fixed"]), xi=[0.0, 0.0])
+    X, zero = np.array([0.0, 0.12, 0.0]), np.zeros(3)
+    with_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), mu=0.5)
+    without_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), mu=0.5, internal_force=None)
+    results["control_step_qp"] = _median_us(lambda: with_qp(X, zero, X, zero, zero), n)
+    results["control_step_no_qp"] = _median_us(lambda: without_qp(X, zero, X, zero, zero), n)
+    third = Finger.from_urdf(ROOT / "urdf" / "planar_2r_finger.urdf", base_in_hand=(0.04, -0.02, np.pi / 2),
+                             configuration="left", name="finger3")
+    hand3 = Hand([*hand.fingers, third], gravity_in_hand=sc.gravity_in_hand)
+    three = ReducedModel(hand3, Grasp(sc.polygon, [1, 3, 2], ["sliding", "fixed", "fixed"]), xi=[-0.01, -0.01, 0.02])
+    prop1 = Proposition1Controller(three, Gains.critically_damped(20.0, 4), mu=[0.0, 0.5, 0.5])
+    S3, S3_dot = np.array([0.0, 0.12, 0.0, -0.01]), np.array([0.0, 0.0, 0.0, 0.01])
+    results["control_step_m3_qp"] = _median_us(lambda: prop1(S3, S3_dot, S3, S3_dot, np.zeros(4)), n)
     if args.json:
         print(json.dumps({k: {"median_us": v} for k, v in results.items()}))
         return

@@ -24,5 +24,6 @@ def test_dynamics_benchmark_quick_smoke():
                           capture_output=True, text=True, timeout=300, check=False)
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
-    for key in ("plant_step", "plant_accelerations", "reduced_state", "reduced_forward_dynamics"):
+    for key in ("plant_step", "plant_accelerations", "reduced_state", "reduced_forward_dynamics",
+                "control_step_qp", "control_step_no_qp", "control_step_m3_qp"):
         assert doc[key]["median_us"] > 0

@@ -1,7 +1,17 @@
 """regrasp: planar multifingered hands that plan feasible contacts, control sliding
 fingertips and regrasp dynamically (after "Dynamic regrasping by sliding")."""
 
+from .closed_loop import ClosedLoopLog, measure_reduced_state, run_closed_loop
 from .collision import UrdfCollisionChecker, default_tip_clearance, segment_hits_polygon
+from .control import (
+    ComputedTorqueController,
+    ControlOutput,
+    FixedContactController,
+    Gains,
+    Proposition1Controller,
+    Proposition2Controller,
+    Proposition3Controller,
+)
 from .envelope import (
     Condition,
     EdgeLine,
@@ -28,18 +38,32 @@ from .finger_urdf import planar_2r_urdf
 from .grasp import ContactMode, Grasp
 from .hand import Hand, HandDynamics
 from .planner import FingerPlan, InfeasibleInterval, PlanResult, plan, plan_scenario
+from .internal_force import (
+    ConeEdge,
+    InternalForceInfeasibleError,
+    InternalForceQP,
+    InternalForceResult,
+    InternalForceSettings,
+    build_internal_force_qp,
+    solve_internal_force_qp,
+)
 from .plant import Plant, PlantContact, PlantEvent, PlantState, PlantStep
 from .polygon import ConvexPolygon, Edge
 from .reduced import ReducedModel, ReducedState
 from .scenario import FingerContact, Scenario, load_scenario
+from .sliding import SlideFeasibility, sliding_feasibility
 from .trajectory import EllipseTrajectory, Trajectory, TrajectorySample, WaypointTrajectory
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "ClosedLoopLog",
+    "ComputedTorqueController",
     "Condition",
+    "ConeEdge",
     "Configuration",
     "ContactMode",
+    "ControlOutput",
     "ConvexPolygon",
     "Edge",
     "EdgeLine",
@@ -50,11 +74,17 @@ __all__ = [
     "FingerEnvelope",
     "FingerModelError",
     "FingerPlan",
+    "FixedContactController",
+    "Gains",
     "Geometry",
     "Grasp",
     "Hand",
     "HandDynamics",
     "InfeasibleInterval",
+    "InternalForceInfeasibleError",
+    "InternalForceQP",
+    "InternalForceResult",
+    "InternalForceSettings",
     "InvalidParameterError",
     "LinkShape",
     "PlanResult",
@@ -64,12 +94,16 @@ __all__ = [
     "PlantState",
     "PlantStep",
     "PolygonError",
+    "Proposition1Controller",
+    "Proposition2Controller",
+    "Proposition3Controller",
     "ReducedModel",
     "ReducedState",
     "RegraspError",
     "Scenario",
     "ScenarioError",
     "SingularFingerError",
+    "SlideFeasibility",
     "SlidingContactCountError",
     "Trajectory",
     "TrajectoryError",
@@ -78,12 +112,17 @@ __all__ = [
     "UnreachableError",
     "UrdfCollisionChecker",
     "WaypointTrajectory",
+    "build_internal_force_qp",
     "condition_of",
     "default_tip_clearance",
     "load_scenario",
+    "measure_reduced_state",
     "plan",
     "plan_scenario",
     "planar_2r_urdf",
     "reachable_on_line",
+    "run_closed_loop",
     "segment_hits_polygon",
+    "sliding_feasibility",
+    "solve_internal_force_qp",
 ]
