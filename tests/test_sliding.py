@@ -404,3 +404,39 @@ def test_figure_3_4_png(tmp_path):
                                   [0.3, 0.3], results, tmp_path / "figure_3_4.png")
     data = path.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
+
+
+def test_two_equal_friction_fingers_cannot_slide_with_gravity_along_trajectory_2():
+    """A consequence of Remark 3.3 that the regrasp issue depends on: holding the paper's rectangle at
+    its vertical sides with one μ on both tips, no finger can ever slide in the direction of gravity
+    (the holder would have to carry the weight plus the slider's drag, mg + μλ, with only μλ of
+    friction), at any time of trajectory 2, any contact positions and any μ; while the envelope of
+    trajectory 2 makes every finger move both up and down within each period."""
+    import numpy as np
+
+    from regrasp import Grasp, load_scenario, plan_scenario
+    from regrasp.sliding import sliding_feasibility
+
+    root = __import__("pathlib").Path(__file__).resolve().parents[1]
+    sc = load_scenario(root / "examples" / "scenarios" / "paper_trajectory_2.toml")
+    grasp = Grasp(sc.polygon, [1, 3], ["fixed", "fixed"])
+    traj = sc.trajectory
+    grid = np.linspace(-0.019, 0.019, 5)
+    for gravity, with_g in (((0.0, -9.81), (-1, +1)), ((0.0, 9.81), (+1, -1))):  # ξ points up on edge 1, down on edge 3
+        for mu in (0.3, 0.8, 1.2):
+            for t in np.linspace(0.0, traj.t_end, 9):
+                for x1 in grid:
+                    for x2 in grid:
+                        for i in (0, 1):
+                            r = sliding_feasibility(grasp, traj.pose(t), [x1, x2], traj.acceleration(t), i, with_g[i],
+                                                    mu, object_mass=sc.polygon.mass, object_inertia=sc.polygon.inertia,
+                                                    gravity_in_hand=gravity)
+                            assert not r.possible
+    # ... but each finger's envelope needs moves of >= 10 mm both ways within a period
+    plan = plan_scenario(sc, samples=201)
+    for f in plan.fingers:
+        lo = np.array([s.feasible[0][0] for s in f.samples])
+        hi = np.array([s.feasible[-1][1] for s in f.samples])
+        rise = max(lo[j] - hi[i] for i in range(len(lo)) for j in range(i + 1, len(lo)))
+        fall = max(lo[i] - hi[j] for i in range(len(lo)) for j in range(i + 1, len(lo)))
+        assert rise > 0.009 and fall > 0.009
