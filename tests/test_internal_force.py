@@ -493,3 +493,43 @@ def test_empty_null_space_only_checks_the_given_forces():
         np.testing.assert_array_equal(result.f_c, np.zeros(4))
         np.testing.assert_allclose(result.forces, f_m.reshape(2, 2), rtol=0, atol=0)
         assert result.feasible is expected, name
+
+
+def test_persistent_solver_matches_the_one_shot_qp():
+    """InternalForceSolver (one persistent OSQP per problem shape, warm-started) gives the same f_c
+    as build_internal_force_qp + solve_internal_force_qp, and raises the same typed error, across a
+    sequence of problems reusing the same solver object."""
+    from regrasp.internal_force import InternalForceSolver
+
+    solvers = {}
+    compared = raised = 0
+    for kind, seed in CASES:
+        case = random_case(kind, seed)
+        A, f_m, frames, fixed, mu, settings = (case[k] for k in ("A", "f_m", "frames", "fixed", "mu", "settings"))
+        solver = solvers.setdefault((kind, settings), InternalForceSolver(settings))
+        try:
+            expected = solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, fixed, mu, settings),
+                                               frames, fixed, mu)
+        except InternalForceInfeasibleError:
+            with pytest.raises(InternalForceInfeasibleError) as err:
+                solver.solve(A, f_m, frames, fixed, mu)
+            assert isinstance(err.value.qp.problem, qpsolvers.Problem)
+            raised += 1
+            continue
+        got = solver.solve(A, f_m, frames, fixed, mu)
+        scale = max(1.0, np.abs(expected.f_c).max())
+        np.testing.assert_allclose(got.f_c, expected.f_c, atol=1e-6 * scale)
+        assert got.null_space_dim == expected.null_space_dim and got.feasible
+        compared += 1
+    # the same solver object reused across states of one kind (warm start, value updates only)
+    shared = InternalForceSolver(InternalForceSettings())
+    for seed in range(6):
+        case = random_case("m3p0", seed)
+        A, f_m, frames, fixed, mu = (case[k] for k in ("A", "f_m", "frames", "fixed", "mu"))
+        try:
+            expected = solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, fixed, mu), frames, fixed, mu)
+        except InternalForceInfeasibleError:
+            continue
+        np.testing.assert_allclose(shared.solve(A, f_m, frames, fixed, mu).f_c, expected.f_c,
+                                   atol=1e-6 * max(1.0, np.abs(expected.f_c).max()))
+    assert compared >= 30 and raised >= 1

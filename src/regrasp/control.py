@@ -27,7 +27,8 @@ the :math:`G R_f B_v f_\xi` terms, which count the friction twice.
 
 The internal force :math:`J^T f_c` (3.3.7) is chosen by :mod:`regrasp.internal_force`: the
 least squeeze that keeps every contact pushing and every fixed contact inside its friction
-cone with margins, given the contact forces :math:`f_m` the motion torque produces.
+cone with margins, given the contact forces :math:`f_m` the motion torque produces. Each
+controller keeps a persistent OSQP solver (:class:`~regrasp.internal_force.InternalForceSolver`).
 """
 
 from __future__ import annotations
@@ -39,13 +40,7 @@ import numpy as np
 
 from .exceptions import InvalidParameterError
 from .grasp import ContactMode
-from .internal_force import (
-    ConeEdge,
-    InternalForceResult,
-    InternalForceSettings,
-    build_internal_force_qp,
-    solve_internal_force_qp,
-)
+from .internal_force import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver
 from .reduced import ReducedModel, ReducedState
 from .validation import as_finite_array, as_friction_coefficients
 
@@ -130,6 +125,7 @@ class ComputedTorqueController:
         self.mu = as_friction_coefficients(mu, model.grasp.m)
         self.internal_force = internal_force
         self.cone_edge = cone_edge
+        self._qp = InternalForceSolver(internal_force) if internal_force is not None else None
         self._fixed = np.array([mode is ContactMode.FIXED for mode in model.grasp.modes])
 
     def friction_estimate(self, st: ReducedState, command: np.ndarray, friction) -> np.ndarray:
@@ -159,11 +155,9 @@ class ComputedTorqueController:
         motion_forces = np.linalg.solve(J.T, tau - M @ q_ddot - st.hand.nonlinear)
         frames = model.grasp.surface_frames(st.S[:3])
         internal = None
-        if self.internal_force is not None:
+        if self._qp is not None:
             A = np.hstack([st.G.T, st.R_f @ st.B_v])
-            qp = build_internal_force_qp(A, motion_forces, frames, self._fixed, self.mu, self.internal_force,
-                                         self.cone_edge)
-            internal = solve_internal_force_qp(qp, frames, self._fixed, self.mu, self.cone_edge)
+            internal = self._qp.solve(A, motion_forces, frames, self._fixed, self.mu, self.cone_edge)
             tau = tau + J.T @ internal.f_c
             forces = internal.forces
         else:

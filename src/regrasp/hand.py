@@ -112,7 +112,10 @@ class Hand:
 
     def dynamics(self, q, v) -> HandDynamics:
         """M, N, J, J̇q̇ and the tips at joint positions ``q`` [rad] and velocities ``v`` [rad/s]."""
-        qs, vs = self._split("q", q), self._split("v", v)
+        return self._dynamics(self._split("q", q), self._split("v", v))
+
+    def _dynamics(self, qs: np.ndarray, vs: np.ndarray) -> HandDynamics:
+        """:meth:`dynamics` on already validated (m, 2) arrays (hot paths)."""
         mass = np.zeros((self.nq, self.nq))
         jac = np.zeros((self.nq, self.nq))
         nle = np.empty(self.nq)
@@ -123,8 +126,8 @@ class Hand:
             sl = slice(2 * i, 2 * i + 2)
             qi, vi = qs[i], vs[i]
             pin.crba(model, data, qi)
-            mi = np.triu(data.M)
-            mass[sl, sl] = mi + np.triu(mi, 1).T
+            mass[sl, sl] = data.M  # crba fills the upper triangle: mirror it
+            mass[2 * i + 1, 2 * i] = mass[2 * i, 2 * i + 1]
             nle[sl] = pin.nonLinearEffects(model, data, qi, vi)
             if self.damping_enabled:
                 nle[sl] += np.asarray(model.damping) * vi
@@ -133,7 +136,7 @@ class Hand:
             tips[i] = data.oMf[fid].translation[:2]
             jdv[sl] = pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED).linear[:2]
             jac[sl, sl] = pin.computeFrameJacobian(model, data, qi, fid, pin.LOCAL_WORLD_ALIGNED)[:2, :]
-        tip_vel = (jac @ np.concatenate(vs)).reshape(self.m, 2)
+        tip_vel = (jac @ vs.reshape(-1)).reshape(self.m, 2)
         return HandDynamics(mass, nle, jac, jdv, tips, tip_vel)
 
     def jacobian(self, q) -> np.ndarray:

@@ -29,6 +29,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+import osqp
 import qpsolvers
 import scipy.linalg
 import scipy.sparse as sp
@@ -41,6 +42,7 @@ __all__ = [
     "InternalForceQP",
     "InternalForceResult",
     "InternalForceSettings",
+    "InternalForceSolver",
     "build_internal_force_qp",
     "solve_internal_force_qp",
 ]
@@ -225,3 +227,67 @@ def solve_internal_force_qp(
     if not ok:
         raise InternalForceInfeasibleError(qp, f"{status} (solution violates the constraints)")
     return InternalForceResult(f_c, forces, qp.null_basis.shape[1], True, status, time.perf_counter() - start)
+
+
+class InternalForceSolver:
+    """The same QP as :func:`build_internal_force_qp` + :func:`solve_internal_force_qp`, on a
+    persistent ``osqp.OSQP`` object per problem shape (warm-started, only the numbers updated),
+    for controllers that solve it every control step.
+
+    On failure it builds the ``qpsolvers`` problem so the raised
+    :class:`InternalForceInfeasibleError` carries it, as the one-shot path does.
+    """
+
+    def __init__(self, settings: InternalForceSettings = InternalForceSettings()):
+        self.settings = settings
+        self._solvers: dict[tuple[int, int, int], tuple[osqp.OSQP, np.ndarray, np.ndarray]] = {}
+
+    def _osqp(self, k: int, rows: int, n_eq: int, a: np.ndarray, lower: np.ndarray, upper: np.ndarray):
+        key = (k, rows, n_eq)
+        if key not in self._solvers:
+            # a dense pattern, so that later updates keep the sparsity structure
+            indptr = np.arange(0, rows * k + 1, rows)
+            indices = np.tile(np.arange(rows), k)
+            a_csc = sp.csc_matrix((a.T.reshape(-1), indices, indptr), shape=(rows, k))
+            solver = osqp.OSQP()
+            tol = self.settings.tolerance
+            solver.setup(P=sp.csc_matrix(np.eye(k)), q=np.zeros(k), A=a_csc, l=lower, u=upper, eps_abs=tol,
+                         eps_rel=tol, polishing=True, verbose=False, max_iter=20000)
+            self._solvers[key] = solver
+        else:
+            self._solvers[key].update(Ax=a.T.reshape(-1), l=lower, u=upper)
+        return self._solvers[key]
+
+    def solve(self, constraint_matrix, motion_forces, surface_frames, fixed, mu,
+              cone_edge: ConeEdge | None = None) -> InternalForceResult:
+        """Solve the QP of the module docstring; see :func:`build_internal_force_qp` for the arguments."""
+        start = time.perf_counter()
+        m = len(surface_frames)
+        null = scipy.linalg.null_space(np.asarray(constraint_matrix).T)
+        k = null.shape[1]
+        qp_shell = InternalForceQP(None, null, motion_forces, self.settings)
+        scale = max(1.0, float(np.abs(motion_forces).max(initial=0.0)))
+        if k == 0:
+            forces = motion_forces.reshape(m, 2)
+            ok = _satisfied(qp_shell, forces, surface_frames, fixed, mu, cone_edge, 1e-9 * scale)
+            return InternalForceResult(np.zeros(2 * m), forces, 0, ok, "empty null space",
+                                       time.perf_counter() - start)
+        ineq, eq = _constraint_rows(surface_frames, fixed, mu, self.settings, cone_edge)
+        items = ineq + eq
+        a = np.array([coef @ null[2 * i:2 * i + 2] for i, coef, _ in items])
+        bound = np.array([lo - coef @ motion_forces[2 * i:2 * i + 2] for i, coef, lo in items])
+        upper = np.concatenate([np.full(len(ineq), np.inf), bound[len(ineq):]])
+        solver = self._osqp(k, len(items), len(eq), a, bound, upper)
+        result = solver.solve(raise_error=False)
+        status = str(result.info.status)
+        x = result.x
+        solved = status in ("solved", "solved inaccurate") and x is not None and np.all(np.isfinite(x))
+        if solved:
+            f_c = null @ x
+            forces = (motion_forces + f_c).reshape(m, 2)
+            if _satisfied(qp_shell, forces, surface_frames, fixed, mu, cone_edge, 1e-6 * scale):
+                return InternalForceResult(f_c, forces, k, True, status, time.perf_counter() - start)
+            status = f"{status} (solution violates the constraints)"
+        qp = build_internal_force_qp(constraint_matrix, motion_forces, surface_frames, fixed, mu, self.settings,
+                                     cone_edge)
+        raise InternalForceInfeasibleError(qp, status)

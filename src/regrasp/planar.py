@@ -20,6 +20,8 @@ def rotation(theta: float) -> np.ndarray:
 def perp(v: np.ndarray) -> np.ndarray:
     """Rotate a 2-vector (or an (n, 2) array of them) by +90 degrees."""
     v = np.asarray(v, dtype=float)
+    if v.ndim == 1:  # the common case, without np.stack's overhead
+        return np.array([-v[1], v[0]])
     return np.stack([-v[..., 1], v[..., 0]], axis=-1)
 
 

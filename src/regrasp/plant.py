@@ -227,11 +227,13 @@ class Plant:
     def _edge(self, c: PlantContact):
         return self.polygon.edge(c.edge)
 
-    def contact_xi(self, st: PlantState, i: int) -> tuple[float, float]:
-        """ξ [m] of tip i's projection on its edge's line, and its relative velocity ξ̇ [m/s]."""
+    def contact_xi(self, st: PlantState, i: int, tip=None, tip_vel=None) -> tuple[float, float]:
+        """ξ [m] of tip i's projection on its edge's line, and its relative velocity ξ̇ [m/s]
+        (``tip``/``tip_vel``: the tip's position and velocity if already known)."""
         e = self._edge(self.contacts[i])
         rot = rotation(st.X[2])
-        tip, tip_vel = self._tip(st, i)
+        if tip is None:
+            tip, tip_vel = self._tip(st, i)
         rel = rot.T @ (tip - st.X[:2])
         xi = float(e.xi_direction @ (rel - e.xi_origin))
         # velocity of the tip relative to the object, in object coordinates
@@ -245,15 +247,15 @@ class Plant:
         tip = f.forward_kinematics(qi)
         return tip, f.tip_jacobian(qi) @ vi
 
-    def constraint_error(self, st: PlantState) -> float:
-        """Largest violation [m] of the active contact constraints."""
+    def constraint_error(self, st: PlantState, tips=None) -> float:
+        """Largest violation [m] of the active contact constraints (``tips``: (m, 2) if known)."""
         rot = rotation(st.X[2])
         worst = 0.0
         for i, c in enumerate(self.contacts):
             if c.mode == "separated":
                 continue
             e = self._edge(c)
-            tip, _ = self._tip(st, i)
+            tip = self._tip(st, i)[0] if tips is None else tips[i]
             if c.mode == "fixed":
                 err = np.linalg.norm(tip - st.X[:2] - rot @ e.point(c.xi))
             else:
@@ -331,8 +333,11 @@ class Plant:
         """(q̈, Ẍ, forces) at state ``st`` for torques ``tau``: ``forces`` (m, 2) are the contact
         forces on the object in the hand frame (zeros for separated contacts)."""
         tau = as_finite_array("tau", tau, (self.hand.nq,))
+        return self._accelerations(st, tau, modes)[:3]
+
+    def _accelerations(self, st: PlantState, tau: np.ndarray, modes=None):
         contacts = self.contacts if modes is None else modes
-        dyn = self.hand.dynamics(st.q, st.v)
+        dyn = self.hand._dynamics(st.q.reshape(-1, 2), st.v.reshape(-1, 2))
         n, m = self.hand.nq, self.hand.m
         rot = rotation(st.X[2])
         w_cols, c_rows, b, owners = self._rows(st, dyn, contacts)
@@ -354,7 +359,7 @@ class Plant:
                 forces[i] = value * (normal + self.mu[i] * c.sign * perp(normal))
             else:
                 forces[i, kind] = value
-        return acc[:n], acc[n:], forces
+        return acc[:n], acc[n:], forces, dyn
 
     def _project_velocities(self, st: PlantState) -> float:
         """Remove the velocity that violates the active constraints (a plastic sticking impulse):
@@ -379,14 +384,14 @@ class Plant:
         return float(delta)
 
     def _derivative(self, st: PlantState, tau):
-        qdd, Xdd, forces = self.accelerations(st, tau)
+        qdd, Xdd, forces, dyn = self._accelerations(st, tau)
         damping = self.hand.damping
         # net power of the contact forces: on the object at its material point, minus on the tips
         power = 0.0
         for i in range(self.hand.m):
             if not forces[i].any():
                 continue
-            tip, tip_vel = self._tip(st, i)
+            tip, tip_vel = dyn.tips[i], dyn.tip_velocities[i]
             point_vel = st.V[:2] + st.V[2] * perp(tip - st.X[:2])
             power += forces[i] @ (point_vel - tip_vel)
         return (st.v, qdd, st.V, Xdd, float(tau @ st.v), float(-(damping * st.v) @ st.v), float(power)), forces
@@ -424,10 +429,11 @@ class Plant:
         self.state = new
         modes = tuple(c.mode for c in self.contacts)
         surface = self.surface_forces(st, forces0)
-        err = self.constraint_error(new)
+        dyn = self.hand._dynamics(new.q.reshape(-1, 2), new.v.reshape(-1, 2))
+        err = self.constraint_error(new, dyn.tips)
         self.max_constraint_error = max(self.max_constraint_error, err)
-        events = self._events(new, tau)
-        xis = np.array([self.contact_xi(new, i) for i in range(self.hand.m)])
+        events = self._events(new, tau, dyn)
+        xis = np.array([self.contact_xi(new, i, dyn.tips[i], dyn.tip_velocities[i]) for i in range(self.hand.m)])
         return PlantStep(new, surface, xis[:, 0], xis[:, 1], modes, err, tuple(events))
 
     def _event(self, t, i, kind, detail, out):
@@ -437,14 +443,14 @@ class Plant:
         if kind in self.stop_on:
             self.stopped = True
 
-    def _events(self, st: PlantState, tau) -> list[PlantEvent]:
+    def _events(self, st: PlantState, tau, dyn) -> list[PlantEvent]:
         out: list[PlantEvent] = []
-        _, _, forces = self.accelerations(st, tau)
+        forces = self._accelerations(st, tau)[2]
         surface = self.surface_forces(st, forces)
         for i, c in enumerate(self.contacts):
             if c.mode == "separated":
                 continue
-            xi, xi_dot = self.contact_xi(st, i)
+            xi, xi_dot = self.contact_xi(st, i, dyn.tips[i], dyn.tip_velocities[i])
             if self.contact_events:
                 self._switch_mode(st, tau, i, surface[i], xi, xi_dot, out)
                 if c.mode == "separated":
@@ -452,7 +458,7 @@ class Plant:
             lo, hi = self._edge(c).xi_range
             if not lo <= xi <= hi:
                 self._event(st.t, i, "left_edge", f"xi = {xi:.5g} m outside [{lo:.5g}, {hi:.5g}]", out)
-        jac = self.hand.jacobian(st.q)
+        jac = dyn.jacobian
         for i in range(self.hand.m):
             cond = np.linalg.cond(jac[2 * i:2 * i + 2, 2 * i:2 * i + 2])
             if not cond <= self.hand.singular_threshold:
