@@ -8,7 +8,7 @@ Run: python benchmarks/bench_dynamics.py [--quick] [--json]
 * ``reduced_forward_dynamics``: :meth:`ReducedModel.forward_dynamics` on that state.
 * ``plant_accelerations``: one :meth:`Plant.accelerations` (one dynamics evaluation of the plant).
 * ``control_step_qp`` / ``control_step_no_qp``: one call of the fixed-contact law (two fingers, both
-  fixed) with and without the internal-force QP (qpsolvers + OSQP, set up anew each call), and
+  fixed) with and without the internal-force QP (a persistent OSQP solver, warm-started), and
   ``control_step_m3_qp``: Proposition 1 with three fingers (a two-dimensional internal force).
 Medians over repeated calls (time.perf_counter), never means.
 """

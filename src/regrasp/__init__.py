@@ -44,6 +44,7 @@ from .internal_force import (
     InternalForceQP,
     InternalForceResult,
     InternalForceSettings,
+    InternalForceSolver,
     build_internal_force_qp,
     solve_internal_force_qp,
 )
@@ -85,6 +86,7 @@ __all__ = [
     "InternalForceQP",
     "InternalForceResult",
     "InternalForceSettings",
+    "InternalForceSolver",
     "InvalidParameterError",
     "LinkShape",
     "PlanResult",
