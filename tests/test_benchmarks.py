@@ -27,3 +27,18 @@ def test_dynamics_benchmark_quick_smoke():
     for key in ("plant_step", "plant_accelerations", "reduced_state", "reduced_forward_dynamics",
                 "control_step_qp", "control_step_no_qp", "control_step_m3_qp"):
         assert doc[key]["median_us"] > 0
+
+
+def test_benchmark_table_quick_smoke():
+    """benchmarks/run.py --quick --json: every measured item has a positive median, and the
+    Pinocchio/OSQP floors are measured in the same run (no timing assertions)."""
+    proc = subprocess.run([sys.executable, str(BENCH / "run.py"), "--quick", "--json"],
+                          capture_output=True, text=True, timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    for key in ("control_fixed_qp", "control_fixed_no_qp", "control_sliding_m3_qp", "control_sliding_m3_no_qp",
+                "plant_step"):
+        assert doc[key]["median_us"] > 0 and doc[key]["floor_us"] > 0
+    assert doc["control_fixed_qp"]["floor_us"] > doc["control_fixed_no_qp"]["floor_us"]
+    assert doc["planner_sample_ideal"]["median_us"] > 0 and doc["planner_sample_ideal"]["floor_us"] is None
+    assert set(doc["rollout_realtime_factor"]) == {"recording_off", "recording_on"}

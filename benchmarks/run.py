@@ -1,0 +1,160 @@
+"""All benchmarks in one table: medians and the floor each stands on, measured in the same run.
+
+Run: python benchmarks/run.py [--quick] [--json]
+
+Items and their floors:
+* control steps (fixed law and Proposition 1, with and without the internal-force QP): floor =
+  the Pinocchio calls one step needs (per finger: crba, nonLinearEffects, the tip's frame
+  Jacobian, and forward kinematics + the classical acceleration for J̇q̇), plus, with the QP,
+  the bare solve of the controller's persistent, warm-started ``osqp.OSQP`` object;
+* one plant step: floor = four times those Pinocchio calls (RK4 evaluates the dynamics 4 times);
+* the planner per time sample (``ideal``, ``urdf``): no floor (null);
+* the supervisor step and the rollout's real-time factor need the regrasp supervisor, which does
+  not exist yet: reported as null.
+Medians of repeated calls (time.perf_counter); the Pinocchio floors time batches of 1000 calls.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from regrasp import FingerEnvelope, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+from regrasp.control import FixedContactController, Gains, Proposition1Controller
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def median_us(fn, n: int) -> float:
+    fn()
+    samples = []
+    for _ in range(n):
+        t0 = time.perf_counter()
+        fn()
+        samples.append(time.perf_counter() - t0)
+    return float(np.median(samples) * 1e6)
+
+
+def batch_us(fn, batch: int = 1000, repeats: int = 7) -> float:
+    """Median over ``repeats`` of the mean time of ``batch`` calls (for sub-microsecond calls)."""
+    fn()
+    samples = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(batch):
+            fn()
+        samples.append((time.perf_counter() - t0) / batch)
+    return float(np.median(samples) * 1e6)
+
+
+def pinocchio_floor_us(hand: Hand, quick: bool) -> float:
+    """The Pinocchio calls one evaluation of the hand's dynamics needs, summed over the fingers."""
+    total = 0.0
+    zero = np.zeros(2)
+    for f in hand.fingers:
+        model, data, fid = f.model, f.model.createData(), f.tip_frame_id
+        q, v = np.array([0.3, -1.2]), np.array([0.5, -0.4])
+        batch = 100 if quick else 1000
+
+        def jdot(model=model, data=data, q=q, v=v, fid=fid):
+            pin.forwardKinematics(model, data, q, v, zero)
+            pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
+
+        total += batch_us(lambda model=model, data=data, q=q: pin.crba(model, data, q), batch)
+        total += batch_us(lambda model=model, data=data, q=q, v=v: pin.nonLinearEffects(model, data, q, v), batch)
+        total += batch_us(lambda model=model, data=data, q=q, fid=fid: pin.computeFrameJacobian(
+            model, data, q, fid, pin.LOCAL_WORLD_ALIGNED), batch)
+        total += batch_us(jdot, batch)
+    return total
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="few iterations (CI smoke run)")
+    parser.add_argument("--json", action="store_true", help="one JSON document on stdout")
+    args = parser.parse_args()
+    n = 20 if args.quick else 300
+
+    sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
+    hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
+    floor_dyn = pinocchio_floor_us(hand, args.quick)
+
+    X, zero3 = np.array([0.0, 0.12, 0.0]), np.zeros(3)
+    fixed = ReducedModel(hand, Grasp(sc.polygon, [1, 3], ["fixed", "fixed"]), xi=[0.0, 0.0])
+    fixed_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), mu=0.5)
+    fixed_no = FixedContactController(fixed, Gains.critically_damped(20.0, 3), mu=0.5, internal_force=None)
+    out = fixed_qp(X, zero3, X, zero3, zero3)
+    # the QP's floor: the controller's persistent osqp.OSQP object solving its (warm-started) problem
+    (raw_osqp,) = [solver for solver in fixed_qp._qp._solvers.values()]
+    assert out.internal is not None
+    osqp_floor = median_us(lambda: raw_osqp.solve(raise_error=False), n)
+
+    third = hand.fingers[0].with_placement(base_in_hand=(0.04, -0.02, np.pi / 2), configuration="left",
+                                           name="finger3")
+    hand3 = Hand([*hand.fingers, third], gravity_in_hand=sc.gravity_in_hand)
+    three = ReducedModel(hand3, Grasp(sc.polygon, [1, 3, 2], ["sliding", "fixed", "fixed"]), xi=[-0.01, -0.01, 0.02])
+    S3, S3d = np.array([0.0, 0.12, 0.0, -0.01]), np.array([0.0, 0.0, 0.0, 0.01])
+    slide_qp = Proposition1Controller(three, Gains.critically_damped(20.0, 4), mu=[0.0, 0.5, 0.5])
+    slide_no = Proposition1Controller(three, Gains.critically_damped(20.0, 4), mu=[0.0, 0.5, 0.5], internal_force=None)
+    floor_dyn3 = pinocchio_floor_us(hand3, args.quick)
+
+    model = ReducedModel(hand, Grasp(sc.polygon, [1, 3], ["sliding", "fixed"]), xi=[0.0, 0.0])
+    S, S_dot = np.array([0.0, 0.12, 0.0, 0.0]), np.array([0.0, 0.0, 0.0, 0.005])
+    st = model.state(S, S_dot)
+    f = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
+    f += 2.0 * np.concatenate([frame[:, 0] for frame in model.grasp.surface_frames(S[:3])])
+    tau = st.hand.nonlinear + st.hand.jacobian.T @ f
+    plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", 0.0, 1.0), PlantContact(3, "fixed", 0.0)],
+                  mu=0.0, stop_on=())
+    plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
+
+    def plant_step():
+        if plant.state.t > 0.05:
+            plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
+        plant.step(tau)
+
+    env_ideal = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1)
+    env_urdf = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1, geometry="urdf")
+    pose = sc.trajectory.pose(0.3)
+
+    results = {
+        "control_fixed_qp": {"median_us": median_us(lambda: fixed_qp(X, zero3, X, zero3, zero3), n),
+                             "floor_us": floor_dyn + osqp_floor},
+        "control_fixed_no_qp": {"median_us": median_us(lambda: fixed_no(X, zero3, X, zero3, zero3), n),
+                                "floor_us": floor_dyn},
+        "control_sliding_m3_qp": {"median_us": median_us(lambda: slide_qp(S3, S3d, S3, S3d, np.zeros(4)), n),
+                                  "floor_us": floor_dyn3 + osqp_floor},
+        "control_sliding_m3_no_qp": {"median_us": median_us(lambda: slide_no(S3, S3d, S3, S3d, np.zeros(4)), n),
+                                     "floor_us": floor_dyn3},
+        "plant_step": {"median_us": median_us(plant_step, n), "floor_us": 4 * floor_dyn},
+        "planner_sample_ideal": {"median_us": median_us(lambda: env_ideal.at(pose), n), "floor_us": None},
+        "planner_sample_urdf": {"median_us": median_us(lambda: env_urdf.at(pose), max(5, n // 10)), "floor_us": None},
+        "supervisor_step": {"median_us": None, "floor_us": None},
+        "rollout_realtime_factor": {"recording_off": None, "recording_on": None},
+    }
+    if args.json:
+        print(json.dumps(results))
+        return
+    print(f"{'item':28s} {'median [us]':>12s} {'floor [us]':>11s} {'ratio':>7s}")
+    for key, value in results.items():
+        if key == "rollout_realtime_factor":
+            print(f"{key:28s} {'n/a (needs the regrasp supervisor)':>32s}")
+            continue
+        med, floor = value["median_us"], value["floor_us"]
+        if med is None:
+            print(f"{key:28s} {'n/a (needs the regrasp supervisor)':>32s}")
+            continue
+        ratio = f"{med / floor:6.1f}x" if floor else "     -"
+        floor_s = f"{floor:11.1f}" if floor else f"{'-':>11s}"
+        print(f"{key:28s} {med:12.1f} {floor_s} {ratio:>7s}")
+    print(f"(Pinocchio floor of one 2-finger dynamics evaluation: {floor_dyn:.1f} us; "
+          f"persistent OSQP solve of the 2-finger QP: {osqp_floor:.1f} us)")
+
+
+if __name__ == "__main__":
+    main()
