@@ -50,6 +50,7 @@ from .internal_force import (
 )
 from .plant import Plant, PlantContact, PlantEvent, PlantState, PlantStep
 from .polygon import ConvexPolygon, Edge
+from .recording import RolloutRecorder
 from .reduced import ReducedModel, ReducedState
 from .scenario import FingerContact, Scenario, load_scenario
 from .sliding import SlideFeasibility, sliding_feasibility
@@ -102,6 +103,7 @@ __all__ = [
     "ReducedModel",
     "ReducedState",
     "RegraspError",
+    "RolloutRecorder",
     "Scenario",
     "ScenarioError",
     "SingularFingerError",

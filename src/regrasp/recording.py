@@ -1,0 +1,980 @@
+r"""Record closed-loop rollouts to rerun: an ``.rrd`` file, a live viewer, or both.
+
+A :class:`RolloutRecorder` turns each control step of :func:`~regrasp.closed_loop.run_closed_loop`
+into a rerun recording a reviewer can scrub through: the hand and the object on the left, the
+time series on the right (the blueprint is stored in the file). It uses its own
+``rerun.RecordingStream`` (never rerun's global or thread-local recording), so several recorders
+can run side by side, and it needs no viewer: ``rrd_path`` alone writes a file headless.
+
+::
+
+    with RolloutRecorder(plant, rrd_path="rollout.rrd") as rec:
+        run_closed_loop(plant, controller, reference, 1.0, on_step=rec.hook(plant, reference))
+    # then: rerun rollout.rrd
+
+**Timelines.** ``time`` (a duration: the plant's time [s] of the logged state) and ``step``
+(a sequence). With :meth:`RolloutRecorder.hook`, step 0 is the state when the hook was made and
+step k the state after the k-th control step; ``decimation = n`` logs only the steps that are
+multiples of n (events are logged at every step regardless).
+
+**Scene** (entities under ``scene/``, the hand frame, in **millimetres**). Rerun's 2-D view draws
+y *downwards* (image convention), so the recorder logs every point as (1000 x, -1000 y): the
+picture is upright (gravity points down the screen) and values read off the viewer are mm with
+the sign of y flipped.
+
+* ``scene/object``: the polygon at the plant's pose (``polygon.vertices`` through X).
+* ``scene/desired``: the desired pose (``reference(t)``'s first three entries), a faint ghost.
+* ``scene/fingers/<finger>``: each link's URDF collision shape as its outline in the plane
+  (cylinders and boxes are rectangles, capsules stadiums): the shape's points, placed by Pinocchio
+  (``data.oMi[joint] * placement``), are the 2-D convex hull computed once in the joint frame;
+  the last strip is the joint chain (joint 1, elbow, tip) as a thick polyline.
+  ``scene/joints``: the joints and tips as dots.
+* ``scene/contacts/forces``: each contact's force on the object, an arrow from the fingertip,
+  ``force_scale`` mm per N (default 10 mm/N). It is the plant's force: the ``PlantStep``'s
+  (at the step's start) when one is passed, otherwise recomputed at the logged state under the
+  step's torque (``plant.accelerations``, one KKT solve; ``plant_forces=False`` skips it).
+  ``scene/contacts/forces_predicted``: the controller's predicted force
+  (``ControlOutput.contact_forces``), thinner.
+* ``scene/contacts/cones``: each friction cone as two rays of ``cone_length`` mm at
+  :math:`\pm\arctan\mu` around the inward normal; green while the contact is fixed, orange
+  while it slides, grey once separated.
+* ``scene/envelope/safe`` and ``scene/envelope/danger``: each drawn edge's feasible set
+  (:class:`~regrasp.envelope.FingerEnvelope` ``.at`` the plant's current pose) as thick segments
+  drawn just outside the edge, in the finger's colour, with the last ``danger_fraction`` of each
+  interval's width at both ends in red.
+
+**Plots** (under ``plots/``; each entity holds several series, named by static
+``rr.SeriesLines``): ``plots/error`` the tracking error (x, y [mm], β [deg], each reduced ξ [mm]),
+measured at the logged state against the desired S_d when the reference is known, otherwise
+the controller's ``ControlOutput.error``; ``plots/xi/<finger>`` the contact's ξ with its desired
+value and the bounds of the feasible interval holding it (and where the danger zones start);
+``plots/force`` normal and tangential forces (plant and predicted); ``plots/cone_margin``
+μ f_n − |f_t| (plant and predicted); ``plots/mode`` 0 fixed, 1 sliding, 2 separated.
+``events``: the plant's events (slip, stick, separation, ...) as text.
+
+**Static data** (logged once): ``model/object`` (the polygon in its own frame, mm, with its edge
+numbers and centre of mass), ``model/setup`` (a Markdown table of the fingers, their edges, μ and
+modes), and the styling of every entity above.
+
+**Cost.** Per logged step the recorder computes the geometry (Pinocchio forward kinematics, one
+``FingerEnvelope.at`` per drawn edge, ~60 µs each in the ``ideal`` geometry) and appends rows to
+in-memory columns, which it sends with ``send_columns`` every ``flush_every`` logged steps and on
+:meth:`~RolloutRecorder.close` (a live viewer therefore sees the data in blocks of that many
+steps). :attr:`RolloutRecorder.seconds_per_step` reports the measured mean cost.
+
+**Robustness.** :meth:`~RolloutRecorder.close` sends what is buffered, flushes and finalises the
+file (footer included), and is idempotent; the context manager calls it also when the block
+raises, so an interrupted rollout leaves a complete, readable file with the steps logged so far.
+A recorder that is never closed is closed when it is garbage-collected or at interpreter exit
+(a ``weakref.finalize`` tied to the recorder; nothing else is registered). A process killed
+outright (SIGKILL, ``os._exit``) cannot finalise its file.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time as _time
+import uuid
+import warnings
+import weakref
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import rerun as rr
+import rerun.blueprint as rrb
+
+from .control import ControlOutput
+from .envelope import EnvelopeSample, FingerEnvelope
+from .exceptions import InvalidParameterError, RegraspError
+from .planar import wrap_angle
+from .plant import Plant, PlantStep
+
+__all__ = ["MODE_CODES", "RolloutRecorder"]
+
+#: Contact mode → the value plotted under ``plots/mode``.
+MODE_CODES = {"fixed": 0, "sliding": 1, "separated": 2}
+
+_MM = np.array([1000.0, -1000.0])  # metres (hand frame, y up) -> scene millimetres (y down)
+_FINGER_COLOURS = [(31, 119, 180), (148, 103, 189), (23, 190, 207), (140, 86, 75), (227, 119, 194),
+                   (188, 189, 34), (127, 127, 127)]
+_MODE_COLOURS = {"fixed": (44, 160, 44), "sliding": (255, 127, 14), "separated": (160, 160, 160)}
+_DANGER = (214, 39, 40)
+_FORCE = (200, 30, 30)
+_PREDICTED = (255, 152, 150)
+_OBJECT = (60, 60, 60)
+_GHOST = (140, 140, 140, 110)
+
+
+def _rgba(colour, alpha: int = 255) -> int:
+    """0xRRGGBBAA of an (r, g, b[, a]) tuple."""
+    r, g, b = colour[:3]
+    a = colour[3] if len(colour) > 3 else alpha
+    return (int(r) << 24) | (int(g) << 16) | (int(b) << 8) | int(a)
+
+
+def _colours(values) -> np.ndarray:
+    """Packed 0xRRGGBBAA colours as the uint32 array rerun reads unambiguously."""
+    return np.asarray(values, dtype=np.uint32)
+
+
+def _darker(colour, factor: float = 0.6):
+    return tuple(int(c * factor) for c in colour[:3])
+
+
+def _entity_name(name: str, taken: set[str]) -> str:
+    """A path-safe, unique entity-path part for a finger name."""
+    base = re.sub(r"[^A-Za-z0-9_\-]", "_", str(name)) or "finger"
+    key, k = base, 1
+    while key in taken:
+        k += 1
+        key = f"{base}_{k}"
+    taken.add(key)
+    return key
+
+
+# ---------------------------------------------------------------------------------------- shapes
+def _circle(radius: float, n: int = 24) -> np.ndarray:
+    a = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    return radius * np.stack([np.cos(a), np.sin(a)], axis=1)
+
+
+def _sphere_samples(centre: np.ndarray, radius: float) -> np.ndarray:
+    """Points on a sphere's three great circles (enough for the hull of its projection)."""
+    c = _circle(radius)
+    z = np.zeros(len(c))
+    rings = [np.column_stack([c[:, 0], c[:, 1], z]), np.column_stack([c[:, 0], z, c[:, 1]]),
+             np.column_stack([z, c[:, 0], c[:, 1]])]
+    return np.concatenate(rings) + centre
+
+
+def _shape_samples(geometry) -> np.ndarray:
+    """Points (n, 3) of a coal shape, in the shape's frame, whose hull is the shape's."""
+    kind = type(geometry).__name__
+    if kind == "Box":
+        h = np.asarray(geometry.halfSide, dtype=float)
+        signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
+        return signs * h
+    if kind == "Cylinder":
+        c = _circle(float(geometry.radius))
+        h = float(geometry.halfLength)
+        return np.concatenate([np.column_stack([c, np.full(len(c), s * h)]) for s in (-1, 1)])
+    if kind == "Capsule":
+        r, h = float(geometry.radius), float(geometry.halfLength)
+        return np.concatenate([_sphere_samples(np.array([0.0, 0.0, s * h]), r) for s in (-1, 1)])
+    if kind == "Sphere":
+        return _sphere_samples(np.zeros(3), float(geometry.radius))
+    geometry.computeLocalAABB()  # meshes, convexes, ...: their bounding box
+    lo, hi = np.asarray(geometry.aabb_local.min_), np.asarray(geometry.aabb_local.max_)
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+
+
+def _hull_2d(points: np.ndarray) -> np.ndarray:
+    """Convex hull (k, 2) of 2-D points, counter-clockwise, collinear points dropped (monotone chain)."""
+    pts = sorted(set(map(tuple, np.round(points, 12))))
+    if len(pts) <= 2:
+        return np.array(pts, dtype=float)
+
+    def half(seq):
+        out = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0.0:
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(reversed(pts))
+    return np.array(lower[:-1] + upper[:-1], dtype=float)
+
+
+def _outline_in_shape_frame(geometry, placement: pin.SE3) -> np.ndarray:
+    """The shape's outline in the plane of its joint, as closed-polyline points (k, 3) in the
+    shape's own frame (so that ``(oMi[joint] * placement).act`` puts it in the hand frame)."""
+    samples = _shape_samples(geometry)
+    in_joint = samples @ placement.rotation.T + placement.translation
+    hull = _hull_2d(in_joint[:, :2])
+    hull = np.vstack([hull, hull[:1]])
+    in_plane = np.column_stack([hull, np.zeros(len(hull))])
+    return (in_plane - placement.translation) @ placement.rotation
+
+
+def _nanoseconds(seconds) -> np.ndarray:
+    """Times [s] as timedelta64[ns], rounded (a float sum such as 1.0069999999 s reads 1.007 s)."""
+    return np.round(np.asarray(seconds, dtype=float) * 1e9).astype(np.int64).astype("timedelta64[ns]")
+
+
+def _pad(points: np.ndarray, n: int) -> np.ndarray:
+    """Repeat the last point so that a polyline has exactly ``n`` points (drawn the same)."""
+    if len(points) >= n:
+        return points
+    return np.vstack([points, np.repeat(points[-1:], n - len(points), axis=0)])
+
+
+# ---------------------------------------------------------------------------------------- writer
+class _Column:
+    """One entity's buffered rows (one per logged step)."""
+
+    __slots__ = ("kind", "width", "rows", "colours")
+
+    def __init__(self, kind: str, width: int = 0):
+        self.kind = kind  # "strips" | "points" | "arrows" | "scalars"
+        self.width = width  # points per strip (strips)
+        self.rows: list = []
+        self.colours: list | None = None
+
+
+class _ColumnWriter:
+    """Owns the recording stream; buffers rows per entity and sends them with ``send_columns``.
+
+    Kept apart from the recorder so that a ``weakref.finalize`` can close it without keeping
+    the recorder alive.
+    """
+
+    def __init__(self, stream: rr.RecordingStream, flush_every: int):
+        self.stream = stream
+        self.flush_every = flush_every
+        self.columns: dict[str, _Column] = {}
+        self.steps: list[int] = []
+        self.times: list[float] = []
+        self.closed = False
+        self.send_seconds = 0.0
+
+    def register(self, path: str, kind: str, width: int = 0, coloured: bool = False) -> None:
+        col = _Column(kind, width)
+        if coloured:
+            col.colours = []
+        self.columns[path] = col
+
+    def put(self, path: str, row, colours=None) -> None:
+        col = self.columns[path]
+        col.rows.append(row)
+        if col.colours is not None:
+            col.colours.append(colours)
+
+    def rollback(self) -> None:
+        """Drop a partly written row (a step whose logging raised), keeping the columns aligned."""
+        n = len(self.steps)
+        for col in self.columns.values():
+            del col.rows[n:]
+            if col.colours is not None:
+                del col.colours[n:]
+
+    def end_row(self, step: int, t: float) -> None:
+        self.steps.append(step)
+        self.times.append(t)
+        if len(self.steps) >= self.flush_every:
+            self.send()
+
+    def send(self) -> None:
+        """Send every buffered row (one ``send_columns`` per entity)."""
+        n = len(self.steps)
+        if n == 0:
+            return
+        start = _time.perf_counter()
+        try:
+            index = [rr.TimeColumn("step", sequence=np.asarray(self.steps, dtype=np.int64)),
+                     rr.TimeColumn("time", duration=_nanoseconds(self.times))]
+            for path, col in self.columns.items():
+                if len(col.rows) != n:
+                    raise RuntimeError(f"recorder bug: {path} has {len(col.rows)} rows for {n} steps")
+                self.stream.send_columns(path, indexes=index, columns=self._component_columns(col))
+        finally:
+            for col in self.columns.values():
+                col.rows.clear()
+                if col.colours is not None:
+                    col.colours.clear()
+            self.steps.clear()
+            self.times.clear()
+            self.send_seconds += _time.perf_counter() - start
+
+    @staticmethod
+    def _component_columns(col: _Column):
+        if col.kind == "scalars":
+            return rr.Scalars.columns(scalars=np.asarray(col.rows, dtype=float))
+        lengths = [len(r[0]) if col.kind == "arrows" else len(r) for r in col.rows]
+        if col.kind == "arrows":
+            origins = np.concatenate([r[0] for r in col.rows]).astype(np.float32)
+            vectors = np.concatenate([r[1] for r in col.rows]).astype(np.float32)
+            return rr.Arrows2D.columns(origins=origins, vectors=vectors).partition(lengths)
+        if col.kind == "points":
+            return rr.Points2D.columns(positions=np.concatenate(col.rows).astype(np.float32)).partition(lengths)
+        strips = np.concatenate(col.rows).astype(np.float32) if col.rows else np.zeros((0, col.width, 2), np.float32)
+        if col.colours is None:
+            return rr.LineStrips2D.columns(strips=strips).partition(lengths)
+        colours = np.concatenate(col.colours).astype(np.uint32)
+        return rr.LineStrips2D.columns(strips=strips, colors=colours).partition(lengths)
+
+    def log_now(self, path: str, step: int, t: float, archetype) -> None:
+        """Log one archetype immediately at (step, t) (rare data: events)."""
+        self.stream.set_time("step", sequence=step)
+        self.stream.set_time("time", duration=_nanoseconds([t])[0])
+        self.stream.log(path, archetype)
+
+    def close(self) -> None:
+        """Send the buffer, flush, and finalise every sink (writes the .rrd footer). Idempotent."""
+        if self.closed:
+            return
+        self.closed = True
+        try:
+            self.send()
+        finally:
+            try:
+                self.stream.flush(timeout_sec=30.0)
+            finally:
+                self.stream.disconnect()
+
+
+def _close_quietly(writer: _ColumnWriter) -> None:
+    """The finalizer of a recorder that was never closed (garbage collection or interpreter exit)."""
+    try:
+        writer.close()
+    except Exception as exc:  # noqa: BLE001 - nothing to raise to at that point
+        warnings.warn(f"RolloutRecorder: closing the recording failed: {exc!r}", RuntimeWarning, stacklevel=1)
+
+
+# -------------------------------------------------------------------------------------- recorder
+class RolloutRecorder:
+    r"""Stream and/or save a closed-loop rollout to rerun (see the module docstring for the scene,
+    the plots and the units).
+
+    Args:
+        plant: The plant being simulated (its hand, object, contacts and μ set up the recording).
+        envelope_edges: Which feasible envelopes to draw: one entry per finger, each an edge
+            index, a sequence of edge indices or None (none for that finger). Default: each
+            finger's current contact edge (``plant.contacts[i].edge``, followed if it changes).
+        rrd_path: Write the recording to this ``.rrd`` file (its directory must exist).
+        spawn: Start a rerun viewer and stream to it (with ``rrd_path``: both).
+        application_id: Rerun application id.
+        recording_name: Name shown in the viewer (default: the file's stem, or "rollout").
+        danger_fraction: Width of each danger zone as a fraction of its feasible interval, in
+            [0, 0.5).
+        decimation: Log every n-th step only (n >= 1).
+        sliding: Contacts whose ξ are the reduced coordinates S[3:] (the controller's
+            ``grasp.sliding``), for naming the error series. Default: the contacts in mode
+            ``"sliding"`` now.
+        envelope_geometry: ``"ideal"`` (segments, ~60 µs per envelope) or ``"urdf"`` (coal,
+            ~1 ms), see :class:`~regrasp.envelope.FingerEnvelope`.
+        force_scale: Arrow length per newton [mm/N].
+        cone_length: Length of the friction-cone rays [mm].
+        plant_forces: Without a ``PlantStep``, recompute the plant's contact forces at the
+            logged state (one KKT solve per logged step, ~150 µs); False: draw and plot the
+            controller's predicted forces only.
+        envelope_tolerance: Reuse an edge's envelope while the object has moved less than this
+            [m] (each coordinate, and β times the object's diameter) since it was computed;
+            0 recomputes it at every logged step.
+        flush_every: Send the buffered rows every this many logged steps.
+
+    Raises:
+        InvalidParameterError: no sink (neither ``rrd_path`` nor ``spawn``), a missing
+            directory, or a parameter out of its domain.
+        UnknownEdgeError: an edge in ``envelope_edges`` that the object does not have.
+    """
+
+    def __init__(
+        self,
+        plant: Plant,
+        *,
+        envelope_edges: Sequence[int | Sequence[int] | None] | None = None,
+        rrd_path: str | Path | None = None,
+        spawn: bool = False,
+        application_id: str = "regrasp",
+        recording_name: str | None = None,
+        danger_fraction: float = 0.1,
+        decimation: int = 1,
+        sliding: Sequence[int] | None = None,
+        envelope_geometry: str = "ideal",
+        force_scale: float = 10.0,
+        cone_length: float = 15.0,
+        plant_forces: bool = True,
+        envelope_tolerance: float = 1e-5,
+        flush_every: int = 100,
+    ):
+        # ---- validation first: a bad argument leaves nothing behind (no stream, no file)
+        if not isinstance(plant, Plant):
+            raise InvalidParameterError("plant", plant, "a regrasp.Plant")
+        if rrd_path is None and not spawn:
+            raise InvalidParameterError("rrd_path", None, "a sink: an .rrd path, spawn=True, or both")
+        path = None
+        if rrd_path is not None:
+            path = Path(rrd_path)
+            if path.is_dir() or not path.parent.is_dir():
+                raise InvalidParameterError("rrd_path", rrd_path, "a file path in an existing directory")
+        if not (isinstance(danger_fraction, (int, float)) and 0.0 <= danger_fraction < 0.5):
+            raise InvalidParameterError("danger_fraction", danger_fraction, "a fraction in [0, 0.5)")
+        self.decimation = self._positive_int("decimation", decimation)
+        flush_every = self._positive_int("flush_every", flush_every)
+        for name, value in (("force_scale", force_scale), ("cone_length", cone_length)):
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise InvalidParameterError(name, value, "a length > 0 [mm per N, mm]")
+        if not (isinstance(envelope_tolerance, (int, float)) and math.isfinite(envelope_tolerance)
+                and envelope_tolerance >= 0):
+            raise InvalidParameterError("envelope_tolerance", envelope_tolerance, "a distance >= 0 [m]")
+        self.envelope_tolerance = float(envelope_tolerance)
+        self.plant = plant
+        hand = plant.hand
+        self.m = hand.m
+        self.fingers = hand.fingers
+        self.polygon = plant.polygon
+        self.mu = np.asarray(plant.mu, dtype=float)
+        self.danger_fraction = float(danger_fraction)
+        self.force_scale = float(force_scale)
+        self.cone_length = float(cone_length)
+        self.plant_forces = bool(plant_forces)
+        self.envelope_edges = self._parse_edges(envelope_edges)
+        if sliding is None:
+            sliding = [i for i, c in enumerate(plant.contacts) if c.mode == "sliding"]
+        sliding = list(sliding)
+        if (len(set(sliding)) != len(sliding)
+                or not all(isinstance(i, (int, np.integer)) and 0 <= i < self.m for i in sliding)):
+            raise InvalidParameterError("sliding", sliding, f"distinct contact indices in 0..{self.m - 1}")
+        self.sliding = [int(i) for i in sliding]
+        self._envelopes: dict[tuple[int, int], FingerEnvelope] = {}
+        self._samples: dict[tuple[int, int], tuple[np.ndarray, EnvelopeSample]] = {}
+        self._envelope_geometry = envelope_geometry
+        for i, c in enumerate(plant.contacts):  # build now, so that a bad geometry raises here
+            self._envelope(i, c.edge)
+            for e in (self.envelope_edges[i] if self.envelope_edges is not None else ()):
+                self._envelope(i, e)
+
+        # ---- geometry caches
+        taken: set[str] = set()
+        self.keys = [_entity_name(f.name, taken) for f in self.fingers]
+        self.colours = [_FINGER_COLOURS[i % len(_FINGER_COLOURS)] for i in range(self.m)]
+        self._edges = self.polygon.edges
+        self._object_closed = np.vstack([self.polygon.vertices, self.polygon.vertices[:1]])
+        self._kin = []  # per finger: (data, shapes [(joint, placement, points3)], tip placement, width)
+        for f in self.fingers:
+            shapes = [(s.link + 1, s.placement_in_joint, _outline_in_shape_frame(s.geometry, s.placement_in_joint))
+                      for s in f.link_shapes()]
+            width = max([3] + [len(p) for _, _, p in shapes])
+            tip = f.model.frames[f.tip_frame_id].placement
+            self._kin.append((f.model.createData(), shapes, tip, width))
+
+        # ---- the stream and its sinks
+        self.rrd_path = path
+        self.steps_logged = 0
+        self.compute_seconds = 0.0
+        self._next_step = 0
+        self._closed = False
+        self._events_seen = (None, 0)
+        stream = rr.RecordingStream(application_id, recording_id=uuid.uuid4(), make_default=False,
+                                    make_thread_default=False)
+        self._writer = _ColumnWriter(stream, flush_every)
+        self._finalizer = weakref.finalize(self, _close_quietly, self._writer)
+        try:
+            stream.set_log_time_enabled(False)  # the simulation's own time is what matters
+            blueprint = self._blueprint()
+            if path is not None and not spawn:
+                stream.save(str(path), default_blueprint=blueprint)
+            elif path is None:
+                stream.spawn(default_blueprint=blueprint)
+            else:
+                rr.spawn(connect=False)
+                stream.set_sinks(rr.GrpcSink(), rr.FileSink(str(path)), default_blueprint=blueprint)
+            name = recording_name if recording_name is not None else (path.stem if path is not None else "rollout")
+            stream.send_recording_name(str(name))
+            self._log_static()
+            self._register_columns()
+        except BaseException:
+            self.close()
+            raise
+
+    # ------------------------------------------------------------------ construction helpers
+    @staticmethod
+    def _positive_int(name: str, value) -> int:
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise InvalidParameterError(name, value, "an integer >= 1")
+        return int(value)
+
+    def _parse_edges(self, envelope_edges):
+        if envelope_edges is None:
+            return None
+        if isinstance(envelope_edges, (str, bytes)) or not isinstance(envelope_edges, Sequence) \
+                or len(envelope_edges) != self.m:
+            raise InvalidParameterError("envelope_edges", envelope_edges,
+                                        f"one entry per finger ({self.m}): an edge, a list of edges or None")
+        out = []
+        for entry in envelope_edges:
+            if entry is None:
+                out.append(())
+                continue
+            edges = [entry] if isinstance(entry, (int, np.integer)) else list(entry)
+            for e in edges:
+                self.polygon.edge(e)  # UnknownEdgeError
+            out.append(tuple(int(e) for e in edges))
+        return out
+
+    def _envelope(self, i: int, edge: int) -> FingerEnvelope:
+        env = self._envelopes.get((i, edge))
+        if env is None:
+            env = FingerEnvelope(self.fingers[i], self.polygon, edge, geometry=self._envelope_geometry)
+            self._envelopes[(i, edge)] = env
+        return env
+
+    def _scene_bounds(self):
+        pts = [f.joint1_in_hand for f in self.fingers]
+        st = self.plant.state
+        if st is not None:
+            pts += list(self.polygon.vertices_in(st.X))
+            pts += [p for i, f in enumerate(self.fingers) for p in f.joint_positions_in_hand(st.q[2 * i:2 * i + 2])]
+        else:
+            pts += [f.joint1_in_hand + s * f.reach[1] for f in self.fingers for s in (-1.0, 1.0)]
+        mm = np.asarray(pts) * _MM
+        lo, hi = mm.min(axis=0) - 25.0, mm.max(axis=0) + 25.0
+        return rrb.VisualBounds2D(x_range=(float(lo[0]), float(hi[0])), y_range=(float(lo[1]), float(hi[1])))
+
+    def _blueprint(self) -> rrb.Blueprint:
+        scene = rrb.Spatial2DView(origin="scene", name="hand frame [mm] (y up)", visual_bounds=self._scene_bounds())
+        left = rrb.Vertical(
+            rrb.Tabs(scene, rrb.Spatial2DView(origin="model/object", name="object frame [mm]"),
+                     rrb.TextDocumentView(origin="model/setup", name="set-up")),
+            rrb.TextLogView(origin="events", name="plant events"),
+            row_shares=[5, 1],
+        )
+        right = rrb.Vertical(
+            rrb.TimeSeriesView(origin="plots/error", name="tracking error: x, y, ξ [mm], β [deg]"),
+            rrb.TimeSeriesView(origin="plots/xi", name="contact ξ and its feasible interval [mm]"),
+            rrb.TimeSeriesView(origin="plots/force", name="contact forces [N]"),
+            rrb.TimeSeriesView(origin="plots/cone_margin", name="friction-cone margin μ f_n − |f_t| [N]"),
+            rrb.TimeSeriesView(origin="plots/mode", name="contact mode: 0 fixed, 1 sliding, 2 separated",
+                               axis_y=rrb.ScalarAxis(range=(-0.2, 2.2))),
+        )
+        return rrb.Blueprint(
+            rrb.Horizontal(left, right, column_shares=[3, 2]),
+            rrb.BlueprintPanel(state="collapsed"),
+            rrb.SelectionPanel(state="collapsed"),
+            rrb.TimePanel(state="expanded", timeline="time"),
+        )
+
+    def _log_static(self) -> None:
+        log = self._writer.stream.log
+        n_edges = self.polygon.n_vertices
+        # the object in its own frame
+        log("model/object/outline", rr.LineStrips2D([self._object_closed * _MM], radii=0.6,
+                                                    colors=_colours([_rgba(_OBJECT)]), labels=["object"]), static=True)
+        mids = np.array([0.5 * (e.start + e.end) for e in self.polygon.edges]) * _MM
+        log("model/object/edges", rr.Points2D(mids, radii=1.0, colors=_colours([_rgba(_OBJECT)]),
+                                              labels=[f"edge {k}" for k in range(n_edges)], show_labels=True),
+            static=True)
+        log("model/object/centre_of_mass", rr.Points2D([[0.0, 0.0]], radii=1.5, labels=["centre of mass"]),
+            static=True)
+        rows = ["| finger | entity | l1, l2 [mm] | base [mm, deg] | configuration | edge | mode | μ |",
+                "|---|---|---|---|---|---|---|---|"]
+        for i, f in enumerate(self.fingers):
+            c = self.plant.contacts[i]
+            b = f.base_in_hand
+            rows.append(f"| {f.name} | `{self.keys[i]}` | {f.link_lengths[0] * 1e3:.1f}, {f.link_lengths[1] * 1e3:.1f} "
+                        f"| ({b[0] * 1e3:.1f}, {b[1] * 1e3:.1f}, {math.degrees(b[2]):.1f}) | {f.configuration.value} "
+                        f"| {c.edge} | {c.mode} | {self.mu[i]:g} |")
+        text = "\n".join([
+            "# Rollout set-up", "",
+            f"Object: {n_edges}-gon, mass {self.polygon.mass:g} kg, inertia {self.polygon.inertia:.3g} kg m², "
+            f"plant step {self.plant.dt * 1e3:g} ms.", "",
+            *rows, "",
+            f"Scene in mm with y flipped (rerun draws y down). Force arrows {self.force_scale:g} mm/N; "
+            f"cone rays {self.cone_length:g} mm; danger zones {100 * self.danger_fraction:g} % of each "
+            f"feasible interval at both ends; envelope geometry '{self._envelope_geometry}'; "
+            f"decimation {self.decimation}.",
+        ])
+        log("model/setup", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
+
+        # styling of the time-varying scene (the rows carry geometry only)
+        names = [f.name for f in self.fingers]
+        log("scene/object", rr.LineStrips2D.from_fields(radii=[0.7], colors=_colours([_rgba(_OBJECT)]),
+                                                        labels=["object"],
+                                                        show_labels=False, draw_order=10.0), static=True)
+        log("scene/desired", rr.LineStrips2D.from_fields(radii=[0.4], colors=_colours([_rgba(_GHOST)]),
+                                                         labels=["desired"],
+                                                         show_labels=False, draw_order=5.0), static=True)
+        for i, f in enumerate(self.fingers):
+            n_links = len(self._kin[i][1])
+            log(f"scene/fingers/{self.keys[i]}", rr.LineStrips2D.from_fields(
+                radii=[0.3] * n_links + [0.9],
+                colors=_colours([_rgba(self.colours[i], 200)] * n_links + [_rgba(_darker(self.colours[i]))]),
+                labels=[f"{f.name} {s.name}" for s in f.link_shapes()] + [f.name], show_labels=False,
+                draw_order=20.0), static=True)
+        log("scene/joints", rr.Points2D.from_fields(
+            radii=[1.3] * (3 * self.m), colors=_colours([_rgba(_darker(c)) for c in self.colours for _ in range(3)]),
+            labels=[f"{n} {j}" for n in names for j in ("joint 1", "elbow", "tip")], show_labels=False,
+            draw_order=21.0), static=True)
+        log("scene/contacts/forces", rr.Arrows2D.from_fields(radii=[0.6], colors=_colours([_rgba(_FORCE)]),
+                                                             labels=[f"{n}: force on the object" for n in names],
+                                                             show_labels=False, draw_order=30.0), static=True)
+        log("scene/contacts/forces_predicted", rr.Arrows2D.from_fields(
+            radii=[0.3], colors=_colours([_rgba(_PREDICTED, 220)]), labels=[f"{n}: predicted force" for n in names],
+            show_labels=False, draw_order=29.0), static=True)
+        log("scene/contacts/cones", rr.LineStrips2D.from_fields(
+            radii=[0.3], labels=[f"{n}: friction cone" for n in names], show_labels=False, draw_order=25.0),
+            static=True)
+        log("scene/envelope/safe", rr.LineStrips2D.from_fields(radii=[1.4], draw_order=15.0), static=True)
+        log("scene/envelope/danger", rr.LineStrips2D.from_fields(radii=[1.4], colors=_colours([_rgba(_DANGER)]),
+                                                                 draw_order=16.0), static=True)
+
+        # time series
+        p = len(self.sliding)
+        err_names = ["x [mm]", "y [mm]", "β [deg]"] + [f"ξ {self.fingers[i].name} [mm]" for i in self.sliding]
+        err_colours = [(31, 119, 180), (44, 160, 44), (214, 39, 40)] + \
+                      [self.colours[i] for i in self.sliding]
+        log("plots/error", rr.SeriesLines(names=err_names, colors=_colours([_rgba(c) for c in err_colours])),
+            static=True)
+        pct = 100.0 * self.danger_fraction
+        for i, f in enumerate(self.fingers):
+            c = self.colours[i]
+            log(f"plots/xi/{self.keys[i]}", rr.SeriesLines(
+                names=[f"ξ {f.name}", f"ξ desired {f.name}", f"feasible lo {f.name}", f"feasible hi {f.name}",
+                       f"lo + {pct:g} % (danger) {f.name}", f"hi − {pct:g} % (danger) {f.name}"],
+                colors=_colours([_rgba(c), _rgba(c, 110), _rgba(_OBJECT), _rgba(_OBJECT), _rgba(_DANGER, 160),
+                                 _rgba(_DANGER, 160)]),
+                widths=[2.0, 1.0, 1.5, 1.5, 1.0, 1.0]), static=True)
+        force_names = ([f"f_n {n}" for n in names] + [f"f_t {n}" for n in names]
+                       + [f"f_n {n} (predicted)" for n in names] + [f"f_t {n} (predicted)" for n in names])
+        force_colours = ([_rgba(c) for c in self.colours] + [_rgba(_darker(c, 0.5)) for c in self.colours]
+                         + [_rgba(c, 90) for c in self.colours] + [_rgba(_darker(c, 0.5), 90) for c in self.colours])
+        log("plots/force", rr.SeriesLines(names=force_names, colors=_colours(force_colours)), static=True)
+        log("plots/cone_margin", rr.SeriesLines(
+            names=[n for n in names] + [f"{n} (predicted)" for n in names],
+            colors=_colours([_rgba(c) for c in self.colours] + [_rgba(c, 90) for c in self.colours])), static=True)
+        log("plots/mode", rr.SeriesLines(names=names, colors=_colours([_rgba(c) for c in self.colours])), static=True)
+        self._n_errors = 3 + p
+
+    def _register_columns(self) -> None:
+        w = self._writer
+        nv = len(self._object_closed)
+        w.register("scene/object", "strips", nv)
+        w.register("scene/desired", "strips", nv)
+        for i in range(self.m):
+            w.register(f"scene/fingers/{self.keys[i]}", "strips", self._kin[i][3])
+        w.register("scene/joints", "points")
+        w.register("scene/contacts/forces", "arrows")
+        w.register("scene/contacts/forces_predicted", "arrows")
+        w.register("scene/contacts/cones", "strips", 3, coloured=True)
+        w.register("scene/envelope/safe", "strips", 2, coloured=True)
+        w.register("scene/envelope/danger", "strips", 2)
+        w.register("plots/error", "scalars")
+        for i in range(self.m):
+            w.register(f"plots/xi/{self.keys[i]}", "scalars")
+        w.register("plots/force", "scalars")
+        w.register("plots/cone_margin", "scalars")
+        w.register("plots/mode", "scalars")
+
+    # ------------------------------------------------------------------ public API
+    @property
+    def closed(self) -> bool:
+        """Whether :meth:`close` has run."""
+        return self._closed
+
+    @property
+    def seconds_per_step(self) -> float:
+        """Mean wall time [s] per logged step: geometry and buffering plus the amortised sending."""
+        if self.steps_logged == 0:
+            return float("nan")
+        return (self.compute_seconds + self._writer.send_seconds) / self.steps_logged
+
+    def log_step(
+        self,
+        plant: Plant,
+        output: ControlOutput | None = None,
+        *,
+        step: int | None = None,
+        time: float | None = None,
+        desired_pose=None,
+        plant_step: PlantStep | None = None,
+    ) -> bool:
+        r"""Log the plant's current state (and the step's control output) at one step.
+
+        Args:
+            plant: The plant (the recorder's, or one with the same hand and object).
+            output: The controller's output for the step that led here, or None (e.g. the
+                initial state): then the predicted forces and margins are not plotted and the
+                tracking error needs ``desired_pose``.
+            step: The ``step`` timeline's value; default: one more than the previous call's
+                (0 for the first call). Only multiples of ``decimation`` are logged.
+            time: The ``time`` timeline's value [s]; default ``plant.state.t``.
+            desired_pose: The desired object pose (x, y, β), or the whole desired reduced state
+                S_d = (x, y, β, ξ of each ``sliding`` contact): drawn as a ghost, and the
+                tracking error is then measured at the logged state.
+            plant_step: The :class:`~regrasp.plant.PlantStep` of the step, whose forces (at the
+                step's start) are then drawn and plotted instead of recomputed ones.
+
+        Returns:
+            Whether the step was logged (False when ``decimation`` skips it).
+
+        Raises:
+            InvalidParameterError: the recorder is closed, the plant has no state or another
+                hand, or an array has the wrong shape.
+        """
+        if self._closed:
+            raise InvalidParameterError("recorder", "closed", "an open RolloutRecorder (log before close())")
+        if (not isinstance(plant, Plant) or plant.hand.m != self.m
+                or plant.polygon.n_vertices != self.polygon.n_vertices):
+            raise InvalidParameterError("plant", plant, f"a plant with the recorder's {self.m} fingers and object")
+        st = plant.state
+        if st is None:
+            raise InvalidParameterError("plant.state", None, "a state: call plant.reset() first")
+        if step is None:
+            step = self._next_step
+        elif isinstance(step, bool) or not isinstance(step, (int, np.integer)) or step < 0:
+            raise InvalidParameterError("step", step, "an integer >= 0")
+        step = int(step)
+        self._next_step = step + 1
+        t = float(st.t if time is None else time)
+        if not math.isfinite(t):
+            raise InvalidParameterError("time", time, "a finite time [s]")
+        start = _time.perf_counter()
+        self._log_events(plant, step)
+        if step % self.decimation:
+            return False
+        desired = None if desired_pose is None else np.asarray(desired_pose, dtype=float).reshape(-1)
+        if desired is not None and (desired.size < 3 or not np.all(np.isfinite(desired))):
+            raise InvalidParameterError("desired_pose", desired_pose, "(x, y, beta) or S_d = (x, y, beta, xi...)")
+        if output is not None and np.asarray(output.error).shape != (self._n_errors,):
+            raise InvalidParameterError("output.error", np.shape(output.error),
+                                        f"{self._n_errors} entries (3 + one per sliding contact {self.sliding}; "
+                                        "pass sliding= to the recorder)")
+        try:
+            self._log_rows(plant, output, desired, plant_step)
+        except BaseException:
+            self._writer.rollback()  # the steps logged so far stay intact
+            raise
+        self.compute_seconds += _time.perf_counter() - start
+        self.steps_logged += 1
+        self._writer.end_row(step, t)  # may send a block (timed separately)
+        return True
+
+    def hook(self, plant: Plant, reference: Callable | None = None, *,
+             log_initial: bool = True) -> Callable[[float, ControlOutput], None]:
+        """An ``on_step`` callback for :func:`~regrasp.closed_loop.run_closed_loop`.
+
+        ``run_closed_loop`` calls it after ``plant.step``, so it logs ``plant.state`` (the state
+        after the step) at ``time = plant.state.t``; the desired pose is ``reference(time)``'s
+        first entry when ``reference`` is given. With ``log_initial`` the current state is
+        logged now (step 0, no control output), so step k is the state after k control steps.
+        """
+        if plant.state is None:
+            raise InvalidParameterError("plant.state", None, "a state: call plant.reset() first")
+
+        def desired_at(t: float):
+            if reference is None:
+                return None
+            value = reference(t)
+            return value[0] if isinstance(value, tuple) else value
+
+        if log_initial:
+            self.log_step(plant, None, desired_pose=desired_at(plant.state.t))
+
+        def on_step(t: float, output: ControlOutput) -> None:
+            step = self._next_step
+            desired = desired_at(plant.state.t) if step % self.decimation == 0 else None
+            self.log_step(plant, output, step=step, desired_pose=desired)
+
+        return on_step
+
+    def flush(self) -> None:
+        """Send the buffered rows and flush the stream (the file stays open)."""
+        if not self._closed:
+            self._writer.send()
+            self._writer.stream.flush(timeout_sec=30.0)
+
+    def close(self) -> None:
+        """Send what is buffered, flush, and finalise the file (footer) and viewer stream.
+
+        Idempotent; after it, :meth:`log_step` raises.
+        """
+        if self._closed:
+            return
+        self._closed = True
+        self._finalizer.detach()
+        self._writer.close()
+
+    def __enter__(self) -> "RolloutRecorder":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        if exc_type is None:
+            self.close()
+        else:  # keep the rollout's exception the one that propagates
+            try:
+                self.close()
+            except Exception as close_exc:  # noqa: BLE001
+                warnings.warn(f"RolloutRecorder.close() failed after {exc_type.__name__}: {close_exc!r}",
+                              RuntimeWarning, stacklevel=2)
+        return False
+
+    def __repr__(self) -> str:
+        state = "closed" if self._closed else "open"
+        return f"RolloutRecorder({self.rrd_path or 'viewer'}, {self.steps_logged} steps logged, {state})"
+
+    # ------------------------------------------------------------------ per step
+    def _log_events(self, plant: Plant, step: int) -> None:
+        events = plant.events
+        seen_list, seen = self._events_seen
+        if seen_list is not events:  # plant.reset() starts a new list
+            seen = 0
+        for ev in events[seen:]:
+            level = "INFO" if ev.kind == "stick" else "WARN"
+            self._writer.log_now("events", step, float(ev.time),
+                                 rr.TextLog(f"t = {ev.time:.4f} s  {ev.contact}: {ev.kind} ({ev.detail})",
+                                            level=level))
+        self._events_seen = (events, len(events))
+
+    def _edges_drawn(self, plant: Plant, i: int):
+        if self.envelope_edges is None:
+            return (plant.contacts[i].edge,)
+        return self.envelope_edges[i]
+
+    def _log_rows(self, plant: Plant, output: ControlOutput | None, desired, plant_step: PlantStep | None) -> None:
+        w = self._writer
+        st = plant.state
+        X = st.X
+        c_, s_ = math.cos(X[2]), math.sin(X[2])
+        R = np.array([[c_, -s_], [s_, c_]])
+        origin = X[:2]
+
+        # object and ghost
+        w.put("scene/object", ((self._object_closed @ R.T + origin) * _MM)[None])
+        if desired is not None:
+            cd, sd = math.cos(desired[2]), math.sin(desired[2])
+            Rd = np.array([[cd, -sd], [sd, cd]])
+            w.put("scene/desired", ((self._object_closed @ Rd.T + desired[:2]) * _MM)[None])
+        else:
+            w.put("scene/desired", np.zeros((0, len(self._object_closed), 2)))
+
+        # fingers: URDF link outlines placed by Pinocchio, and the joint chain
+        chains = np.empty((self.m, 3, 2))
+        for i, (data, shapes, tip_placement, width) in enumerate(self._kin):
+            model = self.fingers[i].model
+            pin.forwardKinematics(model, data, st.q[2 * i:2 * i + 2])
+            strips = []
+            for joint, placement, pts in shapes:
+                M = data.oMi[joint] * placement
+                strips.append(_pad((pts @ M.rotation.T + M.translation)[:, :2], width))
+            chain = np.array([data.oMi[1].translation[:2], data.oMi[2].translation[:2],
+                              (data.oMi[2] * tip_placement).translation[:2]])
+            chains[i] = chain
+            strips.append(_pad(chain, width))
+            w.put(f"scene/fingers/{self.keys[i]}", np.asarray(strips) * _MM)
+        w.put("scene/joints", chains.reshape(-1, 2) * _MM)
+        tips = chains[:, 2]
+
+        # contacts: frames, ξ, forces, cones
+        normals = np.empty((self.m, 2))
+        tangents = np.empty((self.m, 2))
+        xi = np.empty(self.m)
+        modes = [c.mode for c in plant.contacts]
+        for i, c in enumerate(plant.contacts):
+            e = self._edges[c.edge]
+            normals[i] = R @ e.inward_normal
+            tangents[i] = R @ e.xi_direction
+            xi[i] = e.xi_direction @ (R.T @ (tips[i] - origin) - e.xi_origin)
+        surface = None
+        if plant_step is not None:
+            surface = np.asarray(plant_step.forces_surface, dtype=float)
+        elif self.plant_forces and output is not None:
+            try:
+                forces = plant.accelerations(st, output.tau)[2]
+                surface = plant.surface_forces(st, forces)
+            except (np.linalg.LinAlgError, RegraspError):
+                surface = None
+        nan_m = np.full(self.m, np.nan)
+        if surface is not None:
+            vectors = surface[:, :1] * normals + surface[:, 1:2] * tangents
+            w.put("scene/contacts/forces", (tips * _MM, vectors * self.force_scale * np.sign(_MM)))
+            fn, ft = surface[:, 0], surface[:, 1]
+            margin = self.mu * fn - np.abs(ft)
+        else:
+            w.put("scene/contacts/forces", (np.zeros((0, 2)), np.zeros((0, 2))))
+            fn = ft = margin = nan_m
+        if output is not None:
+            w.put("scene/contacts/forces_predicted",
+                  (tips * _MM, np.asarray(output.contact_forces) * self.force_scale * np.sign(_MM)))
+            pred = np.asarray(output.contact_forces_surface, dtype=float)
+            pfn, pft = pred[:, 0], pred[:, 1]
+            pmargin = np.asarray(output.cone_margins, dtype=float)
+        else:
+            w.put("scene/contacts/forces_predicted", (np.zeros((0, 2)), np.zeros((0, 2))))
+            pfn = pft = pmargin = nan_m
+        half = np.arctan(self.mu)
+        ch, sh = np.cos(half)[:, None], np.sin(half)[:, None]
+        perp_n = np.column_stack([-normals[:, 1], normals[:, 0]])
+        ray_a = ch * normals + sh * perp_n
+        ray_b = ch * normals - sh * perp_n
+        L = self.cone_length / 1000.0
+        cones = np.stack([tips + L * ray_a, tips, tips + L * ray_b], axis=1) * _MM
+        w.put("scene/contacts/cones", cones,
+              np.array([_rgba(_MODE_COLOURS.get(mo, _MODE_COLOURS["separated"])) for mo in modes], dtype=np.uint32))
+
+        # envelopes (drawn) and the bounds around each contact's ξ (plotted)
+        samples: dict[tuple[int, int], EnvelopeSample] = {}
+
+        tol = self.envelope_tolerance
+        scale = self.polygon.scale
+
+        def sample(i: int, edge: int) -> EnvelopeSample:
+            if (i, edge) not in samples:
+                cached = self._samples.get((i, edge))
+                if cached is not None and tol > 0.0:
+                    d = np.abs(X - cached[0])
+                    if d[0] <= tol and d[1] <= tol and d[2] * scale <= tol:
+                        samples[(i, edge)] = cached[1]
+                        return cached[1]
+                samples[(i, edge)] = self._envelope(i, edge).at(X, st.t)
+                self._samples[(i, edge)] = (X.copy(), samples[(i, edge)])
+            return samples[(i, edge)]
+
+        safe, safe_colours, danger = [], [], []
+        slot: dict[int, int] = {}
+        for i in range(self.m):
+            for edge in self._edges_drawn(plant, i):
+                e = self._edges[edge]
+                k = slot.get(edge, 0)
+                slot[edge] = k + 1
+                offset = -(0.003 + 0.003 * k) * (R @ e.inward_normal)  # just outside the edge
+                for lo, hi in sample(i, edge).feasible:
+                    wdt = self.danger_fraction * (hi - lo)
+                    ends = (e.xi_origin + np.array([lo, lo + wdt, hi - wdt, hi])[:, None] * e.xi_direction) @ R.T \
+                        + (origin + offset)
+                    safe.append(ends[1:3])
+                    safe_colours.append(_rgba(self.colours[i], 200))
+                    if wdt > 0.0:
+                        danger += [ends[0:2], ends[2:4]]
+        w.put("scene/envelope/safe", np.asarray(safe).reshape(-1, 2, 2) * _MM,
+              np.asarray(safe_colours, dtype=np.uint32))
+        w.put("scene/envelope/danger", np.asarray(danger).reshape(-1, 2, 2) * _MM)
+
+        # time series
+        if desired is not None:
+            err = np.full(self._n_errors, np.nan)
+            err[:3] = desired[:3] - X
+            err[2] = wrap_angle(err[2])
+            for j, i in enumerate(self.sliding):
+                if 3 + j < desired.size:
+                    err[3 + j] = desired[3 + j] - xi[i]
+        elif output is not None:
+            err = np.asarray(output.error, dtype=float).copy()
+        else:
+            err = np.full(self._n_errors, np.nan)
+        err[:2] *= 1000.0
+        err[2] = math.degrees(err[2])
+        err[3:] *= 1000.0
+        w.put("plots/error", err)
+        for i in range(self.m):
+            row = np.full(6, np.nan)
+            if modes[i] != "separated":
+                row[0] = xi[i]
+                if i in self.sliding and desired is not None:
+                    j = self.sliding.index(i)
+                    if 3 + j < desired.size:
+                        row[1] = desired[3 + j]
+                feasible = sample(i, plant.contacts[i].edge).feasible
+                if feasible:
+                    lo, hi = min(feasible, key=lambda iv: 0.0 if iv[0] <= xi[i] <= iv[1]
+                                 else min(abs(xi[i] - iv[0]), abs(xi[i] - iv[1])))
+                    wdt = self.danger_fraction * (hi - lo)
+                    row[2:] = (lo, hi, lo + wdt, hi - wdt)
+            w.put(f"plots/xi/{self.keys[i]}", row * 1000.0)
+        w.put("plots/force", np.concatenate([fn, ft, pfn, pft]))
+        w.put("plots/cone_margin", np.concatenate([margin, pmargin]))
+        w.put("plots/mode", np.array([MODE_CODES.get(mo, 2) for mo in modes], dtype=float))

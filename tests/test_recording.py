@@ -1,0 +1,264 @@
+"""The rerun rollout recorder: complete, verifiable .rrd files, also when a rollout is interrupted.
+
+The scenario is example 03's first leg (finger 1 slides up the left edge under Proposition 3 while
+finger 2 holds the right edge), 0.05-0.15 s of it. Every file is checked with the rerun CLI
+(``rerun rrd verify``) and read back with ``rerun.chunk.RrdReader``.
+"""
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pytest
+import rerun as rr
+from rerun.chunk import RrdReader
+
+from regrasp import Grasp, Hand, Plant, PlantContact, PlantEvent, ReducedModel, load_scenario
+from regrasp.closed_loop import run_closed_loop
+from regrasp.control import Gains, Proposition3Controller
+from regrasp.exceptions import InvalidParameterError, RegraspError, UnknownEdgeError
+from regrasp.recording import RolloutRecorder
+
+pytestmark = pytest.mark.filterwarnings("error::rerun.error_utils.RerunWarning")
+
+ROOT = Path(__file__).resolve().parents[1]
+SC = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
+MU = [0.05, 0.8]
+XI_HOLD = 0.019
+X0 = np.array([0.0, 0.12, 0.0])
+LO, HI, T_LEG = -0.007, 0.016, 1.5  # example 03's slide range [m] and leg duration [s]
+
+SCENE = ["scene/object", "scene/desired", "scene/fingers/finger1", "scene/fingers/finger2", "scene/joints",
+         "scene/contacts/forces", "scene/contacts/forces_predicted", "scene/contacts/cones",
+         "scene/envelope/safe", "scene/envelope/danger"]
+PLOTS = ["plots/error", "plots/xi/finger1", "plots/xi/finger2", "plots/force", "plots/cone_margin", "plots/mode"]
+STATIC = ["model/object/outline", "model/object/edges", "model/setup"]
+
+
+def reference(t):
+    c, amp, w = 0.5 * (LO + HI), 0.5 * (HI - LO), np.pi / T_LEG
+    xi, xi_d, xi_dd = c - amp * np.cos(w * t), amp * w * np.sin(w * t), amp * w * w * np.cos(w * t)
+    return np.append(X0, xi), np.append(np.zeros(3), xi_d), np.append(np.zeros(3), xi_dd)
+
+
+def setup():
+    hand = Hand([c.finger for c in SC.contacts], gravity_in_hand=SC.gravity_in_hand)
+    grasp = Grasp(SC.polygon, [1, 3], ["sliding", "fixed"])
+    model = ReducedModel(hand, grasp, xi=[LO, XI_HOLD])
+    S0, S0_dot, _ = reference(0.0)
+    st = model.state(S0, S0_dot)
+    plant = Plant(hand, SC.polygon, [PlantContact(1, "sliding", LO, 1.0), PlantContact(3, "fixed", XI_HOLD)], mu=MU)
+    plant.reset(st.q, st.q_dot, S0[:3], S0_dot[:3])
+    return plant, Proposition3Controller(model, Gains.critically_damped(40.0, 4), mu=MU)
+
+
+def rerun_cli() -> list[str]:
+    exe = Path(sys.executable).with_name("rerun")
+    if exe.exists():
+        return [str(exe)]
+    found = shutil.which("rerun")
+    return [found] if found else [sys.executable, "-m", "rerun"]
+
+
+def verify(path: Path) -> str:
+    proc = subprocess.run([*rerun_cli(), "rrd", "verify", str(path)], capture_output=True, text=True, timeout=60,
+                          check=False)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, out
+    assert "verified without error" in out, out
+    return out
+
+
+def read(path: Path):
+    """{entity: {column: values of the time-varying rows}}, the static entities, and the store counts."""
+    reader = RrdReader(path)
+    rows: dict[str, dict[str, list]] = {}
+    static: set[str] = set()
+    timelines: set[str] = set()
+    for chunk in reader.stream().to_chunks():
+        entity = chunk.entity_path.lstrip("/")
+        if chunk.is_static:
+            static.add(entity)
+            continue
+        timelines.update(chunk.timeline_names)
+        batch = chunk.to_record_batch()
+        cols = rows.setdefault(entity, {})
+        for name in batch.schema.names:
+            column = batch.column(name)
+            if pa.types.is_duration(column.type):  # to_pylist() would make µs timedeltas
+                column = column.cast(pa.int64())
+            cols.setdefault(name, []).extend(column.to_pylist())
+    for cols in rows.values():  # chunks may come in any order: sort rows by step
+        order = np.argsort(cols["step"], kind="stable")
+        for name in cols:
+            cols[name] = [cols[name][k] for k in order]
+    return rows, static, timelines, (len(reader.recordings()), len(reader.blueprints()))
+
+
+def test_recorded_rollout_verifies_and_reads_back(tmp_path):
+    plant, controller = setup()
+    path = tmp_path / "rollout.rrd"
+    with RolloutRecorder(plant, rrd_path=path) as rec:
+        log = run_closed_loop(plant, controller, reference, 0.15, on_step=rec.hook(plant, reference))
+    n = len(log.times)
+    assert n == 150 and not log.events and rec.closed
+    assert rec.steps_logged == n + 1  # the initial state (step 0) and the state after each step
+    assert 0.0 < rec.seconds_per_step < 0.05
+    verify(path)
+
+    rows, static, timelines, (n_rec, n_bp) = read(path)
+    assert (n_rec, n_bp) == (1, 1)  # the recording and its blueprint
+    assert {"time", "step"} <= timelines and "log_time" not in timelines
+    assert set(SCENE + PLOTS) <= set(rows), sorted(rows)
+    assert set(STATIC) <= static, sorted(static)
+    for entity in SCENE + PLOTS:
+        assert rows[entity]["step"] == list(range(n + 1)), entity
+    assert rows["plots/error"]["time"] == [round(k * plant.dt * 1e9) for k in range(n + 1)]  # [ns]
+
+    # the values are the rollout's: modes, ξ, forces and errors in the documented units
+    last = {e: np.array(rows[e]["Scalars:scalars"][-1], dtype=float) for e in PLOTS}
+    assert list(last["plots/mode"]) == [1.0, 0.0]  # finger 1 slides, finger 2 holds
+    xi1 = last["plots/xi/finger1"]  # ξ, ξ desired, feasible lo, hi, danger lo, hi [mm]
+    assert abs(xi1[0] - log.S[-1, 3] * 1e3) < 0.05 and abs(xi1[0] - xi1[1]) < 0.1
+    assert xi1[2] <= xi1[4] < xi1[0] < xi1[5] <= xi1[3]
+    assert np.isnan(last["plots/xi/finger2"][1])  # the holding finger has no desired ξ
+    fn1, fn2, ft1, ft2 = last["plots/force"][:4]
+    assert fn1 > 0 and fn2 > 0 and abs(abs(ft1) - MU[0] * fn1) < 1e-6  # Coulomb at the sliding contact
+    assert np.abs(last["plots/error"]).max() < 0.5  # mm and deg
+    assert len(rows["scene/object"]["LineStrips2D:strips"][-1][0]) == 5  # closed rectangle
+    assert len(rows["scene/fingers/finger1"]["LineStrips2D:strips"][-1]) == 3  # two links and the chain
+    safe = rows["scene/envelope/safe"]["LineStrips2D:strips"][-1]
+    danger = rows["scene/envelope/danger"]["LineStrips2D:strips"][-1]
+    assert len(safe) == 2 and len(danger) == 4  # one interval per contact edge, a danger zone at each end
+
+
+def test_decimation_logs_every_nth_step(tmp_path):
+    plant, controller = setup()
+    path = tmp_path / "decimated.rrd"
+    with RolloutRecorder(plant, rrd_path=path, decimation=10, plant_forces=False) as rec:
+        run_closed_loop(plant, controller, reference, 0.05, on_step=rec.hook(plant, reference))
+    verify(path)
+    rows, *_ = read(path)
+    assert rows["plots/error"]["step"] == [0, 10, 20, 30, 40, 50]
+    assert np.isnan(rows["plots/force"]["Scalars:scalars"][-1][0])  # plant forces off: not plotted
+    assert rec.steps_logged == 6
+
+
+def test_interrupted_rollout_leaves_a_complete_file(tmp_path):
+    plant, controller = setup()
+    path = tmp_path / "interrupted.rrd"
+    calls = []
+    with pytest.raises(RuntimeError, match="operator pulled the plug"):
+        with RolloutRecorder(plant, rrd_path=path, flush_every=1000) as rec:  # nothing sent before close()
+            hook = rec.hook(plant, reference)
+
+            def on_step(t, output):
+                hook(t, output)
+                calls.append(t)
+                if len(calls) == 7:
+                    raise RuntimeError("operator pulled the plug")
+
+            run_closed_loop(plant, controller, reference, 0.1, on_step=on_step)
+    assert rec.closed
+    verify(path)
+    rows, *_ = read(path)
+    assert rows["plots/error"]["step"] == list(range(8))
+    assert rows["scene/object"]["step"] == list(range(8))
+
+
+def test_a_failure_inside_the_recorder_keeps_the_steps_before_it(tmp_path, monkeypatch):
+    plant, controller = setup()
+    path = tmp_path / "failed.rrd"
+    with pytest.raises(ZeroDivisionError):
+        with RolloutRecorder(plant, rrd_path=path, envelope_tolerance=0.0) as rec:
+            hook = rec.hook(plant, reference)
+            envelope = rec._envelope
+
+            def failing(i, edge):  # fails half-way through step 4's row (after the scene's first rows)
+                if rec._next_step == 5:
+                    raise ZeroDivisionError("boom")
+                return envelope(i, edge)
+
+            monkeypatch.setattr(rec, "_envelope", failing)
+            run_closed_loop(plant, controller, reference, 0.01, on_step=hook)
+    verify(path)
+    rows, *_ = read(path)
+    for entity in SCENE + PLOTS:
+        assert rows[entity]["step"] == [0, 1, 2, 3], entity
+
+
+def test_log_step_with_plant_steps_and_close_is_idempotent(tmp_path):
+    from regrasp.closed_loop import measure_reduced_state
+
+    plant, controller = setup()
+    path = tmp_path / "manual.rrd"
+    rec = RolloutRecorder(plant, rrd_path=path, recording_name="manual loop", envelope_edges=[[0, 1], None])
+    forces = []
+    for k in range(5):
+        S, S_dot = measure_reduced_state(plant, controller.model)
+        out = controller(S, S_dot, *reference(plant.state.t))
+        step = plant.step(out.tau)
+        forces.append(step.forces_surface.copy())
+        if k == 2:  # a plant event is logged as text at its step
+            plant.events.append(PlantEvent(plant.state.t, "finger2", "slip", "made up for the test"))
+        assert rec.log_step(plant, out, step=10 + k, desired_pose=reference(plant.state.t)[0][:3], plant_step=step)
+    rec.close()
+    rec.close()
+    with pytest.raises(InvalidParameterError, match="closed"):
+        rec.log_step(plant, None)
+    verify(path)
+    rows, *_ = read(path)
+    assert rows["plots/force"]["step"] == list(range(10, 15))
+    assert rows["events"]["step"] == [12] and "finger2: slip" in rows["events"]["TextLog:text"][0][0]
+    logged = np.array(rows["plots/force"]["Scalars:scalars"])  # f_n..., f_t..., predicted...
+    assert np.allclose(logged[:, :2], [f[:, 0] for f in forces])
+    assert np.allclose(logged[:, 2:4], [f[:, 1] for f in forces])
+    # finger 1's envelopes on edges 0 (empty: condition I) and 1 (the whole edge); none for finger 2
+    assert len(rows["scene/envelope/safe"]["LineStrips2D:strips"][-1]) == 1
+    err = np.array(rows["plots/error"]["Scalars:scalars"])
+    assert np.isnan(err[:, 3]).all() and np.isfinite(err[:, :3]).all()  # desired pose only: no ξ error
+
+
+def test_recorders_are_independent_of_each_other_and_of_the_global_recording(tmp_path):
+    plant, controller = setup()
+    a, b = tmp_path / "a.rrd", tmp_path / "b.rrd"
+    with RolloutRecorder(plant, rrd_path=a) as ra, RolloutRecorder(plant, rrd_path=b, decimation=5) as rb:
+        hooks = [ra.hook(plant, reference), rb.hook(plant)]
+        run_closed_loop(plant, controller, reference, 0.02, on_step=lambda t, out: [h(t, out) for h in hooks])
+    assert rr.get_global_data_recording() is None and rr.get_thread_local_data_recording() is None
+    for path in (a, b):
+        verify(path)
+    assert read(a)[0]["plots/mode"]["step"] == list(range(21))
+    rows_b = read(b)[0]
+    assert rows_b["plots/mode"]["step"] == [0, 5, 10, 15, 20]
+    assert rows_b["scene/desired"]["LineStrips2D:strips"][-1] == []  # no reference given: no ghost
+
+
+def test_bad_input_raises_typed_errors(tmp_path):
+    plant, _ = setup()
+    with pytest.raises(InvalidParameterError, match="sink") as info:
+        RolloutRecorder(plant)
+    assert isinstance(info.value, RegraspError) and info.value.name == "rrd_path"
+    path = tmp_path / "x.rrd"
+    bad = [dict(danger_fraction=0.5), dict(danger_fraction=-0.1), dict(decimation=0), dict(decimation=1.5),
+           dict(envelope_edges=[1]), dict(sliding=[2]), dict(force_scale=0.0), dict(envelope_geometry="mesh"),
+           dict(flush_every=0), dict(envelope_tolerance=-1.0)]
+    for kwargs in bad:
+        with pytest.raises(InvalidParameterError):
+            RolloutRecorder(plant, rrd_path=path, **kwargs)
+    with pytest.raises(UnknownEdgeError):
+        RolloutRecorder(plant, rrd_path=path, envelope_edges=[7, None])
+    with pytest.raises(InvalidParameterError, match="existing directory"):
+        RolloutRecorder(plant, rrd_path=tmp_path / "missing" / "x.rrd")
+    with pytest.raises(InvalidParameterError):
+        RolloutRecorder("not a plant", rrd_path=path)
+    assert not path.exists()  # rejected before any stream or file was made
+    with RolloutRecorder(plant, rrd_path=path) as rec:
+        with pytest.raises(InvalidParameterError, match="step"):
+            rec.log_step(plant, None, step=-1)
+        with pytest.raises(InvalidParameterError, match="desired_pose"):
+            rec.log_step(plant, None, desired_pose=[0.0, 0.1])
+    verify(path)
