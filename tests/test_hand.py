@@ -108,3 +108,14 @@ def test_link_mass_scale_scales_M_and_gravity_but_not_the_callers_model():
     np.testing.assert_allclose(heavy.dynamics(q, v).mass_matrix, 1.5 * base.dynamics(q, v).mass_matrix, rtol=1e-12)
     np.testing.assert_allclose(heavy.dynamics(q, v).nonlinear, 1.5 * base.dynamics(q, v).nonlinear, rtol=1e-12)
     assert base.fingers[0].model.inertias[1].mass == pytest.approx(make_hand().fingers[0].model.inertias[1].mass)
+
+
+def test_closed_form_condition_number_matches_numpy():
+    from regrasp.hand import condition_2x2
+
+    rng = np.random.default_rng(5)
+    for _ in range(500):
+        a = rng.normal(size=(2, 2)) * rng.uniform(1e-3, 1e3)
+        assert condition_2x2(a) == pytest.approx(np.linalg.cond(a), rel=1e-8)
+    assert condition_2x2(np.array([[1.0, 2.0], [2.0, 4.0]])) == float("inf")
+    assert condition_2x2(np.zeros((2, 2))) == float("inf")

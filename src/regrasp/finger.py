@@ -361,7 +361,10 @@ class Finger:
             UnreachableError: the target is outside the annulus |l1 - l2| <= |r| <= l1 + l2
                 (a relative slack of 1e-12 is accepted and clamped onto the boundary).
         """
-        target = as_finite_array("tip_in_hand", tip_in_hand, (2,))
+        return self._inverse_kinematics(as_finite_array("tip_in_hand", tip_in_hand, (2,)))
+
+    def _inverse_kinematics(self, target: np.ndarray) -> np.ndarray:
+        """:meth:`inverse_kinematics` on a validated (2,) target (hot paths)."""
         r = target - self.joint1_in_hand
         dist = float(np.hypot(r[0], r[1]))
         l1, l2 = self._l1, self._l2

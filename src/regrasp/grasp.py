@@ -44,7 +44,7 @@ from enum import Enum
 import numpy as np
 
 from .exceptions import InvalidParameterError, SlidingContactCountError
-from .planar import perp, rotation
+from .planar import rotation
 from .polygon import ConvexPolygon
 from .validation import as_finite_array
 
@@ -87,6 +87,7 @@ class Grasp:
         self._origins = np.array([e.xi_origin for e in self.edges])  # (m, 2) object frame
         self._tangents = np.array([e.xi_direction for e in self.edges])
         self._normals = np.array([e.inward_normal for e in self.edges])
+        self._frames0 = np.stack([np.column_stack([n, t]) for n, t in zip(self._normals, self._tangents)])
         bv = np.zeros((2 * self.m, self.p))
         for j, i in enumerate(self.sliding):
             bv[2 * i + 1, j] = 1.0
@@ -95,6 +96,41 @@ class Grasp:
     def with_modes(self, modes: Sequence[ContactMode | str]) -> "Grasp":
         """The same contacts with other modes."""
         return Grasp(self.polygon, [e.index for e in self.edges], modes)
+
+    # ------------------------------------------------------------------ kernels (validated input)
+    def _lever(self, beta: float, xi: np.ndarray) -> np.ndarray:
+        return (self._origins + xi[:, None] * self._tangents) @ rotation(beta).T
+
+    def _frames(self, beta: float) -> np.ndarray:
+        return np.einsum("ij,mjk->mik", rotation(beta), self._frames0)
+
+    def _grasp_matrix(self, r: np.ndarray) -> np.ndarray:
+        g = np.zeros((3, 2 * self.m))
+        g[0, 0::2] = 1.0
+        g[1, 1::2] = 1.0
+        g[2, 0::2] = -r[:, 1]  # (⊥r)ᵀ = (-r_y, r_x)
+        g[2, 1::2] = r[:, 0]
+        return g
+
+    def _grasp_matrix_dot(self, r: np.ndarray, tangents: np.ndarray, omega: float, xi_dot: np.ndarray) -> np.ndarray:
+        r_dot = omega * np.column_stack([-r[:, 1], r[:, 0]]) + xi_dot[:, None] * tangents
+        g = np.zeros((3, 2 * self.m))
+        g[2, 0::2] = -r_dot[:, 1]
+        g[2, 1::2] = r_dot[:, 0]
+        return g
+
+    def _surface_rotation(self, frames: np.ndarray) -> np.ndarray:
+        rf = np.eye(2 * self.m)
+        for i in self.sliding:
+            rf[2 * i:2 * i + 2, 2 * i:2 * i + 2] = frames[i]
+        return rf
+
+    def _surface_rotation_dot(self, frames: np.ndarray, omega: float) -> np.ndarray:
+        rf = np.zeros((2 * self.m, 2 * self.m))
+        for i in self.sliding:
+            f = frames[i]
+            rf[2 * i:2 * i + 2, 2 * i:2 * i + 2] = omega * np.array([[-f[1, 0], -f[1, 1]], [f[0, 0], f[0, 1]]])
+        return rf
 
     # ------------------------------------------------------------------ state helpers
     def _check(self, pose, xi):
@@ -110,58 +146,38 @@ class Grasp:
     def lever_arms(self, pose, xi) -> np.ndarray:
         """r_i = R(β) c_i(ξ_i) [m], hand-frame orientation, shape (m, 2)."""
         pose, xi = self._check(pose, xi)
-        return self.points_in_object(xi) @ rotation(pose[2]).T
+        return self._lever(pose[2], xi)
 
     def points(self, pose, xi) -> np.ndarray:
         """Contact points [m] in the hand frame, shape (m, 2)."""
-        pose = as_finite_array("pose", pose, (3,))
-        return pose[:2] + self.lever_arms(pose, xi)
+        pose, xi = self._check(pose, xi)
+        return pose[:2] + self._lever(pose[2], xi)
 
     def surface_frames(self, pose) -> np.ndarray:
         """R_fi = R(β) [n_i t_i] per contact, shape (m, 2, 2) (columns: normal, tangent)."""
-        pose = as_finite_array("pose", pose, (3,))
-        rot = rotation(pose[2])
-        return np.stack([rot @ np.column_stack([n, t]) for n, t in zip(self._normals, self._tangents)])
+        return self._frames(as_finite_array("pose", pose, (3,))[2])
 
     # ------------------------------------------------------------------ matrices
     def grasp_matrix(self, pose, xi) -> np.ndarray:
         r"""G (3 x 2m): column pair i maps contact force f_i to :math:`(f_i, r_i \times f_i)`."""
-        r = self.lever_arms(pose, xi)
-        g = np.zeros((3, 2 * self.m))
-        for i in range(self.m):
-            g[:2, 2 * i:2 * i + 2] = np.eye(2)
-            g[2, 2 * i:2 * i + 2] = perp(r[i])
-        return g
+        return self._grasp_matrix(self.lever_arms(pose, xi))
 
     def grasp_matrix_dot(self, pose, xi, pose_dot, xi_dot) -> np.ndarray:
         r"""Exact :math:`\dot G` for object twist ``pose_dot`` = (v_o, ω) and contact rates ``xi_dot``."""
         pose, xi = self._check(pose, xi)
         pose_dot = as_finite_array("pose_dot", pose_dot, (3,))
         xi_dot = as_finite_array("xi_dot", xi_dot, (self.m,))
-        r = self.lever_arms(pose, xi)
-        t = self._tangents @ rotation(pose[2]).T
-        r_dot = pose_dot[2] * perp(r) + xi_dot[:, None] * t
-        g = np.zeros((3, 2 * self.m))
-        for i in range(self.m):
-            g[2, 2 * i:2 * i + 2] = perp(r_dot[i])
-        return g
+        r = self._lever(pose[2], xi)
+        return self._grasp_matrix_dot(r, self._frames(pose[2])[:, :, 1], pose_dot[2], xi_dot)
 
     def surface_rotation(self, pose) -> np.ndarray:
         """R_f (2m x 2m): block R_fi for sliding contacts, I_2 for fixed ones (eq. 3.1.7)."""
-        frames = self.surface_frames(pose)
-        rf = np.eye(2 * self.m)
-        for i in self.sliding:
-            rf[2 * i:2 * i + 2, 2 * i:2 * i + 2] = frames[i]
-        return rf
+        return self._surface_rotation(self.surface_frames(pose))
 
     def surface_rotation_dot(self, pose, pose_dot) -> np.ndarray:
         r"""Exact :math:`\dot R_f`: :math:`\omega \perp R_{fi}` on sliding blocks, 0 elsewhere."""
         frames = self.surface_frames(pose)
-        omega = as_finite_array("pose_dot", pose_dot, (3,))[2]
-        rf = np.zeros((2 * self.m, 2 * self.m))
-        for i in self.sliding:
-            rf[2 * i:2 * i + 2, 2 * i:2 * i + 2] = omega * perp(frames[i].T).T
-        return rf
+        return self._surface_rotation_dot(frames, as_finite_array("pose_dot", pose_dot, (3,))[2])
 
     def sliding_directions(self) -> np.ndarray:
         """B_v (2m x p): the sliding direction (0, 1) of each sliding contact in its surface frame."""

@@ -141,7 +141,9 @@ class Hand:
 
     def jacobian(self, q) -> np.ndarray:
         """J(q) = blockdiag(J_i), (2m, 2m) [m/rad]."""
-        qs = self._split("q", q)
+        return self._jacobian(self._split("q", q))
+
+    def _jacobian(self, qs: np.ndarray) -> np.ndarray:
         jac = np.zeros((self.nq, self.nq))
         for i, (model, data, fid) in enumerate(zip(self._models, self._datas, self._tip_ids)):
             jac[2 * i:2 * i + 2, 2 * i:2 * i + 2] = pin.computeFrameJacobian(
@@ -172,9 +174,10 @@ class Hand:
     def check_singular(self, q, jacobian: np.ndarray | None = None) -> np.ndarray:
         """Condition numbers of the fingers' tip Jacobians; raises SingularFingerError above the threshold."""
         qs = self._split("q", q)
-        if jacobian is None:
-            jacobian = self.jacobian(q)
-        conds = np.array([np.linalg.cond(jacobian[2 * i:2 * i + 2, 2 * i:2 * i + 2]) for i in range(self.m)])
+        return self._check_singular(qs, self._jacobian(qs) if jacobian is None else jacobian)
+
+    def _check_singular(self, qs: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
+        conds = np.array([condition_2x2(jacobian[2 * i:2 * i + 2, 2 * i:2 * i + 2]) for i in range(self.m)])
         for i, c in enumerate(conds):
             if not c <= self.singular_threshold:  # also catches inf/nan
                 raise SingularFingerError(self.fingers[i].name, qs[i], float(c), self.singular_threshold)
@@ -182,5 +185,21 @@ class Hand:
 
     def inverse_kinematics(self, tips_in_hand) -> np.ndarray:
         """Joint positions q (2m,) putting each tip at ``tips_in_hand`` (m, 2), keeping configurations."""
-        tips = as_finite_array("tips_in_hand", tips_in_hand, (self.m, 2))
-        return np.concatenate([f.inverse_kinematics(p) for f, p in zip(self.fingers, tips)])
+        return self._inverse_kinematics(as_finite_array("tips_in_hand", tips_in_hand, (self.m, 2)))
+
+    def _inverse_kinematics(self, tips: np.ndarray) -> np.ndarray:
+        return np.concatenate([f._inverse_kinematics(p) for f, p in zip(self.fingers, tips)])
+
+
+def condition_2x2(a: np.ndarray) -> float:
+    r"""Condition number σ_max/σ_min of a 2x2 matrix in closed form (inf when singular).
+
+    :math:`\sigma^2_{max,min} = (s \pm \sqrt{s^2 - 4 \det^2})/2` with :math:`s = \|a\|_F^2`.
+    """
+    s = float(a[0, 0] ** 2 + a[0, 1] ** 2 + a[1, 0] ** 2 + a[1, 1] ** 2)
+    det = float(a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0])
+    disc = np.sqrt(max(s * s - 4.0 * det * det, 0.0))
+    small = 0.5 * (s - disc)
+    if small <= 0.0:
+        return float("inf")
+    return float(np.sqrt(0.5 * (s + disc) / small))

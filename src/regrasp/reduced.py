@@ -99,6 +99,7 @@ class ReducedModel:
         self.n = 3 + grasp.p
         self.M_s = np.zeros((self.n, self.n))
         self.M_s[:3, :3] = self.M_o
+        self._bv = grasp.sliding_directions()
 
     @property
     def f_g(self) -> np.ndarray:
@@ -135,21 +136,23 @@ class ReducedModel:
         pose, xi, twist, xi_dot = self.split(S, S_dot)
         S = np.asarray(S, dtype=float)
         S_dot = np.asarray(S_dot, dtype=float)
-        q = self.hand.inverse_kinematics(self.grasp.points(pose, xi))
-        jac = self.hand.jacobian(q)
-        self.hand.check_singular(q, jac)
-        G = self.grasp.grasp_matrix(pose, xi)
-        R_f = self.grasp.surface_rotation(pose)
-        B_v = self.grasp.sliding_directions()
+        grasp, hand = self.grasp, self.hand
+        r = grasp._lever(pose[2], xi)
+        frames = grasp._frames(pose[2])
+        qs = hand._inverse_kinematics(pose[:2] + r).reshape(-1, 2)
+        jac = hand._jacobian(qs)
+        hand._check_singular(qs, jac)
+        G = grasp._grasp_matrix(r)
+        R_f = grasp._surface_rotation(frames)
+        B_v = self._bv
         A = np.hstack([G.T, R_f @ B_v])
         H = np.linalg.solve(jac, A)
         q_dot = H @ S_dot
-        dyn = self.hand.dynamics(q, q_dot)
-        G_dot = self.grasp.grasp_matrix_dot(pose, xi, twist, xi_dot)
-        R_f_dot = self.grasp.surface_rotation_dot(pose, twist)
-        A_dot_S_dot = G_dot.T @ twist + R_f_dot @ B_v @ S_dot[3:]
+        dyn = hand._dynamics(qs, q_dot.reshape(-1, 2))
+        A_dot_S_dot = (grasp._grasp_matrix_dot(r, frames[:, :, 1], twist[2], xi_dot).T @ twist
+                       + grasp._surface_rotation_dot(frames, twist[2]) @ B_v @ S_dot[3:])
         H_dot_S_dot = np.linalg.solve(jac, A_dot_S_dot - dyn.jacobian_dot_v)
-        return ReducedState(S, S_dot, xi, xi_dot, q, q_dot, H, H_dot_S_dot, G, R_f, B_v, dyn)
+        return ReducedState(S, S_dot, xi, xi_dot, qs.reshape(-1), q_dot, H, H_dot_S_dot, G, R_f, B_v, dyn)
 
     # ------------------------------------------------------------------ dynamics
     def mass_matrix(self, st: ReducedState) -> np.ndarray:
