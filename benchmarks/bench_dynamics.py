@@ -17,25 +17,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
-from pathlib import Path
 
 import numpy as np
 
-from regrasp import Finger, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+from common import ROOT, median_us, sliding_hold
+
+from regrasp import Finger, Grasp, Hand, ReducedModel
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
-
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def _median_us(fn, n: int) -> float:
-    fn()  # warm-up
-    samples = []
-    for _ in range(n):
-        t0 = time.perf_counter()
-        fn()
-        samples.append(time.perf_counter() - t0)
-    return float(np.median(samples) * 1e6)
 
 
 def main() -> None:
@@ -45,30 +33,14 @@ def main() -> None:
     args = parser.parse_args()
     n = 20 if args.quick else 500
 
-    sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
-    hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
-    model = ReducedModel(hand, Grasp(sc.polygon, [1, 3], ["sliding", "fixed"]), xi=[0.0, 0.0])
-    S, S_dot = np.array([0.0, 0.12, 0.0, 0.0]), np.array([0.0, 0.0, 0.0, 0.005])
-    st = model.state(S, S_dot)
-    # torques that keep the object still while finger 1 slides up: f from the object's balance
-    frames = model.grasp.surface_frames(S[:3])
-    forces = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
-    forces += 2.0 * np.concatenate([frames[0][:, 0], frames[1][:, 0]])
-    tau = st.hand.nonlinear + st.hand.jacobian.T @ forces
-    plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", 0.0, 1.0), PlantContact(3, "fixed", 0.0)],
-                  mu=0.0, stop_on=())
-
-    def plant_step():
-        if plant.state is None or plant.state.t > 0.05:
-            plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
-        plant.step(tau)
-
-    plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
+    setup = sliding_hold()
+    sc, hand, model, S, S_dot, st, tau, plant = (setup.scenario, setup.hand, setup.model, setup.S, setup.S_dot,
+                                                  setup.state, setup.tau, setup.plant)
     results = {
-        "plant_step": _median_us(plant_step, n),
-        "plant_accelerations": _median_us(lambda: plant.accelerations(plant.state, tau), n),
-        "reduced_state": _median_us(lambda: model.state(S, S_dot), n),
-        "reduced_forward_dynamics": _median_us(lambda: model.forward_dynamics(st, tau, 0.3), n),
+        "plant_step": median_us(setup.plant_step, n),
+        "plant_accelerations": median_us(lambda: plant.accelerations(plant.state, tau), n),
+        "reduced_state": median_us(lambda: model.state(S, S_dot), n),
+        "reduced_forward_dynamics": median_us(lambda: model.forward_dynamics(st, tau, 0.3), n),
     }
     results["reduced_evaluation"] = results["reduced_state"] + results["reduced_forward_dynamics"]
 
@@ -76,15 +48,15 @@ def main() -> None:
     X, zero = np.array([0.0, 0.12, 0.0]), np.zeros(3)
     with_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), mu=0.5)
     without_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), mu=0.5, internal_force=None)
-    results["control_step_qp"] = _median_us(lambda: with_qp(X, zero, X, zero, zero), n)
-    results["control_step_no_qp"] = _median_us(lambda: without_qp(X, zero, X, zero, zero), n)
+    results["control_step_qp"] = median_us(lambda: with_qp(X, zero, X, zero, zero), n)
+    results["control_step_no_qp"] = median_us(lambda: without_qp(X, zero, X, zero, zero), n)
     third = Finger.from_urdf(ROOT / "urdf" / "planar_2r_finger.urdf", base_in_hand=(0.04, -0.02, np.pi / 2),
                              configuration="left", name="finger3")
     hand3 = Hand([*hand.fingers, third], gravity_in_hand=sc.gravity_in_hand)
     three = ReducedModel(hand3, Grasp(sc.polygon, [1, 3, 2], ["sliding", "fixed", "fixed"]), xi=[-0.01, -0.01, 0.02])
     prop1 = Proposition1Controller(three, Gains.critically_damped(20.0, 4), mu=[0.0, 0.5, 0.5])
     S3, S3_dot = np.array([0.0, 0.12, 0.0, -0.01]), np.array([0.0, 0.0, 0.0, 0.01])
-    results["control_step_m3_qp"] = _median_us(lambda: prop1(S3, S3_dot, S3, S3_dot, np.zeros(4)), n)
+    results["control_step_m3_qp"] = median_us(lambda: prop1(S3, S3_dot, S3, S3_dot, np.zeros(4)), n)
     if args.json:
         print(json.dumps({k: {"median_us": v} for k, v in results.items()}))
         return

@@ -19,25 +19,14 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from regrasp import FingerEnvelope, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+from common import median_us, sliding_hold
+
+from regrasp import FingerEnvelope, Grasp, Hand, ReducedModel
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
-
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def median_us(fn, n: int) -> float:
-    fn()
-    samples = []
-    for _ in range(n):
-        t0 = time.perf_counter()
-        fn()
-        samples.append(time.perf_counter() - t0)
-    return float(np.median(samples) * 1e6)
 
 
 def batch_us(fn, batch: int = 1000, repeats: int = 7) -> float:
@@ -80,8 +69,8 @@ def main() -> None:
     args = parser.parse_args()
     n = 20 if args.quick else 300
 
-    sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
-    hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
+    setup = sliding_hold()
+    sc, hand = setup.scenario, setup.hand
     floor_dyn = pinocchio_floor_us(hand, args.quick)
 
     X, zero3 = np.array([0.0, 0.12, 0.0]), np.zeros(3)
@@ -103,21 +92,6 @@ def main() -> None:
     slide_no = Proposition1Controller(three, Gains.critically_damped(20.0, 4), mu=[0.0, 0.5, 0.5], internal_force=None)
     floor_dyn3 = pinocchio_floor_us(hand3, args.quick)
 
-    model = ReducedModel(hand, Grasp(sc.polygon, [1, 3], ["sliding", "fixed"]), xi=[0.0, 0.0])
-    S, S_dot = np.array([0.0, 0.12, 0.0, 0.0]), np.array([0.0, 0.0, 0.0, 0.005])
-    st = model.state(S, S_dot)
-    f = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
-    f += 2.0 * np.concatenate([frame[:, 0] for frame in model.grasp.surface_frames(S[:3])])
-    tau = st.hand.nonlinear + st.hand.jacobian.T @ f
-    plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", 0.0, 1.0), PlantContact(3, "fixed", 0.0)],
-                  mu=0.0, stop_on=())
-    plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
-
-    def plant_step():
-        if plant.state.t > 0.05:
-            plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
-        plant.step(tau)
-
     env_ideal = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1)
     env_urdf = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1, geometry="urdf")
     pose = sc.trajectory.pose(0.3)
@@ -131,7 +105,7 @@ def main() -> None:
                                   "floor_us": floor_dyn3 + osqp_floor},
         "control_sliding_m3_no_qp": {"median_us": median_us(lambda: slide_no(S3, S3d, S3, S3d, np.zeros(4)), n),
                                      "floor_us": floor_dyn3},
-        "plant_step": {"median_us": median_us(plant_step, n), "floor_us": 4 * floor_dyn},
+        "plant_step": {"median_us": median_us(setup.plant_step, n), "floor_us": 4 * floor_dyn},
         "planner_sample_ideal": {"median_us": median_us(lambda: env_ideal.at(pose), n), "floor_us": None},
         "planner_sample_urdf": {"median_us": median_us(lambda: env_urdf.at(pose), max(5, n // 10)), "floor_us": None},
         "supervisor_step": {"median_us": None, "floor_us": None},

@@ -264,6 +264,16 @@ class Plant:
         return worst
 
     # ------------------------------------------------------------------ dynamics
+    def _force_column(self, sl: slice, J: np.ndarray, r: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """Generalized force (fingers, object) of a unit force ``d`` on the object at lever arm ``r``,
+        applied by finger joints ``sl``: -Jᵀd on the finger, (d, r × d) on the object."""
+        n = self.hand.nq
+        col = np.zeros(n + 3)
+        col[sl] = -J.T @ d
+        col[n:n + 2] = d
+        col[n + 2] = r[0] * d[1] - r[1] * d[0]
+        return col
+
     def _rows(self, st: PlantState, dyn, contacts):
         """Per active contact: force columns W (generalized force per multiplier), constraint
         rows C (acting on (q̈, Ẍ) or, at velocity level, on (q̇, V)), right-hand sides b, owners."""
@@ -286,12 +296,7 @@ class Plant:
                 phi = tip - st.X[:2] - rc
                 phi_dot = tip_vel - st.V[:2] - omega * perp(rc)
                 for k in range(2):
-                    d = np.eye(2)[k]
-                    col = np.zeros(n + 3)
-                    col[sl] = -J.T @ d
-                    col[n:n + 2] = d
-                    col[n + 2] = r[0] * d[1] - r[1] * d[0]
-                    w_cols.append(col)
+                    w_cols.append(self._force_column(sl, J, r, np.eye(2)[k]))
                     row = np.zeros(n + 3)
                     row[sl] = J[k]
                     row[n + k] = -1.0
@@ -305,12 +310,7 @@ class Plant:
                 offset = e.inward_normal @ e.xi_origin
                 psi = normal @ r - offset
                 psi_dot = omega * (perp(normal) @ r) + normal @ (tip_vel - st.V[:2])
-                d = normal + self.mu[i] * c.sign * tangent
-                col = np.zeros(n + 3)
-                col[sl] = -J.T @ d
-                col[n:n + 2] = d
-                col[n + 2] = r[0] * d[1] - r[1] * d[0]
-                w_cols.append(col)
+                w_cols.append(self._force_column(sl, J, r, normal + self.mu[i] * c.sign * tangent))
                 row = np.zeros(n + 3)
                 row[sl] = normal @ J
                 row[n:n + 2] = -normal

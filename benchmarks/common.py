@@ -1,0 +1,61 @@
+"""Set-up shared by the benchmark scripts (run as ``python benchmarks/<script>.py``)."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from regrasp import Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def median_us(fn, n: int) -> float:
+    """Median wall time [µs] of ``n`` calls of ``fn`` (after one warm-up call)."""
+    fn()
+    samples = []
+    for _ in range(n):
+        t0 = time.perf_counter()
+        fn()
+        samples.append(time.perf_counter() - t0)
+    return float(np.median(samples) * 1e6)
+
+
+@dataclass
+class SlidingHold:
+    """The paper's hand holding the rectangle still while finger 1 slides up at 5 mm/s."""
+
+    scenario: object
+    hand: Hand
+    model: ReducedModel
+    S: np.ndarray
+    S_dot: np.ndarray
+    state: object
+    tau: np.ndarray
+    plant: Plant
+
+    def plant_step(self) -> None:
+        """One plant step, restarting from the initial state every 50 ms."""
+        if self.plant.state is None or self.plant.state.t > 0.05:
+            self.plant.reset(self.state.q, self.state.q_dot, self.S[:3], self.S_dot[:3])
+        self.plant.step(self.tau)
+
+
+def sliding_hold() -> SlidingHold:
+    sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
+    hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
+    model = ReducedModel(hand, Grasp(sc.polygon, [1, 3], ["sliding", "fixed"]), xi=[0.0, 0.0])
+    S, S_dot = np.array([0.0, 0.12, 0.0, 0.0]), np.array([0.0, 0.0, 0.0, 0.005])
+    st = model.state(S, S_dot)
+    # torques that keep the object still: contact forces from the object's balance plus a squeeze
+    frames = model.grasp.surface_frames(S[:3])
+    forces = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
+    forces += 2.0 * np.concatenate([frames[0][:, 0], frames[1][:, 0]])
+    tau = st.hand.nonlinear + st.hand.jacobian.T @ forces
+    plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", 0.0, 1.0), PlantContact(3, "fixed", 0.0)],
+                  mu=0.0, stop_on=())
+    plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
+    return SlidingHold(sc, hand, model, S, S_dot, st, tau, plant)
