@@ -9,8 +9,13 @@ Items and their floors:
   the bare solve of the controller's persistent, warm-started ``osqp.OSQP`` object;
 * one plant step: floor = four times those Pinocchio calls (RK4 evaluates the dynamics 4 times);
 * the planner per time sample (``ideal``, ``urdf``): no floor (null);
-* the supervisor step and the rollout's real-time factor need the regrasp supervisor, which does
-  not exist yet: reported as null.
+* one supervisor step (``RegraspSupervisor.step`` minus its control law: the runtime envelopes of
+  all fingers at the measured pose, the look-ahead in the plan, the danger test), three fingers of
+  ``paper_trajectory_2_three_fingers.toml`` holding still, with the scenario's ``urdf`` envelopes
+  and with ``ideal`` ones; floor: one envelope sample per finger (``FingerEnvelope.at``);
+* the rollout of paper trajectory 2 with the palm finger (``paper_trajectory_2_three_fingers.toml``,
+  two periods at 1 kHz, or until it fails): real-time factor = simulated time / wall time, with
+  recording off and on (a ``RolloutRecorder`` writing an .rrd to a temporary directory).
 Medians of repeated calls (time.perf_counter); the Pinocchio floors time batches of 1000 calls.
 """
 
@@ -18,15 +23,51 @@ from __future__ import annotations
 
 import argparse
 import json
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from common import median_us, sliding_hold
+from common import ROOT, median_us, sliding_hold
 
-from regrasp import FingerEnvelope, Grasp, Hand, ReducedModel
+from regrasp import FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.supervisor import SupervisorSettings
+
+THREE = ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
+
+
+def supervisor_step_us(geometry: str, n: int) -> tuple[float, float]:
+    """Median of the supervisor's own time per step and its floor (one envelope sample per finger at
+    the same pose). Three fingers at t = 0 on the middles of their feasible sets; ``regrasp=False``,
+    so each step evaluates the envelopes, the look-ahead and the danger test but starts no slide."""
+    sc = load_scenario(THREE)
+    rollout = build_rollout(sc, duration=0.01, settings=SupervisorSettings(geometry=geometry, regrasp=False),
+                            xi0=[-0.0125, 0.0125, 0.0])
+    sup, plant = rollout.supervisor, rollout.plant
+    meas = rollout.measure(None)
+    times = []
+    for _ in range(n + 1):
+        times.append(sup.step(meas, plant.dt).supervisor_seconds)
+    floor = sum(median_us(lambda env=env: env.at(meas.X, meas.t), n) for env in sup.envelopes)
+    return float(np.median(times[1:]) * 1e6), floor
+
+
+def rollout_realtime(quick: bool) -> dict:
+    """Real-time factors of the three-finger rollout of paper trajectory 2, recording off and on."""
+    sc = load_scenario(THREE)
+    duration = 0.2 if quick else None
+    off = build_rollout(sc, duration=duration).run()
+    with tempfile.TemporaryDirectory() as tmp:
+        rollout = build_rollout(sc, duration=duration)
+        with RolloutRecorder(rollout.plant, rrd_path=Path(tmp) / "bench.rrd") as recorder:
+            on = rollout.run(recorder=recorder)
+    simulated = off.steps * rollout.plant.dt
+    return {"recording_off": off.realtime_factor, "recording_on": on.realtime_factor,
+            "simulated_s": simulated, "requested_s": off.duration,
+            "outcome": "success" if off.success else f"failed at {off.failure.time:.3f} s: {off.failure.reason}"}
 
 
 def batch_us(fn, batch: int = 1000, repeats: int = 7) -> float:
@@ -108,26 +149,28 @@ def main() -> None:
         "plant_step": {"median_us": median_us(setup.plant_step, n), "floor_us": 4 * floor_dyn},
         "planner_sample_ideal": {"median_us": median_us(lambda: env_ideal.at(pose), n), "floor_us": None},
         "planner_sample_urdf": {"median_us": median_us(lambda: env_urdf.at(pose), max(5, n // 10)), "floor_us": None},
-        "supervisor_step": {"median_us": None, "floor_us": None},
-        "rollout_realtime_factor": {"recording_off": None, "recording_on": None},
     }
+    for geometry in ("urdf", "ideal"):
+        med, floor = supervisor_step_us(geometry, max(5, n // 10) if geometry == "urdf" else n)
+        results[f"supervisor_step_{geometry}"] = {"median_us": med, "floor_us": floor}
+    results["rollout_realtime_factor"] = rollout_realtime(args.quick)
     if args.json:
         print(json.dumps(results))
         return
     print(f"{'item':28s} {'median [us]':>12s} {'floor [us]':>11s} {'ratio':>7s}")
     for key, value in results.items():
         if key == "rollout_realtime_factor":
-            print(f"{key:28s} {'n/a (needs the regrasp supervisor)':>32s}")
             continue
         med, floor = value["median_us"], value["floor_us"]
-        if med is None:
-            print(f"{key:28s} {'n/a (needs the regrasp supervisor)':>32s}")
-            continue
         ratio = f"{med / floor:6.1f}x" if floor else "     -"
         floor_s = f"{floor:11.1f}" if floor else f"{'-':>11s}"
         print(f"{key:28s} {med:12.1f} {floor_s} {ratio:>7s}")
+    rt = results["rollout_realtime_factor"]
+    print(f"rollout real-time factor      {rt['recording_off']:6.2f}x recording off, {rt['recording_on']:6.2f}x on "
+          f"({rt['simulated_s']:.3f} of {rt['requested_s']:.3f} s simulated; {rt['outcome']})")
     print(f"(Pinocchio floor of one 2-finger dynamics evaluation: {floor_dyn:.1f} us; "
-          f"persistent OSQP solve of the 2-finger QP: {osqp_floor:.1f} us)")
+          f"persistent OSQP solve of the 2-finger QP: {osqp_floor:.1f} us; supervisor floors: one "
+          f"envelope sample per finger)")
 
 
 if __name__ == "__main__":

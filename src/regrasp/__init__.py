@@ -52,8 +52,17 @@ from .plant import Plant, PlantContact, PlantEvent, PlantState, PlantStep
 from .polygon import ConvexPolygon, Edge
 from .recording import RolloutRecorder
 from .reduced import ReducedModel, ReducedState
+from .rollout import Rollout, RolloutEvent, RolloutFailure, RolloutResult, build_rollout
 from .scenario import FingerContact, Scenario, load_scenario
 from .sliding import SlideFeasibility, sliding_feasibility
+from .supervisor import (
+    ContactPhase,
+    Measurement,
+    RegraspSupervisor,
+    SupervisorEvent,
+    SupervisorOutput,
+    SupervisorSettings,
+)
 from .trajectory import EllipseTrajectory, Trajectory, TrajectorySample, WaypointTrajectory
 
 __version__ = "0.1.0"
@@ -65,6 +74,7 @@ __all__ = [
     "ConeEdge",
     "Configuration",
     "ContactMode",
+    "ContactPhase",
     "ControlOutput",
     "ConvexPolygon",
     "Edge",
@@ -90,6 +100,7 @@ __all__ = [
     "InternalForceSolver",
     "InvalidParameterError",
     "LinkShape",
+    "Measurement",
     "PlanResult",
     "Plant",
     "PlantContact",
@@ -103,12 +114,20 @@ __all__ = [
     "ReducedModel",
     "ReducedState",
     "RegraspError",
+    "RegraspSupervisor",
+    "Rollout",
+    "RolloutEvent",
+    "RolloutFailure",
     "RolloutRecorder",
+    "RolloutResult",
     "Scenario",
     "ScenarioError",
     "SingularFingerError",
     "SlideFeasibility",
     "SlidingContactCountError",
+    "SupervisorEvent",
+    "SupervisorOutput",
+    "SupervisorSettings",
     "Trajectory",
     "TrajectoryError",
     "TrajectorySample",
@@ -117,6 +136,7 @@ __all__ = [
     "UrdfCollisionChecker",
     "WaypointTrajectory",
     "build_internal_force_qp",
+    "build_rollout",
     "condition_of",
     "default_tip_clearance",
     "load_scenario",

@@ -72,11 +72,13 @@ class FingerContact:
         finger: The finger (URDF, base pose, configuration).
         edge: Index of the contact edge.
         tip_clearance: Tip clearance [m] for the ``urdf`` geometry, or None for the default.
+        mu: Coulomb friction coefficient of the fingertip on the object [-] (used by rollouts).
     """
 
     finger: Finger
     edge: int
     tip_clearance: float | None = None
+    mu: float = 0.5
 
 
 @dataclass(frozen=True)
@@ -92,6 +94,11 @@ class Scenario:
     gravity_in_hand: np.ndarray = field(default_factory=lambda: np.array([0.0, -9.81]))
     samples: int = 401
     geometry: Geometry = Geometry.IDEAL
+
+    @property
+    def mu(self) -> np.ndarray:
+        """Each fingertip's friction coefficient [-], (m,)."""
+        return np.array([c.mu for c in self.contacts])
 
 
 class _Reader:
@@ -239,10 +246,13 @@ def _fingers(path: Path, tables: Any, polygon: ConvexPolygon) -> tuple[FingerCon
         clearance = r.number("tip_clearance", None)
         if clearance is not None and clearance < 0.0:
             raise r.fail("tip_clearance", f"expected a length >= 0 [m], got {clearance!r}")
+        mu = r.number("mu", 0.5)
+        if not mu >= 0.0:
+            raise r.fail("mu", f"expected a friction coefficient >= 0, got {mu!r}")
         finger = _wrap(r, "urdf", lambda: Finger.from_urdf(
             urdf, base_in_hand=base, configuration=configuration, name=name))
         r.finish()
-        contacts.append(FingerContact(finger, edge, clearance))
+        contacts.append(FingerContact(finger, edge, clearance, float(mu)))
     return tuple(contacts)
 
 

@@ -1,0 +1,625 @@
+r"""The regrasp supervisor (paper §4, Figure 4.1): slide a contact to safety while the motion goes on.
+
+At every control step the supervisor
+
+1. evaluates each contact's feasible envelope at the *measured* object pose (the planner's
+   :class:`~regrasp.envelope.FingerEnvelope` for one time sample, ``ideal`` geometry by default;
+   ``envelope_every`` > 1 re-evaluates it only every k-th step and reuses the last sample in
+   between);
+2. for a fixed contact whose margin to the nearer bound of its feasible interval is below
+   ``danger_fraction`` × the interval's width (its *danger zone*), plans a slide to the
+   interval's midpoint, but only if :func:`~regrasp.sliding.sliding_feasibility` accepts that
+   direction at the current pose and the desired object acceleration; otherwise it logs why and
+   tries the next contact in danger, or waits;
+3. runs a slide in three phases: **priming** (the fixed-contact law with the internal force moved
+   so the contact sits just past the edge of its friction cone, in the sliding direction, until
+   it is sensed slipping or for at most ``prime_time``), **sliding** (the sliding law: Proposition 3 for two fingers, Proposition 2 with
+   the measured friction for more; ξ follows a second-order filter towards the target,
+   :math:`\ddot\xi_r = \omega_n^2 (\xi^* - \xi_r) - 2\zeta\omega_n\dot\xi_r`), and **settling**
+   (the fixed-contact law at the reached ξ, until the plant's contact sticks);
+4. starts at most one slide at a time, so p ≤ 1 and 2m ≥ 3 + p holds for every m ≥ 2.
+
+The supervisor reads only what a hand could sense: the object pose and twist, each contact's
+position and rate along its edge, whether each contact is stuck or sliding (a slip sensor) and, for
+Proposition 2, the tangential force at a sliding contact (a force sensor). It never sees the plant.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from .control import (
+    ComputedTorqueController,
+    ControlOutput,
+    FixedContactController,
+    Gains,
+    Proposition2Controller,
+    Proposition3Controller,
+)
+from .envelope import EnvelopeSample, FingerEnvelope, Geometry
+from .exceptions import InvalidParameterError
+from .grasp import Grasp
+from .hand import Hand
+from .internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
+from .intervals import intersect, widest
+from .planner import PlanResult
+from .polygon import ConvexPolygon
+from .reduced import ReducedModel
+from .sliding import sliding_feasibility
+from .trajectory import Trajectory
+from .validation import as_finite_array, as_friction_coefficients, as_positive_float
+
+__all__ = [
+    "ContactPhase",
+    "Measurement",
+    "RegraspSupervisor",
+    "SupervisorEvent",
+    "SupervisorOutput",
+    "SupervisorSettings",
+]
+
+
+class ContactPhase(str, Enum):
+    """What the supervisor is doing with a contact."""
+
+    FIXED = "fixed"
+    PRIMING = "priming"
+    SLIDING = "sliding"
+    SETTLING = "settling"
+
+
+@dataclass(frozen=True)
+class SupervisorSettings:
+    """Tuning of :class:`RegraspSupervisor`.
+
+    Attributes:
+        danger_fraction: A contact is in danger when its margin is below this fraction of its
+            feasible interval's width [-] ...
+        reaction_time: ... or when, within this time [s], it would come that close to a bound:
+            by the planned envelopes along the desired trajectory (when the supervisor has a
+            plan), or else by the bounds' current rates (finite differences of the runtime
+            envelopes). A bound can sweep 100 mm/s near a vertex, faster than a slide can start.
+        target_horizon: With a plan, a slide's target is the midpoint of the widest piece of the
+            planned feasible sets' intersection over the next ``target_horizon`` [s] (or over
+            the longest prefix of it whose intersection is not empty), within the current interval.
+        omega_n: Natural frequency of the slide filter [rad/s].
+        zeta: Damping ratio of the slide filter [-].
+        prime_time: Longest duration of the cone-edge transition before a slide [s]; it ends
+            earlier when the contact is sensed slipping.
+        prime_overshoot: The transition asks for |f_t| = (μ + this) f_n at the contact [-], just
+            past the cone's edge, so that the contact starts to slip by itself (gently: the
+            tangential force exceeds the kinetic friction by ``prime_overshoot`` f_n) before the
+            sliding law takes over. Switching to the sliding law while the contact is still stuck
+            makes the plant redistribute the forces for one step and can slip another contact.
+        arrive_tolerance: A slide ends when |ξ - ξ*| is below this [m] ...
+        arrive_speed: ... and |ξ̇| below this [m/s].
+        max_slide_time: A slide that has not arrived after this long ends where it is [s].
+        recheck_time: After the predicate rejects a slide, ask again after this long [s].
+        control_omega: Bandwidth of the computed-torque laws [rad/s] (critically damped).
+        envelope_every: Evaluate the runtime envelopes every k-th step (1: every step).
+        geometry: Envelope geometry, ``"ideal"`` or ``"urdf"``.
+        internal_force: Margins of the controllers' internal-force QP (default: push ≥ 0.2 N, fixed
+            contacts 0.05 inside their cones). A larger minimum push squeezes harder, which
+            makes some slides infeasible for the torque balance (e.g. the side fingers of
+            paper_trajectory_2_three_fingers.toml sliding up at 0.5 N).
+        feasibility: Margins the sliding-direction predicate requires before a slide starts (at
+            least those of ``internal_force``, so that the priming QP is feasible).
+        regrasp: False: never slide (every contact stays where it is; for comparison runs).
+    """
+
+    danger_fraction: float = 0.1
+    reaction_time: float = 0.4
+    target_horizon: float = 0.5
+    omega_n: float = 20.0
+    zeta: float = 1.0
+    prime_time: float = 0.02
+    prime_overshoot: float = 0.05
+    arrive_tolerance: float = 5e-4
+    arrive_speed: float = 5e-3
+    max_slide_time: float = 1.5
+    recheck_time: float = 0.01
+    control_omega: float = 20.0
+    envelope_every: int = 1
+    geometry: str = "ideal"
+    internal_force: InternalForceSettings = field(default_factory=lambda: InternalForceSettings(f_min=0.2))
+    feasibility: InternalForceSettings = field(
+        default_factory=lambda: InternalForceSettings(f_min=0.2, margin=0.05, f_max=20.0))
+    regrasp: bool = True
+
+    def __post_init__(self):
+        for name in ("reaction_time", "target_horizon", "omega_n", "zeta", "prime_time", "prime_overshoot", "arrive_tolerance",
+                     "arrive_speed", "max_slide_time", "recheck_time", "control_omega"):
+            as_positive_float(name, getattr(self, name))
+        if not 0.0 < self.danger_fraction < 0.5:
+            raise InvalidParameterError("danger_fraction", self.danger_fraction, "a fraction in (0, 0.5)")
+        if isinstance(self.envelope_every, bool) or int(self.envelope_every) != self.envelope_every \
+                or self.envelope_every < 1:
+            raise InvalidParameterError("envelope_every", self.envelope_every, "an integer >= 1")
+        try:
+            Geometry(self.geometry)
+        except ValueError:
+            raise InvalidParameterError("geometry", self.geometry, "'ideal' or 'urdf'") from None
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """What the hand senses at one control step.
+
+    Attributes:
+        t: Time [s].
+        X, V: Object pose (x, y, β) and twist in the hand frame [m, rad], [m/s, rad/s].
+        xi, xi_dot: Each contact's position along its edge and its rate [m], [m/s].
+        sliding: Whether each contact is sliding (a slip sensor), (m,) bool.
+        friction: Tangential contact force on the object at each contact [N], (m,) (read at the
+            sliding contacts only, by Proposition 2).
+    """
+
+    t: float
+    X: np.ndarray
+    V: np.ndarray
+    xi: np.ndarray
+    xi_dot: np.ndarray
+    sliding: np.ndarray
+    friction: np.ndarray
+
+
+@dataclass(frozen=True)
+class SupervisorEvent:
+    """A decision of the supervisor.
+
+    Attributes:
+        time: [s].
+        contact: Finger name.
+        kind: ``danger``, ``slide_rejected``, ``prime``, ``slide_aborted``, ``slide``, ``arrived``,
+            ``stuck``, ``left_envelope``.
+        detail: Human-readable numbers and reasons.
+    """
+
+    time: float
+    contact: str
+    kind: str
+    detail: str
+
+
+@dataclass(frozen=True)
+class SupervisorOutput:
+    """One supervisor step.
+
+    Attributes:
+        tau: Joint torques [N m], (2m,).
+        control: The control law's output.
+        law: The law that ran.
+        phases: Each contact's phase.
+        envelopes: Each contact's envelope sample (the latest evaluated one).
+        margins: Each contact's envelope margin [m] (negative: outside its feasible set).
+        bounds: Each contact's feasible interval (lo, hi) holding (or nearest to) ξ [m], (m, 2);
+            NaN where the set is empty.
+        targets: Each contact's slide target ξ* [m] (NaN when not sliding).
+        reference_xi: The slide filter's ξ_r [m] per contact (NaN when not sliding).
+        events: Decisions taken at this step.
+        supervisor_seconds: Wall time of the supervisor's own work (envelopes and decisions) [s].
+        control_seconds: Wall time of the control law [s].
+    """
+
+    tau: np.ndarray
+    control: ControlOutput
+    law: str
+    phases: tuple[ContactPhase, ...]
+    envelopes: tuple[EnvelopeSample, ...]
+    margins: np.ndarray
+    bounds: np.ndarray
+    targets: np.ndarray
+    reference_xi: np.ndarray
+    events: tuple[SupervisorEvent, ...]
+    supervisor_seconds: float
+    control_seconds: float
+
+
+#: The largest change of a bound between two envelope evaluations counted as motion [m].
+_MAX_BOUND_STEP = 1e-3
+_NUMBER = re.compile(r"[-+]?\d[\d.e+-]*")
+
+
+def _single_intervals(samples) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(lo, hi, single) per sample: the bounds where the feasible set is one interval."""
+    single = np.array([len(s.feasible) == 1 for s in samples])
+    lo = np.array([s.feasible[0][0] if len(s.feasible) == 1 else np.nan for s in samples])
+    hi = np.array([s.feasible[0][1] if len(s.feasible) == 1 else np.nan for s in samples])
+    return lo, hi, single
+
+
+def _interval_of(sample: EnvelopeSample, xi: float) -> tuple[float, float] | None:
+    """The feasible interval holding ``xi``, else the nearest one, else None."""
+    best, best_gap = None, math.inf
+    for lo, hi in sample.feasible:
+        gap = 0.0 if lo <= xi <= hi else min(abs(xi - lo), abs(xi - hi))
+        if gap < best_gap:
+            best, best_gap = (lo, hi), gap
+    return best
+
+
+class RegraspSupervisor:
+    r"""Keeps every contact inside its feasible envelope by sliding it (paper §4).
+
+    Args:
+        hand: The fingers (finger i touches contact i).
+        polygon: The object.
+        edges: The contact edge of each finger.
+        trajectory: The desired object trajectory X_d(t) in the hand frame.
+        xi: Initial contact positions ξ [m], one per finger (all contacts start fixed).
+        mu: Friction coefficient(s) the controllers and the predicate assume.
+        object_mass, object_inertia: [kg], [kg m²]; default: the polygon's.
+        tip_clearance: Per-finger tip clearance [m] for the ``urdf`` geometry (None: default).
+        plan: The planner's result for ``trajectory`` (:func:`~regrasp.planner.plan`), or None.
+            With a plan the supervisor looks ahead: a contact is in danger when the planned
+            envelopes of the next ``reaction_time`` would squeeze it, and a slide's target is the
+            contact that stays feasible longest from now on (the planner's initial-grasp rule
+            applied from the current time, within the current interval), which on a wide still
+            interval is its midpoint (see ``SupervisorSettings.target_horizon``). Without a plan:
+            the current interval's midpoint.
+        settings: :class:`SupervisorSettings`.
+    """
+
+    def __init__(self, hand: Hand, polygon: ConvexPolygon, edges, trajectory: Trajectory, xi, mu=0.5, *,
+                 object_mass: float | None = None, object_inertia: float | None = None,
+                 tip_clearance=None, plan: PlanResult | None = None,
+                 settings: SupervisorSettings = SupervisorSettings()):
+        m = hand.m
+        edges = [int(e) for e in edges]
+        if len(edges) != m:
+            raise InvalidParameterError("edges", edges, f"one edge per finger ({m})")
+        self.hand = hand
+        self.polygon = polygon
+        self.edges = edges
+        self.trajectory = trajectory
+        self.settings = settings
+        self.mu = as_friction_coefficients(mu, m)
+        self.object_mass = as_positive_float("object_mass", polygon.mass if object_mass is None else object_mass)
+        self.object_inertia = as_positive_float(
+            "object_inertia", polygon.inertia if object_inertia is None else object_inertia)
+        self.names = [f.name for f in hand.fingers]
+        clearances = [None] * m if tip_clearance is None else list(tip_clearance)
+        self.envelopes = [FingerEnvelope(f, polygon, e, geometry=settings.geometry, tip_clearance=c)
+                          for f, e, c in zip(hand.fingers, edges, clearances)]
+        self.grasp = Grasp(polygon, edges, ["fixed"] * m)
+        if plan is not None and len(plan.fingers) != m:
+            raise InvalidParameterError("plan", len(plan.fingers), f"a plan with one finger per finger ({m})")
+        self.plan = plan
+        self._plan_bounds = None if plan is None else [_single_intervals(f.samples) for f in plan.fingers]
+        self.xi = as_finite_array("xi", xi, (m,)).copy()
+        self.phases = [ContactPhase.FIXED] * m
+        self.regrasps = [0] * m
+        self.events: list[SupervisorEvent] = []
+        self._active: int | None = None        # the contact being primed, slid or settled
+        self._direction = 0.0
+        self._target = math.nan
+        self._filter = np.zeros(2)             # ξ_r, ξ̇_r
+        self._phase_start = 0.0
+        self._slipped = False
+        self._samples: list[EnvelopeSample | None] = [None] * m
+        self._step = 0
+        self._rejected: dict[int, str] = {}    # last logged rejection per contact (log once per reason)
+        self._in_danger = [False] * m
+        self._recheck = [-math.inf] * m       # when a rejected slide may be asked about again
+        self._previous: tuple[float, np.ndarray] | None = None   # (t, bounds) of the last envelope
+        self._rates = np.zeros((m, 2))                          # d(lo)/dt, d(hi)/dt [m/s]
+        self._controller = self._fixed_controller()
+
+    # ------------------------------------------------------------------ controllers
+    def _gains(self, n: int) -> Gains:
+        return Gains.critically_damped(self.settings.control_omega, n)
+
+    def _model(self, modes) -> ReducedModel:
+        return ReducedModel(self.hand, self.grasp.with_modes(modes), self.xi, object_mass=self.object_mass,
+                            object_inertia=self.object_inertia)
+
+    def _fixed_controller(self, cone_edge: ConeEdge | None = None) -> ComputedTorqueController:
+        model = self._model(["fixed"] * self.hand.m)
+        mu = self.mu
+        if cone_edge is not None:  # just past the cone's edge, so that the contact starts to slip
+            mu = mu.copy()
+            mu[cone_edge.contact] += self.settings.prime_overshoot
+        return FixedContactController(model, self._gains(3), mu, internal_force=self.settings.internal_force,
+                                      cone_edge=cone_edge)
+
+    def _sliding_controller(self, i: int) -> ComputedTorqueController:
+        modes = ["sliding" if j == i else "fixed" for j in range(self.hand.m)]
+        model = self._model(modes)
+        if self.hand.m == 2:
+            return Proposition3Controller(model, self._gains(4), self.mu, internal_force=self.settings.internal_force)
+        # with m > 2 the internal force could change the sliding contact's normal force; keeping it on
+        # its cone edge makes the normal force the one the (measured) friction implies
+        return Proposition2Controller(model, self._gains(4), self.mu, internal_force=self.settings.internal_force,
+                                      cone_edge=ConeEdge(i, self._direction))
+
+    # ------------------------------------------------------------------ logging
+    def _log(self, out: list, t: float, i: int, kind: str, detail: str) -> None:
+        event = SupervisorEvent(float(t), self.names[i], kind, detail)
+        out.append(event)
+        self.events.append(event)
+
+    # ------------------------------------------------------------------ decisions
+    def _envelope_state(self, meas: Measurement):
+        m = self.hand.m
+        if self._step % self.settings.envelope_every == 0 or any(s is None for s in self._samples):
+            for i, env in enumerate(self.envelopes):
+                self._samples[i] = env.at(meas.X, meas.t)
+            fresh = True
+        else:
+            fresh = False
+        margins = np.empty(m)
+        bounds = np.full((m, 2), np.nan)
+        for i, sample in enumerate(self._samples):
+            margins[i] = sample.margin(meas.xi[i])
+            iv = _interval_of(sample, meas.xi[i])
+            if iv is not None:
+                bounds[i] = iv
+        if fresh:
+            if self._previous is not None and meas.t > self._previous[0]:
+                change = bounds - self._previous[1]
+                rates = change / (meas.t - self._previous[0])
+                # a jump is a change of the set's shape (pieces joining or splitting), not a motion:
+                # the margin sees it at once, so it gets no rate
+                smooth = np.isfinite(rates) & (np.abs(change) <= _MAX_BOUND_STEP)
+                self._rates = np.where(smooth, rates, 0.0)
+            self._previous = (meas.t, bounds)
+        return margins, bounds
+
+    def _planned(self, i: int, t: float) -> tuple[EnvelopeSample, ...]:
+        """Finger i's planned envelopes from time t on (the sample at or just before t first)."""
+        times = self.plan.times
+        k = max(0, int(np.searchsorted(times, t, side="right")) - 1)
+        return self.plan.fingers[i].samples[k:]
+
+    def _squeezed_ahead(self, i: int, t: float, xi: float) -> float | None:
+        """The first planned time within ``reaction_time`` where ξ is in a danger zone or outside."""
+        times = self.plan.times
+        k0 = max(0, int(np.searchsorted(times, t, side="right")) - 1)
+        k1 = int(np.searchsorted(times, t + self.settings.reaction_time, side="right"))
+        lo, hi, single = (a[k0:k1] for a in self._plan_bounds[i])
+        # samples with one interval, vectorised; the others (empty or split sets) one by one
+        width = hi - lo
+        bad = single & (np.minimum(xi - lo, hi - xi) < self.settings.danger_fraction * width)
+        samples = self.plan.fingers[i].samples
+        for k in np.flatnonzero(~single):
+            sample = samples[k0 + k]
+            iv = _interval_of(sample, xi)
+            bad[k] = iv is None or sample.margin(xi) < self.settings.danger_fraction * (iv[1] - iv[0])
+        hits = np.flatnonzero(bad)
+        return float(times[k0 + hits[0]]) if hits.size else None
+
+    def _slide_target(self, i: int, t: float, xi: float, interval: tuple[float, float]) -> tuple[float, float | None]:
+        """(ξ*, until): the contact in ``interval`` that the plan keeps feasible longest from t."""
+        if self.plan is None:
+            return 0.5 * (interval[0] + interval[1]), None
+        prefix, until = (interval,), None
+        for sample in self._planned(i, t):
+            if sample.time > t + self.settings.target_horizon:
+                break
+            nxt = intersect(prefix, sample.feasible)
+            if not nxt:
+                break
+            prefix, until = nxt, sample.time
+        lo, hi = widest(prefix)
+        return 0.5 * (lo + hi), until
+
+    def _time_to_bound(self, i: int, xi: float, bounds) -> float:
+        """Time [s] until the nearer moving bound reaches ``xi`` at its current rate (inf if never)."""
+        lo, hi = bounds[i]
+        times = [math.inf]
+        if self._rates[i, 0] > 0.0:
+            times.append((xi - lo) / self._rates[i, 0])
+        if self._rates[i, 1] < 0.0:
+            times.append((hi - xi) / -self._rates[i, 1])
+        return min(times)
+
+    def _try_start(self, meas: Measurement, margins, bounds, out: list) -> None:
+        """Start priming the most endangered contact whose slide the predicate accepts."""
+        fraction = self.settings.danger_fraction
+        danger = []
+        for i in range(self.hand.m):
+            lo, hi = bounds[i]
+            width = hi - lo
+            if not np.isfinite(width):
+                self._in_danger[i] = False
+                continue
+            why = ""
+            if margins[i] < fraction * width:
+                why = "in the danger zone"
+            elif self.plan is not None:
+                when = self._squeezed_ahead(i, meas.t, meas.xi[i])
+                if when is not None:
+                    why = f"the plan squeezes it at t = {when:.3f} s"
+            else:
+                reach = self._time_to_bound(i, meas.xi[i], bounds)
+                if reach < self.settings.reaction_time:
+                    why = f"a bound arrives in {reach:.3f} s"
+            in_danger = bool(why)
+            urgency = meas.t if self.plan is None or not why.startswith("the plan") else when
+            if in_danger and not self._in_danger[i]:
+                self._log(out, meas.t, i, "danger", f"xi = {meas.xi[i] * 1e3:.2f} mm, feasible "
+                          f"[{lo * 1e3:.2f}, {hi * 1e3:.2f}] mm, margin {margins[i] * 1e3:.2f} mm: {why}")
+            if not in_danger:
+                self._rejected.pop(i, None)
+            self._in_danger[i] = in_danger
+            if in_danger:
+                danger.append((urgency, margins[i] / width, i))
+        if not self.settings.regrasp:
+            return
+        if not danger:
+            return
+        desired = self.trajectory.sample(meas.t)
+        pose_d, acc_d = desired.pose, desired.acceleration
+        for *_, i in sorted(danger):  # the soonest squeezed first
+            if meas.t < self._recheck[i]:
+                continue
+            lo, hi = bounds[i]
+            target, until = self._slide_target(i, meas.t, meas.xi[i], (lo, hi))
+            if abs(target - meas.xi[i]) < 2.0 * self.settings.arrive_tolerance:
+                continue  # already where a slide would take it
+            direction = 1.0 if target > meas.xi[i] else -1.0
+            mu = self.mu.copy()
+            mu[i] += self.settings.prime_overshoot  # the priming asks for that much friction
+            verdict = sliding_feasibility(
+                self.grasp, pose_d, meas.xi, acc_d, i, direction, mu, object_mass=self.object_mass,
+                object_inertia=self.object_inertia, gravity_in_hand=self.hand.gravity_in_hand,
+                settings=self.settings.feasibility)
+            if not verdict.possible:
+                reason = f"slide {'+' if direction > 0 else '-'}xi rejected: {verdict.reason}"
+                key = _NUMBER.sub("#", reason)
+                if self._rejected.get(i) != key:  # log each kind of rejection once per danger episode
+                    self._log(out, meas.t, i, "slide_rejected", reason + "; waiting")
+                    self._rejected[i] = key
+                self._recheck[i] = meas.t + self.settings.recheck_time
+                continue
+            self._rejected.pop(i, None)
+            self._active, self._direction, self._target = i, direction, target
+            self._phase_start = meas.t
+            self.phases[i] = ContactPhase.PRIMING
+            self.xi = meas.xi.copy()
+            self._controller = self._fixed_controller(ConeEdge(i, direction))
+            self._log(out, meas.t, i, "prime", f"to slide {'+' if direction > 0 else '-'}xi from "
+                      f"{meas.xi[i] * 1e3:.2f} mm to {target * 1e3:.2f} mm (feasible [{lo * 1e3:.2f}, "
+                      f"{hi * 1e3:.2f}] mm" + (f", planned feasible until t = {until:.3f} s" if until is not None else "")
+                      + "); predicted normal forces "
+                      + ", ".join(f"{f:.2f}" for f in verdict.normal_forces) + " N")
+            return
+
+    def _end_slide(self, meas: Measurement, out: list, kind: str, detail: str) -> None:
+        """Back to the fixed-contact law at the reached ξ; settle until the contact sticks."""
+        i = self._active
+        self.xi = meas.xi.copy()
+        self._controller = self._fixed_controller()
+        self._log(out, meas.t, i, kind, detail)
+        if meas.sliding[i]:
+            self.phases[i] = ContactPhase.SETTLING
+        else:
+            self._finish(meas, out)
+
+    def _finish(self, meas: Measurement, out: list) -> None:
+        i = self._active
+        self.phases[i] = ContactPhase.FIXED
+        self.regrasps[i] += 1
+        if abs(self.xi[i] - meas.xi[i]) > 1e-12:
+            self.xi = meas.xi.copy()
+            self._controller = self._fixed_controller()
+        self._active = None
+        self._target = math.nan
+
+    def _advance(self, meas: Measurement, out: list) -> None:
+        """Move the active slide's phase on."""
+        s = self.settings
+        i = self._active
+        phase = self.phases[i]
+        if phase is ContactPhase.PRIMING and (meas.sliding[i] or meas.t - self._phase_start >= s.prime_time - 1e-12):
+            self.phases[i] = ContactPhase.SLIDING
+            self._phase_start = meas.t
+            self.xi = meas.xi.copy()
+            self._controller = self._sliding_controller(i)
+            self._filter[:] = (meas.xi[i], meas.xi_dot[i])
+            self._slipped = bool(meas.sliding[i])
+            self._log(out, meas.t, i, "slide", f"sliding law {self._controller.law}, target "
+                      f"{self._target * 1e3:.2f} mm")
+        elif phase is ContactPhase.SLIDING:
+            # the plant reports the slip one step after the sliding law starts
+            self._slipped = self._slipped or bool(meas.sliding[i])
+            if self._slipped and not meas.sliding[i]:
+                self._end_slide(meas, out, "stuck", f"the contact stuck at {meas.xi[i] * 1e3:.2f} mm "
+                                f"(target {self._target * 1e3:.2f} mm)")
+            elif abs(meas.xi[i] - self._target) < s.arrive_tolerance and abs(meas.xi_dot[i]) < s.arrive_speed:
+                self._end_slide(meas, out, "arrived", f"xi = {meas.xi[i] * 1e3:.2f} mm after "
+                                f"{meas.t - self._phase_start:.3f} s")
+            elif meas.t - self._phase_start > s.max_slide_time:
+                self._end_slide(meas, out, "arrived", f"slide stopped after max_slide_time at "
+                                f"{meas.xi[i] * 1e3:.2f} mm (target {self._target * 1e3:.2f} mm)")
+        elif phase is ContactPhase.SETTLING and not meas.sliding[i]:
+            self._finish(meas, out)
+
+    def _filter_step(self, dt: float) -> tuple[float, float, float]:
+        """Advance the slide filter by dt (semi-implicit Euler) and return (ξ_r, ξ̇_r, ξ̈_r)."""
+        w, z = self.settings.omega_n, self.settings.zeta
+        x, v = self._filter
+        a = w * w * (self._target - x) - 2.0 * z * w * v
+        v = v + a * dt
+        x = x + v * dt
+        self._filter[:] = (x, v)
+        return x, v, w * w * (self._target - x) - 2.0 * z * w * v
+
+    # ------------------------------------------------------------------ the step
+    def step(self, meas: Measurement, dt: float) -> SupervisorOutput:
+        """Decide and compute the torques for one control period ``dt`` [s]."""
+        start = time.perf_counter()
+        out: list[SupervisorEvent] = []
+        margins, bounds = self._envelope_state(meas)
+        for i in range(self.hand.m):
+            if margins[i] < 0.0 and self.phases[i] is ContactPhase.FIXED:
+                self._log(out, meas.t, i, "left_envelope", f"xi = {meas.xi[i] * 1e3:.2f} mm is outside its feasible "
+                          "set " + ("(empty: " + str(self._samples[i].reason) + ")" if not self._samples[i].feasible
+                                    else "[" + ", ".join(f"[{lo * 1e3:.2f}, {hi * 1e3:.2f}]"
+                                                         for lo, hi in self._samples[i].feasible) + "] mm"))
+        if self._active is not None:
+            self._advance(meas, out)
+        if self._active is None:
+            self._try_start(meas, margins, bounds, out)
+        desired = self.trajectory.sample(meas.t)
+        X_d, V_d, A_d = desired.pose, desired.velocity, desired.acceleration
+        targets = np.full(self.hand.m, np.nan)
+        reference = np.full(self.hand.m, np.nan)
+        controller = self._controller
+        kwargs = {}
+        if self._active is not None and self.phases[self._active] is ContactPhase.SLIDING:
+            i = self._active
+            xr, vr, ar = self._filter_step(dt)
+            targets[i], reference[i] = self._target, xr
+            S = np.append(meas.X, meas.xi[i])
+            S_dot = np.append(meas.V, meas.xi_dot[i])
+            S_d, S_d_dot, S_d_ddot = np.append(X_d, xr), np.append(V_d, vr), np.append(A_d, ar)
+            if isinstance(controller, Proposition2Controller):
+                # the measured friction, but never less than the minimum push allows: on the cone
+                # edge it sets the slider's normal force, which must stay >= f_min
+                floor = self.mu[i] * 1.05 * self.settings.internal_force.f_min
+                kwargs["friction"] = np.array([self._direction * max(abs(meas.friction[i]), floor)])
+        else:
+            if self._active is not None:
+                targets[self._active] = self._target
+            S, S_dot, S_d, S_d_dot, S_d_ddot = meas.X, meas.V, X_d, V_d, A_d
+        supervisor_seconds = time.perf_counter() - start
+        try:
+            control = controller(S, S_dot, S_d, S_d_dot, S_d_ddot, **kwargs)
+        except InternalForceInfeasibleError as exc:
+            if self._active is None or self.phases[self._active] not in (ContactPhase.PRIMING, ContactPhase.SLIDING):
+                raise
+            # the slide cannot go on after all (the predicate's forecast used the desired state):
+            # abort it, hold with the fixed law (which the contact settles into) and ask again later
+            i = self._active
+            self._log(out, meas.t, i, "slide_aborted", f"no internal force keeps the slide in its cones ({exc.status})")
+            self._recheck[i] = meas.t + self.settings.recheck_time
+            self.xi = meas.xi.copy()
+            if meas.sliding[i]:
+                self.phases[i] = ContactPhase.SETTLING
+            else:
+                self.phases[i] = ContactPhase.FIXED
+                self._active, self._target = None, math.nan
+            controller = self._controller = self._fixed_controller()
+            control = controller(meas.X, meas.V, X_d, V_d, A_d)
+        self._step += 1
+        return SupervisorOutput(
+            tau=control.tau,
+            control=control,
+            law=controller.law + (" (cone edge)" if controller.cone_edge is not None else ""),
+            phases=tuple(self.phases),
+            envelopes=tuple(self._samples),
+            margins=margins,
+            bounds=bounds,
+            targets=targets,
+            reference_xi=reference,
+            events=tuple(out),
+            supervisor_seconds=supervisor_seconds,
+            control_seconds=control.seconds,
+        )

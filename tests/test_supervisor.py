@@ -1,0 +1,119 @@
+"""The regrasp supervisor: its settings, its danger test, its slide targets and its refusals.
+
+Closed-loop behaviour on the independent plant is in tests/test_rollout.py.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from regrasp import Hand, load_scenario
+from regrasp.exceptions import InvalidParameterError
+from regrasp.planner import plan, plan_scenario
+from regrasp.supervisor import ContactPhase, Measurement, RegraspSupervisor, SupervisorSettings
+
+SCENARIOS = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
+
+
+@pytest.fixture(scope="module")
+def two_fingers():
+    return load_scenario(SCENARIOS / "paper_trajectory_2.toml")
+
+
+def make_supervisor(sc, xi, *, plan=None, **settings) -> RegraspSupervisor:
+    hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
+    return RegraspSupervisor(hand, sc.polygon, [c.edge for c in sc.contacts], sc.trajectory, xi, sc.mu,
+                             plan=plan, settings=SupervisorSettings(**settings))
+
+
+def measurement(sc, t, xi) -> Measurement:
+    m = len(sc.contacts)
+    return Measurement(t, sc.trajectory.pose(t), sc.trajectory.velocity(t), np.asarray(xi, float), np.zeros(m),
+                       np.zeros(m, bool), np.zeros(m))
+
+
+@pytest.mark.parametrize("name, value", [
+    ("danger_fraction", 0.0), ("danger_fraction", 0.5), ("omega_n", -1.0), ("zeta", 0.0), ("prime_time", np.nan),
+    ("reaction_time", -0.1), ("envelope_every", 0), ("envelope_every", 1.5), ("geometry", "mesh"),
+])
+def test_settings_reject_bad_values(name, value):
+    with pytest.raises(InvalidParameterError) as info:
+        SupervisorSettings(**{name: value})
+    assert info.value.name == name
+
+
+def test_a_plan_for_other_fingers_is_rejected(two_fingers):
+    one = plan(two_fingers.contacts[:1], two_fingers.polygon, two_fingers.trajectory, samples=5)
+    with pytest.raises(InvalidParameterError):
+        make_supervisor(two_fingers, [0.0, 0.0], plan=one)
+
+
+def test_a_contact_in_the_middle_of_a_wide_envelope_is_left_alone(two_fingers):
+    # at t = 1.0 s both side fingers' feasible sets span the whole edge (paper_trajectory_2 plan)
+    sup = make_supervisor(two_fingers, [0.0, 0.0])
+    out = sup.step(measurement(two_fingers, 1.0, [0.0, 0.0]), 1e-3)
+    assert out.phases == (ContactPhase.FIXED, ContactPhase.FIXED)
+    assert not [e for e in out.events if e.kind in ("danger", "prime")]
+    assert np.all(out.margins > 0.1 * (out.bounds[:, 1] - out.bounds[:, 0]))
+    assert out.law == "fixed contacts"
+    assert np.all(np.isfinite(out.tau))
+
+
+def test_the_danger_zone_is_a_tenth_of_the_interval(two_fingers):
+    # finger 1's feasible set at t = 0 is [-20, -5] mm (ideal geometry): 1.5 mm danger zones
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    ((lo, hi),) = sample.feasible
+    for xi, expected in ((hi - 0.05 * (hi - lo), True), (hi - 0.15 * (hi - lo), False),
+                         (lo + 0.05 * (hi - lo), True), (0.5 * (lo + hi), False)):
+        sup = make_supervisor(two_fingers, [xi, 0.012], regrasp=False)
+        out = sup.step(measurement(two_fingers, 0.0, [xi, 0.012]), 1e-3)
+        flagged = any(e.kind == "danger" and e.contact == "finger1" for e in out.events)
+        assert flagged is expected, (xi, lo, hi)
+        assert out.phases[0] is ContactPhase.FIXED  # regrasp=False never slides
+
+
+def test_two_equal_friction_fingers_refuse_to_slide_with_gravity_and_say_why(two_fingers):
+    # finger 1 near the top of its interval must slide down (with gravity): impossible (Remark 3.3)
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    ((lo, hi),) = sample.feasible
+    xi = [hi - 0.02 * (hi - lo), 0.012]
+    sup = make_supervisor(two_fingers, xi)
+    out = sup.step(measurement(two_fingers, 0.0, xi), 1e-3)
+    rejected = [e for e in out.events if e.kind == "slide_rejected"]
+    assert rejected and rejected[0].contact == "finger1"
+    assert "-xi" in rejected[0].detail and "pull" in rejected[0].detail
+    assert out.phases[0] is ContactPhase.FIXED
+    # asked again within recheck_time: no new log line, no new predicate call
+    out2 = sup.step(measurement(two_fingers, 0.001, xi), 1e-3)
+    assert not [e for e in out2.events if e.kind == "slide_rejected"]
+
+
+def test_a_possible_slide_is_primed_on_the_cone_edge_towards_the_target(two_fingers):
+    # finger 1 near the bottom of [-20, -5] mm slides up (against gravity): possible
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    ((lo, hi),) = sample.feasible
+    xi = [lo + 0.02 * (hi - lo), 0.012]
+    sup = make_supervisor(two_fingers, xi)
+    out = sup.step(measurement(two_fingers, 0.0, xi), 1e-3)
+    assert out.phases[0] is ContactPhase.PRIMING
+    assert out.targets[0] == pytest.approx(0.5 * (lo + hi))
+    assert out.law == "fixed contacts (cone edge)"
+    f_n, f_t = out.control.contact_forces_surface[0]
+    overshoot = sup.settings.prime_overshoot
+    assert f_t == pytest.approx((sup.mu[0] + overshoot) * f_n, rel=1e-6)  # + direction: up the edge
+
+
+def test_with_a_plan_the_supervisor_looks_ahead(two_fingers):
+    # at t = 0.25 s finger 2 at 9.8 mm is 2.9 mm from the bound of [6.9, 20] mm (the danger zone is
+    # 1.3 mm), but the bound rises to 8.9 mm by t = 0.5 s, inside the reaction time (0.4 s)
+    result = plan_scenario(two_fingers)
+    xi = [-0.0125, 0.0098]
+    blind = make_supervisor(two_fingers, xi, regrasp=False)
+    ahead = make_supervisor(two_fingers, xi, plan=result, regrasp=False)
+    meas = measurement(two_fingers, 0.25, xi)
+    out_blind, out_ahead = blind.step(meas, 1e-3), ahead.step(meas, 1e-3)
+    danger_blind = [e for e in out_blind.events if e.kind == "danger" and e.contact == "finger2"]
+    danger_ahead = [e for e in out_ahead.events if e.kind == "danger" and e.contact == "finger2"]
+    assert not danger_blind
+    assert danger_ahead and "the plan squeezes it" in danger_ahead[0].detail
