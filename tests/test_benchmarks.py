@@ -41,4 +41,9 @@ def test_benchmark_table_quick_smoke():
         assert doc[key]["median_us"] > 0 and doc[key]["floor_us"] > 0
     assert doc["control_fixed_qp"]["floor_us"] > doc["control_fixed_no_qp"]["floor_us"]
     assert doc["planner_sample_ideal"]["median_us"] > 0 and doc["planner_sample_ideal"]["floor_us"] is None
-    assert set(doc["rollout_realtime_factor"]) == {"recording_off", "recording_on"}
+    for key in ("supervisor_step_urdf", "supervisor_step_ideal"):
+        assert doc[key]["median_us"] > 0 and doc[key]["floor_us"] > 0
+    rollout = doc["rollout_realtime_factor"]
+    assert set(rollout) >= {"recording_off", "recording_on"}
+    assert rollout["recording_off"] > 0 and rollout["recording_on"] > 0
+    assert 0 < rollout["simulated_s"] <= rollout["requested_s"] + 1e-9
