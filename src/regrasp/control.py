@@ -37,12 +37,13 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import lapack
 
 from .exceptions import InvalidParameterError
 from .grasp import ContactMode
 from .internal_force import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver
 from .reduced import ReducedModel, ReducedState
-from .validation import as_finite_array, as_friction_coefficients
+from .validation import as_finite_array, as_finite_vectors, as_friction_coefficients
 
 __all__ = [
     "ComputedTorqueController",
@@ -140,32 +141,46 @@ class ComputedTorqueController:
         """
         start = time.perf_counter()
         model = self.model
-        n = model.n
-        st = model.state(S, S_dot)
-        error = as_finite_array("S_d", S_d, (n,)) - st.S
-        error_rate = as_finite_array("S_d_dot", S_d_dot, (n,)) - st.S_dot
-        command = as_finite_array("S_d_ddot", S_d_ddot, (n,)) + self.gains.kv * error_rate + self.gains.ks * error
+        S, S_dot, S_d, S_d_dot, S_d_ddot = as_finite_vectors(
+            _ARGUMENTS, (S, S_dot, S_d, S_d_dot, S_d_ddot), model.n)
+        st, J_inv, A, frames_bd = model._state(S, S_dot)
+        error = S_d - S
+        error_rate = S_d_dot - S_dot
+        command = S_d_ddot + self.gains.kv * error_rate + self.gains.ks * error
         f_hat = self.friction_estimate(st, command, friction)
-        H, M, J = st.H, st.hand.mass_matrix, st.hand.jacobian
-        rhs = model.mass_matrix(st) @ command + model.bias(st)
-        rhs[:3] -= model.f_g
-        rhs[3:] += f_hat
-        tau = H @ np.linalg.solve(H.T @ H, rhs)
+        H = st.H
         q_ddot = H @ command + st.H_dot_S_dot
-        motion_forces = np.linalg.solve(J.T, tau - M @ q_ddot - st.hand.nonlinear)
-        frames = model.grasp.surface_frames(st.S[:3])
+        # (H^T M H + M_s) a + N_s = H^T (M q̈ + N) + M_s a with q̈ = H a + Ḣ Ṡ
+        wrench = st.hand.mass_matrix @ q_ddot + st.hand.nonlinear
+        gx, gy = model.hand.gravity_in_hand.tolist()  # -[f_g; -f̂_ξ], f_g = m_o g
+        external = np.array([-model.object_mass * gx, -model.object_mass * gy, 0.0,
+                             *np.asarray(f_hat, dtype=float).tolist()])
+        rhs = H.T @ wrench + model.M_s @ command + external
+        tau = H @ _solve(H.T @ H, rhs)
+        motion_forces = J_inv.T @ (tau - wrench)  # f = J^{-T}(τ - M q̈ - N)
         internal = None
         if self._qp is not None:
-            A = np.hstack([st.G.T, st.R_f @ st.B_v])
-            internal = self._qp.solve(A, motion_forces, frames, self._fixed, self.mu, self.cone_edge)
-            tau = tau + J.T @ internal.f_c
+            internal = self._qp._solve(A, motion_forces, frames_bd, self._fixed, self.mu, self.cone_edge,
+                                      time.perf_counter())
+            tau = tau + st.hand.jacobian.T @ internal.f_c
             forces = internal.forces
         else:
             forces = motion_forces.reshape(model.grasp.m, 2)
-        surface = np.einsum("mji,mj->mi", frames, forces)
-        margins = self.mu * surface[:, 0] - np.abs(surface[:, 1])
+        surface = (forces.reshape(-1) @ frames_bd).reshape(-1, 2)  # (n_i^T f_i, t_i^T f_i) per contact
+        margins = np.array([mu * f_n - abs(f_t) for mu, (f_n, f_t) in zip(self.mu.tolist(), surface.tolist())])
         return ControlOutput(tau, command, error, error_rate, f_hat, forces, surface, margins, internal,
                              time.perf_counter() - start)
+
+
+_ARGUMENTS = ("S", "S_dot", "S_d", "S_d_dot", "S_d_ddot")
+
+
+def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.linalg.solve(a, b)`` (the same LAPACK dgesv) without numpy's per-call overhead."""
+    _, _, x, info = lapack.dgesv(a, b)
+    if info != 0:
+        raise np.linalg.LinAlgError("Singular matrix")
+    return x
 
 
 class FixedContactController(ComputedTorqueController):

@@ -20,6 +20,7 @@ placement.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
@@ -214,6 +215,8 @@ class Finger:
         self.psi1_offset = _planar_angle(joint1) + self._alpha1
         #: Geometric elbow angle theta2 [rad] minus q2.
         self.theta2_offset = float(wrap_angle(gamma2 + alpha2 - self._alpha1))
+        self._ik_constants = (float(self.joint1_in_hand[0]), float(self.joint1_in_hand[1]),
+                              float(-self.configuration.sign))
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -365,19 +368,22 @@ class Finger:
 
     def _inverse_kinematics(self, target: np.ndarray) -> np.ndarray:
         """:meth:`inverse_kinematics` on a validated (2,) target (hot paths)."""
-        r = target - self.joint1_in_hand
-        dist = float(np.hypot(r[0], r[1]))
+        return np.array(self._joint_angles(float(target[0]), float(target[1])))
+
+    def _joint_angles(self, x: float, y: float) -> tuple[float, float]:
+        """(q1, q2) [rad] for the tip at (x, y) in the hand frame, in scalar arithmetic (hot paths)."""
+        ox, oy, sigma = self._ik_constants
+        rx, ry = x - ox, y - oy
+        dist = math.hypot(rx, ry)
         l1, l2 = self._l1, self._l2
-        inner, outer = self.reach
+        inner, outer = abs(l1 - l2), l1 + l2
         slack = 1e-12 * outer
         if dist > outer + slack or dist < inner - slack:
-            raise UnreachableError(self.name, target, dist, (inner, outer))
-        cos2 = np.clip((dist**2 - l1**2 - l2**2) / (2.0 * l1 * l2), -1.0, 1.0)
-        theta2 = -self.configuration.sign * float(np.arccos(cos2))
-        psi1 = float(np.arctan2(r[1], r[0]) - np.arctan2(l2 * np.sin(theta2), l1 + l2 * np.cos(theta2)))
-        q1 = wrap_angle(psi1 - self.psi1_offset)
-        q2 = wrap_angle(theta2 - self.theta2_offset)
-        return np.array([q1, q2])
+            raise UnreachableError(self.name, np.array([x, y]), dist, (inner, outer))
+        cos2 = min(max((dist**2 - l1**2 - l2**2) / (2.0 * l1 * l2), -1.0), 1.0)
+        theta2 = sigma * math.acos(cos2)
+        psi1 = math.atan2(ry, rx) - math.atan2(l2 * math.sin(theta2), l1 + l2 * math.cos(theta2))
+        return wrap_angle(psi1 - self.psi1_offset), wrap_angle(theta2 - self.theta2_offset)
 
     def joint_positions_from_points(self, elbow_in_hand: np.ndarray, tip_in_hand: np.ndarray) -> np.ndarray:
         """Joint positions q [rad] that place the elbow and the tip at the given points.

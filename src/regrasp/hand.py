@@ -14,6 +14,8 @@ passed in are not modified.
 
 from __future__ import annotations
 
+import functools
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -90,6 +92,16 @@ class Hand:
                                                     inertia.inertia * self.link_mass_scale)
         self._datas = [model.createData() for model in self._models]
         self._tip_ids = [f.tip_frame_id for f in self.fingers]
+        # the hot paths run one model of the whole hand (every finger a chain from the hand frame):
+        # one Pinocchio pass instead of one per finger
+        self._hand_model, self._hand_tips = _whole_hand(self._models, self._tip_ids)
+        self._hand_data = self._hand_model.createData()
+        self._damping = np.concatenate([np.asarray(model.damping, dtype=float) for model in self._models])
+        upper = [2 * i * self.nq + 2 * i + 1 for i in range(self.m)]  # (2i, 2i + 1), row-major
+        self._mass_mirror = (np.array([u + self.nq - 1 for u in upper]), np.array(upper))
+        # whether this Pinocchio's computeAllTerms leaves M's lower triangle to us (crba does)
+        pin.computeAllTerms(self._hand_model, self._hand_data, np.full(self.nq, 0.5), np.zeros(self.nq))
+        self._mirror_mass = not np.array_equal(self._hand_data.M, self._hand_data.M.T)
         self.gravity_in_hand = np.zeros(2)
         self.set_gravity(gravity_in_hand)
 
@@ -97,7 +109,7 @@ class Hand:
         """Set the gravity vector [m/s^2] in the hand frame."""
         g = as_finite_array("gravity_in_hand", gravity_in_hand, (2,))
         self.gravity_in_hand = g
-        for model in self._models:
+        for model in (*self._models, self._hand_model):
             model.gravity = pin.Motion(np.array([g[0], g[1], 0.0, 0.0, 0.0, 0.0]))
 
     @property
@@ -114,41 +126,45 @@ class Hand:
         """M, N, J, J̇q̇ and the tips at joint positions ``q`` [rad] and velocities ``v`` [rad/s]."""
         return self._dynamics(self._split("q", q), self._split("v", v))
 
-    def _dynamics(self, qs: np.ndarray, vs: np.ndarray) -> HandDynamics:
-        """:meth:`dynamics` on already validated (m, 2) arrays (hot paths)."""
-        mass = np.zeros((self.nq, self.nq))
-        jac = np.zeros((self.nq, self.nq))
-        nle = np.empty(self.nq)
-        jdv = np.empty(self.nq)
-        tips = np.empty((self.m, 2))
-        zero = np.zeros(2)
-        for i, (model, data, fid) in enumerate(zip(self._models, self._datas, self._tip_ids)):
-            sl = slice(2 * i, 2 * i + 2)
-            qi, vi = qs[i], vs[i]
-            pin.crba(model, data, qi)
-            mass[sl, sl] = data.M  # crba fills the upper triangle: mirror it
-            mass[2 * i + 1, 2 * i] = mass[2 * i, 2 * i + 1]
-            nle[sl] = pin.nonLinearEffects(model, data, qi, vi)
-            if self.damping_enabled:
-                nle[sl] += np.asarray(model.damping) * vi
-            pin.forwardKinematics(model, data, qi, vi, zero)
-            pin.updateFramePlacement(model, data, fid)
-            tips[i] = data.oMf[fid].translation[:2]
-            jdv[sl] = pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED).linear[:2]
-            jac[sl, sl] = pin.computeFrameJacobian(model, data, qi, fid, pin.LOCAL_WORLD_ALIGNED)[:2, :]
-        tip_vel = (jac @ vs.reshape(-1)).reshape(self.m, 2)
-        return HandDynamics(mass, nle, jac, jdv, tips, tip_vel)
+    def _dynamics(self, qs: np.ndarray, vs: np.ndarray, kinematics=None) -> HandDynamics:
+        """:meth:`dynamics` on already validated (m, 2) arrays (hot paths); ``kinematics``: J and the
+        tips at ``qs``, when the caller has them already."""
+        model, data = self._hand_model, self._hand_data
+        v = vs.reshape(-1)
+        # one pass: M (crba), N (rnea at q̈ = 0), the joint Jacobians and the bodies' velocities and
+        # accelerations at q̈ = 0
+        pin.computeAllTerms(model, data, qs.reshape(-1), v)
+        jac, tips = (self._frame_jacobian(), self._frame_tips()) if kinematics is None else kinematics
+        mass = data.M.copy()
+        if self._mirror_mass:  # crba fills the upper triangle
+            lower, upper = self._mass_mirror
+            mass.reshape(-1)[lower] = mass.reshape(-1)[upper]
+        nle = data.nle + self._damping * v if self.damping_enabled else data.nle.copy()
+        jdv = np.concatenate([pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED).linear[:2]
+                              for fid in self._hand_tips])
+        return HandDynamics(mass, nle, jac, jdv, tips, (jac @ v).reshape(self.m, 2))
+
+    def _frame_jacobian(self) -> np.ndarray:
+        """J (2m, 2m) from the joint Jacobians of the last pass."""
+        model, data = self._hand_model, self._hand_data
+        jac = np.empty((self.nq, self.nq))
+        for i, fid in enumerate(self._hand_tips):
+            # finger i's rows: its 2x2 block, zeros elsewhere (the chains are independent)
+            jac[2 * i:2 * i + 2] = pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED)[:2]
+        return jac
+
+    def _frame_tips(self) -> np.ndarray:
+        """The tips (m, 2) from the placements of the last pass."""
+        model, data = self._hand_model, self._hand_data
+        return np.array([pin.updateFramePlacement(model, data, fid).translation[:2] for fid in self._hand_tips])
 
     def jacobian(self, q) -> np.ndarray:
         """J(q) = blockdiag(J_i), (2m, 2m) [m/rad]."""
         return self._jacobian(self._split("q", q))
 
     def _jacobian(self, qs: np.ndarray) -> np.ndarray:
-        jac = np.zeros((self.nq, self.nq))
-        for i, (model, data, fid) in enumerate(zip(self._models, self._datas, self._tip_ids)):
-            jac[2 * i:2 * i + 2, 2 * i:2 * i + 2] = pin.computeFrameJacobian(
-                model, data, qs[i], fid, pin.LOCAL_WORLD_ALIGNED)[:2, :]
-        return jac
+        pin.computeJointJacobians(self._hand_model, self._hand_data, qs.reshape(-1))
+        return self._frame_jacobian()
 
     def tip_positions(self, q) -> np.ndarray:
         """Tip positions [m], (m, 2), hand frame."""
@@ -177,10 +193,15 @@ class Hand:
         return self._check_singular(qs, self._jacobian(qs) if jacobian is None else jacobian)
 
     def _check_singular(self, qs: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
-        conds = np.array([condition_2x2(jacobian[2 * i:2 * i + 2, 2 * i:2 * i + 2]) for i in range(self.m)])
+        blocks = [jacobian[2 * i:2 * i + 2, 2 * i:2 * i + 2].reshape(-1).tolist() for i in range(self.m)]
+        return np.array(self._check_singular_blocks(qs, blocks))
+
+    def _check_singular_blocks(self, qs: np.ndarray, blocks) -> list[float]:
+        """Condition numbers of the tip Jacobians given as (a, b, c, d) = row-major 2x2 blocks (floats)."""
+        conds = [_condition(*block) for block in blocks]
         for i, c in enumerate(conds):
             if not c <= self.singular_threshold:  # also catches inf/nan
-                raise SingularFingerError(self.fingers[i].name, qs[i], float(c), self.singular_threshold)
+                raise SingularFingerError(self.fingers[i].name, qs[i], c, self.singular_threshold)
         return conds
 
     def inverse_kinematics(self, tips_in_hand) -> np.ndarray:
@@ -188,7 +209,39 @@ class Hand:
         return self._inverse_kinematics(as_finite_array("tips_in_hand", tips_in_hand, (self.m, 2)))
 
     def _inverse_kinematics(self, tips: np.ndarray) -> np.ndarray:
-        return np.concatenate([f._inverse_kinematics(p) for f, p in zip(self.fingers, tips)])
+        return np.array([angle for f, (x, y) in zip(self.fingers, tips.tolist()) for angle in f._joint_angles(x, y)])
+
+
+def _whole_hand(models: Sequence[pin.Model], tip_ids: Sequence[int]) -> tuple[pin.Model, list[int]]:
+    """One model with every finger model a chain from the universe (the hand frame), and its tip
+    frames. Names get a prefix "<i>/" (Pinocchio wants them unique)."""
+    whole, tips = None, []
+    for i, model in enumerate(models):
+        model = pin.Model(model)
+        tip_name = f"{i}/{model.frames[tip_ids[i]].name}"
+        for k in range(len(model.frames)):
+            frame = model.frames[k]
+            frame.name = f"{i}/{frame.name}"
+            model.frames[k] = frame
+        for k in range(len(model.names)):
+            model.names[k] = f"{i}/{model.names[k]}"
+        whole = model if whole is None else pin.appendModel(whole, model, 0, pin.SE3.Identity())
+        tips.append(tip_name)
+    return whole, [whole.getFrameId(name) for name in tips]
+
+
+@functools.cache
+def _block_positions(m: int) -> np.ndarray:
+    """Flat positions of the 2x2 diagonal blocks of a (2m, 2m) array, block by block, row-major."""
+    return np.array([(2 * i + r) * 2 * m + 2 * i + c for i in range(m) for r in range(2) for c in range(2)])
+
+
+def block_diagonal(blocks: np.ndarray) -> np.ndarray:
+    """The (2m, 2m) block-diagonal matrix of m 2x2 ``blocks`` (m, 2, 2)."""
+    m = len(blocks)
+    out = np.zeros((2 * m, 2 * m))
+    out.reshape(-1)[_block_positions(m)] = blocks.reshape(-1)
+    return out
 
 
 def condition_2x2(a: np.ndarray) -> float:
@@ -196,10 +249,15 @@ def condition_2x2(a: np.ndarray) -> float:
 
     :math:`\sigma^2_{max,min} = (s \pm \sqrt{s^2 - 4 \det^2})/2` with :math:`s = \|a\|_F^2`.
     """
-    s = float(a[0, 0] ** 2 + a[0, 1] ** 2 + a[1, 0] ** 2 + a[1, 1] ** 2)
-    det = float(a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0])
-    disc = np.sqrt(max(s * s - 4.0 * det * det, 0.0))
+    return _condition(*np.asarray(a, dtype=float).reshape(-1).tolist())
+
+
+def _condition(a: float, b: float, c: float, d: float) -> float:
+    """:func:`condition_2x2` of [[a, b], [c, d]] in scalar arithmetic."""
+    s = a * a + b * b + c * c + d * d
+    det = a * d - b * c
+    disc = math.sqrt(max(s * s - 4.0 * det * det, 0.0))
     small = 0.5 * (s - disc)
     if small <= 0.0:
-        return float("inf")
-    return float(np.sqrt(0.5 * (s + disc) / small))
+        return math.inf
+    return math.sqrt(0.5 * (s + disc) / small)

@@ -24,6 +24,8 @@ so and only reports whether the predicted forces satisfy the constraints.
 
 from __future__ import annotations
 
+import functools
+import math
 import time
 import warnings
 from dataclasses import dataclass
@@ -33,8 +35,10 @@ import osqp
 import qpsolvers
 import scipy.linalg
 import scipy.sparse as sp
+from scipy.linalg import lapack
 
 from .exceptions import InvalidParameterError, RegraspError
+from .hand import block_diagonal
 
 __all__ = [
     "ConeEdge",
@@ -148,6 +152,67 @@ def _constraint_rows(frames, fixed, mu, settings, cone_edge):
     return ineq, eq
 
 
+class _Rows:
+    r"""The constraint rows of :func:`_constraint_rows` for one (fixed, μ, settings, cone edge), as
+    matrices: row r reads :math:`\alpha_r n_i^T f_i + \beta_r t_i^T f_i \ge lo_r` (equalities last, = lo_r),
+    so that for given surface frames all rows are one product :math:`C f` (:meth:`matrix`)."""
+
+    def __init__(self, m: int, fixed, mu, settings: InternalForceSettings, cone_edge: ConeEdge | None):
+        if cone_edge is not None and not 0 <= cone_edge.contact < m:
+            raise InvalidParameterError("cone_edge", cone_edge, f"a contact index in 0..{m - 1}")
+        # in surface coordinates (n = e_x, t = e_y) each row's coefficients are (α_r, β_r)
+        ineq, eq = _constraint_rows(np.broadcast_to(np.eye(2), (m, 2, 2)), fixed, mu, settings, cone_edge)
+        self.coefficients = np.zeros((len(ineq) + len(eq), 2 * m))
+        for r, (i, coef, _) in enumerate(ineq + eq):
+            self.coefficients[r, 2 * i:2 * i + 2] = coef
+        self.lower = np.array([lo for _, _, lo in ineq + eq])
+        self.n_ineq, self.n_eq = len(ineq), len(eq)
+        self.upper = np.full(self.n_ineq + self.n_eq, _OSQP_INFTY)  # equalities' bounds set per problem
+
+    def matrix(self, frames_bd: np.ndarray) -> np.ndarray:
+        """C (rows, 2m): the rows' left-hand sides are C f for contact forces f (2m,) in the hand frame;
+        ``frames_bd``: blockdiag(R_fi) (2m, 2m) of the surface frames."""
+        return self.coefficients @ frames_bd.T
+
+    def satisfied(self, C: np.ndarray, forces: np.ndarray, slack: float) -> bool:
+        """Whether forces (2m,) satisfy every row to ``slack`` [N]."""
+        residual = (C @ forces - self.lower).tolist()
+        n = self.n_ineq
+        return min(residual[:n], default=0.0) >= -slack and all(abs(r) <= slack for r in residual[n:])
+
+
+_OSQP_INFTY = 1e30  # OSQP's infinity (osqp.OSQP().constant("OSQP_INFTY"))
+
+
+def _null_basis(constraint_matrix) -> np.ndarray:
+    r"""An orthonormal basis of :math:`\mathrm{null}(A^T)`, (rows, k).
+
+    For a full-column-rank A (the usual case) the last k columns of Q in A = QR (Householder,
+    LAPACK), without forming Q; otherwise ``scipy.linalg.null_space`` (SVD, numerical rank).
+    """
+    a = np.asarray(constraint_matrix, dtype=float)
+    rows, cols = a.shape
+    if rows >= cols > 0:
+        qr, tau, _, info = lapack.dgeqrf(a)
+        diagonal = [abs(d) for d in qr.diagonal().tolist()]
+        if info == 0 and min(diagonal) > max(diagonal) * max(rows, cols) * np.finfo(float).eps:
+            if rows == cols:
+                return np.zeros((rows, 0))
+            basis, _, info = lapack.dormqr("L", "N", qr, tau, _unit_tail(rows, rows - cols), max(64, rows))
+            if info == 0:
+                return basis
+    return scipy.linalg.null_space(a.T)
+
+
+@functools.cache
+def _unit_tail(rows: int, k: int) -> np.ndarray:
+    """[0; I_k] (rows, k): Q times it is Q's last k columns (read-only: LAPACK gets a copy)."""
+    tail = np.zeros((rows, k))
+    tail[rows - k:] = np.eye(k)
+    tail.flags.writeable = False
+    return tail
+
+
 def build_internal_force_qp(
     constraint_matrix: np.ndarray,
     motion_forces: np.ndarray,
@@ -168,32 +233,25 @@ def build_internal_force_qp(
         settings: Margins.
         cone_edge: Optional contact to put on its cone edge.
     """
-    m = len(surface_frames)
-    if cone_edge is not None and not 0 <= cone_edge.contact < m:
-        raise InvalidParameterError("cone_edge", cone_edge, f"a contact index in 0..{m - 1}")
-    null = scipy.linalg.null_space(constraint_matrix.T)
+    rows = _Rows(len(surface_frames), fixed, mu, settings, cone_edge)
+    null = _null_basis(constraint_matrix)
     k = null.shape[1]
     if k == 0:
         return InternalForceQP(None, null, motion_forces, settings)
-    ineq, eq = _constraint_rows(surface_frames, fixed, mu, settings, cone_edge)
-
-    def rows(items):
-        a = np.array([coef @ null[2 * i:2 * i + 2] for i, coef, _ in items])
-        rhs = np.array([lo - coef @ motion_forces[2 * i:2 * i + 2] for i, coef, lo in items])
-        return a, rhs
-
-    a_in, lo_in = rows(ineq)  # a y >= lo  ->  -a y <= -lo
-    problem_args = dict(P=sp.csc_matrix(np.eye(k)), q=np.zeros(k), G=sp.csc_matrix(-a_in), h=-lo_in)
-    if eq:
-        a_eq, b_eq = rows(eq)
-        problem_args.update(A=sp.csc_matrix(a_eq), b=b_eq)
+    C = rows.matrix(block_diagonal(np.asarray(surface_frames, dtype=float)))
+    a = C @ null
+    rhs = rows.lower - C @ motion_forces  # a y >= rhs (inequalities), a y = rhs (equalities)
+    ineq = slice(0, rows.n_ineq)
+    problem_args = dict(P=sp.csc_matrix(np.eye(k)), q=np.zeros(k), G=sp.csc_matrix(-a[ineq]), h=-rhs[ineq])
+    if rows.n_eq:
+        problem_args.update(A=sp.csc_matrix(a[rows.n_ineq:]), b=rhs[rows.n_ineq:])
     return InternalForceQP(qpsolvers.Problem(**problem_args), null, motion_forces, settings)
 
 
 def _satisfied(qp: InternalForceQP, forces, frames, fixed, mu, cone_edge, slack) -> bool:
-    ineq, eq = _constraint_rows(frames, fixed, mu, qp.settings, cone_edge)
-    ok = all(coef @ forces[i] >= lo - slack for i, coef, lo in ineq)
-    return ok and all(abs(coef @ forces[i]) <= slack for i, coef, _ in eq)
+    rows = _Rows(len(frames), fixed, mu, qp.settings, cone_edge)
+    C = rows.matrix(block_diagonal(np.asarray(frames, dtype=float)))
+    return rows.satisfied(C, np.asarray(forces).reshape(-1), slack)
 
 
 def solve_internal_force_qp(
@@ -240,54 +298,78 @@ class InternalForceSolver:
 
     def __init__(self, settings: InternalForceSettings = InternalForceSettings()):
         self.settings = settings
-        self._solvers: dict[tuple[int, int, int], tuple[osqp.OSQP, np.ndarray, np.ndarray]] = {}
+        self._solvers: dict[tuple[int, int, int], osqp.OSQP] = {}
+        self._rows: dict[tuple, _Rows] = {}
+        self._rows_settings = settings
 
-    def _osqp(self, k: int, rows: int, n_eq: int, a: np.ndarray, lower: np.ndarray, upper: np.ndarray):
-        key = (k, rows, n_eq)
-        if key not in self._solvers:
+    def _rows_for(self, m: int, fixed, mu, cone_edge: ConeEdge | None) -> _Rows:
+        if self._rows_settings is not self.settings:
+            self._rows.clear()
+            self._rows_settings = self.settings
+        key = (m, tuple(np.asarray(fixed, dtype=bool).tolist()), tuple(np.asarray(mu, dtype=float).tolist()),
+               cone_edge)
+        rows = self._rows.get(key)
+        if rows is None:
+            rows = self._rows[key] = _Rows(m, fixed, mu, self.settings, cone_edge)
+        return rows
+
+    def _osqp(self, k: int, rows: _Rows, a: np.ndarray, lower: np.ndarray) -> osqp.OSQP:
+        """The persistent solver of this shape, set up or updated with the numbers of this problem."""
+        key = (k, len(lower), rows.n_eq)
+        upper = rows.upper
+        if rows.n_eq:
+            upper = upper.copy()
+            upper[rows.n_ineq:] = lower[rows.n_ineq:]
+        solver = self._solvers.get(key)
+        if solver is None:
             # a dense pattern, so that later updates keep the sparsity structure
-            indptr = np.arange(0, rows * k + 1, rows)
-            indices = np.tile(np.arange(rows), k)
-            a_csc = sp.csc_matrix((a.T.reshape(-1), indices, indptr), shape=(rows, k))
+            n_rows = len(lower)
+            indptr = np.arange(0, n_rows * k + 1, n_rows)
+            indices = np.tile(np.arange(n_rows), k)
+            a_csc = sp.csc_matrix((a.T.reshape(-1), indices, indptr), shape=(n_rows, k))
             solver = osqp.OSQP()
             tol = self.settings.tolerance
             solver.setup(P=sp.csc_matrix(np.eye(k)), q=np.zeros(k), A=a_csc, l=lower, u=upper, eps_abs=tol,
                          eps_rel=tol, polishing=True, verbose=False, max_iter=20000)
             self._solvers[key] = solver
         else:
-            self._solvers[key].update(Ax=a.T.reshape(-1), l=lower, u=upper)
-        return self._solvers[key]
+            # what ``solver.update(Ax=..., l=..., u=...)`` does, without its bookkeeping for derivatives
+            # (the upper bounds of the inequalities are OSQP's infinity in every problem of this shape)
+            np.maximum(lower, -_OSQP_INFTY, out=lower)
+            solver._solver.update_data_vec(q=None, l=lower, u=upper if rows.n_eq else None)
+            solver._solver.update_data_mat(P_x=None, P_i=None, A_x=a.T.reshape(-1), A_i=None)
+        return solver
 
     def solve(self, constraint_matrix, motion_forces, surface_frames, fixed, mu,
               cone_edge: ConeEdge | None = None) -> InternalForceResult:
         """Solve the QP of the module docstring; see :func:`build_internal_force_qp` for the arguments."""
-        start = time.perf_counter()
-        m = len(surface_frames)
-        null = scipy.linalg.null_space(np.asarray(constraint_matrix).T)
+        frames = np.asarray(surface_frames, dtype=float)
+        return self._solve(constraint_matrix, motion_forces, block_diagonal(frames), fixed, mu, cone_edge,
+                           time.perf_counter())
+
+    def _solve(self, constraint_matrix, motion_forces, frames_bd: np.ndarray, fixed, mu, cone_edge, start: float):
+        """:meth:`solve` with the surface frames as blockdiag(R_fi) (2m, 2m) (hot paths)."""
+        m = len(frames_bd) // 2
+        rows = self._rows_for(m, fixed, mu, cone_edge)
+        null = _null_basis(constraint_matrix)
         k = null.shape[1]
-        qp_shell = InternalForceQP(None, null, motion_forces, self.settings)
-        scale = max(1.0, float(np.abs(motion_forces).max(initial=0.0)))
+        C = rows.matrix(frames_bd)
+        f_m = np.asarray(motion_forces, dtype=float)
+        scale = max(1.0, max(map(abs, f_m.tolist()), default=0.0))
         if k == 0:
-            forces = motion_forces.reshape(m, 2)
-            ok = _satisfied(qp_shell, forces, surface_frames, fixed, mu, cone_edge, 1e-9 * scale)
-            return InternalForceResult(np.zeros(2 * m), forces, 0, ok, "empty null space",
+            ok = rows.satisfied(C, f_m, 1e-9 * scale)
+            return InternalForceResult(np.zeros(2 * m), f_m.reshape(m, 2), 0, ok, "empty null space",
                                        time.perf_counter() - start)
-        ineq, eq = _constraint_rows(surface_frames, fixed, mu, self.settings, cone_edge)
-        items = ineq + eq
-        a = np.array([coef @ null[2 * i:2 * i + 2] for i, coef, _ in items])
-        bound = np.array([lo - coef @ motion_forces[2 * i:2 * i + 2] for i, coef, lo in items])
-        upper = np.concatenate([np.full(len(ineq), np.inf), bound[len(ineq):]])
-        solver = self._osqp(k, len(items), len(eq), a, bound, upper)
-        result = solver.solve(raise_error=False)
-        status = str(result.info.status)
-        x = result.x
-        solved = status in ("solved", "solved inaccurate") and x is not None and np.all(np.isfinite(x))
-        if solved:
+        solver = self._osqp(k, rows, C @ null, rows.lower - C @ f_m)
+        solver._solver.solve()
+        status = str(solver._solver.info.status)
+        x = solver._solver.solution.x
+        if status in ("solved", "solved inaccurate") and x is not None and all(map(math.isfinite, x.tolist())):
             f_c = null @ x
-            forces = (motion_forces + f_c).reshape(m, 2)
-            if _satisfied(qp_shell, forces, surface_frames, fixed, mu, cone_edge, 1e-6 * scale):
-                return InternalForceResult(f_c, forces, k, True, status, time.perf_counter() - start)
+            forces = f_m + f_c
+            if rows.satisfied(C, forces, 1e-6 * scale):
+                return InternalForceResult(f_c, forces.reshape(m, 2), k, True, status, time.perf_counter() - start)
             status = f"{status} (solution violates the constraints)"
-        qp = build_internal_force_qp(constraint_matrix, motion_forces, surface_frames, fixed, mu, self.settings,
-                                     cone_edge)
+        frames = np.stack([frames_bd[2 * i:2 * i + 2, 2 * i:2 * i + 2] for i in range(m)])
+        qp = build_internal_force_qp(constraint_matrix, motion_forces, frames, fixed, mu, self.settings, cone_edge)
         raise InternalForceInfeasibleError(qp, status)

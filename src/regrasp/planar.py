@@ -7,6 +7,8 @@ the active rotation :math:`R(\theta) = [[c, -s], [s, c]]`; ``perp(v)`` rotates `
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pinocchio as pin
 
@@ -54,6 +56,9 @@ def se3_from_planar(pose: np.ndarray) -> pin.SE3:
 
 def wrap_angle(angle: float | np.ndarray) -> float | np.ndarray:
     """Wrap an angle [rad] to (-pi, pi]."""
+    if isinstance(angle, float):  # the scalar case without numpy's overhead (same arithmetic as np.mod)
+        wrapped = float(angle + math.pi) % (2.0 * math.pi) - math.pi
+        return math.pi if wrapped == -math.pi else wrapped
     wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
     wrapped = np.where(wrapped == -np.pi, np.pi, wrapped)
     return float(wrapped) if np.ndim(wrapped) == 0 else wrapped

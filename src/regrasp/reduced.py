@@ -28,6 +28,7 @@ friction.) Coulomb friction closes the system: :math:`f_{\xi,j} = \mu\, s_j\, n_
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,7 +36,7 @@ import numpy as np
 from .exceptions import InvalidParameterError
 from .grasp import Grasp
 from .hand import Hand, HandDynamics
-from .validation import as_finite_array, as_friction_coefficients, as_positive_float
+from .validation import as_finite_array, as_finite_vectors, as_friction_coefficients, as_positive_float
 
 __all__ = ["ReducedModel", "ReducedState"]
 
@@ -100,12 +101,14 @@ class ReducedModel:
         self.M_s = np.zeros((self.n, self.n))
         self.M_s[:3, :3] = self.M_o
         self._bv = grasp.sliding_directions()
+        self._identity = np.eye(hand.nq)
+        self._sliding_column = {i: 3 + j for j, i in enumerate(grasp.sliding)}  # contact -> column of S
 
     @property
     def f_g(self) -> np.ndarray:
         """Gravity wrench on the object at its centre of mass [N, N, N m]."""
-        g = self.hand.gravity_in_hand
-        return np.array([self.object_mass * g[0], self.object_mass * g[1], 0.0])
+        gx, gy = self.hand.gravity_in_hand.tolist()
+        return np.array([self.object_mass * gx, self.object_mass * gy, 0.0])
 
     # ------------------------------------------------------------------ coordinates
     def split(self, S, S_dot=None):
@@ -133,26 +136,67 @@ class ReducedModel:
 
     def state(self, S, S_dot) -> ReducedState:
         """All the model's quantities at (S, Ṡ); raises SingularFingerError at a singular finger."""
-        pose, xi, twist, xi_dot = self.split(S, S_dot)
-        S = np.asarray(S, dtype=float)
-        S_dot = np.asarray(S_dot, dtype=float)
-        grasp, hand = self.grasp, self.hand
-        r = grasp._lever(pose[2], xi)
-        frames = grasp._frames(pose[2])
-        qs = hand._inverse_kinematics(pose[:2] + r).reshape(-1, 2)
-        jac = hand._jacobian(qs)
-        hand._check_singular(qs, jac)
-        G = grasp._grasp_matrix(r)
-        R_f = grasp._surface_rotation(frames)
-        B_v = self._bv
-        A = np.hstack([G.T, R_f @ B_v])
-        H = np.linalg.solve(jac, A)
+        S, S_dot = as_finite_vectors(("S", "S_dot"), (S, S_dot), self.n)
+        return self._state(S, S_dot)[0]
+
+    def _state(self, S: np.ndarray, S_dot: np.ndarray) -> tuple[ReducedState, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`state` on validated (n,) arrays (hot paths), with J⁻¹, A and blockdiag(R_fi) of
+        every contact's surface frame (2m, 2m).
+
+        The per-contact kinematics is scalar arithmetic (m is 2 or 3: numpy's per-call cost would
+        dominate); the matrices are built once from it.
+        """
+        grasp, hand, m, n, nq = self.grasp, self.hand, self.grasp.m, self.n, self.hand.nq
+        s_list, sd_list = S.tolist(), S_dot.tolist()
+        x, y, beta = s_list[:3]
+        omega = sd_list[2]
+        xi, xi_dot = self.xi.tolist(), [0.0] * m
+        for i, col in self._sliding_column.items():
+            xi[i], xi_dot[i] = s_list[col], sd_list[col]
+        c, s = math.cos(beta), math.sin(beta)
+        q, tips, a_rows, a_dot = [], [], [], []
+        frames = [0.0] * (nq * nq)  # blockdiag(R_fi), row-major
+        for i, (ox, oy, tx, ty, nx, ny) in enumerate(grasp._contact_constants):
+            cx, cy = ox + xi[i] * tx, oy + xi[i] * ty
+            rx, ry = c * cx - s * cy, s * cx + c * cy  # lever arm r_i = R c_i(ξ_i)
+            nx, ny = c * nx - s * ny, s * nx + c * ny  # surface frame [n_i t_i] = R [n°_i t°_i]
+            tx, ty = c * tx - s * ty, s * tx + c * ty
+            tips.append((x + rx, y + ry))  # the contact point, where the tip is
+            q.extend(hand.fingers[i]._joint_angles(x + rx, y + ry))
+            k = 2 * i * (nq + 1)
+            frames[k], frames[k + 1], frames[k + nq], frames[k + nq + 1] = nx, tx, ny, ty
+            # rows 2i, 2i+1 of A = [G^T | R_f B_v]: [I_2 | ⊥r_i | t_i in the column of ξ_i if it slides]
+            row_x, row_y = [1.0, 0.0, -ry] + [0.0] * (n - 3), [0.0, 1.0, rx] + [0.0] * (n - 3)
+            col = self._sliding_column.get(i)
+            if col is not None:
+                row_x[col], row_y[col] = tx, ty
+            a_rows += (row_x, row_y)
+            # Ȧ Ṡ = Ġ^T Ẋ + Ṙ_f B_v ξ̇: ω ⊥ṙ_i + ω ξ̇_i ⊥t_i with ṙ_i = ω ⊥r_i + ξ̇_i t_i
+            a_dot += (-omega * omega * rx - 2.0 * omega * xi_dot[i] * ty,
+                      -omega * omega * ry + 2.0 * omega * xi_dot[i] * tx)
+        qs = np.array(q).reshape(m, 2)
+        J = hand._jacobian(qs)
+        rows = J.tolist()
+        blocks = [(rows[2 * i][2 * i], rows[2 * i][2 * i + 1], rows[2 * i + 1][2 * i], rows[2 * i + 1][2 * i + 1])
+                  for i in range(m)]
+        hand._check_singular_blocks(qs, blocks)
+        J_inv = [0.0] * (nq * nq)  # blockdiag(J_i^{-1}), row-major
+        for i, (a, b, c_, d) in enumerate(blocks):
+            det, k = a * d - b * c_, 2 * i * (nq + 1)
+            J_inv[k], J_inv[k + 1], J_inv[k + nq], J_inv[k + nq + 1] = d / det, -b / det, -c_ / det, a / det
+        J_inv = np.array(J_inv).reshape(nq, nq)
+        A = np.array(a_rows)
+        H = J_inv @ A
         q_dot = H @ S_dot
-        dyn = hand._dynamics(qs, q_dot.reshape(-1, 2))
-        A_dot_S_dot = (grasp._grasp_matrix_dot(r, frames[:, :, 1], twist[2], xi_dot).T @ twist
-                       + grasp._surface_rotation_dot(frames, twist[2]) @ B_v @ S_dot[3:])
-        H_dot_S_dot = np.linalg.solve(jac, A_dot_S_dot - dyn.jacobian_dot_v)
-        return ReducedState(S, S_dot, xi, xi_dot, qs.reshape(-1), q_dot, H, H_dot_S_dot, G, R_f, B_v, dyn)
+        dyn = hand._dynamics(qs, q_dot.reshape(m, 2), (J, np.array(tips)))
+        H_dot_S_dot = J_inv @ (np.array(a_dot) - dyn.jacobian_dot_v)
+        frames = np.array(frames).reshape(nq, nq)
+        R_f = self._identity.copy()
+        for i in grasp.sliding:
+            R_f[2 * i:2 * i + 2, 2 * i:2 * i + 2] = frames[2 * i:2 * i + 2, 2 * i:2 * i + 2]
+        st = ReducedState(S, S_dot, np.array(xi), np.array(xi_dot), qs.reshape(-1), q_dot, H, H_dot_S_dot,
+                          A[:, :3].T, R_f, self._bv, dyn)
+        return st, J_inv, A, frames
 
     # ------------------------------------------------------------------ dynamics
     def mass_matrix(self, st: ReducedState) -> np.ndarray:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .exceptions import InvalidParameterError
@@ -46,4 +48,19 @@ def as_friction_coefficients(mu, m: int) -> np.ndarray:
     arr = np.array(mu, dtype=float) if np.ndim(mu) else np.full(m, float(mu))
     if arr.shape != (m,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
         raise InvalidParameterError("mu", mu, f"a friction coefficient >= 0, or one per contact ({m})")
+    return arr
+
+
+def as_finite_vectors(names: tuple[str, ...], values: tuple, n: int) -> np.ndarray:
+    """The ``values`` as the rows of one (len(values), n) float array, all checked at once (hot paths).
+
+    Raises the error :func:`as_finite_array` raises for the first bad value, in order.
+    """
+    try:
+        arr = np.array(values, dtype=float)
+    except (TypeError, ValueError):
+        arr = None
+    # a sum is finite when every entry is (a finite sum that overflows only takes the slow path)
+    if arr is None or arr.shape != (len(values), n) or not math.isfinite(sum(arr.reshape(-1).tolist())):
+        arr = np.array([as_finite_array(name, value, (n,)) for name, value in zip(names, values)])
     return arr
