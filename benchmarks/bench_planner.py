@@ -33,9 +33,10 @@ Correctness check: on every brute-force sample the brute-force intervals must ag
 discrepancy is printed and the script exits with status 1 (timing different answers would be
 meaningless).
 
-A separate, untimed profiling pass counts the ``urdf`` mode's collision-checker calls per sample
-(each ``collides`` call is one Pinocchio forward kinematics and one ``coal.distance`` per link
-shape) and how much of the sample's time is spent inside ``collides`` and inside the IK.
+A separate, untimed profiling pass counts the ``urdf`` mode's posture queries per sample (one
+``checker.links_collide`` per grid or bisection point) and the links among them that coal had to
+evaluate (one ``coal.distance`` per shape of the link; the others were certified free by the
+checker's distance certificate), and how much of the sample's time those coal evaluations take.
 
 Run (from any directory)::
 
@@ -179,43 +180,42 @@ def microbench(fn, n: int = 2000) -> float:
 
 
 def profile_urdf(envs, samples) -> dict:
-    """Untimed pass: collides()/IK calls and time shares inside the urdf mode's at()."""
+    """Untimed pass: posture queries and coal link evaluations inside the urdf mode's at().
+
+    The urdf mode asks ``checker.links_collide`` once per grid or bisection point (a "posture
+    query"); that calls coal only for the links its certificate cannot clear
+    (``checker._link_distance``: one coal.distance per shape of the link).
+    """
     per_sample = []
-    for env, finger in envs:
+    for env, _ in envs:
         checker = env.checker
-        counters = {"collides": 0, "t_collides": 0.0, "ik": 0, "t_ik": 0.0}
-        orig_collides, orig_ik = checker.collides, finger.inverse_kinematics
+        counters = {"queries": 0, "links": 0, "t_links": 0.0}
+        orig_query, orig_link = checker.links_collide, checker._link_distance
 
-        def collides(q, pose, _f=orig_collides, _c=counters):
+        def query(*args, _f=orig_query, _c=counters):
+            _c["queries"] += 1
+            return _f(*args)
+
+        def link(*args, _f=orig_link, _c=counters):
             t0 = time.perf_counter()
             try:
-                return _f(q, pose)
+                return _f(*args)
             finally:
-                _c["collides"] += 1
-                _c["t_collides"] += time.perf_counter() - t0
+                _c["links"] += 1
+                _c["t_links"] += time.perf_counter() - t0
 
-        def ik(tip, _f=orig_ik, _c=counters):
-            t0 = time.perf_counter()
-            try:
-                return _f(tip)
-            finally:
-                _c["ik"] += 1
-                _c["t_ik"] += time.perf_counter() - t0
-
-        checker.collides, finger.inverse_kinematics = collides, ik  # instance attributes only
+        checker.links_collide, checker._link_distance = query, link  # instance attributes only
         try:
             for t, pose in samples:
-                for key in counters:
-                    counters[key] = 0 if key in ("collides", "ik") else 0.0
+                counters.update(queries=0, links=0, t_links=0.0)
                 t0 = time.perf_counter()
                 env.at(pose, t)
                 total = time.perf_counter() - t0
-                per_sample.append((counters["collides"], counters["ik"], counters["t_collides"] / total,
-                                   counters["t_ik"] / total, len(checker.shapes)))
+                per_sample.append((counters["queries"], counters["links"], counters["t_links"] / total))
         finally:
-            del checker.collides, finger.inverse_kinematics
+            del checker.links_collide, checker._link_distance
     arr = np.array(per_sample, dtype=float)
-    # One coal.distance call in isolation, for scale.
+    # One coal.distance call and one collides() call in isolation, for scale.
     env, finger = envs[0]
     checker = env.checker
     t, pose = samples[len(samples) // 2]
@@ -239,15 +239,13 @@ def profile_urdf(envs, samples) -> dict:
         coal.distance(shape.geometry, placement, checker.object_geometry, obj, req, res)
 
     return {
-        "collides_calls_per_sample_median": float(np.median(arr[:, 0])),
-        "collides_calls_per_sample_range": [int(arr[:, 0].min()), int(arr[:, 0].max())],
-        "coal_distance_calls_per_sample_median": float(np.median(arr[:, 0] * arr[:, 4])),
-        "ik_calls_per_sample_median": float(np.median(arr[:, 1])),
-        "share_in_collides_median": float(np.median(arr[:, 2])),
-        "share_in_ik_median": float(np.median(arr[:, 3])),
+        "posture_queries_per_sample_median": float(np.median(arr[:, 0])),
+        "posture_queries_per_sample_range": [int(arr[:, 0].min()), int(arr[:, 0].max())],
+        "coal_link_evaluations_per_sample_median": float(np.median(arr[:, 1])),
+        "coal_link_evaluations_per_sample_range": [int(arr[:, 1].min()), int(arr[:, 1].max())],
+        "share_in_coal_link_evaluations_median": float(np.median(arr[:, 2])),
         "collides_call_us": microbench(lambda: checker.collides(q, pose)) * 1e6,
         "coal_distance_call_us": microbench(one_distance) * 1e6,
-        "ik_call_us": microbench(lambda: finger.inverse_kinematics(env.tip_at(pose, 0.5 * (lo + hi)))) * 1e6,
         "samples": int(arr.shape[0]),
     }
 
@@ -335,9 +333,6 @@ def main(argv=None) -> int:
 
     prof = profile_urdf(urdf_envs, samples)
     results["urdf"].update({k: v for k, v in prof.items() if k != "samples"})
-    # coal.distance itself, estimated: calls per sample x the isolated per-call time.
-    results["urdf"]["share_in_coal_distance_est"] = (
-        prof["coal_distance_calls_per_sample_median"] * prof["coal_distance_call_us"] / results["urdf"]["median_us"])
     results["ideal"]["repeats"] = results["urdf"]["repeats"] = repeats
 
     med = {k: results[k]["median_us"] for k in ("ideal", "urdf", "brute_force")}
@@ -381,16 +376,15 @@ def main(argv=None) -> int:
         print()
         u = r["urdf"]
         print(f"urdf mode, per sample (median over {prof['samples']} samples): "
-              f"{u['collides_calls_per_sample_median']:.0f} collides() calls "
-              f"(range {u['collides_calls_per_sample_range'][0]}-{u['collides_calls_per_sample_range'][1]}), "
-              f"= {u['coal_distance_calls_per_sample_median']:.0f} coal.distance calls, "
-              f"{u['ik_calls_per_sample_median']:.0f} IK calls")
-        print(f"  share of at() time inside collides(): {100 * u['share_in_collides_median']:.0f} %, "
-              f"inside inverse_kinematics(): {100 * u['share_in_ik_median']:.0f} %")
-        print(f"  one collides() call: {u['collides_call_us']:.1f} us, of which one coal.distance: "
-              f"{u['coal_distance_call_us']:.2f} us; one inverse_kinematics(): {u['ik_call_us']:.1f} us")
-        print(f"  => coal.distance itself is only ~{100 * u['share_in_coal_distance_est']:.0f} % of a urdf "
-              "sample; the rest is Python overhead (IK input checks, SE3 products, numpy)")
+              f"{u['posture_queries_per_sample_median']:.0f} posture queries "
+              f"(range {u['posture_queries_per_sample_range'][0]}-{u['posture_queries_per_sample_range'][1]}), "
+              f"of which coal evaluated {u['coal_link_evaluations_per_sample_median']:.0f} links "
+              f"(range {u['coal_link_evaluations_per_sample_range'][0]}-"
+              f"{u['coal_link_evaluations_per_sample_range'][1]}; the others were certified free)")
+        print(f"  share of at() time in coal link evaluations (transform + coal.distance): "
+              f"{100 * u['share_in_coal_link_evaluations_median']:.0f} %")
+        print(f"  one collides() call (public API, both links): {u['collides_call_us']:.1f} us; "
+              f"one coal.distance: {u['coal_distance_call_us']:.2f} us")
         print(f"brute force: median {r['brute_force']['collides_calls_per_sample_median']:.0f} collides() "
               f"calls per sample (reachable grid points on the edge)")
         print()

@@ -24,6 +24,7 @@ from regrasp.envelope import Condition, FingerEnvelope
 from regrasp.exceptions import FingerModelError
 from regrasp.finger import Finger
 from regrasp.finger_urdf import planar_2r_urdf
+from regrasp.planar import se3_from_planar
 from regrasp.polygon import ConvexPolygon
 
 RHO = 0.01  # fixed tip clearance [m]
@@ -372,3 +373,78 @@ def test_default_tip_clearance_for_a_box_distal_link():
     sample = env.at(np.array([0.03, 0.12, 0.0]))
     ideal = FingerEnvelope(finger, rect, 1).at(np.array([0.03, 0.12, 0.0]))
     assert sample.feasible and sample.feasible[0][1] - sample.feasible[0][0] > 0.5 * (ideal.feasible[0][1] - ideal.feasible[0][0])
+
+
+# --------------------------------------------------------------------------- 4. the checker's fast paths
+def pinocchio_coal_distances(checker, finger: Finger, q: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """Signed distances with the shapes placed by Pinocchio's forward kinematics (hand frame)."""
+    pin.forwardKinematics(finger.model, finger.data, q)
+    obj_rot = np.eye(3)
+    obj_rot[:2, :2] = rot(pose[2])
+    obj = pin.SE3(obj_rot, np.array([pose[0], pose[1], 0.0]))
+    req = coal.DistanceRequest()
+    req.enable_signed_distance = True
+    out = []
+    for shape in checker.shapes:
+        placement = finger.data.oMi[shape.link + 1] * shape.placement_in_joint
+        out.append(coal.distance(shape.geometry, placement, checker.object_geometry, obj, req, coal.DistanceResult()))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("seed", range(0, 200, 20))
+def test_planar_signed_distances_match_pinocchio_placements(seed):
+    """The checker places each shape with the planar link frames (no Pinocchio per query) and
+    tests it against the object expressed in that frame; coal's distances agree with shapes
+    placed by Pinocchio's forward kinematics (to coal's own tolerance), and so do the verdicts."""
+    case = make_case(seed)
+    rng = np.random.default_rng(seed)
+    for conf in ("left", "right"):
+        finger = make_random_finger(case["l1"], case["l2"], case["base"], conf, radius=0.05 * case["l1"])
+        checker = FingerEnvelope(finger, case["polygon"], case["edge"], geometry="urdf").checker
+        scale = case["l1"] + case["l2"]
+        for _ in range(20):
+            q = rng.uniform(-np.pi, np.pi, size=2)
+            pose = case["pose"] + rng.normal(0.0, 0.3 * scale, size=3)
+            ref = pinocchio_coal_distances(checker, finger, q, pose)
+            got = checker.signed_distances(q, pose)
+            assert np.allclose(got, ref, rtol=0.0, atol=1e-5 * scale), (got, ref)
+            if abs(ref.min()) > 1e-5 * scale:  # (each call starts afresh: no stale certificates)
+                assert checker.collides(q, pose) == (ref.min() < 0.0)
+                far = pose + np.array([10.0 * scale, 0.0, 0.0])
+                assert not checker.collides(q, far)  # certifies q free there, which must not carry over
+                assert checker.collides(q, se3_from_planar(pose)) == (ref.min() < 0.0)
+
+
+@pytest.mark.parametrize("seed", range(3, 200, 20))
+def test_certified_free_postures_give_coal_verdicts(seed):
+    """links_collide skips coal for a link that cannot have reached the object since its last
+    coal distance; along sweeps and jumps its verdicts equal fresh coal verdicts."""
+    case = make_case(seed)
+    rng = np.random.default_rng(seed)
+    for conf in ("left", "right"):
+        finger = make_random_finger(case["l1"], case["l2"], case["base"], conf, radius=0.05 * case["l1"])
+        checker = FingerEnvelope(finger, case["polygon"], case["edge"], geometry="urdf").checker
+        pose = case["pose"]
+        q, step = rng.uniform(-np.pi, np.pi, size=2), rng.normal(0.0, 0.5, size=2)
+        postures = [q + t * step for t in np.linspace(0.0, 1.0, 60)]  # a sweep
+        postures += [q + rng.normal(0.0, 0.05, size=2) for _ in range(20)]  # small jumps
+        postures += [rng.uniform(-np.pi, np.pi, size=2) for _ in range(20)]  # large jumps
+        checker.set_object_pose(*pose)
+        stateful = [checker.links_collide(*checker._posture(p)) for p in postures]
+        fresh = [checker.collides(p, pose) for p in postures]  # resets the certificates each time
+        assert stateful == fresh
+
+
+@pytest.mark.parametrize("seed", range(5, 200, 10))
+def test_urdf_envelope_without_certificates_is_identical(seed):
+    """Disabling the checker's certified-free shortcut (every query calls coal) changes nothing."""
+    case = make_case(seed)
+    for conf in ("left", "right"):
+        finger = make_random_finger(case["l1"], case["l2"], case["base"], conf, radius=0.02 * case["l1"])
+        fast = FingerEnvelope(finger, case["polygon"], case["edge"], geometry="urdf")
+        slow = FingerEnvelope(finger, case["polygon"], case["edge"], geometry="urdf")
+        slow.checker._margin = math.inf  # no certificate ever holds
+        for shift in (0.0, 0.1, -0.1):
+            pose = case["pose"] + shift * np.array([case["l1"], case["l2"], 1.0])
+            a, b = fast.at(pose), slow.at(pose)
+            assert (a.feasible, a.reachable, a.reason) == (b.feasible, b.reachable, b.reason)

@@ -488,3 +488,38 @@ def test_closed_form_reachable_set_matches_the_elbow_margin_classifier():
             assert inside == (elbow_margin(mid, d, l1, l2, sign) >= 0.0), (l1, l2, d, sign, got)
         for a, b in got:
             assert min(abs(a - x) for x in cuts) < 1e-12 and min(abs(b - x) for x in cuts) < 1e-12
+
+
+# --------------------------------------------------------------------------- float fast paths
+def test_float_helpers_match_numpy():
+    """The envelope's float helpers reproduce numpy's linspace and wrap_angle bit for bit."""
+    from regrasp.envelope import _linspace, _wrap
+    from regrasp.planar import wrap_angle
+
+    rng = np.random.default_rng(7)
+    for _ in range(2000):
+        lo = rng.normal(0.0, 0.1)
+        hi = lo + abs(rng.normal(0.0, 0.1)) * 10.0 ** rng.integers(-8, 1)
+        num = int(rng.integers(2, 60))
+        assert _linspace(lo, hi, num) == np.linspace(lo, hi, num).tolist()
+    angles = np.concatenate([rng.uniform(-20.0, 20.0, 2000), np.pi * np.arange(-6, 7), [1e-300, -0.0]])
+    for angle in angles.tolist():
+        assert _wrap(angle) == wrap_angle(angle)
+
+
+@pytest.mark.parametrize("bad", [[0.0, 0.1], [0.0, np.nan, 0.0], np.array([0.0, 0.1, np.inf]), "abc",
+                                 np.zeros((1, 3))])
+def test_pose_is_validated(bad):
+    from regrasp.exceptions import InvalidParameterError
+
+    case = make_case(0)
+    finger = make_finger(case["l1"], case["l2"], case["base"], "left")
+    env = FingerEnvelope(finger, case["polygon"], case["edge"])
+    with pytest.raises(InvalidParameterError, match="pose_object_in_hand"):
+        env.at(bad)
+    # lists, tuples and float32 arrays are accepted like float64 arrays
+    pose = case["pose"]
+    ref = env.at(pose)
+    for same in (pose.tolist(), tuple(pose.tolist())):
+        assert env.at(same).feasible == ref.feasible
+    assert env.at(pose.astype(np.float32)).condition is env.at(pose.astype(np.float32).astype(float)).condition

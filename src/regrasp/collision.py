@@ -20,16 +20,21 @@ Two models of the finger's links:
 
 from __future__ import annotations
 
+import math
+
 import coal
 import numpy as np
 import pinocchio as pin
 
 from .exceptions import FingerModelError, InvalidParameterError
 from .finger import Finger, LinkShape
-from .planar import se3_from_planar
 from .polygon import ConvexPolygon
 
 __all__ = ["UrdfCollisionChecker", "default_tip_clearance", "segment_hits_polygon"]
+
+#: Safety margin of the certified-free shortcut of :meth:`UrdfCollisionChecker.links_collide`,
+#: as a fraction of the finger's reach l1 + l2.
+_CERTIFY_MARGIN = 1e-4
 
 
 def segment_hits_polygon(a: np.ndarray, b: np.ndarray, normals: np.ndarray, offsets: np.ndarray,
@@ -42,21 +47,32 @@ def segment_hits_polygon(a: np.ndarray, b: np.ndarray, normals: np.ndarray, offs
     clipped range is not empty and its midpoint is inside by more than ``eps`` [m]
     (a segment through a vertex or along an edge only touches the boundary).
     """
+    (ax, ay), (bx, by) = np.asarray(a, dtype=float).tolist(), np.asarray(b, dtype=float).tolist()
+    halfplanes = [(nx, ny, off) for (nx, ny), off in zip(np.asarray(normals, dtype=float).tolist(),
+                                                          np.asarray(offsets, dtype=float).tolist())]
+    return segment_hits_halfplanes(ax, ay, bx, by, halfplanes, eps)
+
+
+def segment_hits_halfplanes(ax: float, ay: float, bx: float, by: float,
+                            halfplanes: list[tuple[float, float, float]], eps: float) -> bool:
+    r""":func:`segment_hits_polygon` on plain floats: the segment (ax, ay)–(bx, by) [m] and the
+    polygon as ``(n_x, n_y, o)`` half-planes :math:`n \cdot y > o` (no validation; hot paths)."""
     t0, t1 = 0.0, 1.0
-    da = normals @ a - offsets  # signed distance of a to each edge line (>0 inside)
-    db = normals @ b - offsets
-    for fa, fb in zip(da, db):
-        if fa < 0.0 and fb < 0.0:
-            return False
+    dists = []  # signed distances of a and b to each edge line (>0 inside)
+    for nx, ny, off in halfplanes:
+        fa = nx * ax + ny * ay - off
+        fb = nx * bx + ny * by - off
         if fa < 0.0:
+            if fb < 0.0:
+                return False
             t0 = max(t0, fa / (fa - fb))
         elif fb < 0.0:
             t1 = min(t1, fa / (fa - fb))
         if t1 <= t0:
             return False
+        dists.append((fa, fb))
     tm = 0.5 * (t0 + t1)
-    depth = np.min(da + tm * (db - da))
-    return bool(depth > eps)
+    return min(fa + tm * (fb - fa) for fa, fb in dists) > eps
 
 
 def _truncate_distal(shape: LinkShape, tip_in_joint: np.ndarray, clearance: float,
@@ -105,6 +121,16 @@ def _truncate_distal(shape: LinkShape, tip_in_joint: np.ndarray, clearance: floa
         new_geom = coal.Box(*sides)
     new_placement = pin.SE3(placement.rotation, placement.translation - toward_tip * clearance / 2.0)
     return LinkShape(link=shape.link, name=shape.name, geometry=new_geom, placement_in_joint=new_placement)
+
+
+def _reach_in_plane(geometry, placement: pin.SE3) -> float:
+    """Largest distance [m] from the z-axis of a point of ``geometry`` placed at ``placement``
+    (from the corners of its local bounding box, so an upper bound)."""
+    geometry.computeLocalAABB()
+    lo, hi = np.asarray(geometry.aabb_local.min_), np.asarray(geometry.aabb_local.max_)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    points = corners @ placement.rotation.T + placement.translation
+    return float(np.max(np.hypot(points[:, 0], points[:, 1])))
 
 
 def _half_width(geometry) -> float:
@@ -160,24 +186,160 @@ class UrdfCollisionChecker:
         self._request = coal.DistanceRequest()
         self._request.enable_signed_distance = True
         self._result = coal.DistanceResult()
+        self._init_planar_kinematics()
+
+    def _init_planar_kinematics(self) -> None:
+        r"""Precompute the planar fast path of :meth:`signed_distances`.
+
+        Link k's *link frame* :math:`L_k` has its origin at joint k and its x-axis along the
+        link (joint 1 → joint 2, joint 2 → tip). The finger is planar, so a shape's placement
+        is :math:`L_k A` with a constant :math:`A` (from Pinocchio at q = 0). Coal distances
+        are invariant under a common rigid motion, so each shape is tested at :math:`A`
+        against the object at :math:`L_k^{-1} X` (X the object's placement), which is planar:
+        per query only a z-rotation and a translation are written into a ``coal.Transform3s``.
+        """
+        finger = self.finger
+        model, data = finger.model, finger.data
+        pin.forwardKinematics(model, data, np.zeros(model.nq))
+        tip = pin.updateFramePlacement(model, data, finger.tip_frame_id).translation
+        points = [data.oMi[1].translation.copy(), data.oMi[2].translation.copy(), tip.copy()]
+        self._link_frames0 = []  # link frames at q = 0: (angle psi_k [rad], placement L_k)
+        for k in (0, 1):
+            start, end = points[k], points[k + 1]
+            psi = math.atan2(end[1] - start[1], end[0] - start[0])
+            rot = np.eye(3)
+            rot[:2, :2] = [[math.cos(psi), -math.sin(psi)], [math.sin(psi), math.cos(psi)]]
+            self._link_frames0.append((psi, pin.SE3(rot, start)))
+        self._l1 = float(np.linalg.norm(points[1][:2] - points[0][:2]))
+        self._joint1 = points[0][:2].tolist()
+        self._object = (0.0, 0.0, 1.0, 0.0)  # object pose (x, y, cos beta, sin beta), hand frame
+        # per link: the object's transform L_k^-1 X (rotation and translation buffers, written
+        # through flat memoryviews), the link's shapes (coal functor, placement A, index) and
+        # the largest distance [m] of a shape point from the link's z-axis
+        self._links = []
+        for k in (0, 1):
+            psi0, frame0 = self._link_frames0[k]
+            rot, trans = np.eye(3), np.array([0.0, 0.0, -frame0.translation[2]])
+            shapes, reach = [], 0.0
+            for i, shape in enumerate(self.shapes):
+                if shape.link == k:
+                    a = frame0.actInv(data.oMi[k + 1] * shape.placement_in_joint)
+                    shapes.append((coal.ComputeDistance(shape.geometry, self.object_geometry),
+                                   coal.Transform3s(a.rotation, a.translation), i))
+                    reach = max(reach, _reach_in_plane(shape.geometry, a))
+            views = (memoryview(rot).cast("B").cast("d"), memoryview(trans).cast("B").cast("d"))
+            self._links.append((rot, trans, *views, coal.Transform3s(), shapes, reach))
+        # (the coal functors hold raw pointers to the geometries: self.shapes and
+        # self.object_geometry keep them alive)
+        self._margin = _CERTIFY_MARGIN * sum(finger.link_lengths)
+        self._certificates: list[tuple[float, ...] | None] = [None, None]
+
+    def set_object_pose(self, x: float, y: float, beta: float) -> None:
+        """Object pose (x [m], y [m], beta [rad]) in the hand frame for :meth:`links_collide` (no validation)."""
+        self._object = (x, y, math.cos(beta), math.sin(beta))
+        self._certificates = [None, None]
+
+    def _object_in_link(self, k: int, ox: float, oy: float, c: float, s: float):
+        """The coal transform :math:`L_k^{-1} X` for link frame origin (ox, oy), direction (c, s)."""
+        x, y, cb, sb = self._object
+        rot, trans, rv, tv, tf, _, _ = self._links[k]
+        cj = c * cb + s * sb  # rotation by beta - psi
+        sj = c * sb - s * cb
+        rv[0] = cj
+        rv[1] = -sj
+        rv[3] = sj
+        rv[4] = cj
+        dx, dy = x - ox, y - oy
+        tv[0] = c * dx + s * dy
+        tv[1] = c * dy - s * dx
+        tf.setTransform(rot, trans)
+        return tf
+
+    def _link_distance(self, k: int, ox: float, oy: float, c: float, s: float) -> float:
+        """Smallest signed distance [m] of link k's shapes to the object, stopping at the first
+        negative one (link frame at joint (ox, oy) [m] with direction (c, s); +inf if no shapes)."""
+        shapes = self._links[k][5]
+        if not shapes:
+            return math.inf
+        request, result = self._request, self._result
+        tf = self._object_in_link(k, ox, oy, c, s)
+        nearest = math.inf
+        for distance, placement, _ in shapes:
+            result.clear()
+            nearest = min(nearest, distance(placement, tf, request, result))
+            if nearest < 0.0:
+                break
+        return nearest
+
+    def links_collide(self, c1: float, s1: float, x2: float, y2: float, c2: float, s2: float) -> bool:
+        r"""Whether any link shape penetrates the object (pose from :meth:`set_object_pose`).
+
+        The finger's posture is given by link 1's direction (c1, s1) = (cos psi1, sin psi1),
+        the elbow (x2, y2) [m] in the hand frame and link 2's direction (c2, s2). No validation
+        (hot path of the ``urdf`` envelope), and coal is called only where needed:
+
+        * it stops at the first penetrating shape;
+        * a link that coal found free at distance :math:`\delta` [m] (the last such query for
+          this object pose) is free wherever none of its points has moved by :math:`\delta` or
+          more (distances are 1-Lipschitz in a rigid motion). Joint move :math:`\Delta o` and
+          direction :math:`u` move a shape point by at most :math:`|\Delta o| + |\Delta u| R`
+          (:math:`R`: the largest distance of a point of the link's shapes from its joint axis),
+          so when that is below :math:`\delta (1 - 10^{-3}) - m` (:math:`m = 10^{-4} (l_1 + l_2)`,
+          far above coal's tolerance) the link is free without a coal call, and coal's verdict
+          there would be the same.
+        """
+        hypot = math.hypot
+        cert = self._certificates[0]  # (cos psi, sin psi, budget [m]): link 1 turns about joint 1
+        if cert is None or hypot(c1 - cert[0], s1 - cert[1]) * self._links[0][6] >= cert[2]:
+            dist = self._link_distance(0, *self._joint1, c1, s1)
+            if dist < 0.0:
+                return True
+            self._certificates[0] = (c1, s1, dist * (1.0 - 1e-3) - self._margin)
+        cert = self._certificates[1]  # (x, y, cos psi, sin psi, budget [m])
+        if cert is None or (hypot(x2 - cert[0], y2 - cert[1])
+                            + hypot(c2 - cert[2], s2 - cert[3]) * self._links[1][6] >= cert[4]):
+            dist = self._link_distance(1, x2, y2, c2, s2)
+            if dist < 0.0:
+                return True
+            self._certificates[1] = (x2, y2, c2, s2, dist * (1.0 - 1e-3) - self._margin)
+        return False
+
+    def _posture(self, q) -> tuple[float, float, float, float, float, float]:
+        """(cos psi1, sin psi1, elbow x [m], elbow y [m], cos psi2, sin psi2) for joint positions q."""
+        q1, q2 = np.asarray(q, dtype=float).tolist()
+        psi1 = self._link_frames0[0][0] + q1
+        psi2 = self._link_frames0[1][0] + q1 + q2
+        c1, s1 = math.cos(psi1), math.sin(psi1)
+        ox, oy = self._joint1
+        return c1, s1, ox + self._l1 * c1, oy + self._l1 * s1, math.cos(psi2), math.sin(psi2)
+
+    def _set_object(self, pose_object_in_hand: np.ndarray | pin.SE3) -> None:
+        if isinstance(pose_object_in_hand, pin.SE3):
+            rot, trans = pose_object_in_hand.rotation, pose_object_in_hand.translation
+            self.set_object_pose(float(trans[0]), float(trans[1]), math.atan2(rot[1, 0], rot[0, 0]))
+        else:
+            self.set_object_pose(*np.asarray(pose_object_in_hand, dtype=float).tolist())
 
     def signed_distances(self, q: np.ndarray, pose_object_in_hand: np.ndarray | pin.SE3) -> np.ndarray:
         """Signed distance [m] of each kept shape to the object (negative: penetration).
 
         ``pose_object_in_hand`` is the planar pose (x, y, beta) or its ``pin.SE3``.
         """
-        model, data = self.finger.model, self.finger.data
-        pin.forwardKinematics(model, data, q)
-        object_placement = (pose_object_in_hand if isinstance(pose_object_in_hand, pin.SE3)
-                            else se3_from_planar(pose_object_in_hand))
+        self._set_object(pose_object_in_hand)
+        c1, s1, x2, y2, c2, s2 = self._posture(q)
+        links = ((*self._joint1, c1, s1), (x2, y2, c2, s2))
+        request, result = self._request, self._result
         out = np.empty(len(self.shapes))
-        for i, shape in enumerate(self.shapes):
-            placement = data.oMi[shape.link + 1] * shape.placement_in_joint
-            self._result.clear()
-            out[i] = coal.distance(shape.geometry, placement, self.object_geometry, object_placement,
-                                   self._request, self._result)
+        for k in (0, 1):
+            shapes = self._links[k][5]
+            if shapes:
+                tf = self._object_in_link(k, *links[k])
+                for distance, placement, i in shapes:
+                    result.clear()
+                    out[i] = distance(placement, tf, request, result)
         return out
 
     def collides(self, q: np.ndarray, pose_object_in_hand: np.ndarray | pin.SE3) -> bool:
         """Whether any link shape penetrates the object."""
-        return bool(np.min(self.signed_distances(q, pose_object_in_hand), initial=np.inf) < 0.0)
+        self._set_object(pose_object_in_hand)
+        return self.links_collide(*self._posture(q))

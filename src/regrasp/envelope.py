@@ -57,11 +57,11 @@ from enum import Enum
 
 import numpy as np
 
-from .collision import UrdfCollisionChecker, default_tip_clearance, segment_hits_polygon
+from .collision import UrdfCollisionChecker, default_tip_clearance, segment_hits_halfplanes
 from .exceptions import InvalidParameterError
 from .finger import Finger
 from .intervals import Intervals, intersect, merge
-from .planar import perp, rotation, se3_from_planar, wrap_angle
+from .planar import rotation
 from .polygon import ConvexPolygon
 from .validation import as_finite_array
 
@@ -219,10 +219,41 @@ class EnvelopeSample:
         return best
 
 
+def _wrap(angle: float) -> float:
+    """:func:`~regrasp.planar.wrap_angle` of one float (same arithmetic, without numpy)."""
+    wrapped = (angle + math.pi) % (2.0 * math.pi) - math.pi
+    return math.pi if wrapped == -math.pi else wrapped
+
+
+def _pose_floats(value) -> tuple[float, float, float]:
+    """A planar pose ``(x, y, beta)`` as floats, validated like ``as_finite_array(…, (3,))``."""
+    if type(value) is np.ndarray and value.shape == (3,) and value.dtype.kind == "f":
+        x, y, beta = value.tolist()
+        if math.isfinite(x) and math.isfinite(y) and math.isfinite(beta):
+            return x, y, beta
+    x, y, beta = as_finite_array("pose_object_in_hand", value, (3,)).tolist()
+    return x, y, beta
+
+
+def _linspace(lo: float, hi: float, num: int) -> list[float]:
+    """``np.linspace(lo, hi, num).tolist()`` (num >= 2) with numpy's arithmetic, without numpy."""
+    delta = hi - lo
+    div = num - 1
+    step = delta / div
+    if step == 0.0:  # numpy's handling of denormal spans
+        out = [(k / div) * delta + lo for k in range(div)]
+    else:
+        out = [k * step + lo for k in range(div)]
+    out.append(hi)
+    return out
+
+
 class FingerEnvelope:
     r"""Computes the feasible-contact envelope of one finger on one polygon edge.
 
     Build once for a (finger, object, edge) and call :meth:`at` for each object pose.
+    :meth:`at` works on plain floats with constants precomputed here (it is called at
+    every control step by a regrasp supervisor).
 
     Args:
         finger: The finger (its configuration selects the reachable set).
@@ -270,95 +301,123 @@ class FingerEnvelope:
                 tip_clearance = default_tip_clearance(finger)
             self.checker = UrdfCollisionChecker(finger, polygon, float(tip_clearance))
         self.tip_clearance = None if self.checker is None else self.checker.tip_clearance
+        # constants of the hot path, as floats
+        self._joint1 = tuple(finger.joint1_in_hand.tolist())
+        self._base_angle = float(finger.base_in_hand[2])
+        self._edge_normal = tuple(self.edge.inward_normal.tolist())
+        self._edge_origin = tuple(self.edge.xi_origin.tolist())
+        self._vertices = [tuple(v) for v in polygon.vertices.tolist()]
+        self._normals = [tuple(e.inward_normal.tolist()) for e in polygon.edges]
+        self._l1_sq = self.l1**2
+        self._l2_sq = self.l2**2
+        self._l1_sq_minus_l2_sq = self.l1**2 - self.l2**2
 
     # ------------------------------------------------------------------ geometry
+    def _line(self, x: float, y: float, beta: float) -> tuple[float, ...]:
+        """(d, lam, s0, n_x, n_y, cos beta, sin beta) of the edge's line at a pose (floats)."""
+        c, s = math.cos(beta), math.sin(beta)
+        n0x, n0y = self._edge_normal
+        nx, ny = c * n0x - s * n0y, s * n0x + c * n0y
+        cx, cy = self._edge_origin
+        o1x, o1y = self._joint1
+        rx = x + (c * cx - s * cy) - o1x
+        ry = y + (s * cx + c * cy) - o1y
+        lam = _wrap(math.atan2(ny, nx) - self._base_angle)
+        return rx * nx + ry * ny, lam, ry * nx - rx * ny, nx, ny, c, s
+
     def line(self, pose_object_in_hand) -> EdgeLine:
         """The edge's line parameters at an object pose ``(x, y, beta)`` in the hand frame."""
-        pose = as_finite_array("pose_object_in_hand", pose_object_in_hand, (3,))
-        rot = rotation(pose[2])
-        normal = rot @ self.edge.inward_normal
-        tangent = perp(normal)
-        rel = pose[:2] + rot @ self.edge.xi_origin - self.finger.joint1_in_hand
-        lam = wrap_angle(math.atan2(normal[1], normal[0]) - self.finger.base_in_hand[2])
-        return EdgeLine(float(rel @ normal), float(lam), normal, tangent, float(rel @ tangent))
+        d, lam, s0, nx, ny, _, _ = self._line(*_pose_floats(pose_object_in_hand))
+        return EdgeLine(d, lam, np.array([nx, ny]), np.array([-ny, nx]), s0)
 
     def tip_in_hand(self, line: EdgeLine, s: float) -> np.ndarray:
         """Point [m] of the edge's line with coordinate ``s``, in the hand frame."""
         return self.finger.joint1_in_hand + line.d * line.normal_in_hand + s * line.tangent_in_hand
 
+    def _tip_and_elbow(self, d: float, nx: float, ny: float, s: float) -> tuple[float, float, float, float]:
+        """Tip and elbow (x, y, x, y) [m] relative to joint 1 for the tip at line coordinate ``s``
+        (line at distance ``d`` with inward normal (nx, ny); inside the annulus)."""
+        px = d * nx - s * ny
+        py = d * ny + s * nx
+        r = math.hypot(px, py)
+        ux, uy = px / r, py / r
+        a = (self._l1_sq_minus_l2_sq + r * r) / (2.0 * r)
+        h = self.sign * math.sqrt(max(self._l1_sq - a * a, 0.0))
+        return px, py, a * ux - h * uy, a * uy + h * ux
+
     def elbow_in_hand(self, line: EdgeLine, s: float) -> np.ndarray:
         """Elbow [m] of the configured IK solution for the tip at ``s`` (inside the annulus)."""
-        o1 = self.finger.joint1_in_hand
-        rel = line.d * line.normal_in_hand + s * line.tangent_in_hand
-        r = math.hypot(rel[0], rel[1])
-        u = rel / r
-        a = (self.l1**2 - self.l2**2 + r * r) / (2.0 * r)
-        h = math.sqrt(max(self.l1**2 - a * a, 0.0))
-        return o1 + a * u + self.sign * h * perp(u)
+        nx, ny = line.normal_in_hand.tolist()
+        _, _, ex, ey = self._tip_and_elbow(line.d, nx, ny, s)
+        return self.finger.joint1_in_hand + np.array([ex, ey])
 
-    def _vertex_breakpoints(self, line: EdgeLine, vertices_in_hand: np.ndarray) -> list[float]:
-        """Tip coordinates s where link 1 passes through a vertex (Example 2.2)."""
-        out = []
-        o1 = self.finger.joint1_in_hand
-        for v in vertices_in_hand:
-            w = v - o1
-            dist = math.hypot(w[0], w[1])
-            if dist == 0.0 or dist > self.l1:
+    def _ideal_feasible(self, base: Intervals, x: float, y: float, c: float, s: float,
+                        d: float, nx: float, ny: float) -> Intervals:
+        """Feasible pieces of ``base`` with segment links (line coordinates s)."""
+        o1x, o1y = self._joint1
+        l1, eps = self.l1, self._eps
+        verts = [(x + (c * vx - s * vy), y + (s * vx + c * vy)) for vx, vy in self._vertices]
+        halfplanes = []
+        for (mx, my), (vx, vy) in zip(self._normals, verts):
+            kx, ky = c * mx - s * my, s * mx + c * my
+            halfplanes.append((kx, ky, kx * vx + ky * vy))
+        # tip coordinates where link 1 passes through a vertex (Example 2.2)
+        extra = []
+        for vx, vy in verts:
+            wx, wy = vx - o1x, vy - o1y
+            dist = math.hypot(wx, wy)
+            if dist == 0.0 or dist > l1:
                 continue
-            elbow = self.l1 * w / dist
-            en, et = float(elbow @ line.normal_in_hand), float(elbow @ line.tangent_in_hand)
-            disc = self.l2**2 - (line.d - en) ** 2
+            ex, ey = l1 * wx / dist, l1 * wy / dist
+            disc = self._l2_sq - (d - (ex * nx + ey * ny)) ** 2
             if disc >= 0.0:
-                root = math.sqrt(disc)
-                out += [et - root, et + root]
-        return out
-
-    def _ideal_free(self, line: EdgeLine, s: float, normals: np.ndarray, offsets: np.ndarray) -> bool:
-        o1 = self.finger.joint1_in_hand
-        elbow = self.elbow_in_hand(line, s)
-        tip = self.tip_in_hand(line, s)
-        return not (
-            segment_hits_polygon(o1, elbow, normals, offsets, eps=self._eps)
-            or segment_hits_polygon(elbow, tip, normals, offsets, eps=self._eps)
-        )
-
-    def _urdf_free(self, line: EdgeLine, s: float, object_placement) -> bool:
-        q = self.finger.joint_positions_from_points(self.elbow_in_hand(line, s), self.tip_in_hand(line, s))
-        return not self.checker.collides(q, object_placement)
-
-    def _ideal_feasible(self, line, base: Intervals, pose) -> Intervals:
-        verts = self.polygon.vertices_in(pose)
-        rot = rotation(pose[2])
-        normals = np.array([rot @ e.inward_normal for e in self.polygon.edges])
-        offsets = np.einsum("ij,ij->i", normals, verts)  # n_k . v_k
-        extra = self._vertex_breakpoints(line, verts)
+                et, root = ey * nx - ex * ny, math.sqrt(disc)
+                extra += (et - root, et + root)
         pieces = []
         for lo, hi in base:
-            cuts = sorted({lo, hi, *(x for x in extra if lo < x < hi)})
+            cuts = sorted({lo, hi, *(t for t in extra if lo < t < hi)})
             for a, b in zip(cuts[:-1], cuts[1:]):
-                if b > a and self._ideal_free(line, 0.5 * (a + b), normals, offsets):
+                if b <= a:
+                    continue
+                px, py, ex, ey = self._tip_and_elbow(d, nx, ny, 0.5 * (a + b))
+                if not (segment_hits_halfplanes(o1x, o1y, o1x + ex, o1y + ey, halfplanes, eps)
+                        or segment_hits_halfplanes(o1x + ex, o1y + ey, o1x + px, o1y + py, halfplanes, eps)):
                     pieces.append((a, b))
         return merge(pieces)
 
-    def _urdf_feasible(self, line, base: Intervals, pose, hints: Intervals) -> Intervals:
+    def _urdf_feasible(self, base: Intervals, hints: Intervals, x: float, y: float, beta: float,
+                       d: float, nx: float, ny: float) -> Intervals:
+        """Feasible pieces of ``base`` with the URDF shapes: grid, then bisection of every flip."""
         tol = self.urdf_tolerance * self.edge.length
-        placement = se3_from_planar(pose)
-        hint_points = [x for iv in hints for x in iv]
+        self.checker.set_object_pose(x, y, beta)
+        links_collide = self.checker.links_collide
+        tip_and_elbow = self._tip_and_elbow
+        o1x, o1y = self._joint1
+        hypot = math.hypot
+
+        def free(s: float) -> bool:
+            px, py, ex, ey = tip_and_elbow(d, nx, ny, s)
+            n1 = hypot(ex, ey)
+            vx, vy = px - ex, py - ey
+            n2 = hypot(vx, vy)
+            return not links_collide(ex / n1, ey / n1, o1x + ex, o1y + ey, vx / n2, vy / n2)
+
+        hint_points = [t for iv in hints for t in iv]
         pieces = []
         for lo, hi in base:
-            grid = set(np.linspace(lo, hi, self.urdf_grid).tolist())
-            grid.update(x for x in hint_points if lo < x < hi)
+            grid = set(_linspace(lo, hi, self.urdf_grid))
+            grid.update(t for t in hint_points if lo < t < hi)
             pts = sorted(grid)
-            free = [self._urdf_free(line, s, placement) for s in pts]
-            start = pts[0] if free[0] else None
+            verdicts = [free(s) for s in pts]
+            start = pts[0] if verdicts[0] else None
             for k in range(1, len(pts)):
-                if free[k] == free[k - 1]:
+                if verdicts[k] == verdicts[k - 1]:
                     continue
                 a, b = pts[k - 1], pts[k]  # verdict flips in (a, b): bisect
-                fa = free[k - 1]
+                fa = verdicts[k - 1]
                 while b - a > tol:
                     m = 0.5 * (a + b)
-                    if self._urdf_free(line, m, placement) == fa:
+                    if free(m) == fa:
                         a = m
                     else:
                         b = m
@@ -375,15 +434,15 @@ class FingerEnvelope:
     def at(self, pose_object_in_hand, time: float = 0.0) -> EnvelopeSample:
         """The envelope at one object pose ``(x [m], y [m], beta [rad])`` in the hand frame."""
         t_start = _time.perf_counter()
-        pose = as_finite_array("pose_object_in_hand", pose_object_in_hand, (3,))
-        line = self.line(pose)
-        condition = condition_of(line.d, self.l1)
-        reach_s = reachable_on_line(line.d, self.l1, self.l2, self.sign)
+        x, y, beta = _pose_floats(pose_object_in_hand)
+        d, lam, s0, nx, ny, c, s = self._line(x, y, beta)
+        condition = condition_of(d, self.l1)
+        reach_s = reachable_on_line(d, self.l1, self.l2, self.sign)
         lo_xi, hi_xi = self.edge.xi_range
-        base = intersect(reach_s, ((lo_xi + line.s0, hi_xi + line.s0),))
-        feasible_s = self._ideal_feasible(line, base, pose) if base else ()
+        base = intersect(reach_s, ((lo_xi + s0, hi_xi + s0),))
+        feasible_s = self._ideal_feasible(base, x, y, c, s, d, nx, ny) if base else ()
         if self.checker is not None and base:
-            feasible_s = self._urdf_feasible(line, base, pose, feasible_s)
+            feasible_s = self._urdf_feasible(base, feasible_s, x, y, beta, d, nx, ny)
         if feasible_s:
             reason = None
         elif condition is Condition.I:
@@ -394,15 +453,14 @@ class FingerEnvelope:
             reason = "off the edge"
         else:
             reason = "collision"
-        shift = line.s0
         return EnvelopeSample(
             time=float(time),
-            d=line.d,
-            lam=line.lam,
+            d=d,
+            lam=lam,
             condition=condition,
-            reachable=tuple((a - shift, b - shift) for a, b in reach_s),
+            reachable=tuple((a - s0, b - s0) for a, b in reach_s),
             edge_range=(lo_xi, hi_xi),
-            feasible=tuple((a - shift, b - shift) for a, b in feasible_s),
+            feasible=tuple((a - s0, b - s0) for a, b in feasible_s),
             reason=reason,
             seconds=_time.perf_counter() - t_start,
         )
