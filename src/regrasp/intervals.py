@@ -23,14 +23,20 @@ __all__ = [
 
 def merge(pieces: Iterable[tuple[float, float]], *, gap: float = 0.0) -> Intervals:
     """Union of ``pieces``; pieces closer than ``gap`` are joined, empty ones dropped."""
-    items = sorted((float(lo), float(hi)) for lo, hi in pieces if hi > lo)
-    out: list[list[float]] = []
-    for lo, hi in items:
-        if out and lo <= out[-1][1] + gap:
-            out[-1][1] = max(out[-1][1], hi)
+    items = sorted([(float(lo), float(hi)) for lo, hi in pieces if hi > lo])
+    if len(items) < 2:
+        return tuple(items)
+    out = []
+    start, end = items[0]
+    for lo, hi in items[1:]:
+        if lo <= end + gap:
+            if hi > end:
+                end = hi
         else:
-            out.append([lo, hi])
-    return tuple((lo, hi) for lo, hi in out)
+            out.append((start, end))
+            start, end = lo, hi
+    out.append((start, end))
+    return tuple(out)
 
 
 def intersect(a: Intervals, b: Intervals) -> Intervals:
