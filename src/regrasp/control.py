@@ -149,24 +149,25 @@ class ComputedTorqueController:
         command = S_d_ddot + self.gains.kv * error_rate + self.gains.ks * error
         f_hat = self.friction_estimate(st, command, friction)
         H = st.H
-        q_ddot = H @ command + st.H_dot_S_dot
+        # (ndarray.dot: matmul's ufunc machinery costs ~1 us per call on these small arrays)
+        q_ddot = H.dot(command) + st.H_dot_S_dot
         # (H^T M H + M_s) a + N_s = H^T (M q̈ + N) + M_s a with q̈ = H a + Ḣ Ṡ
-        wrench = st.hand.mass_matrix @ q_ddot + st.hand.nonlinear
+        wrench = st.hand.mass_matrix.dot(q_ddot) + st.hand.nonlinear
         gx, gy = model.hand.gravity_in_hand.tolist()  # -[f_g; -f̂_ξ], f_g = m_o g
         external = np.array([-model.object_mass * gx, -model.object_mass * gy, 0.0,
                              *np.asarray(f_hat, dtype=float).tolist()])
-        rhs = H.T @ wrench + model.M_s @ command + external
-        tau = H @ _solve(H.T @ H, rhs)
-        motion_forces = J_inv.T @ (tau - wrench)  # f = J^{-T}(τ - M q̈ - N)
+        rhs = H.T.dot(wrench) + model.M_s.dot(command) + external
+        tau = H.dot(_solve(H.T.dot(H), rhs))
+        motion_forces = J_inv.T.dot(tau - wrench)  # f = J^{-T}(τ - M q̈ - N)
         internal = None
         if self._qp is not None:
             internal = self._qp._solve(A, motion_forces, frames_bd, self._fixed, self.mu, self.cone_edge,
                                       time.perf_counter())
-            tau = tau + st.hand.jacobian.T @ internal.f_c
+            tau = tau + st.hand.jacobian.T.dot(internal.f_c)
             forces = internal.forces
         else:
             forces = motion_forces.reshape(model.grasp.m, 2)
-        surface = (forces.reshape(-1) @ frames_bd).reshape(-1, 2)  # (n_i^T f_i, t_i^T f_i) per contact
+        surface = forces.reshape(-1).dot(frames_bd).reshape(-1, 2)  # (n_i^T f_i, t_i^T f_i) per contact
         margins = np.array([mu * f_n - abs(f_t) for mu, (f_n, f_t) in zip(self.mu.tolist(), surface.tolist())])
         return ControlOutput(tau, command, error, error_rate, f_hat, forces, surface, margins, internal,
                              time.perf_counter() - start)

@@ -215,8 +215,9 @@ class Finger:
         self.psi1_offset = _planar_angle(joint1) + self._alpha1
         #: Geometric elbow angle theta2 [rad] minus q2.
         self.theta2_offset = float(wrap_angle(gamma2 + alpha2 - self._alpha1))
+        l1, l2 = self._l1, self._l2
         self._ik_constants = (float(self.joint1_in_hand[0]), float(self.joint1_in_hand[1]),
-                              float(-self.configuration.sign))
+                              float(-self.configuration.sign), abs(l1 - l2), l1 + l2, 1e-12 * (l1 + l2))
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -372,12 +373,10 @@ class Finger:
 
     def _joint_angles(self, x: float, y: float) -> tuple[float, float]:
         """(q1, q2) [rad] for the tip at (x, y) in the hand frame, in scalar arithmetic (hot paths)."""
-        ox, oy, sigma = self._ik_constants
+        ox, oy, sigma, inner, outer, slack = self._ik_constants
         rx, ry = x - ox, y - oy
         dist = math.hypot(rx, ry)
         l1, l2 = self._l1, self._l2
-        inner, outer = abs(l1 - l2), l1 + l2
-        slack = 1e-12 * outer
         if dist > outer + slack or dist < inner - slack:
             raise UnreachableError(self.name, np.array([x, y]), dist, (inner, outer))
         cos2 = min(max((dist**2 - l1**2 - l2**2) / (2.0 * l1 * l2), -1.0), 1.0)

@@ -142,7 +142,7 @@ class Hand:
         nle = data.nle + self._damping * v if self.damping_enabled else data.nle.copy()
         jdv = np.concatenate([pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED).linear[:2]
                               for fid in self._hand_tips])
-        return HandDynamics(mass, nle, jac, jdv, tips, (jac @ v).reshape(self.m, 2))
+        return HandDynamics(mass, nle, jac, jdv, tips, jac.dot(v).reshape(self.m, 2))
 
     def _frame_jacobian(self) -> np.ndarray:
         """J (2m, 2m) from the joint Jacobians of the last pass."""

@@ -172,15 +172,16 @@ class _Rows:
     def matrix(self, frames_bd: np.ndarray) -> np.ndarray:
         """C (rows, 2m): the rows' left-hand sides are C f for contact forces f (2m,) in the hand frame;
         ``frames_bd``: blockdiag(R_fi) (2m, 2m) of the surface frames."""
-        return self.coefficients @ frames_bd.T
+        return self.coefficients.dot(frames_bd.T)  # (ndarray.dot: cheaper than matmul on small arrays)
 
     def satisfied(self, C: np.ndarray, forces: np.ndarray, slack: float) -> bool:
         """Whether forces (2m,) satisfy every row to ``slack`` [N]."""
-        residual = (C @ forces - self.lower).tolist()
+        residual = (C.dot(forces) - self.lower).tolist()
         n = self.n_ineq
         return min(residual[:n], default=0.0) >= -slack and all(abs(r) <= slack for r in residual[n:])
 
 
+_EPS = float(np.finfo(float).eps)
 _OSQP_INFTY = 1e30  # OSQP's infinity (osqp.OSQP().constant("OSQP_INFTY"))
 
 
@@ -195,7 +196,7 @@ def _null_basis(constraint_matrix) -> np.ndarray:
     if rows >= cols > 0:
         qr, tau, _, info = lapack.dgeqrf(a)
         diagonal = [abs(d) for d in qr.diagonal().tolist()]
-        if info == 0 and min(diagonal) > max(diagonal) * max(rows, cols) * np.finfo(float).eps:
+        if info == 0 and min(diagonal) > max(diagonal) * max(rows, cols) * _EPS:
             if rows == cols:
                 return np.zeros((rows, 0))
             basis, _, info = lapack.dormqr("L", "N", qr, tau, _unit_tail(rows, rows - cols), max(64, rows))
@@ -313,8 +314,9 @@ class InternalForceSolver:
             rows = self._rows[key] = _Rows(m, fixed, mu, self.settings, cone_edge)
         return rows
 
-    def _osqp(self, k: int, rows: _Rows, a: np.ndarray, lower: np.ndarray) -> osqp.OSQP:
-        """The persistent solver of this shape, set up or updated with the numbers of this problem."""
+    def _osqp(self, k: int, rows: _Rows, a_t: np.ndarray, lower: np.ndarray) -> osqp.OSQP:
+        """The persistent solver of this shape, set up or updated with the numbers of this problem
+        (``a_t``: the constraint matrix transposed, (k, rows), C-contiguous: its column-major data)."""
         key = (k, len(lower), rows.n_eq)
         upper = rows.upper
         if rows.n_eq:
@@ -326,7 +328,7 @@ class InternalForceSolver:
             n_rows = len(lower)
             indptr = np.arange(0, n_rows * k + 1, n_rows)
             indices = np.tile(np.arange(n_rows), k)
-            a_csc = sp.csc_matrix((a.T.reshape(-1), indices, indptr), shape=(n_rows, k))
+            a_csc = sp.csc_matrix((a_t.reshape(-1), indices, indptr), shape=(n_rows, k))
             solver = osqp.OSQP()
             tol = self.settings.tolerance
             solver.setup(P=sp.csc_matrix(np.eye(k)), q=np.zeros(k), A=a_csc, l=lower, u=upper, eps_abs=tol,
@@ -337,7 +339,7 @@ class InternalForceSolver:
             # (the upper bounds of the inequalities are OSQP's infinity in every problem of this shape)
             np.maximum(lower, -_OSQP_INFTY, out=lower)
             solver._solver.update_data_vec(q=None, l=lower, u=upper if rows.n_eq else None)
-            solver._solver.update_data_mat(P_x=None, P_i=None, A_x=a.T.reshape(-1), A_i=None)
+            solver._solver.update_data_mat(P_x=None, P_i=None, A_x=a_t.reshape(-1), A_i=None)
         return solver
 
     def solve(self, constraint_matrix, motion_forces, surface_frames, fixed, mu,
@@ -360,12 +362,12 @@ class InternalForceSolver:
             ok = rows.satisfied(C, f_m, 1e-9 * scale)
             return InternalForceResult(np.zeros(2 * m), f_m.reshape(m, 2), 0, ok, "empty null space",
                                        time.perf_counter() - start)
-        solver = self._osqp(k, rows, C @ null, rows.lower - C @ f_m)
+        solver = self._osqp(k, rows, null.T.dot(C.T), rows.lower - C.dot(f_m))
         solver._solver.solve()
         status = str(solver._solver.info.status)
         x = solver._solver.solution.x
         if status in ("solved", "solved inaccurate") and x is not None and all(map(math.isfinite, x.tolist())):
-            f_c = null @ x
+            f_c = null.dot(x)
             forces = f_m + f_c
             if rows.satisfied(C, forces, 1e-6 * scale):
                 return InternalForceResult(f_c, forces.reshape(m, 2), k, True, status, time.perf_counter() - start)

@@ -186,16 +186,19 @@ class ReducedModel:
             J_inv[k], J_inv[k + 1], J_inv[k + nq], J_inv[k + nq + 1] = d / det, -b / det, -c_ / det, a / det
         J_inv = np.array(J_inv).reshape(nq, nq)
         A = np.array(a_rows)
-        H = J_inv @ A
-        q_dot = H @ S_dot
+        H = J_inv.dot(A)  # (ndarray.dot: matmul's ufunc machinery costs ~1 us per call here)
+        q_dot = H.dot(S_dot)
         dyn = hand._dynamics(qs, q_dot.reshape(m, 2), (J, np.array(tips)))
-        H_dot_S_dot = J_inv @ (np.array(a_dot) - dyn.jacobian_dot_v)
+        H_dot_S_dot = J_inv.dot(np.array(a_dot) - dyn.jacobian_dot_v)
         frames = np.array(frames).reshape(nq, nq)
         R_f = self._identity.copy()
         for i in grasp.sliding:
             R_f[2 * i:2 * i + 2, 2 * i:2 * i + 2] = frames[2 * i:2 * i + 2, 2 * i:2 * i + 2]
-        st = ReducedState(S, S_dot, np.array(xi), np.array(xi_dot), qs.reshape(-1), q_dot, H, H_dot_S_dot,
-                          A[:, :3].T, R_f, self._bv, dyn)
+        if grasp.p:
+            xi, xi_dot = np.array(xi), np.array(xi_dot)
+        else:  # (cheaper than converting the lists)
+            xi, xi_dot = self.xi.astype(float), np.zeros(m)
+        st = ReducedState(S, S_dot, xi, xi_dot, qs.reshape(-1), q_dot, H, H_dot_S_dot, A[:, :3].T, R_f, self._bv, dyn)
         return st, J_inv, A, frames
 
     # ------------------------------------------------------------------ dynamics
