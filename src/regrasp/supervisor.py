@@ -302,6 +302,7 @@ class RegraspSupervisor:
         self._filter = np.zeros(2)             # ξ_r, ξ̇_r
         self._phase_start = 0.0
         self._slipped = False
+        self._aborted = False
         self._samples: list[EnvelopeSample | None] = [None] * m
         self._step = 0
         self._rejected: dict[int, str] = {}    # last logged rejection per contact (log once per reason)
@@ -505,7 +506,9 @@ class RegraspSupervisor:
     def _finish(self, meas: Measurement, out: list) -> None:
         i = self._active
         self.phases[i] = ContactPhase.FIXED
-        self.regrasps[i] += 1
+        if not self._aborted:  # an aborted slide that settles is not a regrasp
+            self.regrasps[i] += 1
+        self._aborted = False
         if abs(self.xi[i] - meas.xi[i]) > 1e-12:
             self.xi = meas.xi.copy()
             self._controller = self._fixed_controller()
@@ -598,6 +601,7 @@ class RegraspSupervisor:
             # the slide cannot go on after all (the predicate's forecast used the desired state):
             # abort it, hold with the fixed law (which the contact settles into) and ask again later
             i = self._active
+            self._aborted = True
             self._log(out, meas.t, i, "slide_aborted", f"no internal force keeps the slide in its cones ({exc.status})")
             self._recheck[i] = meas.t + self.settings.recheck_time
             self.xi = meas.xi.copy()
@@ -605,7 +609,7 @@ class RegraspSupervisor:
                 self.phases[i] = ContactPhase.SETTLING
             else:
                 self.phases[i] = ContactPhase.FIXED
-                self._active, self._target = None, math.nan
+                self._active, self._target, self._aborted = None, math.nan, False
             controller = self._controller = self._fixed_controller()
             control = controller(meas.X, meas.V, X_d, V_d, A_d)
         self._step += 1
