@@ -709,3 +709,32 @@ def test_torque_free_energy_conservation_with_ideal_contacts(modes, seed):
     assert abs(plant.energy() - e0) / e0 < 1e-6
     assert plant.max_constraint_error < 1e-9
     assert [c.mode for c in plant.contacts] == list(modes)
+
+
+@pytest.mark.parametrize("damping,link_mass_scale", [(True, 1.0), (False, 1.3)])
+def test_private_dynamics_pass_matches_the_hand(damping, link_mass_scale):
+    """The plant's own Pinocchio pass (M, N, J from Pinocchio; the tip and J̇q̇ from J's columns,
+    the planar revolute identities) equals :meth:`Hand.dynamics` (crba, nonLinearEffects, frame
+    placement and classical acceleration), and so do M⁻¹ and J M⁻¹ Jᵀ."""
+    rng = np.random.default_rng(5)
+    fingers = [c.finger for c in scenario().contacts]
+    hand = Hand(fingers, gravity_in_hand=(3.0, -GRAVITY), damping=damping, link_mass_scale=link_mass_scale)
+    plant = Plant(hand, polygon(), [PlantContact(1, "fixed"), PlantContact(3, "fixed")], collision_check=False)
+    for _ in range(5):
+        q, v = rng.uniform(-2.5, 2.5, 4), rng.normal(size=4) * 3.0
+        dyn = hand.dynamics(q, v)
+        for i, f in enumerate(plant._pin_pass(q, v)):
+            sl = slice(2 * i, 2 * i + 2)
+            mass, jac = dyn.mass_matrix[sl, sl], dyn.jacobian[sl, sl]
+            scale = np.abs(mass).max()
+            np.testing.assert_allclose(f[:3], [mass[0, 0], mass[0, 1], mass[1, 1]], rtol=0, atol=1e-14 * scale)
+            np.testing.assert_allclose(f[3:5], dyn.nonlinear[sl], rtol=0, atol=1e-13 * np.abs(dyn.nonlinear).max())
+            np.testing.assert_array_equal(np.reshape(f[5:9], (2, 2)), jac)
+            jdv = dyn.jacobian_dot_v[sl]
+            np.testing.assert_allclose(f[9:11], jdv, rtol=0, atol=1e-12 * np.abs(dyn.jacobian_dot_v).max())
+            np.testing.assert_allclose(f[11:13], dyn.tips[i], rtol=0, atol=1e-15)
+            np.testing.assert_allclose(f[13:15], dyn.tip_velocities[i], rtol=0, atol=1e-15)
+            inverse = np.linalg.inv(mass)
+            np.testing.assert_allclose(f[15:18], [inverse[0, 0], inverse[0, 1], inverse[1, 1]], rtol=1e-12)
+            tip_space = jac @ inverse @ jac.T
+            np.testing.assert_allclose(f[18:21], [tip_space[0, 0], tip_space[0, 1], tip_space[1, 1]], rtol=1e-12)

@@ -1,9 +1,10 @@
 r"""An independent simulator of the hand and the object in full coordinates.
 
-It shares with :mod:`regrasp.reduced` only primitive models: the fingers' Pinocchio
-dynamics (M, N, J, J̇q̇ through :class:`~regrasp.hand.Hand`), the object's geometry and
-inertia, and μ. It never uses H, G, G_f, P or eq. (3.2.11), so a controller that works
-on the plant works on physics, not on its own model.
+It shares with :mod:`regrasp.reduced` only primitive models: the fingers' Pinocchio models
+(the :class:`~regrasp.hand.Hand`'s, with their gravity and link masses; the plant evaluates M,
+N, J and J̇q̇ on its own Pinocchio data), the object's geometry and inertia, and μ. It never
+uses H, G, G_f, P or eq. (3.2.11), so a controller that works on the plant works on physics,
+not on its own model.
 
 **Coordinates.** Joint positions q (2m) and the object pose X = (x_o, β), with velocities
 v and V = (v_o, ω). Contact i joins the tip :math:`p_i(q)` to the object:
@@ -21,10 +22,13 @@ v and V = (v_o, ω). Contact i joins the tip :math:`p_i(q)` to the object:
 **Equations.** :math:`M\ddot q + N = \tau - \sum_i J_i^T f_i`,
 :math:`M_o \ddot X = f_g + \sum_i (f_i,\ (p_i - x_o)\times f_i)`, and every constraint's second
 derivative, Baumgarte-stabilised: :math:`\ddot\phi + 2\alpha\dot\phi + \alpha^2\phi = 0`. One
-linear solve per evaluation gives (q̈, Ẍ, λ).
+linear solve per evaluation gives (q̈, Ẍ, λ): M is block diagonal (the fingers' 2x2 blocks and
+the object's), so the multipliers come from the Delassus system :math:`C M^{-1} W \lambda = b -
+C M^{-1}(\tau - N, f_g)` (one row per constraint, in plain floats), then the accelerations.
 
 **Integration.** Classical Runge–Kutta (RK4) with a fixed step (default 1 ms); the contact
-modes and friction directions are frozen during a step. The work of the joint torques, of
+modes and friction directions are frozen during a step (the evaluation at a step's end, which
+the event checks need, is the next step's first stage when τ and the modes stay). The work of the joint torques, of
 the joint damping and of the contact forces (friction) are integrated alongside, for
 energy-balance checks.
 
@@ -40,21 +44,72 @@ exceeds the hand's threshold). Kinds in ``stop_on`` stop the simulation.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
+import pinocchio as pin
 
 from .collision import UrdfCollisionChecker, default_tip_clearance
 from .exceptions import InvalidParameterError
-from .hand import Hand
-from .planar import perp, rotation
+from .hand import Hand, condition_2x2
 from .polygon import ConvexPolygon
 from .validation import as_finite_array, as_friction_coefficients, as_positive_float
 
 __all__ = ["Plant", "PlantContact", "PlantEvent", "PlantState", "PlantStep"]
 
 _MODES = ("fixed", "sliding", "separated")
+_FIXED, _SLIDING = 0, 1
+_LWA = pin.LOCAL_WORLD_ALIGNED
+
+
+class _EdgeGeometry(NamedTuple):
+    """An edge's inward normal n, ξ direction t, ξ origin o, n·o and ξ range (object frame)."""
+
+    nx: float
+    ny: float
+    tx: float
+    ty: float
+    ox: float
+    oy: float
+    offset: float
+    lo: float
+    hi: float
+
+
+def _solve_small(a: list[list[float]], b: list[float]) -> list[float]:
+    """x with a x = b for a small dense system (lists, overwritten): Gaussian elimination with
+    partial pivoting in plain floats (numpy's per-call overhead dwarfs a 1..2m system)."""
+    k = len(b)
+    for col in range(k):
+        top = a[col]
+        piv, best = col, abs(top[col])
+        for r in range(col + 1, k):
+            if abs(a[r][col]) > best:
+                piv, best = r, abs(a[r][col])
+        if not best > 0.0:
+            raise np.linalg.LinAlgError("Singular matrix")
+        if piv != col:
+            a[col], a[piv] = a[piv], top
+            top = a[col]
+            b[col], b[piv] = b[piv], b[col]
+        p, bc = top[col], b[col]
+        for r in range(col + 1, k):
+            row = a[r]
+            factor = row[col] / p
+            if factor:
+                for j in range(col + 1, k):
+                    row[j] -= factor * top[j]
+                b[r] -= factor * bc
+    x = [0.0] * k
+    for col in range(k - 1, -1, -1):
+        row, acc = a[col], b[col]
+        for j in range(col + 1, k):
+            acc -= row[j] * x[j]
+        x[col] = acc / row[col]
+    return x
 
 
 @dataclass
@@ -190,6 +245,14 @@ class Plant:
             for f in hand.fingers:
                 clearance = default_tip_clearance(f) if tip_clearance is None else tip_clearance
                 self.checkers.append(UrdfCollisionChecker(f, polygon, clearance))
+        # the plant's own Pinocchio data on the hand's models (their gravity and link masses)
+        self._pin = [(model, model.createData(), fid, *np.asarray(model.damping, dtype=float).tolist(),
+                      *model.jointPlacements[1].translation[:2].tolist())
+                     for model, fid in zip(hand._models, hand._tip_ids)]
+        self._last_key, self._last_evaluation = None, None  # see step()
+        self._damping = tuple(d for entry in self._pin for d in entry[3:5])
+        self._no_damping = (0.0,) * hand.nq
+        self._edge_cache: dict[int, _EdgeGeometry] = {}
         self.state: PlantState | None = None
         self.events: list[PlantEvent] = []
         self.stopped = False
@@ -224,22 +287,32 @@ class Plant:
         return out
 
     # ------------------------------------------------------------------ geometry
-    def _edge(self, c: PlantContact):
-        return self.polygon.edge(c.edge)
+    def _edge_geometry(self, k: int) -> _EdgeGeometry:
+        """Edge ``k``'s constants as floats (object frame), cached."""
+        geo = self._edge_cache.get(k)
+        if geo is None:
+            e = self.polygon.edge(k)
+            (nx, ny), (tx, ty), (ox, oy) = e.inward_normal.tolist(), e.xi_direction.tolist(), e.xi_origin.tolist()
+            geo = _EdgeGeometry(nx, ny, tx, ty, ox, oy, float(e.inward_normal @ e.xi_origin), *e.xi_range)
+            self._edge_cache[k] = geo
+        return geo
+
+    def _xi(self, k: int, X, V, tip, tip_vel) -> tuple[float, float]:
+        """ξ and ξ̇ of a tip (position, velocity: pairs of floats) on edge k at pose X, twist V (floats)."""
+        g = self._edge_geometry(k)
+        c, s = math.cos(X[2]), math.sin(X[2])
+        rx, ry = tip[0] - X[0], tip[1] - X[1]
+        xi = g.tx * ((c * rx + s * ry) - g.ox) + g.ty * ((c * ry - s * rx) - g.oy)
+        # velocity of the tip relative to the object, in object coordinates
+        ux, uy = tip_vel[0] - (V[0] - V[2] * ry), tip_vel[1] - (V[1] + V[2] * rx)
+        return xi, g.tx * (c * ux + s * uy) + g.ty * (c * uy - s * ux)
 
     def contact_xi(self, st: PlantState, i: int, tip=None, tip_vel=None) -> tuple[float, float]:
         """ξ [m] of tip i's projection on its edge's line, and its relative velocity ξ̇ [m/s]
         (``tip``/``tip_vel``: the tip's position and velocity if already known)."""
-        e = self._edge(self.contacts[i])
-        rot = rotation(st.X[2])
         if tip is None:
             tip, tip_vel = self._tip(st, i)
-        rel = rot.T @ (tip - st.X[:2])
-        xi = float(e.xi_direction @ (rel - e.xi_origin))
-        # velocity of the tip relative to the object, in object coordinates
-        point_vel = st.V[:2] + st.V[2] * perp(tip - st.X[:2])
-        xi_dot = float(e.xi_direction @ (rot.T @ (tip_vel - point_vel)))
-        return xi, xi_dot
+        return self._xi(self.contacts[i].edge, st.X.tolist(), st.V.tolist(), tip, tip_vel)
 
     def _tip(self, st: PlantState, i: int):
         f = self.hand.fingers[i]
@@ -247,170 +320,235 @@ class Plant:
         tip = f.forward_kinematics(qi)
         return tip, f.tip_jacobian(qi) @ vi
 
-    def constraint_error(self, st: PlantState, tips=None) -> float:
-        """Largest violation [m] of the active contact constraints (``tips``: (m, 2) if known)."""
-        rot = rotation(st.X[2])
-        worst = 0.0
-        for i, c in enumerate(self.contacts):
-            if c.mode == "separated":
-                continue
-            e = self._edge(c)
-            tip = self._tip(st, i)[0] if tips is None else tips[i]
-            if c.mode == "fixed":
-                err = np.linalg.norm(tip - st.X[:2] - rot @ e.point(c.xi))
-            else:
-                err = abs((rot @ e.inward_normal) @ (tip - st.X[:2]) - e.inward_normal @ e.xi_origin)
-            worst = max(worst, float(err))
-        return worst
-
-    # ------------------------------------------------------------------ dynamics
-    def _force_column(self, sl: slice, J: np.ndarray, r: np.ndarray, d: np.ndarray) -> np.ndarray:
-        """Generalized force (fingers, object) of a unit force ``d`` on the object at lever arm ``r``,
-        applied by finger joints ``sl``: -Jᵀd on the finger, (d, r × d) on the object."""
-        n = self.hand.nq
-        col = np.zeros(n + 3)
-        col[sl] = -J.T @ d
-        col[n:n + 2] = d
-        col[n + 2] = r[0] * d[1] - r[1] * d[0]
-        return col
-
-    def _rows(self, st: PlantState, dyn, contacts):
-        """Per active contact: force columns W (generalized force per multiplier), constraint
-        rows C (acting on (q̈, Ẍ) or, at velocity level, on (q̇, V)), right-hand sides b, owners."""
-        n = self.hand.nq
-        rot = rotation(st.X[2])
-        omega = st.V[2]
-        w_cols, c_rows, b, owners = [], [], [], []
+    def _specs(self, contacts) -> tuple[tuple, ...]:
+        """The active contacts as floats (a tuple): ``(i, _FIXED, c_x, c_y)`` (the contact point,
+        object frame) or ``(i, _SLIDING, n_x, n_y, n·ξ-origin, μ s)`` (the edge's normal)."""
+        out, mu = [], self.mu.tolist()
         for i, c in enumerate(contacts):
             if c.mode == "separated":
                 continue
-            e = self.polygon.edge(c.edge)
-            sl = slice(2 * i, 2 * i + 2)
-            J = dyn.jacobian[sl, sl]
-            tip = dyn.tips[i]
-            tip_vel = dyn.tip_velocities[i]
-            jdv = dyn.jacobian_dot_v[sl]
-            r = tip - st.X[:2]
+            g = self._edge_geometry(c.edge)
             if c.mode == "fixed":
-                rc = rot @ e.point(c.xi)
-                phi = tip - st.X[:2] - rc
-                phi_dot = tip_vel - st.V[:2] - omega * perp(rc)
-                for k in range(2):
-                    w_cols.append(self._force_column(sl, J, r, np.eye(2)[k]))
-                    row = np.zeros(n + 3)
-                    row[sl] = J[k]
-                    row[n + k] = -1.0
-                    row[n + 2] = -perp(rc)[k]
-                    c_rows.append(row)
-                    b.append(-jdv[k] - omega**2 * rc[k] - 2 * self.alpha * phi_dot[k] - self.alpha**2 * phi[k])
-                    owners.append((i, k))
+                out.append((i, _FIXED, g.ox + c.xi * g.tx, g.oy + c.xi * g.ty))
             else:
-                normal = rot @ e.inward_normal
-                tangent = perp(normal)
-                offset = e.inward_normal @ e.xi_origin
-                psi = normal @ r - offset
-                psi_dot = omega * (perp(normal) @ r) + normal @ (tip_vel - st.V[:2])
-                w_cols.append(self._force_column(sl, J, r, normal + self.mu[i] * c.sign * tangent))
-                row = np.zeros(n + 3)
-                row[sl] = normal @ J
-                row[n:n + 2] = -normal
-                row[n + 2] = perp(normal) @ r
-                c_rows.append(row)
-                drift = (-omega**2 * (normal @ r) + 2 * omega * (perp(normal) @ (tip_vel - st.V[:2]))
-                         + normal @ jdv)
-                b.append(-drift - 2 * self.alpha * psi_dot - self.alpha**2 * psi)
-                owners.append((i, "n"))
-        return w_cols, c_rows, b, owners
+                out.append((i, _SLIDING, g.nx, g.ny, g.offset, mu[i] * c.sign))
+        return tuple(out)
 
-    def _full_mass(self, dyn) -> np.ndarray:
-        n = self.hand.nq
-        mass = np.zeros((n + 3, n + 3))
-        mass[:n, :n] = dyn.mass_matrix
-        mass[n:, n:] = np.diag([self.mass, self.mass, self.inertia])
-        return mass
+    @staticmethod
+    def _violations(specs, X, tips) -> float:
+        """Largest violation of the constraints ``specs`` at pose X with tips (floats)."""
+        c, s = math.cos(X[2]), math.sin(X[2])
+        worst = 0.0
+        for spec in specs:
+            i = spec[0]
+            rx, ry = tips[i][0] - X[0], tips[i][1] - X[1]
+            if spec[1] == _FIXED:
+                ex, ey = rx - (c * spec[2] - s * spec[3]), ry - (s * spec[2] + c * spec[3])
+                err = math.sqrt(ex * ex + ey * ey)
+            else:
+                err = abs((c * spec[2] - s * spec[3]) * rx + (s * spec[2] + c * spec[3]) * ry - spec[4])
+            worst = max(worst, err)
+        return worst
+
+    def constraint_error(self, st: PlantState, tips=None) -> float:
+        """Largest violation [m] of the active contact constraints (``tips``: (m, 2) if known)."""
+        if tips is None:
+            tips = [self._tip(st, i)[0] if c.mode != "separated" else None for i, c in enumerate(self.contacts)]
+        return self._violations(self._specs(self.contacts), st.X.tolist(), tips)
+
+    # ------------------------------------------------------------------ dynamics
+    def _pin_pass(self, q: np.ndarray, v: np.ndarray) -> list[tuple]:
+        r"""Per finger at (q, v), as floats: M (0-2: m00, m01, m11), N (3-4: Coriolis, gravity,
+        damping), the tip Jacobian J (5-8: j00, j01, j10, j11), J̇q̇ (9-10), the tip p (11-12) and
+        its velocity J q̇ (13-14), :math:`M^{-1}` (15-17: i00, i01, i11), :math:`J M^{-1} J^T`
+        (18-20: l00, l01, l11); and J as an array (21).
+
+        One ``computeAllTerms`` (M, N) and one ``getFrameJacobian`` per finger, on the plant's own
+        Pinocchio data. The finger is a planar chain of revolute joints about z (validated by
+        :class:`~regrasp.finger.Finger`), so J's columns are :math:`e_z \times (p - o_1)` and
+        :math:`e_z \times (p - o_2)` (joint axes :math:`o_1` fixed, :math:`o_2` the elbow): p follows
+        from :math:`o_1`, and :math:`\dot J\dot q = -\dot q_1^2 (o_2 - o_1) - (\dot q_1 + \dot q_2)^2
+        (p - o_2)`, the tip's acceleration at :math:`\ddot q = 0` (Pinocchio's classical
+        acceleration; ``tests/test_plant.py`` checks both against :meth:`Hand.dynamics`)."""
+        damped = self.hand.damping_enabled
+        out = []
+        for i, (model, data, fid, d0, d1, ox, oy) in enumerate(self._pin):
+            qi, vi = q[2 * i:2 * i + 2], v[2 * i:2 * i + 2]
+            pin.computeAllTerms(model, data, qi, vi)
+            (m00, m01), (_, m11) = data.M.tolist()
+            n0, n1 = data.nle.tolist()
+            v0, v1 = vi.tolist()
+            if damped:
+                n0 += d0 * v0
+                n1 += d1 * v1
+            jac = pin.getFrameJacobian(model, data, fid, _LWA)[:2]
+            (j00, j01), (j10, j11) = jac.tolist()
+            w1, w2 = v0 * v0, (v0 + v1) * (v0 + v1)
+            det = m00 * m11 - m01 * m01
+            i00, i01, i11 = m11 / det, -m01 / det, m00 / det
+            k00, k01 = j00 * i00 + j01 * i01, j00 * i01 + j01 * i11  # J M^-1
+            k10, k11 = j10 * i00 + j11 * i01, j10 * i01 + j11 * i11
+            out.append((m00, m01, m11, n0, n1, j00, j01, j10, j11,
+                        -w1 * (j10 - j11) - w2 * j11, w2 * j01 - w1 * (j01 - j00), ox + j10, oy - j00,
+                        j00 * v0 + j01 * v1, j10 * v0 + j11 * v1, i00, i01, i11,
+                        k00 * j00 + k01 * j01, k00 * j10 + k01 * j11, k10 * j10 + k11 * j11, jac))
+        return out
+
+    def _rows(self, fingers, specs, X, V):
+        r"""Per active contact, its constraint rows ``(i, d_x, d_y, c_0, c_1, c_2)`` (the row acting
+        on (q̈, Ẍ) is :math:`(d^T J_i, c)`), their Baumgarte right-hand sides, and its force columns
+        ``(i, f_x, f_y, o_0, o_1, o_2)`` (a unit multiplier is the force f on the object at the tip:
+        :math:`-J_i^T f` on finger i, o = (f, r × f) on the object)."""
+        x, y, beta = X
+        vx, vy, w = V
+        c, s = math.cos(beta), math.sin(beta)
+        alpha2, alpha_sq, w_sq = 2 * self.alpha, self.alpha**2, w**2
+        rows, b, cols = [], [], []
+        for spec in specs:
+            i, kind, ux, uy = spec[:4]
+            _, _, _, _, _, _, _, _, _, jax, jay, px, py, pvx, pvy = fingers[i][:15]
+            rx, ry = px - x, py - y
+            if kind == _FIXED:
+                rcx, rcy = c * ux - s * uy, s * ux + c * uy
+                rows += ((i, 1.0, 0.0, -1.0, 0.0, rcy), (i, 0.0, 1.0, 0.0, -1.0, -rcx))
+                b += (-jax - w_sq * rcx - alpha2 * (pvx - vx + w * rcy) - alpha_sq * (rx - rcx),
+                      -jay - w_sq * rcy - alpha2 * (pvy - vy - w * rcx) - alpha_sq * (ry - rcy))
+                cols += ((i, 1.0, 0.0, 1.0, 0.0, -ry), (i, 0.0, 1.0, 0.0, 1.0, rx))
+            else:
+                nx, ny = c * ux - s * uy, s * ux + c * uy
+                nr, tr = nx * rx + ny * ry, nx * ry - ny * rx
+                rvx, rvy = pvx - vx, pvy - vy
+                psi_dot = w * tr + (nx * rvx + ny * rvy)
+                drift = -w_sq * nr + 2 * w * (nx * rvy - ny * rvx) + (nx * jax + ny * jay)
+                rows.append((i, nx, ny, -nx, -ny, tr))
+                b.append(-drift - alpha2 * psi_dot - alpha_sq * (nr - spec[4]))
+                fx, fy = nx - spec[5] * ny, ny + spec[5] * nx
+                cols.append((i, fx, fy, fx, fy, rx * fy - ry * fx))
+        return rows, b, cols
+
+    def _multipliers(self, fingers, rows, cols, rhs):
+        r"""Solve :math:`C M^{-1} W \lambda = rhs` (the Delassus form of the KKT system: M is block
+        diagonal) and return :math:`\sum f\lambda` per finger and :math:`\sum o\lambda`."""
+        im, ii = 1.0 / self.mass, 1.0 / self.inertia
+        a = []
+        for ri, dx, dy, c0, c1, c2 in rows:
+            l00, l01, l11 = fingers[ri][18:21]
+            ux, uy = dx * l00 + dy * l01, dx * l01 + dy * l11
+            c0, c1, c2 = c0 * im, c1 * im, c2 * ii
+            a.append([c0 * o0 + c1 * o1 + c2 * o2 - (ux * fx + uy * fy if ri == ci else 0.0)
+                      for ci, fx, fy, o0, o1, o2 in cols])
+        tip_sum = [[0.0, 0.0] for _ in fingers]
+        s0 = s1 = s2 = 0.0
+        for value, (i, fx, fy, o0, o1, o2) in zip(_solve_small(a, rhs), cols):
+            f = tip_sum[i]
+            f[0] += fx * value
+            f[1] += fy * value
+            s0 += o0 * value
+            s1 += o1 * value
+            s2 += o2 * value
+        return tip_sum, (s0, s1, s2)
+
+    def _solve(self, fingers, specs, X, V, tau):
+        """(q̈, Ẍ, forces) as lists of floats: forces (fx, fy) per finger on the object."""
+        g0, g1 = self.hand.gravity_in_hand.tolist()
+        free = []  # per finger: τ - N and the tip's acceleration at q̈ = M^-1 (τ - N)
+        for i, f in enumerate(fingers):
+            r0, r1 = tau[2 * i] - f[3], tau[2 * i + 1] - f[4]
+            u0, u1 = f[15] * r0 + f[16] * r1, f[16] * r0 + f[17] * r1
+            free.append((r0, r1, f[5] * u0 + f[6] * u1, f[7] * u0 + f[8] * u1))
+        rows, b, cols = self._rows(fingers, specs, X, V)
+        if rows:
+            rhs = [bk - (dx * free[i][2] + dy * free[i][3] + c0 * g0 + c1 * g1)
+                   for (i, dx, dy, c0, c1, _), bk in zip(rows, b)]
+            forces, obj = self._multipliers(fingers, rows, cols, rhs)
+        else:
+            forces, obj = [[0.0, 0.0] for _ in fingers], (0.0, 0.0, 0.0)
+        qdd = []
+        for (fx, fy), f, (r0, r1, _, _) in zip(forces, fingers, free):
+            r0, r1 = r0 - (f[5] * fx + f[7] * fy), r1 - (f[6] * fx + f[8] * fy)
+            qdd += (f[15] * r0 + f[16] * r1, f[16] * r0 + f[17] * r1)
+        return qdd, [g0 + obj[0] / self.mass, g1 + obj[1] / self.mass, obj[2] / self.inertia], forces
 
     def accelerations(self, st: PlantState, tau, modes=None):
         """(q̈, Ẍ, forces) at state ``st`` for torques ``tau``: ``forces`` (m, 2) are the contact
         forces on the object in the hand frame (zeros for separated contacts)."""
-        tau = as_finite_array("tau", tau, (self.hand.nq,))
-        return self._accelerations(st, tau, modes)[:3]
-
-    def _accelerations(self, st: PlantState, tau: np.ndarray, modes=None):
-        contacts = self.contacts if modes is None else modes
-        dyn = self.hand._dynamics(st.q.reshape(-1, 2), st.v.reshape(-1, 2))
-        n, m = self.hand.nq, self.hand.m
-        rot = rotation(st.X[2])
-        w_cols, c_rows, b, owners = self._rows(st, dyn, contacts)
-        k = len(w_cols)
-        g = self.hand.gravity_in_hand
-        rhs_dyn = np.concatenate([tau - dyn.nonlinear, [self.mass * g[0], self.mass * g[1], 0.0]])
-        kkt = np.zeros((n + 3 + k, n + 3 + k))
-        kkt[:n + 3, :n + 3] = self._full_mass(dyn)
-        if k:
-            kkt[:n + 3, n + 3:] = -np.array(w_cols).T
-            kkt[n + 3:, :n + 3] = np.array(c_rows)
-        sol = np.linalg.solve(kkt, np.concatenate([rhs_dyn, b]))
-        acc, lam = sol[:n + 3], sol[n + 3:]
-        forces = np.zeros((m, 2))
-        for (i, kind), value in zip(owners, lam):
-            if kind == "n":
-                c = contacts[i]
-                normal = rot @ self.polygon.edge(c.edge).inward_normal
-                forces[i] = value * (normal + self.mu[i] * c.sign * perp(normal))
-            else:
-                forces[i, kind] = value
-        return acc[:n], acc[n:], forces, dyn
+        tau = self._torques(tau)
+        fingers = self._pin_pass(st.q, st.v)
+        specs = self._specs(self.contacts if modes is None else modes)
+        qdd, Xdd, forces = self._solve(fingers, specs, st.X.tolist(), st.V.tolist(), tau)
+        return np.array(qdd), np.array(Xdd), np.array(forces)
 
     def _project_velocities(self, st: PlantState) -> float:
         """Remove the velocity that violates the active constraints (a plastic sticking impulse):
         the mass-weighted projection of (q̇, V) onto C (q̇, V) = 0. Returns the kinetic energy [J]
         it removes (negative), which is friction's doing and is booked as contact work."""
-        dyn = self.hand.dynamics(st.q, st.v)
-        _, c_rows, _, _ = self._rows(st, dyn, self.contacts)
-        if not c_rows:
+        fingers = self._pin_pass(st.q, st.v)
+        X, V = st.X.tolist(), st.V.tolist()
+        rows, _, _ = self._rows(fingers, self._specs(self.contacts), X, V)
+        if not rows:
             return 0.0
-        n = self.hand.nq
-        C = np.array(c_rows)
-        mass = self._full_mass(dyn)
-        z = np.concatenate([st.v, st.V])
-        k = C.shape[0]
-        kkt = np.zeros((n + 3 + k, n + 3 + k))
-        kkt[:n + 3, :n + 3] = mass
-        kkt[:n + 3, n + 3:] = C.T
-        kkt[n + 3:, :n + 3] = C
-        z_new = np.linalg.solve(kkt, np.concatenate([mass @ z, np.zeros(k)]))[:n + 3]
-        delta = 0.5 * (z_new @ mass @ z_new - z @ mass @ z)
-        st.v, st.V = z_new[:n].copy(), z_new[n:].copy()
-        return float(delta)
+        # z_new = z - M^-1 C^T μ with C M^-1 C^T μ = C z: columns (d, -c) in _multipliers' form
+        cols = [(i, dx, dy, -c0, -c1, -c2) for i, dx, dy, c0, c1, c2 in rows]
+        rhs = [-(dx * fingers[i][13] + dy * fingers[i][14] + c0 * V[0] + c1 * V[1] + c2 * V[2])
+               for i, dx, dy, c0, c1, c2 in rows]
+        tip_sum, obj_sum = self._multipliers(fingers, rows, cols, rhs)
+        v_old, v_new, energy = st.v.tolist(), [], 0.0
+        for i, f in enumerate(fingers):
+            m00, m01, m11, _, _, j00, j01, j10, j11 = f[:9]
+            fx, fy = tip_sum[i]
+            r0, r1 = -(j00 * fx + j10 * fy), -(j01 * fx + j11 * fy)
+            w0, w1 = v_old[2 * i:2 * i + 2]
+            u0, u1 = w0 + (f[15] * r0 + f[16] * r1), w1 + (f[16] * r0 + f[17] * r1)
+            energy += m00 * (u0 * u0 - w0 * w0) + 2 * m01 * (u0 * u1 - w0 * w1) + m11 * (u1 * u1 - w1 * w1)
+            v_new += [u0, u1]
+        scale = (1.0 / self.mass, 1.0 / self.mass, 1.0 / self.inertia)
+        V_new = [V[k] + obj_sum[k] * scale[k] for k in range(3)]
+        weights = (self.mass, self.mass, self.inertia)
+        energy += sum(wk * (a * a - b * b) for wk, a, b in zip(weights, V_new, V))
+        st.v, st.V = np.array(v_new), np.array(V_new)
+        return 0.5 * energy
 
-    def _derivative(self, st: PlantState, tau):
-        qdd, Xdd, forces, dyn = self._accelerations(st, tau)
-        damping = self.hand.damping
+    def _evaluate(self, y: np.ndarray, tau: tuple, specs: tuple):
+        """dy/dt of the flat state y = (q, v, X, V, works), the contact forces (per finger) and the
+        fingers' dynamics (:meth:`_pin_pass`)."""
+        n = self.hand.nq
+        yl = y.tolist()
+        v, X, V = yl[n:2 * n], yl[2 * n:2 * n + 3], yl[2 * n + 3:2 * n + 6]
+        fingers = self._pin_pass(y[:n], y[n:2 * n])
+        qdd, Xdd, forces = self._solve(fingers, specs, X, V, tau)
         # net power of the contact forces: on the object at its material point, minus on the tips
         power = 0.0
-        for i in range(self.hand.m):
-            if not forces[i].any():
-                continue
-            tip, tip_vel = dyn.tips[i], dyn.tip_velocities[i]
-            point_vel = st.V[:2] + st.V[2] * perp(tip - st.X[:2])
-            power += forces[i] @ (point_vel - tip_vel)
-        return (st.v, qdd, st.V, Xdd, float(tau @ st.v), float(-(damping * st.v) @ st.v), float(power)), forces
-
-    @staticmethod
-    def _advance(st: PlantState, deriv, h: float) -> PlantState:
-        dq, dv, dX, dV, pt, pd, pc = deriv
-        return PlantState(st.t + h, st.q + h * dq, st.v + h * dv, st.X + h * dX, st.V + h * dV,
-                          st.torque_work + h * pt, st.damping_work + h * pd, st.contact_work + h * pc)
+        for (fx, fy), f in zip(forces, fingers):
+            if fx or fy:
+                rx, ry = f[11] - X[0], f[12] - X[1]
+                power += fx * (V[0] - V[2] * ry - f[13]) + fy * (V[1] + V[2] * rx - f[14])
+        torque = damp = 0.0
+        for t, d, u in zip(tau, self._damping if self.hand.damping_enabled else self._no_damping, v):
+            torque += t * u
+            damp -= d * u * u
+        return np.array(v + qdd + V + Xdd + [torque, damp, power]), forces, fingers
 
     # ------------------------------------------------------------------ stepping
+    def _surface(self, k: int, c: float, s: float, force) -> tuple[float, float]:
+        """A force (fx, fy) at a contact on edge k in its surface frame (normal, tangential) at
+        object rotation (c, s) = (cos β, sin β)."""
+        g = self._edge_geometry(k)
+        fx, fy = force
+        return ((c * g.nx - s * g.ny) * fx + (s * g.nx + c * g.ny) * fy,
+                (c * g.tx - s * g.ty) * fx + (s * g.tx + c * g.ty) * fy)
+
     def surface_forces(self, st: PlantState, forces: np.ndarray) -> np.ndarray:
         """Contact forces (m, 2) in each contact's surface frame (normal, tangential)."""
-        rot = rotation(st.X[2])
-        out = np.zeros_like(forces)
-        for i, c in enumerate(self.contacts):
-            e = self._edge(c)
-            out[i] = (rot @ np.column_stack([e.inward_normal, e.xi_direction])).T @ forces[i]
-        return out
+        c, s = math.cos(st.X[2]), math.sin(st.X[2])
+        return np.array([self._surface(ct.edge, c, s, f) for ct, f in zip(self.contacts, np.asarray(forces).tolist())])
+
+    def _torques(self, tau) -> tuple:
+        """``tau`` validated, as a tuple of floats (a fast path for a finite float64 array)."""
+        if isinstance(tau, np.ndarray) and tau.dtype == np.float64 and tau.shape == (self.hand.nq,):
+            out = tuple(tau.tolist())
+            if all(map(math.isfinite, out)):
+                return out
+        return tuple(as_finite_array("tau", tau, (self.hand.nq,)).tolist())
 
     def step(self, tau) -> PlantStep:
         """Advance one time step with constant joint torques ``tau`` [N m] (RK4)."""
@@ -418,23 +556,33 @@ class Plant:
             raise InvalidParameterError("state", None, "a state: call reset() first")
         if self.stopped:
             raise InvalidParameterError("plant", "stopped", "a running plant (it stopped on an event)")
-        tau = as_finite_array("tau", tau, (self.hand.nq,))
-        st, h = self.state, self.dt
-        k1, forces0 = self._derivative(st, tau)
-        k2, _ = self._derivative(self._advance(st, k1, h / 2), tau)
-        k3, _ = self._derivative(self._advance(st, k2, h / 2), tau)
-        k4, _ = self._derivative(self._advance(st, k3, h), tau)
-        avg = tuple((a + 2 * b2 + 2 * c + d) / 6.0 for a, b2, c, d in zip(k1, k2, k3, k4))
-        new = self._advance(st, avg, h)
+        tau = self._torques(tau)
+        st, h, n, hand = self.state, self.dt, self.hand.nq, self.hand
+        specs = self._specs(self.contacts)
+        y = np.concatenate((st.q, st.v, st.X, st.V, (st.torque_work, st.damping_work, st.contact_work)))
+        # the event check's evaluation at the last step's end is this step's first stage when the
+        # state, τ, the modes and the parameters are the same
+        params = (hand.gravity_in_hand.tobytes(), hand.damping_enabled, self.mass, self.inertia, self.alpha)
+        key = (y.tobytes(), tau, specs, params)
+        k1, forces0, _ = self._last_evaluation if key == self._last_key else self._evaluate(y, tau, specs)
+        k2 = self._evaluate(y + h / 2 * k1, tau, specs)[0]
+        k3 = self._evaluate(y + h / 2 * k2, tau, specs)[0]
+        k4 = self._evaluate(y + h * k3, tau, specs)[0]
+        y = y + h * ((k1 + 2 * k2 + 2 * k3 + k4) / 6.0)
+        tw, dw, cw = y[2 * n + 6:].tolist()
+        new = PlantState(st.t + h, y[:n], y[n:2 * n], y[2 * n:2 * n + 3], y[2 * n + 3:2 * n + 6], tw, dw, cw)
         self.state = new
         modes = tuple(c.mode for c in self.contacts)
-        surface = self.surface_forces(st, forces0)
-        dyn = self.hand._dynamics(new.q.reshape(-1, 2), new.v.reshape(-1, 2))
-        err = self.constraint_error(new, dyn.tips)
+        c0, s0 = math.cos(st.X[2]), math.sin(st.X[2])
+        surface = np.array([self._surface(c.edge, c0, s0, f) for c, f in zip(self.contacts, forces0)])
+        end = self._evaluate(y, tau, specs)
+        self._last_key, self._last_evaluation = (y.tobytes(), tau, specs, params), end
+        fingers = end[2]
+        err = self._violations(specs, new.X.tolist(), [f[11:13] for f in fingers])
         self.max_constraint_error = max(self.max_constraint_error, err)
-        events = self._events(new, tau, dyn)
-        xis = np.array([self.contact_xi(new, i, dyn.tips[i], dyn.tip_velocities[i]) for i in range(self.hand.m)])
-        return PlantStep(new, surface, xis[:, 0], xis[:, 1], modes, err, tuple(events))
+        events, xis = self._events(new, tau, end[1], fingers)
+        return PlantStep(new, surface, np.array([x[0] for x in xis]), np.array([x[1] for x in xis]), modes, err,
+                         tuple(events))
 
     def _event(self, t, i, kind, detail, out):
         ev = PlantEvent(t, self.hand.fingers[i].name, kind, detail)
@@ -443,32 +591,42 @@ class Plant:
         if kind in self.stop_on:
             self.stopped = True
 
-    def _events(self, st: PlantState, tau, dyn) -> list[PlantEvent]:
+    def _events(self, st: PlantState, tau: tuple, forces, fingers):
+        """Events at the step's end ``st`` given the contact forces and the fingers' dynamics there;
+        and every contact's (ξ, ξ̇) after them."""
         out: list[PlantEvent] = []
-        forces = self._accelerations(st, tau)[2]
-        surface = self.surface_forces(st, forces)
-        for i, c in enumerate(self.contacts):
-            if c.mode == "separated":
+        V0 = st.V
+        X = st.X.tolist()
+        c, s = math.cos(X[2]), math.sin(X[2])
+
+        def xis():
+            V = st.V.tolist()
+            return [self._xi(ct.edge, X, V, f[11:13], f[13:15]) for ct, f in zip(self.contacts, fingers)]
+
+        current = xis()
+        for i, ct in enumerate(self.contacts):
+            if ct.mode == "separated":
                 continue
-            xi, xi_dot = self.contact_xi(st, i, dyn.tips[i], dyn.tip_velocities[i])
+            if st.V is not V0:  # a stick before changed the velocities
+                current = xis()
+            xi, xi_dot = current[i]
             if self.contact_events:
-                self._switch_mode(st, tau, i, surface[i], xi, xi_dot, out)
-                if c.mode == "separated":
+                self._switch_mode(st, tau, i, self._surface(ct.edge, c, s, forces[i]), xi, xi_dot, out)
+                if ct.mode == "separated":
                     continue
-            lo, hi = self._edge(c).xi_range
-            if not lo <= xi <= hi:
-                self._event(st.t, i, "left_edge", f"xi = {xi:.5g} m outside [{lo:.5g}, {hi:.5g}]", out)
-        jac = dyn.jacobian
-        for i in range(self.hand.m):
-            cond = np.linalg.cond(jac[2 * i:2 * i + 2, 2 * i:2 * i + 2])
+            g = self._edge_geometry(ct.edge)
+            if not g.lo <= xi <= g.hi:
+                self._event(st.t, i, "left_edge", f"xi = {xi:.5g} m outside [{g.lo:.5g}, {g.hi:.5g}]", out)
+        for i, f in enumerate(fingers):
+            cond = condition_2x2(f[21])
             if not cond <= self.hand.singular_threshold:
                 self._event(st.t, i, "singular", f"Jacobian condition number {cond:.3g}", out)
         if self.checkers is not None:
             for i, checker in enumerate(self.checkers):
-                dist = checker.signed_distances(st.q[2 * i:2 * i + 2], st.X)
-                if dist.size and dist.min() < 0.0:
-                    self._event(st.t, i, "collision", f"link penetrates the object by {-dist.min():.3g} m", out)
-        return out
+                dist = checker.signed_distances(st.q[2 * i:2 * i + 2], st.X).tolist()
+                if dist and min(dist) < 0.0:
+                    self._event(st.t, i, "collision", f"link penetrates the object by {-min(dist):.3g} m", out)
+        return out, (current if st.V is V0 else xis())
 
     def _switch_mode(self, st: PlantState, tau, i: int, force_surface, xi: float, xi_dot: float, out) -> None:
         """Separation, slip and stick of contact i (module docstring)."""
@@ -484,7 +642,7 @@ class Plant:
         elif c.mode == "sliding" and xi_dot * c.sign <= 0.0:
             trial = [PlantContact(o.edge, o.mode, o.xi, o.sign) for o in self.contacts]
             trial[i] = PlantContact(c.edge, "fixed", xi, c.sign)
-            _, _, f_fixed = self.accelerations(st, tau, modes=trial)
+            _, _, f_fixed = self.accelerations(st, np.array(tau), modes=trial)
             fn2, ft2 = self.surface_forces(st, f_fixed)[i]
             if fn2 >= 0.0 and abs(ft2) <= self.mu[i] * fn2:
                 self._event(st.t, i, "stick", f"xi_dot = {xi_dot:.3g} m/s crossed zero; force inside the cone", out)
