@@ -119,3 +119,35 @@ def test_closed_form_condition_number_matches_numpy():
         assert condition_2x2(a) == pytest.approx(np.linalg.cond(a), rel=1e-8)
     assert condition_2x2(np.array([[1.0, 2.0], [2.0, 4.0]])) == float("inf")
     assert condition_2x2(np.zeros((2, 2))) == float("inf")
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_whole_hand_pass_matches_one_pinocchio_model_per_finger(seed):
+    """Hand.dynamics runs one Pinocchio model of the whole hand (the fingers appended as chains from
+    the hand frame); every block equals the finger's own model: crba, nonLinearEffects (+ damping),
+    the tip's frame Jacobian, classical acceleration and placement."""
+    import pinocchio as pin
+
+    rng = np.random.default_rng(seed)
+    f1, f2 = make_hand().fingers
+    f3 = f1.with_placement(base_in_hand=(0.0, -0.06, 0.3), configuration="right", name="f3")
+    hand = Hand([f1, f2, f3], gravity_in_hand=(1.2, -9.0), link_mass_scale=1.3)
+    q, v = rng.uniform(-1.5, 1.5, size=6), rng.normal(size=6)
+    dyn = hand.dynamics(q, v)
+    zero = np.zeros(2)
+    for i, f in enumerate(hand.fingers):
+        model, data, fid, sl = hand._models[i], hand._models[i].createData(), f.tip_frame_id, slice(2 * i, 2 * i + 2)
+        qi, vi = q[sl], v[sl]
+        np.testing.assert_allclose(dyn.mass_matrix[sl, sl], pin.crba(model, data, qi), rtol=1e-13, atol=1e-18)
+        nle = pin.nonLinearEffects(model, data, qi, vi) + np.asarray(model.damping) * vi
+        np.testing.assert_allclose(dyn.nonlinear[sl], nle, rtol=1e-13, atol=1e-16)
+        jac = pin.computeFrameJacobian(model, data, qi, fid, pin.LOCAL_WORLD_ALIGNED)[:2]
+        np.testing.assert_allclose(dyn.jacobian[sl, sl], jac, rtol=1e-13, atol=1e-16)
+        pin.forwardKinematics(model, data, qi, vi, zero)
+        acc = pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED).linear[:2]
+        np.testing.assert_allclose(dyn.jacobian_dot_v[sl], acc, rtol=1e-13, atol=1e-16)
+        np.testing.assert_allclose(dyn.tips[i], pin.updateFramePlacement(model, data, fid).translation[:2],
+                                   rtol=0, atol=1e-16)
+        others = np.ones(6, dtype=bool)
+        others[sl] = False
+        assert not dyn.mass_matrix[sl][:, others].any() and not dyn.jacobian[sl][:, others].any()

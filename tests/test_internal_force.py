@@ -533,3 +533,24 @@ def test_persistent_solver_matches_the_one_shot_qp():
         np.testing.assert_allclose(shared.solve(A, f_m, frames, fixed, mu).f_c, expected.f_c,
                                    atol=1e-6 * max(1.0, np.abs(expected.f_c).max()))
     assert compared >= 30 and raised >= 1
+
+
+def test_null_basis_is_orthonormal_and_falls_back_on_rank_deficient_matrices():
+    """The persistent solver's null basis (Householder QR) spans null(Aᵀ) with orthonormal columns;
+    a rank-deficient A takes scipy's SVD (numerical rank), a square full-rank one has none."""
+    import scipy.linalg
+
+    from regrasp.internal_force import _null_basis
+
+    rng = np.random.default_rng(3)
+    for rows, cols in ((4, 3), (6, 4), (6, 3), (4, 4)):
+        A = rng.normal(size=(rows, cols))
+        N = _null_basis(A)
+        assert N.shape == (rows, rows - cols)
+        np.testing.assert_allclose(N.T @ N, np.eye(rows - cols), atol=1e-14)
+        np.testing.assert_allclose(A.T @ N, 0.0, atol=1e-14)
+    A = rng.normal(size=(6, 4))
+    A[:, 3] = A[:, 0] - 2.0 * A[:, 1]  # rank 3
+    N = _null_basis(A)
+    assert N.shape == scipy.linalg.null_space(A.T).shape == (6, 3)
+    np.testing.assert_allclose(A.T @ N, 0.0, atol=1e-13)

@@ -9,7 +9,9 @@ acceleration, ``pin.getFrameClassicalAcceleration``). Gravity is a vector in the
 so "the hand upside down" is ``gravity_in_hand = (0, +9.81)``.
 
 The hand keeps its own copies of the finger models (with the hand's gravity); the fingers
-passed in are not modified.
+passed in are not modified. The hot paths run them as one Pinocchio model of the whole hand
+(each finger a chain from the hand frame, ``pin.appendModel``): one ``pin.computeAllTerms`` pass
+gives every block of M and N at once.
 """
 
 from __future__ import annotations
@@ -140,8 +142,9 @@ class Hand:
             lower, upper = self._mass_mirror
             mass.reshape(-1)[lower] = mass.reshape(-1)[upper]
         nle = data.nle + self._damping * v if self.damping_enabled else data.nle.copy()
-        jdv = np.concatenate([pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED).linear[:2]
-                              for fid in self._hand_tips])
+        jdv = np.empty(self.nq)
+        for i, fid in enumerate(self._hand_tips):
+            jdv[2 * i:2 * i + 2] = pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED).linear[:2]
         return HandDynamics(mass, nle, jac, jdv, tips, jac.dot(v).reshape(self.m, 2))
 
     def _frame_jacobian(self) -> np.ndarray:
