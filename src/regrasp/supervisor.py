@@ -420,7 +420,7 @@ class RegraspSupervisor:
             times.append((hi - xi) / -self._rates[i, 1])
         return min(times)
 
-    def _try_start(self, meas: Measurement, margins, bounds, out: list) -> None:
+    def _try_start(self, meas: Measurement, margins, bounds, desired, out: list) -> None:
         """Start priming the most endangered contact whose slide the predicate accepts."""
         fraction = self.settings.danger_fraction
         danger = []
@@ -455,7 +455,6 @@ class RegraspSupervisor:
             return
         if not danger:
             return
-        desired = self.trajectory.sample(meas.t)
         pose_d, acc_d = desired.pose, desired.acceleration
         for *_, i in sorted(danger):  # the soonest squeezed first
             if meas.t < self._recheck[i]:
@@ -568,9 +567,9 @@ class RegraspSupervisor:
                                                          for lo, hi in self._samples[i].feasible) + "] mm"))
         if self._active is not None:
             self._advance(meas, out)
+        desired = self.trajectory.sample(float(meas.t))
         if self._active is None:
-            self._try_start(meas, margins, bounds, out)
-        desired = self.trajectory.sample(meas.t)
+            self._try_start(meas, margins, bounds, desired, out)
         X_d, V_d, A_d = desired.pose, desired.velocity, desired.acceleration
         targets = np.full(self.hand.m, np.nan)
         reference = np.full(self.hand.m, np.nan)

@@ -72,6 +72,8 @@ class Trajectory(ABC):
     # ------------------------------------------------------------------ helpers
     def _times_in_domain(self, t) -> tuple[np.ndarray, bool]:
         """``t`` as a 1-D array clamped onto the domain, and whether it was a scalar."""
+        if type(t) is float and self.t_start <= t <= self.t_end:  # the common case, without numpy checks
+            return np.array([t]), True
         arr = as_finite_array("t", t)
         if arr.ndim > 1:
             raise InvalidParameterError("t", t, "a time [s] or a 1-D array of times")
