@@ -49,12 +49,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
+import coal
 import numpy as np
 import pinocchio as pin
 
 from .collision import UrdfCollisionChecker, default_tip_clearance
 from .exceptions import InvalidParameterError
-from .hand import Hand, condition_2x2
+from .hand import Hand, _condition
 from .polygon import ConvexPolygon
 from .validation import as_finite_array, as_friction_coefficients, as_positive_float
 
@@ -80,9 +81,30 @@ class _EdgeGeometry(NamedTuple):
 
 
 def _solve_small(a: list[list[float]], b: list[float]) -> list[float]:
-    """x with a x = b for a small dense system (lists, overwritten): Gaussian elimination with
-    partial pivoting in plain floats (numpy's per-call overhead dwarfs a 1..2m system)."""
+    """x with a x = b for a small dense system (lists; overwritten) in plain floats (numpy's per-call
+    overhead dwarfs a 1..2m system): Cramer's rule up to 3 unknowns, else Gaussian elimination with
+    partial pivoting."""
     k = len(b)
+    if k <= 3:
+        if k == 3:
+            (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
+            c00, c01, c02 = a11 * a22 - a12 * a21, a12 * a20 - a10 * a22, a10 * a21 - a11 * a20
+            det = a00 * c00 + a01 * c01 + a02 * c02
+            if not abs(det) > 0.0:
+                raise np.linalg.LinAlgError("Singular matrix")
+            b0, b1, b2 = b
+            return [(c00 * b0 + (a02 * a21 - a01 * a22) * b1 + (a01 * a12 - a02 * a11) * b2) / det,
+                    (c01 * b0 + (a00 * a22 - a02 * a20) * b1 + (a02 * a10 - a00 * a12) * b2) / det,
+                    (c02 * b0 + (a01 * a20 - a00 * a21) * b1 + (a00 * a11 - a01 * a10) * b2) / det]
+        if k == 2:
+            (a00, a01), (a10, a11) = a
+            det = a00 * a11 - a01 * a10
+            if not abs(det) > 0.0:
+                raise np.linalg.LinAlgError("Singular matrix")
+            return [(a11 * b[0] - a01 * b[1]) / det, (a00 * b[1] - a10 * b[0]) / det]
+        if not abs(a[0][0]) > 0.0:
+            raise np.linalg.LinAlgError("Singular matrix")
+        return [b[0] / a[0][0]]
     for col in range(k):
         top = a[col]
         piv, best = col, abs(top[col])
@@ -110,6 +132,22 @@ def _solve_small(a: list[list[float]], b: list[float]) -> list[float]:
             acc -= row[j] * x[j]
         x[col] = acc / row[col]
     return x
+
+
+def _reach(shape) -> float:
+    """Largest distance [m] of a point of a link shape from its joint (inf for unknown shapes)."""
+    geom = shape.geometry
+    if isinstance(geom, coal.Cylinder):
+        extent = math.hypot(geom.radius, geom.halfLength)
+    elif isinstance(geom, coal.Capsule):
+        extent = geom.radius + geom.halfLength
+    elif isinstance(geom, coal.Box):
+        extent = float(np.linalg.norm(geom.halfSide))
+    elif isinstance(geom, coal.Sphere):
+        extent = geom.radius
+    else:
+        return math.inf
+    return float(np.linalg.norm(shape.placement_in_joint.translation)) + extent
 
 
 @dataclass
@@ -245,6 +283,9 @@ class Plant:
             for f in hand.fingers:
                 clearance = default_tip_clearance(f) if tip_clearance is None else tip_clearance
                 self.checkers.append(UrdfCollisionChecker(f, polygon, clearance))
+            self._link_radii = [tuple(max((_reach(s) for s in checker.shapes if s.link == k), default=0.0)
+                                      for k in (0, 1)) for checker in self.checkers]
+            self._certificates = [None] * hand.m  # see _collisions()
         # the plant's own Pinocchio data on the hand's models (their gravity and link masses)
         self._pin = [(model, model.createData(), fid, *np.asarray(model.damping, dtype=float).tolist(),
                       *model.jointPlacements[1].translation[:2].tolist())
@@ -361,7 +402,7 @@ class Plant:
         r"""Per finger at (q, v), as floats: M (0-2: m00, m01, m11), N (3-4: Coriolis, gravity,
         damping), the tip Jacobian J (5-8: j00, j01, j10, j11), J̇q̇ (9-10), the tip p (11-12) and
         its velocity J q̇ (13-14), :math:`M^{-1}` (15-17: i00, i01, i11), :math:`J M^{-1} J^T`
-        (18-20: l00, l01, l11); and J as an array (21).
+        (18-20: l00, l01, l11).
 
         One ``computeAllTerms`` (M, N) and one ``getFrameJacobian`` per finger, on the plant's own
         Pinocchio data. The finger is a planar chain of revolute joints about z (validated by
@@ -381,8 +422,7 @@ class Plant:
             if damped:
                 n0 += d0 * v0
                 n1 += d1 * v1
-            jac = pin.getFrameJacobian(model, data, fid, _LWA)[:2]
-            (j00, j01), (j10, j11) = jac.tolist()
+            (j00, j01), (j10, j11) = pin.getFrameJacobian(model, data, fid, _LWA)[:2].tolist()
             w1, w2 = v0 * v0, (v0 + v1) * (v0 + v1)
             det = m00 * m11 - m01 * m01
             i00, i01, i11 = m11 / det, -m01 / det, m00 / det
@@ -391,28 +431,34 @@ class Plant:
             out.append((m00, m01, m11, n0, n1, j00, j01, j10, j11,
                         -w1 * (j10 - j11) - w2 * j11, w2 * j01 - w1 * (j01 - j00), ox + j10, oy - j00,
                         j00 * v0 + j01 * v1, j10 * v0 + j11 * v1, i00, i01, i11,
-                        k00 * j00 + k01 * j01, k00 * j10 + k01 * j11, k10 * j10 + k11 * j11, jac))
+                        k00 * j00 + k01 * j01, k00 * j10 + k01 * j11, k10 * j10 + k11 * j11))
         return out
 
-    def _rows(self, fingers, specs, X, V):
+    def _rows(self, fingers, specs, X, V, free=None, gravity=(0.0, 0.0)):
         r"""Per active contact, its constraint rows ``(i, d_x, d_y, c_0, c_1, c_2)`` (the row acting
-        on (q̈, Ẍ) is :math:`(d^T J_i, c)`), their Baumgarte right-hand sides, and its force columns
+        on (q̈, Ẍ) is :math:`(d^T J_i, c)`), their right-hand sides, and its force columns
         ``(i, f_x, f_y, o_0, o_1, o_2)`` (a unit multiplier is the force f on the object at the tip:
-        :math:`-J_i^T f` on finger i, o = (f, r × f) on the object)."""
+        :math:`-J_i^T f` on finger i, o = (f, r × f) on the object).
+
+        The right-hand side is the Baumgarte one, b, less the rows applied to the free accelerations
+        (:math:`C M^{-1}(\tau - N, f_g)`): ``free`` gives each finger's free tip acceleration
+        :math:`J M^{-1}(\tau - N)` (None: zero), ``gravity`` the object's."""
         x, y, beta = X
         vx, vy, w = V
+        g0, g1 = gravity
         c, s = math.cos(beta), math.sin(beta)
         alpha2, alpha_sq, w_sq = 2 * self.alpha, self.alpha**2, w**2
-        rows, b, cols = [], [], []
+        rows, rhs, cols = [], [], []
         for spec in specs:
             i, kind, ux, uy = spec[:4]
-            _, _, _, _, _, _, _, _, _, jax, jay, px, py, pvx, pvy = fingers[i][:15]
+            jax, jay, px, py, pvx, pvy = fingers[i][9:15]
+            fax, fay = (0.0, 0.0) if free is None else free[i]
             rx, ry = px - x, py - y
             if kind == _FIXED:
                 rcx, rcy = c * ux - s * uy, s * ux + c * uy
                 rows += ((i, 1.0, 0.0, -1.0, 0.0, rcy), (i, 0.0, 1.0, 0.0, -1.0, -rcx))
-                b += (-jax - w_sq * rcx - alpha2 * (pvx - vx + w * rcy) - alpha_sq * (rx - rcx),
-                      -jay - w_sq * rcy - alpha2 * (pvy - vy - w * rcx) - alpha_sq * (ry - rcy))
+                rhs += (-jax - w_sq * rcx - alpha2 * (pvx - vx + w * rcy) - alpha_sq * (rx - rcx) - (fax - g0),
+                        -jay - w_sq * rcy - alpha2 * (pvy - vy - w * rcx) - alpha_sq * (ry - rcy) - (fay - g1))
                 cols += ((i, 1.0, 0.0, 1.0, 0.0, -ry), (i, 0.0, 1.0, 0.0, 1.0, rx))
             else:
                 nx, ny = c * ux - s * uy, s * ux + c * uy
@@ -421,10 +467,10 @@ class Plant:
                 psi_dot = w * tr + (nx * rvx + ny * rvy)
                 drift = -w_sq * nr + 2 * w * (nx * rvy - ny * rvx) + (nx * jax + ny * jay)
                 rows.append((i, nx, ny, -nx, -ny, tr))
-                b.append(-drift - alpha2 * psi_dot - alpha_sq * (nr - spec[4]))
+                rhs.append(-drift - alpha2 * psi_dot - alpha_sq * (nr - spec[4]) - (nx * (fax - g0) + ny * (fay - g1)))
                 fx, fy = nx - spec[5] * ny, ny + spec[5] * nx
                 cols.append((i, fx, fy, fx, fy, rx * fy - ry * fx))
-        return rows, b, cols
+        return rows, rhs, cols
 
     def _multipliers(self, fingers, rows, cols, rhs):
         r"""Solve :math:`C M^{-1} W \lambda = rhs` (the Delassus form of the KKT system: M is block
@@ -450,24 +496,23 @@ class Plant:
 
     def _solve(self, fingers, specs, X, V, tau):
         """(q̈, Ẍ, forces) as lists of floats: forces (fx, fy) per finger on the object."""
-        g0, g1 = self.hand.gravity_in_hand.tolist()
-        free = []  # per finger: τ - N and the tip's acceleration at q̈ = M^-1 (τ - N)
+        gravity = self.hand.gravity_in_hand.tolist()
+        torque, free = [], []  # per finger: τ - N, and the tip's acceleration at q̈ = M^-1 (τ - N)
         for i, f in enumerate(fingers):
             r0, r1 = tau[2 * i] - f[3], tau[2 * i + 1] - f[4]
             u0, u1 = f[15] * r0 + f[16] * r1, f[16] * r0 + f[17] * r1
-            free.append((r0, r1, f[5] * u0 + f[6] * u1, f[7] * u0 + f[8] * u1))
-        rows, b, cols = self._rows(fingers, specs, X, V)
+            torque.append((r0, r1))
+            free.append((f[5] * u0 + f[6] * u1, f[7] * u0 + f[8] * u1))
+        rows, rhs, cols = self._rows(fingers, specs, X, V, free, gravity)
         if rows:
-            rhs = [bk - (dx * free[i][2] + dy * free[i][3] + c0 * g0 + c1 * g1)
-                   for (i, dx, dy, c0, c1, _), bk in zip(rows, b)]
             forces, obj = self._multipliers(fingers, rows, cols, rhs)
         else:
             forces, obj = [[0.0, 0.0] for _ in fingers], (0.0, 0.0, 0.0)
         qdd = []
-        for (fx, fy), f, (r0, r1, _, _) in zip(forces, fingers, free):
+        for (fx, fy), f, (r0, r1) in zip(forces, fingers, torque):
             r0, r1 = r0 - (f[5] * fx + f[7] * fy), r1 - (f[6] * fx + f[8] * fy)
             qdd += (f[15] * r0 + f[16] * r1, f[16] * r0 + f[17] * r1)
-        return qdd, [g0 + obj[0] / self.mass, g1 + obj[1] / self.mass, obj[2] / self.inertia], forces
+        return qdd, [gravity[0] + obj[0] / self.mass, gravity[1] + obj[1] / self.mass, obj[2] / self.inertia], forces
 
     def accelerations(self, st: PlantState, tau, modes=None):
         """(q̈, Ẍ, forces) at state ``st`` for torques ``tau``: ``forces`` (m, 2) are the contact
@@ -508,13 +553,12 @@ class Plant:
         st.v, st.V = np.array(v_new), np.array(V_new)
         return 0.5 * energy
 
-    def _evaluate(self, y: np.ndarray, tau: tuple, specs: tuple):
-        """dy/dt of the flat state y = (q, v, X, V, works), the contact forces (per finger) and the
-        fingers' dynamics (:meth:`_pin_pass`)."""
+    def _evaluate(self, y: list, tau: tuple, specs: tuple, q=None, v=None):
+        """dy/dt of the flat state y = (q, v, X, V, works) (a list of floats), the contact forces
+        (per finger) and the fingers' dynamics (:meth:`_pin_pass`); ``q``, ``v``: y's as arrays."""
         n = self.hand.nq
-        yl = y.tolist()
-        v, X, V = yl[n:2 * n], yl[2 * n:2 * n + 3], yl[2 * n + 3:2 * n + 6]
-        fingers = self._pin_pass(y[:n], y[n:2 * n])
+        vel, X, V = y[n:2 * n], y[2 * n:2 * n + 3], y[2 * n + 3:2 * n + 6]
+        fingers = self._pin_pass(np.array(y[:n]) if q is None else q, np.array(vel) if v is None else v)
         qdd, Xdd, forces = self._solve(fingers, specs, X, V, tau)
         # net power of the contact forces: on the object at its material point, minus on the tips
         power = 0.0
@@ -523,10 +567,10 @@ class Plant:
                 rx, ry = f[11] - X[0], f[12] - X[1]
                 power += fx * (V[0] - V[2] * ry - f[13]) + fy * (V[1] + V[2] * rx - f[14])
         torque = damp = 0.0
-        for t, d, u in zip(tau, self._damping if self.hand.damping_enabled else self._no_damping, v):
+        for t, d, u in zip(tau, self._damping if self.hand.damping_enabled else self._no_damping, vel):
             torque += t * u
             damp -= d * u * u
-        return np.array(v + qdd + V + Xdd + [torque, damp, power]), forces, fingers
+        return vel + qdd + V + Xdd + [torque, damp, power], forces, fingers
 
     # ------------------------------------------------------------------ stepping
     def _surface(self, k: int, c: float, s: float, force) -> tuple[float, float]:
@@ -559,24 +603,26 @@ class Plant:
         tau = self._torques(tau)
         st, h, n, hand = self.state, self.dt, self.hand.nq, self.hand
         specs = self._specs(self.contacts)
-        y = np.concatenate((st.q, st.v, st.X, st.V, (st.torque_work, st.damping_work, st.contact_work)))
+        y = st.q.tolist() + st.v.tolist() + st.X.tolist() + st.V.tolist() + [st.torque_work, st.damping_work,
+                                                                           st.contact_work]
         # the event check's evaluation at the last step's end is this step's first stage when the
         # state, τ, the modes and the parameters are the same
         params = (hand.gravity_in_hand.tobytes(), hand.damping_enabled, self.mass, self.inertia, self.alpha)
-        key = (y.tobytes(), tau, specs, params)
+        key = (y, tau, specs, params)
         k1, forces0, _ = self._last_evaluation if key == self._last_key else self._evaluate(y, tau, specs)
-        k2 = self._evaluate(y + h / 2 * k1, tau, specs)[0]
-        k3 = self._evaluate(y + h / 2 * k2, tau, specs)[0]
-        k4 = self._evaluate(y + h * k3, tau, specs)[0]
-        y = y + h * ((k1 + 2 * k2 + 2 * k3 + k4) / 6.0)
-        tw, dw, cw = y[2 * n + 6:].tolist()
-        new = PlantState(st.t + h, y[:n], y[n:2 * n], y[2 * n:2 * n + 3], y[2 * n + 3:2 * n + 6], tw, dw, cw)
+        half = h / 2
+        k2 = self._evaluate([a + half * b for a, b in zip(y, k1)], tau, specs)[0]
+        k3 = self._evaluate([a + half * b for a, b in zip(y, k2)], tau, specs)[0]
+        k4 = self._evaluate([a + h * b for a, b in zip(y, k3)], tau, specs)[0]
+        y = [a + h * ((b1 + 2 * b2 + 2 * b3 + b4) / 6.0) for a, b1, b2, b3, b4 in zip(y, k1, k2, k3, k4)]
+        new = PlantState(st.t + h, np.array(y[:n]), np.array(y[n:2 * n]), np.array(y[2 * n:2 * n + 3]),
+                         np.array(y[2 * n + 3:2 * n + 6]), *y[2 * n + 6:])
         self.state = new
         modes = tuple(c.mode for c in self.contacts)
         c0, s0 = math.cos(st.X[2]), math.sin(st.X[2])
         surface = np.array([self._surface(c.edge, c0, s0, f) for c, f in zip(self.contacts, forces0)])
-        end = self._evaluate(y, tau, specs)
-        self._last_key, self._last_evaluation = (y.tobytes(), tau, specs, params), end
+        end = self._evaluate(y, tau, specs, new.q, new.v)
+        self._last_key, self._last_evaluation = (y, tau, specs, params), end
         fingers = end[2]
         err = self._violations(specs, new.X.tolist(), [f[11:13] for f in fingers])
         self.max_constraint_error = max(self.max_constraint_error, err)
@@ -618,15 +664,48 @@ class Plant:
             if not g.lo <= xi <= g.hi:
                 self._event(st.t, i, "left_edge", f"xi = {xi:.5g} m outside [{g.lo:.5g}, {g.hi:.5g}]", out)
         for i, f in enumerate(fingers):
-            cond = condition_2x2(f[21])
+            cond = _condition(*f[5:9])
             if not cond <= self.hand.singular_threshold:
                 self._event(st.t, i, "singular", f"Jacobian condition number {cond:.3g}", out)
         if self.checkers is not None:
-            for i, checker in enumerate(self.checkers):
-                dist = checker.signed_distances(st.q[2 * i:2 * i + 2], st.X).tolist()
-                if dist and min(dist) < 0.0:
-                    self._event(st.t, i, "collision", f"link penetrates the object by {-min(dist):.3g} m", out)
+            self._collisions(st, fingers, out)
         return out, (current if st.V is V0 else xis())
+
+    def _collisions(self, st: PlantState, fingers, out: list[PlantEvent]) -> None:
+        r"""Collision events from coal's signed distances of each finger's link shapes.
+
+        Coal is skipped for a finger whose links cannot have reached the object since coal last
+        found them free: a distance is 1-Lipschitz in a rigid motion, and a point of link k's
+        shapes moves relative to the object by at most :math:`|\Delta r_k| + |\Delta\theta_k| R_k`
+        (:math:`r_k`: the link's joint in the object frame, :math:`\theta_k`: its direction
+        relative to the object, :math:`R_k`: the largest distance of a point of its shapes from
+        the joint). The link is free while that stays below its last distance, less 0.1 % and
+        10 µm (far above coal's tolerance): coal's verdict there would be the same."""
+        x, y, beta = st.X.tolist()
+        c, s = math.cos(beta), math.sin(beta)
+        q = st.q.tolist()
+        for i, checker in enumerate(self.checkers):
+            f = fingers[i]
+            ox, oy = self._pin[i][5:7]
+            ex, ey = f[11] - f[8], f[12] + f[6]  # the elbow: p - o_2 = (j11, -j01)
+            posture = (q[2 * i], q[2 * i + 1], beta, c * (ox - x) + s * (oy - y), c * (oy - y) - s * (ox - x),
+                       c * (ex - x) + s * (ey - y), c * (ey - y) - s * (ex - x))
+            cert = self._certificates[i]
+            if cert is not None:
+                q1, q2, b, r1x, r1y, r2x, r2y, budget1, budget2 = cert
+                turn1 = abs(posture[0] - q1 - (beta - b))
+                turn2 = abs(posture[0] - q1 + posture[1] - q2 - (beta - b))
+                radius1, radius2 = self._link_radii[i]
+                if (math.hypot(posture[3] - r1x, posture[4] - r1y) + turn1 * radius1 < budget1
+                        and math.hypot(posture[5] - r2x, posture[6] - r2y) + turn2 * radius2 < budget2):
+                    continue
+            dist = checker.signed_distances(st.q[2 * i:2 * i + 2], st.X).tolist()
+            nearest = [math.inf, math.inf]
+            for d, shape in zip(dist, checker.shapes):
+                nearest[shape.link] = min(nearest[shape.link], d)
+            self._certificates[i] = (*posture, *(d * (1.0 - 1e-3) - 1e-5 for d in nearest))
+            if dist and min(dist) < 0.0:
+                self._event(st.t, i, "collision", f"link penetrates the object by {-min(dist):.3g} m", out)
 
     def _switch_mode(self, st: PlantState, tau, i: int, force_surface, xi: float, xi_dot: float, out) -> None:
         """Separation, slip and stick of contact i (module docstring)."""
