@@ -287,11 +287,12 @@ class Plant:
                                       for k in (0, 1)) for checker in self.checkers]
             self._certificates = [None] * hand.m  # see _collisions()
         # the plant's own Pinocchio data on the hand's models (their gravity and link masses)
-        self._pin = [(model, model.createData(), fid, *np.asarray(model.damping, dtype=float).tolist(),
+        self._pin = [(slice(2 * i, 2 * i + 2), model, model.createData(), fid,
+                      *np.asarray(model.damping, dtype=float).tolist(),
                       *model.jointPlacements[1].translation[:2].tolist())
-                     for model, fid in zip(hand._models, hand._tip_ids)]
-        self._last_key, self._last_evaluation = None, None  # see step()
-        self._damping = tuple(d for entry in self._pin for d in entry[3:5])
+                     for i, (model, fid) in enumerate(zip(hand._models, hand._tip_ids))]
+        self._last_key, self._last_evaluation = (None,) * 4, None  # see step()
+        self._damping = tuple(d for entry in self._pin for d in entry[4:6])
         self._no_damping = (0.0,) * hand.nq
         self._edge_cache: dict[int, _EdgeGeometry] = {}
         self.state: PlantState | None = None
@@ -338,10 +339,10 @@ class Plant:
             self._edge_cache[k] = geo
         return geo
 
-    def _xi(self, k: int, X, V, tip, tip_vel) -> tuple[float, float]:
-        """ξ and ξ̇ of a tip (position, velocity: pairs of floats) on edge k at pose X, twist V (floats)."""
-        g = self._edge_geometry(k)
-        c, s = math.cos(X[2]), math.sin(X[2])
+    @staticmethod
+    def _xi(g: _EdgeGeometry, X, V, c: float, s: float, tip, tip_vel) -> tuple[float, float]:
+        """ξ and ξ̇ of a tip (position, velocity: pairs of floats) on edge ``g`` at pose X, twist V
+        (floats), (c, s) = (cos β, sin β)."""
         rx, ry = tip[0] - X[0], tip[1] - X[1]
         xi = g.tx * ((c * rx + s * ry) - g.ox) + g.ty * ((c * ry - s * rx) - g.oy)
         # velocity of the tip relative to the object, in object coordinates
@@ -353,7 +354,9 @@ class Plant:
         (``tip``/``tip_vel``: the tip's position and velocity if already known)."""
         if tip is None:
             tip, tip_vel = self._tip(st, i)
-        return self._xi(self.contacts[i].edge, st.X.tolist(), st.V.tolist(), tip, tip_vel)
+        X = st.X.tolist()
+        return self._xi(self._edge_geometry(self.contacts[i].edge), X, st.V.tolist(), math.cos(X[2]), math.sin(X[2]),
+                        tip, tip_vel)
 
     def _tip(self, st: PlantState, i: int):
         f = self.hand.fingers[i]
@@ -413,8 +416,8 @@ class Plant:
         acceleration; ``tests/test_plant.py`` checks both against :meth:`Hand.dynamics`)."""
         damped = self.hand.damping_enabled
         out = []
-        for i, (model, data, fid, d0, d1, ox, oy) in enumerate(self._pin):
-            qi, vi = q[2 * i:2 * i + 2], v[2 * i:2 * i + 2]
+        for sl, model, data, fid, d0, d1, ox, oy in self._pin:
+            qi, vi = q[sl], v[sl]
             pin.computeAllTerms(model, data, qi, vi)
             (m00, m01), (_, m11) = data.M.tolist()
             n0, n1 = data.nle.tolist()
@@ -553,23 +556,26 @@ class Plant:
         st.v, st.V = np.array(v_new), np.array(V_new)
         return 0.5 * energy
 
-    def _evaluate(self, y: list, tau: tuple, specs: tuple, q=None, v=None):
+    def _evaluate(self, y: list, tau: tuple, specs: tuple, q=None, v=None, fingers=None):
         """dy/dt of the flat state y = (q, v, X, V, works) (a list of floats), the contact forces
-        (per finger) and the fingers' dynamics (:meth:`_pin_pass`); ``q``, ``v``: y's as arrays."""
+        (per finger) and the fingers' dynamics (:meth:`_pin_pass`, or ``fingers`` if known);
+        ``q``, ``v``: y's as arrays."""
         n = self.hand.nq
         vel, X, V = y[n:2 * n], y[2 * n:2 * n + 3], y[2 * n + 3:2 * n + 6]
-        fingers = self._pin_pass(np.array(y[:n]) if q is None else q, np.array(vel) if v is None else v)
+        if fingers is None:
+            fingers = self._pin_pass(np.array(y[:n]) if q is None else q, np.array(vel) if v is None else v)
         qdd, Xdd, forces = self._solve(fingers, specs, X, V, tau)
-        # net power of the contact forces: on the object at its material point, minus on the tips
-        power = 0.0
-        for (fx, fy), f in zip(forces, fingers):
+        # the powers of the torques, of the damping and of the contact forces (on the object at its
+        # material point, minus on the tips)
+        torque = damp = power = 0.0
+        damping = self._damping if self.hand.damping_enabled else self._no_damping
+        for i, ((fx, fy), f) in enumerate(zip(forces, fingers)):
+            u0, u1 = vel[2 * i], vel[2 * i + 1]
+            torque += tau[2 * i] * u0 + tau[2 * i + 1] * u1
+            damp -= damping[2 * i] * u0 * u0 + damping[2 * i + 1] * u1 * u1
             if fx or fy:
                 rx, ry = f[11] - X[0], f[12] - X[1]
                 power += fx * (V[0] - V[2] * ry - f[13]) + fy * (V[1] + V[2] * rx - f[14])
-        torque = damp = 0.0
-        for t, d, u in zip(tau, self._damping if self.hand.damping_enabled else self._no_damping, vel):
-            torque += t * u
-            damp -= d * u * u
         return vel + qdd + V + Xdd + [torque, damp, power], forces, fingers
 
     # ------------------------------------------------------------------ stepping
@@ -606,10 +612,14 @@ class Plant:
         y = st.q.tolist() + st.v.tolist() + st.X.tolist() + st.V.tolist() + [st.torque_work, st.damping_work,
                                                                            st.contact_work]
         # the event check's evaluation at the last step's end is this step's first stage when the
-        # state, τ, the modes and the parameters are the same
+        # state, τ, the modes and the parameters are the same (its Pinocchio pass, when the state is)
         params = (hand.gravity_in_hand.tobytes(), hand.damping_enabled, self.mass, self.inertia, self.alpha)
-        key = (y, tau, specs, params)
-        k1, forces0, _ = self._last_evaluation if key == self._last_key else self._evaluate(y, tau, specs)
+        if (y, params) != self._last_key[:2]:
+            k1, forces0, _ = self._evaluate(y, tau, specs)
+        elif (tau, specs) != self._last_key[2:]:
+            k1, forces0, _ = self._evaluate(y, tau, specs, fingers=self._last_evaluation[2])
+        else:
+            k1, forces0, _ = self._last_evaluation
         half = h / 2
         k2 = self._evaluate([a + half * b for a, b in zip(y, k1)], tau, specs)[0]
         k3 = self._evaluate([a + half * b for a, b in zip(y, k2)], tau, specs)[0]
@@ -622,7 +632,7 @@ class Plant:
         c0, s0 = math.cos(st.X[2]), math.sin(st.X[2])
         surface = np.array([self._surface(c.edge, c0, s0, f) for c, f in zip(self.contacts, forces0)])
         end = self._evaluate(y, tau, specs, new.q, new.v)
-        self._last_key, self._last_evaluation = (y, tau, specs, params), end
+        self._last_key, self._last_evaluation = (y, params, tau, specs), end
         fingers = end[2]
         err = self._violations(specs, new.X.tolist(), [f[11:13] for f in fingers])
         self.max_constraint_error = max(self.max_constraint_error, err)
@@ -644,10 +654,11 @@ class Plant:
         V0 = st.V
         X = st.X.tolist()
         c, s = math.cos(X[2]), math.sin(X[2])
+        geometry = [self._edge_geometry(ct.edge) for ct in self.contacts]
 
         def xis():
             V = st.V.tolist()
-            return [self._xi(ct.edge, X, V, f[11:13], f[13:15]) for ct, f in zip(self.contacts, fingers)]
+            return [self._xi(g, X, V, c, s, f[11:13], f[13:15]) for g, f in zip(geometry, fingers)]
 
         current = xis()
         for i, ct in enumerate(self.contacts):
@@ -660,7 +671,7 @@ class Plant:
                 self._switch_mode(st, tau, i, self._surface(ct.edge, c, s, forces[i]), xi, xi_dot, out)
                 if ct.mode == "separated":
                     continue
-            g = self._edge_geometry(ct.edge)
+            g = geometry[i]
             if not g.lo <= xi <= g.hi:
                 self._event(st.t, i, "left_edge", f"xi = {xi:.5g} m outside [{g.lo:.5g}, {g.hi:.5g}]", out)
         for i, f in enumerate(fingers):
@@ -686,7 +697,7 @@ class Plant:
         q = st.q.tolist()
         for i, checker in enumerate(self.checkers):
             f = fingers[i]
-            ox, oy = self._pin[i][5:7]
+            ox, oy = self._pin[i][6:8]
             ex, ey = f[11] - f[8], f[12] + f[6]  # the elbow: p - o_2 = (j11, -j01)
             posture = (q[2 * i], q[2 * i + 1], beta, c * (ox - x) + s * (oy - y), c * (oy - y) - s * (ox - x),
                        c * (ex - x) + s * (ey - y), c * (ey - y) - s * (ex - x))
