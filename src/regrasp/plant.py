@@ -455,7 +455,7 @@ class Plant:
         for spec in specs:
             i, kind, ux, uy = spec[:4]
             jax, jay, px, py, pvx, pvy = fingers[i][9:15]
-            fax, fay = (0.0, 0.0) if free is None else free[i]
+            fax, fay = (0.0, 0.0) if free is None else free[i][:2]
             rx, ry = px - x, py - y
             if kind == _FIXED:
                 rcx, rcy = c * ux - s * uy, s * ux + c * uy
@@ -500,19 +500,18 @@ class Plant:
     def _solve(self, fingers, specs, X, V, tau):
         """(q̈, Ẍ, forces) as lists of floats: forces (fx, fy) per finger on the object."""
         gravity = self.hand.gravity_in_hand.tolist()
-        torque, free = [], []  # per finger: τ - N, and the tip's acceleration at q̈ = M^-1 (τ - N)
+        free = []  # per finger: the tip's acceleration at q̈ = M^-1 (τ - N), and τ - N
         for i, f in enumerate(fingers):
             r0, r1 = tau[2 * i] - f[3], tau[2 * i + 1] - f[4]
             u0, u1 = f[15] * r0 + f[16] * r1, f[16] * r0 + f[17] * r1
-            torque.append((r0, r1))
-            free.append((f[5] * u0 + f[6] * u1, f[7] * u0 + f[8] * u1))
+            free.append((f[5] * u0 + f[6] * u1, f[7] * u0 + f[8] * u1, r0, r1))
         rows, rhs, cols = self._rows(fingers, specs, X, V, free, gravity)
         if rows:
             forces, obj = self._multipliers(fingers, rows, cols, rhs)
         else:
             forces, obj = [[0.0, 0.0] for _ in fingers], (0.0, 0.0, 0.0)
         qdd = []
-        for (fx, fy), f, (r0, r1) in zip(forces, fingers, torque):
+        for (fx, fy), f, (_, _, r0, r1) in zip(forces, fingers, free):
             r0, r1 = r0 - (f[5] * fx + f[7] * fy), r1 - (f[6] * fx + f[8] * fy)
             qdd += (f[15] * r0 + f[16] * r1, f[16] * r0 + f[17] * r1)
         return qdd, [gravity[0] + obj[0] / self.mass, gravity[1] + obj[1] / self.mass, obj[2] / self.inertia], forces
@@ -563,7 +562,10 @@ class Plant:
         n = self.hand.nq
         vel, X, V = y[n:2 * n], y[2 * n:2 * n + 3], y[2 * n + 3:2 * n + 6]
         if fingers is None:
-            fingers = self._pin_pass(np.array(y[:n]) if q is None else q, np.array(vel) if v is None else v)
+            if q is None:
+                qv = np.array(y[:2 * n])
+                q, v = qv[:n], qv[n:]
+            fingers = self._pin_pass(q, v)
         qdd, Xdd, forces = self._solve(fingers, specs, X, V, tau)
         # the powers of the torques, of the damping and of the contact forces (on the object at its
         # material point, minus on the tips)
@@ -576,7 +578,7 @@ class Plant:
             if fx or fy:
                 rx, ry = f[11] - X[0], f[12] - X[1]
                 power += fx * (V[0] - V[2] * ry - f[13]) + fy * (V[1] + V[2] * rx - f[14])
-        return vel + qdd + V + Xdd + [torque, damp, power], forces, fingers
+        return [*vel, *qdd, *V, *Xdd, torque, damp, power], forces, fingers
 
     # ------------------------------------------------------------------ stepping
     def _surface(self, k: int, c: float, s: float, force) -> tuple[float, float]:
