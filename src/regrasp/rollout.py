@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -159,7 +159,6 @@ class Rollout:
     supervisor: RegraspSupervisor
     duration: float
     names: tuple[str, ...]
-    _rows: list = field(default_factory=list, repr=False)
 
     def measure(self, last: PlantStep | None) -> Measurement:
         """What the hand's sensors read now (from the last plant step, or the plant's state)."""
@@ -231,6 +230,8 @@ class Rollout:
         return self._result(rows, log, failure, time.perf_counter() - wall0, recorder)
 
     def _check_events(self, step: PlantStep, out: SupervisorOutput) -> RolloutFailure | None:
+        if not step.events:
+            return None
         index = {n: i for i, n in enumerate(self.names)}
         for e in step.events:
             i = index[e.contact]
@@ -241,12 +242,12 @@ class Rollout:
         return None
 
     def _row(self, meas: Measurement, out: SupervisorOutput, step: PlantStep, plant_seconds: float):
-        X_d = self.supervisor.trajectory.pose(meas.t)
         # fixed contacts the supervisor holds fixed (a contact being primed slips on purpose)
         fixed = np.array([c == "fixed" and p is ContactPhase.FIXED for c, p in zip(step.modes, out.phases)])
         margins = self.plant.mu * step.forces_surface[:, 0] - np.abs(step.forces_surface[:, 1])
         cone = float(margins[fixed].min()) if fixed.any() else np.inf
-        return (meas.t, meas.xi, out.bounds, [p.value for p in out.phases], X_d - meas.X, step.forces_surface,
+        # the control law's error E = S_d - S starts with the object's X_d - X
+        return (meas.t, meas.xi, out.bounds, [p.value for p in out.phases], out.control.error[:3], step.forces_surface,
                 float(np.min(out.margins)), cone, out.supervisor_seconds, out.control_seconds, plant_seconds)
 
     def _result(self, rows, log, failure, wall, recorder) -> RolloutResult:
@@ -256,15 +257,13 @@ class Rollout:
         err = np.array(cols[4], dtype=float).reshape(-1, 3)
         late = times > TRANSIENT
         pos_err = np.hypot(err[late, 0], err[late, 1])
-        verts = self.plant.polygon.vertices
-        width = float(np.max(np.linalg.norm(verts[:, None] - verts[None], axis=-1)))
         log.sort(key=lambda e: e.time)
         return RolloutResult(
             success=failure is None,
             failure=failure,
             duration=self.duration,
             steps=len(rows),
-            object_width=width,
+            object_width=self.plant.polygon.scale,
             max_object_error_after_transient=float(pos_err.max()) if pos_err.size else float("nan"),
             max_orientation_error_after_transient=float(np.abs(err[late, 2]).max()) if late.any() else float("nan"),
             regrasps={n: c for n, c in zip(self.names, self.supervisor.regrasps)},

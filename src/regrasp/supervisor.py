@@ -177,7 +177,8 @@ class SupervisorEvent:
         time: [s].
         contact: Finger name.
         kind: ``danger``, ``slide_rejected``, ``prime``, ``slide_aborted``, ``slide``, ``arrived``,
-            ``stuck``, ``left_envelope``.
+            ``stuck`` (stuck before the target), ``timed_out`` (``max_slide_time`` passed),
+            ``left_envelope``.
         detail: Human-readable numbers and reasons.
     """
 
@@ -259,10 +260,9 @@ class RegraspSupervisor:
         plan: The planner's result for ``trajectory`` (:func:`~regrasp.planner.plan`), or None.
             With a plan the supervisor looks ahead: a contact is in danger when the planned
             envelopes of the next ``reaction_time`` would squeeze it, and a slide's target is the
-            contact that stays feasible longest from now on (the planner's initial-grasp rule
-            applied from the current time, within the current interval), which on a wide still
-            interval is its midpoint (see ``SupervisorSettings.target_horizon``). Without a plan:
-            the current interval's midpoint.
+            middle of what the plan keeps feasible over the next ``target_horizon``, within the
+            current interval (the planner's prefix-intersection rule applied from now), which on a
+            wide still interval is its midpoint. Without a plan: the current interval's midpoint.
         settings: :class:`SupervisorSettings`.
     """
 
@@ -372,16 +372,14 @@ class RegraspSupervisor:
             self._previous = (meas.t, bounds)
         return margins, bounds
 
-    def _planned(self, i: int, t: float) -> tuple[EnvelopeSample, ...]:
-        """Finger i's planned envelopes from time t on (the sample at or just before t first)."""
-        times = self.plan.times
-        k = max(0, int(np.searchsorted(times, t, side="right")) - 1)
-        return self.plan.fingers[i].samples[k:]
+    def _plan_index(self, t: float) -> int:
+        """Index of the planned sample at or just before t."""
+        return max(0, int(np.searchsorted(self.plan.times, t, side="right")) - 1)
 
     def _squeezed_ahead(self, i: int, t: float, xi: float) -> float | None:
         """The first planned time within ``reaction_time`` where ξ is in a danger zone or outside."""
         times = self.plan.times
-        k0 = max(0, int(np.searchsorted(times, t, side="right")) - 1)
+        k0 = self._plan_index(t)
         k1 = int(np.searchsorted(times, t + self.settings.reaction_time, side="right"))
         lo, hi, single = (a[k0:k1] for a in self._plan_bounds[i])
         # samples with one interval, vectorised; the others (empty or split sets) one by one
@@ -396,11 +394,13 @@ class RegraspSupervisor:
         return float(times[k0 + hits[0]]) if hits.size else None
 
     def _slide_target(self, i: int, t: float, xi: float, interval: tuple[float, float]) -> tuple[float, float | None]:
-        """(ξ*, until): the contact in ``interval`` that the plan keeps feasible longest from t."""
+        """(ξ*, until): the middle of the widest piece of ``interval`` that the plan keeps feasible
+        over [t, t + target_horizon] (or its longest prefix with a non-empty intersection), and
+        the last planned time of that prefix."""
         if self.plan is None:
             return 0.5 * (interval[0] + interval[1]), None
         prefix, until = (interval,), None
-        for sample in self._planned(i, t):
+        for sample in self.plan.fingers[i].samples[self._plan_index(t):]:
             if sample.time > t + self.settings.target_horizon:
                 break
             nxt = intersect(prefix, sample.feasible)
@@ -430,19 +430,18 @@ class RegraspSupervisor:
             if not np.isfinite(width):
                 self._in_danger[i] = False
                 continue
-            why = ""
+            why, urgency = "", meas.t
             if margins[i] < fraction * width:
                 why = "in the danger zone"
             elif self.plan is not None:
                 when = self._squeezed_ahead(i, meas.t, meas.xi[i])
                 if when is not None:
-                    why = f"the plan squeezes it at t = {when:.3f} s"
+                    why, urgency = f"the plan squeezes it at t = {when:.3f} s", when
             else:
                 reach = self._time_to_bound(i, meas.xi[i], bounds)
                 if reach < self.settings.reaction_time:
                     why = f"a bound arrives in {reach:.3f} s"
             in_danger = bool(why)
-            urgency = meas.t if self.plan is None or not why.startswith("the plan") else when
             if in_danger and not self._in_danger[i]:
                 self._log(out, meas.t, i, "danger", f"xi = {meas.xi[i] * 1e3:.2f} mm, feasible "
                           f"[{lo * 1e3:.2f}, {hi * 1e3:.2f}] mm, margin {margins[i] * 1e3:.2f} mm: {why}")
@@ -538,7 +537,7 @@ class RegraspSupervisor:
                 self._end_slide(meas, out, "arrived", f"xi = {meas.xi[i] * 1e3:.2f} mm after "
                                 f"{meas.t - self._phase_start:.3f} s")
             elif meas.t - self._phase_start > s.max_slide_time:
-                self._end_slide(meas, out, "arrived", f"slide stopped after max_slide_time at "
+                self._end_slide(meas, out, "timed_out", f"slide stopped after max_slide_time at "
                                 f"{meas.xi[i] * 1e3:.2f} mm (target {self._target * 1e3:.2f} mm)")
         elif phase is ContactPhase.SETTLING and not meas.sliding[i]:
             self._finish(meas, out)
