@@ -22,6 +22,7 @@ from regrasp.control import (
     Proposition3Controller,
 )
 from regrasp.exceptions import InvalidParameterError
+from regrasp.internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
 
 ROOT = Path(__file__).resolve().parents[1]
 SC = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
@@ -38,6 +39,9 @@ CASES = {
     "prop2": (Proposition2Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.3, 0.5, 0.5], 0.01),
     "prop3_up": (Proposition3Controller, 2, ["sliding", "fixed"], [-0.0075, -0.0075], [0.3, 0.3], 0.01),
     "prop3_down": (Proposition3Controller, 2, ["sliding", "fixed"], [0.005, 0.015], [0.05, 0.8], -0.01),
+    "prop3_m3": (Proposition3Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.3, 0.5, 0.5], 0.01),
+    "prop3_m3_down": (Proposition3Controller, 3, ["fixed", "sliding", "fixed"], [0.0, 0.01, 0.02], [0.5, 0.3, 0.5],
+                      -0.01),
 }
 
 
@@ -72,7 +76,8 @@ def run(name, duration=0.4, dt=1e-3, friction_noise=0.0):
     return log, deviation, np.array([mo == "fixed" for mo in modes])
 
 
-@pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop2", "prop3_up", "prop3_down"])
+@pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop2", "prop3_up", "prop3_down", "prop3_m3",
+                                  "prop3_m3_down"])
 def test_error_follows_the_closed_loop_ode(name):
     log, deviation, fixed = run(name)
     assert log.events == ()
@@ -90,7 +95,7 @@ def test_exact_laws_converge_to_the_ode_as_dt_shrinks(name):
     assert 1.6 < coarse / fine < 2.4  # first order in dt: the only error is the sampling
 
 
-@pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop3_up", "prop3_down"])
+@pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop3_up", "prop3_down", "prop3_m3", "prop3_m3_down"])
 def test_achieved_internal_force_equals_the_commanded_one(name):
     """The plant's contact forces equal the controller's predicted ones (motion part + f_c), so the
     internal force achieved is the commanded one (τ_I = τ_Ic)."""
@@ -135,3 +140,70 @@ def test_laws_check_their_preconditions():
         Proposition1Controller(sliding, Gains(np.ones(4), -np.ones(4)))
     with pytest.raises(InvalidParameterError):
         Proposition1Controller(sliding, Gains(np.ones(3), np.ones(3)))  # wrong size
+
+
+def model_of(name):
+    """The reduced model of a CASES entry, and its state S (x, y, β, ξ_slider) at ξ."""
+    law, m, modes, xi, mu, speed = CASES[name]
+    fingers = [c.finger for c in SC.contacts] + ([FINGER3] if m == 3 else [])
+    grasp = Grasp(SC.polygon, [1, 3, 2][:m], modes)
+    model = ReducedModel(Hand(fingers, gravity_in_hand=(0.0, -9.81)), grasp, xi=np.array(xi, dtype=float))
+    S = np.concatenate([[0.0, 0.12, 0.0], np.array(xi)[list(grasp.sliding)]])
+    return model, S, np.array(mu), speed
+
+
+@pytest.mark.parametrize("name", ["prop3_up", "prop3_down"])
+def test_proposition3_force_distribution_reduces_to_the_papers_P_for_two_fingers(name):
+    """With m = 2 the m-finger law's equations have a unique solution, which is (3.4.9)'s."""
+    model, S, mu, speed = model_of(name)
+    rng = np.random.default_rng(3)
+    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), mu=mu)
+    for _ in range(5):
+        S_dot = np.append(rng.normal(0, 0.01, 3), speed)
+        S_d = S + rng.normal(0, 1e-3, 4)
+        out = law(S, S_dot, S_d, S_dot, rng.normal(0, 0.5, 4))
+        st, _, A, frames_bd = model._state(S, S_dot)
+        tau, f_hat, forces, _ = law._distributed_torque(st, A, frames_bd, out.command, law._direction)
+        scale = np.abs(out.tau).max()
+        assert np.abs(tau - out.tau).max() < 1e-9 * scale
+        assert abs(f_hat[0] - out.friction_estimate[0]) < 1e-9 * scale
+
+
+def test_proposition3_with_three_fingers_chooses_the_sliders_normal_force():
+    """m = 3: the predicted forces move the object as commanded (checked with G and the object's
+    equation, not the law's matrices), keep the slider on its cone edge and every contact within
+    the QP's margins, also where Proposition 2 on the cone edge fails because the measured
+    friction over μ is below the minimum push."""
+    model, S, mu, speed = model_of("prop3_m3")
+    settings = InternalForceSettings(f_min=0.5, margin=0.05)
+    rng = np.random.default_rng(4)
+    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), mu=mu, internal_force=settings)
+    for _ in range(5):
+        S_dot = np.append(rng.normal(0, 0.01, 3), speed)
+        out = law(S, S_dot, S + rng.normal(0, 1e-4, 4), S_dot, rng.normal(0, 0.1, 4))
+        pose, xi = S[:3], model.xi.copy()
+        xi[0] = S[3]
+        G = model.grasp.grasp_matrix(pose, xi)
+        wrench = model.object_mass * (out.command[:3] * [1, 1, 0] - [0.0, -9.81, 0.0])
+        wrench[2] = model.object_inertia * out.command[2]
+        assert np.allclose(G @ out.contact_forces.reshape(-1), wrench, atol=1e-9)
+        f_n, f_t = out.contact_forces_surface.T
+        assert abs(f_t[0] - mu[0] * f_n[0]) < 1e-9  # sliding in +ξ: friction on the object along +t
+        assert abs(out.friction_estimate[0] - f_t[0]) < 1e-9  # f̂_ξ is the slider's predicted friction
+        assert f_n.min() >= settings.f_min - 1e-6
+        assert np.all(np.abs(f_t[1:]) <= (mu[1:] - settings.margin) * f_n[1:] + 1e-6)
+    pinned = Proposition2Controller(model, Gains.critically_damped(OMEGA, 4), mu=mu, internal_force=settings,
+                                    cone_edge=ConeEdge(0, 1.0))
+    with pytest.raises(InternalForceInfeasibleError):
+        pinned(S, np.append(np.zeros(3), speed), S, np.append(np.zeros(3), speed), np.zeros(4),
+               friction=[0.5 * mu[0] * settings.f_min])
+    assert law(S, np.append(np.zeros(3), speed), S, np.append(np.zeros(3), speed), np.zeros(4)).internal.feasible
+
+
+def test_proposition3_checks_its_arguments():
+    model, *_ = model_of("prop3_m3")
+    gains = Gains.critically_damped(OMEGA, 4)
+    with pytest.raises(InvalidParameterError, match="direction"):
+        Proposition3Controller(model, gains, direction=0.0)
+    with pytest.raises(InvalidParameterError, match="cone_edge"):
+        Proposition3Controller(model, gains, cone_edge=ConeEdge(0, 1.0))

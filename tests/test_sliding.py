@@ -33,7 +33,8 @@ from factories import random_polygon
 from regrasp import Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
 from regrasp.closed_loop import run_closed_loop
 from regrasp.control import Gains, Proposition3Controller
-from regrasp.internal_force import InternalForceSettings
+from regrasp.exceptions import InvalidParameterError
+from regrasp.internal_force import InternalForceSettings, InternalForceSolver
 from regrasp.sliding import SlideFeasibility, sliding_feasibility
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -306,6 +307,29 @@ def test_three_finger_slide_matches_a_brute_force_search():
     assert sum(outcomes.values()) >= 30, outcomes
     assert outcomes[True] >= 8 and outcomes[False] >= 8, outcomes
 
+
+
+def test_persistent_solver_gives_the_one_shot_verdicts():
+    """``solver=``: the same QP on a persistent OSQP object; same verdicts and forces on the random
+    cases of both sizes, and a solver with other settings is refused."""
+    compared = 0
+    for seed in THREE_FINGER_SEEDS:
+        c = random_slide_case(seed, 3)
+        one_shot = run(c)
+        settings = c["settings"] or InternalForceSettings(f_min=0.0, margin=0.0)  # the predicate's default
+        grasp = Grasp(c["polygon"], c["edges"], ["fixed"] * 3)
+        fast = sliding_feasibility(grasp, c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["mu_arg"],
+                                   object_mass=c["mass"], object_inertia=c["inertia"], gravity_in_hand=c["gravity"],
+                                   settings=settings, solver=InternalForceSolver(settings))
+        assert fast.possible == one_shot.possible, seed
+        scale = max(1.0, np.abs(one_shot.forces_surface).max())
+        np.testing.assert_allclose(fast.forces_surface, one_shot.forces_surface, rtol=0, atol=1e-6 * scale)
+        compared += 1
+    assert compared == len(THREE_FINGER_SEEDS)
+    with pytest.raises(InvalidParameterError, match="solver"):
+        sliding_feasibility(grasp, c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["mu_arg"], object_mass=c["mass"],
+                            object_inertia=c["inertia"], settings=InternalForceSettings(f_min=1.0),
+                            solver=InternalForceSolver(InternalForceSettings(f_min=2.0)))
 
 def n_t_inverse(surface_force, n, t):
     """Hand-frame force from its (normal, tangential) components."""

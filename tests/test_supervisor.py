@@ -11,6 +11,7 @@ import pytest
 from regrasp import Hand, load_scenario
 from regrasp.exceptions import InvalidParameterError
 from regrasp.planner import plan, plan_scenario
+from regrasp.sliding import sliding_feasibility
 from regrasp.supervisor import ContactPhase, Measurement, RegraspSupervisor, SupervisorSettings
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
@@ -36,6 +37,8 @@ def measurement(sc, t, xi) -> Measurement:
 @pytest.mark.parametrize("name, value", [
     ("danger_fraction", 0.0), ("danger_fraction", 0.5), ("omega_n", -1.0), ("zeta", 0.0), ("prime_time", np.nan),
     ("reaction_time", -0.1), ("envelope_every", 0), ("envelope_every", 1.5), ("geometry", "mesh"),
+    ("settle_undershoot", 0.0), ("path_checks", 0), ("path_checks", 2.5), ("enabling_candidates", True),
+    ("enabling_recheck_time", -1.0),
 ])
 def test_settings_reject_bad_values(name, value):
     with pytest.raises(InvalidParameterError) as info:
@@ -94,7 +97,7 @@ def test_a_possible_slide_is_primed_on_the_cone_edge_towards_the_target(two_fing
     sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
     ((lo, hi),) = sample.feasible
     xi = [lo + 0.02 * (hi - lo), 0.012]
-    sup = make_supervisor(two_fingers, xi)
+    sup = make_supervisor(two_fingers, xi, path_checks=1)  # asked where it starts only
     out = sup.step(measurement(two_fingers, 0.0, xi), 1e-3)
     assert out.phases[0] is ContactPhase.PRIMING
     assert out.targets[0] == pytest.approx(0.5 * (lo + hi))
@@ -102,6 +105,32 @@ def test_a_possible_slide_is_primed_on_the_cone_edge_towards_the_target(two_fing
     f_n, f_t = out.control.contact_forces_surface[0]
     overshoot = sup.settings.prime_overshoot
     assert f_t == pytest.approx((sup.mu[0] + overshoot) * f_n, rel=1e-6)  # + direction: up the edge
+
+
+def test_a_slide_is_asked_about_along_its_path(two_fingers):
+    """The same slide, asked at its start, middle and target: at the target (ξ = -12.5 mm) finger 2
+    would need more friction than the predicate's margin allows (checked here directly with
+    sliding_feasibility), so it is rejected there, and said so."""
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    ((lo, hi),) = sample.feasible
+    xi = [lo + 0.02 * (hi - lo), 0.012]
+    sup = make_supervisor(two_fingers, xi)
+    assert sup.settings.path_checks == 3
+    out = sup.step(measurement(two_fingers, 0.0, xi), 1e-3)
+    assert out.phases[0] is ContactPhase.FIXED
+    (rejected,) = [e for e in out.events if e.kind == "slide_rejected"]
+    assert "fixed contact 1 would slip" in rejected.detail and "-12.50 mm on the way" in rejected.detail
+    target = 0.5 * (lo + hi)
+    desired = two_fingers.trajectory.sample(min(6.0 / sup.settings.omega_n, two_fingers.trajectory.t_end))
+    at_target = sliding_feasibility(sup.grasp, desired.pose, [target, 0.012], desired.acceleration, 0, 1.0, sup.mu,
+                                    object_mass=sup.object_mass, object_inertia=sup.object_inertia,
+                                    gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility)
+    at_start = sliding_feasibility(sup.grasp, two_fingers.trajectory.pose(0.0), xi,
+                                   two_fingers.trajectory.sample(0.0).acceleration, 0, 1.0,
+                                   sup.mu + [sup.settings.prime_overshoot, 0.0], object_mass=sup.object_mass,
+                                   object_inertia=sup.object_inertia, gravity_in_hand=sup.hand.gravity_in_hand,
+                                   settings=sup.settings.feasibility)
+    assert at_start.possible and not at_target.possible
 
 
 def test_with_a_plan_the_supervisor_looks_ahead(two_fingers):
@@ -117,3 +146,56 @@ def test_with_a_plan_the_supervisor_looks_ahead(two_fingers):
     danger_ahead = [e for e in out_ahead.events if e.kind == "danger" and e.contact == "finger2"]
     assert not danger_blind
     assert danger_ahead and "the plan squeezes it" in danger_ahead[0].detail
+
+
+THREE = Path(__file__).resolve().parents[1] / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
+
+
+def test_a_rejected_slide_gets_another_contact_to_enable_it():
+    """Three fingers at t = 1.737 s: finger 1 must slide down (-ξ) before its bound sweeps down,
+    but with the palm under the centre the torque balance forbids it on the way. The supervisor
+    slides the palm towards finger 1's side first; at the palm's target the slide is possible
+    at every checked point (asked here directly, with the same settings)."""
+    sc = load_scenario(THREE)
+    xi = [0.01381, -0.01356, 0.00031]
+    sup = make_supervisor(sc, xi, plan=plan_scenario(sc), geometry="urdf")
+    t = 1.737
+    out = sup.step(measurement(sc, t, xi), 1e-3)
+    (rejected,) = [e for e in out.events if e.kind == "slide_rejected"]
+    assert rejected.contact == "finger1" and "-xi" in rejected.detail and "on the way" in rejected.detail
+    (prime,) = [e for e in out.events if e.kind == "prime"]
+    assert prime.contact == "palm" and "to let finger1 slide -xi" in prime.detail
+    assert out.phases[2] is ContactPhase.PRIMING and out.phases[0] is ContactPhase.FIXED
+    palm_target, finger1_target = out.targets[2], sup._slide_target(0, t, xi[0], tuple(out.bounds[0]))[0]
+    assert palm_target > xi[2] + 1e-3  # +ξ on the bottom edge: towards finger 1's side
+
+    def possible(where, when, palm):
+        desired = sc.trajectory.sample(when)
+        return sliding_feasibility(sup.grasp, desired.pose, [where, xi[1], palm], desired.acceleration, 0, -1.0,
+                                   sup.mu, object_mass=sup.object_mass, object_inertia=sup.object_inertia,
+                                   gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility).possible
+
+    duration = 6.0 / sup.settings.omega_n
+    path = [(xi[0] + f * (finger1_target - xi[0]), t + duration + f * duration) for f in (0.5, 1.0)]
+    assert not all(possible(w, when - duration, xi[2]) for w, when in path)  # with the palm where it is
+    assert all(possible(w, when, palm_target) for w, when in path)          # with the palm moved
+
+
+def test_a_slide_that_ends_sliding_settles_just_inside_the_cone_and_sticks():
+    """After a slide arrives the contact is still sliding; the settling law asks (μ - 0.05) f_n of
+    friction in the sliding direction, so the plant's kinetic friction slows it and it sticks
+    within a few periods, without slipping any other contact."""
+    from regrasp import build_rollout
+
+    rollout = build_rollout(load_scenario(THREE), duration=0.3)
+    result = rollout.run()
+    assert result.success, result.failure
+    kinds = [(e.contact, e.kind) for e in result.events]
+    arrived = next(e for e in result.events if e.kind == "arrived")
+    stick = next(e for e in result.events if e.kind == "stick" and e.contact == arrived.contact)
+    assert 0.0 < stick.time - arrived.time <= 0.02
+    settling = result.phases[(result.times > arrived.time) & (result.times < stick.time), :]
+    assert settling.size and np.all(settling[:, ["finger1", "finger2", "palm"].index(arrived.contact)] == "settling")
+    for k, (contact, kind) in enumerate(kinds):  # every slip is a primed one
+        if kind == "slip":
+            assert (contact, "prime") in kinds[:k], kinds[:k + 1]

@@ -147,6 +147,16 @@ class ComputedTorqueController:
         error = S_d - S
         error_rate = S_d_dot - S_dot
         command = S_d_ddot + self.gains.kv * error_rate + self.gains.ks * error
+        tau, f_hat, forces, internal = self._torque(st, J_inv, A, frames_bd, command, friction)
+        surface = forces.reshape(-1).dot(frames_bd).reshape(-1, 2)  # (n_i^T f_i, t_i^T f_i) per contact
+        margins = np.array([mu * f_n - abs(f_t) for mu, (f_n, f_t) in zip(self.mu.tolist(), surface.tolist())])
+        return ControlOutput(tau, command, error, error_rate, f_hat, forces, surface, margins, internal,
+                             time.perf_counter() - start)
+
+    def _torque(self, st: ReducedState, J_inv: np.ndarray, A: np.ndarray, frames_bd: np.ndarray,
+                command: np.ndarray, friction):
+        """(τ, f̂_ξ, predicted contact forces (m, 2), internal-force result) for the commanded S̈."""
+        model = self.model
         f_hat = self.friction_estimate(st, command, friction)
         H = st.H
         # (ndarray.dot: matmul's ufunc machinery costs ~1 us per call on these small arrays)
@@ -167,10 +177,7 @@ class ComputedTorqueController:
             forces = internal.forces
         else:
             forces = motion_forces.reshape(model.grasp.m, 2)
-        surface = forces.reshape(-1).dot(frames_bd).reshape(-1, 2)  # (n_i^T f_i, t_i^T f_i) per contact
-        margins = np.array([mu * f_n - abs(f_t) for mu, (f_n, f_t) in zip(self.mu.tolist(), surface.tolist())])
-        return ControlOutput(tau, command, error, error_rate, f_hat, forces, surface, margins, internal,
-                             time.perf_counter() - start)
+        return tau, f_hat, forces, internal
 
 
 _ARGUMENTS = ("S", "S_dot", "S_d", "S_d_dot", "S_d_ddot")
@@ -213,25 +220,50 @@ class Proposition2Controller(ComputedTorqueController):
 
 
 class Proposition3Controller(ComputedTorqueController):
-    r"""Proposition 3 (3.4.11, corrected): m = 2, p = 1, :math:`\hat f_\xi = P (M_o a_X - f_g)`.
+    r"""Proposition 3 (3.4.11, corrected), and its generalisation to m > 2 fingers; p = 1.
 
-    P depends on the sliding direction. We use the direction the contact will slide in during
-    the next sample: the sign of the measured ξ̇, unless ξ̇ crosses zero within ``sample_time``
-    under the commanded ξ̈ (a reversal), in which case the sign of the commanded ξ̈. Using the
-    desired ξ̇ instead would predict the wrong friction for a step or two at every reversal, and
-    the contact would stick there.
+    The friction at the sliding contact j is not measured but predicted from the commanded motion.
+    The contact forces f that move the object as commanded with contact j on the edge of its
+    friction cone in the sliding direction s solve
+
+    .. math:: G f = M_o a_X - f_g, \qquad (t_j - s \mu_j n_j)^T f_j = 0.
+
+    * m = 2: these are four equations in four unknowns; f is unique and
+      :math:`\hat f_\xi = t_j^T f_j = P (M_o a_X - f_g)` with the paper's P (3.4.9).
+    * m > 2: f has 2m - 4 degrees of freedom. The internal-force QP (:mod:`regrasp.internal_force`)
+      picks the least-squeeze f, :math:`f = f_p + N_c y` with :math:`f_p` the least-norm solution
+      and :math:`N_c` a basis of the null space of the same equations, so that every contact
+      pushes and every fixed contact stays in its cone while j stays on its cone edge; then
+      :math:`\hat f_\xi = t_j^T f_j` and :math:`\tau = M(H a + \dot H \dot S) + N + J^T f`. Because
+      :math:`H^T J^T = A^T`, this τ satisfies the reduced equation with that :math:`\hat f_\xi`,
+      so the error obeys the same ODE. Unlike Proposition 2 with the slider held on its cone edge,
+      which pins the slider's normal force to the measured friction over μ, the slider's normal
+      force is chosen together with the other contacts' (``docs/derivations.md``, §4). The
+      ``internal`` result's ``f_c`` is then relative to :math:`f_p`.
+
+    The sliding direction s: the direction the contact will slide in during the next sample, the
+    sign of the measured ξ̇, unless ξ̇ crosses zero within ``sample_time`` under the commanded ξ̈
+    (a reversal), in which case the sign of the commanded ξ̈. Using the desired ξ̇ instead would
+    predict the wrong friction for a step or two at every reversal, and the contact would stick
+    there. ``direction`` sets s until the first such decision (+1 by default).
     """
 
     law = "Proposition 3"
 
-    def __init__(self, model: ReducedModel, gains: Gains, mu=0.5, *, sample_time: float = 1e-3, **kwargs):
-        if model.grasp.m != 2 or model.grasp.p != 1:
-            raise InvalidParameterError("model", model.grasp.modes, "m = 2 fingers with p = 1 sliding contact")
+    def __init__(self, model: ReducedModel, gains: Gains, mu=0.5, *, sample_time: float = 1e-3,
+                 direction: float = 1.0, **kwargs):
+        if model.grasp.m < 2 or model.grasp.p != 1:
+            raise InvalidParameterError("model", model.grasp.modes, "m >= 2 fingers with p = 1 sliding contact")
         super().__init__(model, gains, mu, **kwargs)
         if not np.isfinite(sample_time) or sample_time <= 0:
             raise InvalidParameterError("sample_time", sample_time, "a control period > 0 [s]")
+        if direction not in (-1, 1, -1.0, 1.0):
+            raise InvalidParameterError("direction", direction, "+1 or -1")
+        if self.cone_edge is not None:
+            raise InvalidParameterError("cone_edge", self.cone_edge, "None: the sliding contact is on its cone edge")
         self.sample_time = float(sample_time)
-        self._direction = 1.0
+        self._direction = float(direction)
+        self._slider = model.grasp.sliding[0]
 
     def sliding_direction(self, xi_dot: float, xi_ddot_command: float) -> float:
         """±1: the sign of ξ̇ over the next sample (see the class docstring)."""
@@ -243,7 +275,34 @@ class Proposition3Controller(ComputedTorqueController):
         return self._direction
 
     def friction_estimate(self, st, command, friction) -> np.ndarray:
-        mu = self.mu[self.model.grasp.sliding[0]]
+        """m = 2: :math:`P (M_o a_X - f_g)` (3.4.9); m > 2: see :meth:`_torque`."""
+        mu = self.mu[self._slider]
         direction = self.sliding_direction(float(st.S_dot[3]), float(command[3]))
         P = self.model.grasp.friction_map(st.S[:3], st.xi, [direction], mu)
         return P @ (self.model.M_o @ command[:3] - self.model.f_g)
+
+    def _torque(self, st, J_inv, A, frames_bd, command, friction):
+        if self.model.grasp.m == 2:
+            return super()._torque(st, J_inv, A, frames_bd, command, friction)
+        direction = self.sliding_direction(float(st.S_dot[3]), float(command[3]))
+        return self._distributed_torque(st, A, frames_bd, command, direction)
+
+    def _distributed_torque(self, st, A, frames_bd, command, direction: float):
+        """The m > 2 law of the class docstring (valid for m = 2 too: then f is unique)."""
+        model, j = self.model, self._slider
+        n_j, t_j = frames_bd[2 * j:2 * j + 2, 2 * j], frames_bd[2 * j:2 * j + 2, 2 * j + 1]
+        edge = A.copy()  # [G^T | e_j (t_j - s μ_j n_j)]: its columns' transposes are the equations
+        edge[:, 3] = 0.0
+        edge[2 * j:2 * j + 2, 3] = t_j - direction * self.mu[j] * n_j
+        rhs = np.append(model.M_o.dot(command[:3]) - model.f_g, 0.0)
+        particular = edge.dot(_solve(edge.T.dot(edge), rhs))  # least-norm f_p
+        internal = None
+        if self._qp is not None:
+            internal = self._qp._solve(edge, particular, frames_bd, self._fixed, self.mu, None, time.perf_counter())
+            forces = internal.forces
+        else:
+            forces = particular.reshape(model.grasp.m, 2)
+        q_ddot = st.H.dot(command) + st.H_dot_S_dot
+        tau = st.hand.mass_matrix.dot(q_ddot) + st.hand.nonlinear + st.hand.jacobian.T.dot(forces.reshape(-1))
+        f_hat = np.array([float(t_j.dot(forces[j]))])
+        return tau, f_hat, forces, internal

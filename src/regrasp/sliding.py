@@ -28,6 +28,7 @@ from .grasp import Grasp
 from .internal_force import (
     InternalForceInfeasibleError,
     InternalForceSettings,
+    InternalForceSolver,
     build_internal_force_qp,
     solve_internal_force_qp,
 )
@@ -73,6 +74,7 @@ def sliding_feasibility(
     object_inertia: float,
     gravity_in_hand=(0.0, -9.81),
     settings: InternalForceSettings = InternalForceSettings(f_min=0.0, margin=0.0),
+    solver: InternalForceSolver | None = None,
 ) -> SlideFeasibility:
     r"""Whether contact ``contact`` can slide in ``direction`` while the object accelerates as asked.
 
@@ -87,8 +89,13 @@ def sliding_feasibility(
         object_mass, object_inertia: [kg], [kg m²].
         gravity_in_hand: [m/s²].
         settings: Minimum normal force and cone margin (default: the bare physics, 0 and 0).
+        solver: A persistent :class:`~regrasp.internal_force.InternalForceSolver` with these
+            ``settings``, for callers that ask many times (a supervisor); the same QP, solved
+            warm-started instead of set up anew (~20x faster). None: the one-shot ``qpsolvers`` path.
     """
     m = grasp.m
+    if solver is not None and solver.settings != settings:
+        raise InvalidParameterError("solver", solver.settings, f"a solver with the same settings ({settings})")
     if not 0 <= contact < m:
         raise InvalidParameterError("contact", contact, f"a contact index in 0..{m - 1}")
     if direction not in (-1, 1, -1.0, 1.0):
@@ -117,10 +124,13 @@ def sliding_feasibility(
         return SlideFeasibility(False, contact, float(direction), surface, surface[:, 0].copy(),
                                 mu * surface[:, 0] - np.abs(surface[:, 1]),
                                 "no finite contact forces produce this motion with that slide (singular geometry)")
-    qp = build_internal_force_qp(system.T, particular, frames, fixed, mu, settings)
     reason = None
     try:
-        result = solve_internal_force_qp(qp, frames, fixed, mu)
+        if solver is None:
+            result = solve_internal_force_qp(build_internal_force_qp(system.T, particular, frames, fixed, mu, settings),
+                                             frames, fixed, mu)
+        else:
+            result = solver.solve(system.T, particular, frames, fixed, mu)
         forces = result.forces
         possible = result.feasible
         if not possible:

@@ -13,15 +13,16 @@ At every control step the supervisor
    tries the next contact in danger, or waits;
 3. runs a slide in three phases: **priming** (the fixed-contact law with the internal force moved
    so the contact sits just past the edge of its friction cone, in the sliding direction, until
-   it is sensed slipping or for at most ``prime_time``), **sliding** (the sliding law: Proposition 3 for two fingers, Proposition 2 with
-   the measured friction for more; ξ follows a second-order filter towards the target,
+   it is sensed slipping or for at most ``prime_time``), **sliding** (the sliding law: Proposition 3, which predicts the friction from
+   the commanded motion and, for more than two fingers, chooses the slider's normal force with the
+   internal force; ξ follows a second-order filter towards the target,
    :math:`\ddot\xi_r = \omega_n^2 (\xi^* - \xi_r) - 2\zeta\omega_n\dot\xi_r`), and **settling**
    (the fixed-contact law at the reached ξ, until the plant's contact sticks);
 4. starts at most one slide at a time, so p ≤ 1 and 2m ≥ 3 + p holds for every m ≥ 2.
 
 The supervisor reads only what a hand could sense: the object pose and twist, each contact's
-position and rate along its edge, whether each contact is stuck or sliding (a slip sensor) and, for
-Proposition 2, the tangential force at a sliding contact (a force sensor). It never sees the plant.
+position and rate along its edge and whether each contact is stuck or sliding (a slip sensor). It
+never sees the plant.
 """
 
 from __future__ import annotations
@@ -39,14 +40,13 @@ from .control import (
     ControlOutput,
     FixedContactController,
     Gains,
-    Proposition2Controller,
     Proposition3Controller,
 )
 from .envelope import EnvelopeSample, FingerEnvelope, Geometry
 from .exceptions import InvalidParameterError
 from .grasp import Grasp
 from .hand import Hand
-from .internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
+from .internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings, InternalForceSolver
 from .intervals import intersect, widest
 from .planner import PlanResult
 from .polygon import ConvexPolygon
@@ -97,6 +97,13 @@ class SupervisorSettings:
             tangential force exceeds the kinetic friction by ``prime_overshoot`` f_n) before the
             sliding law takes over. Switching to the sliding law while the contact is still stuck
             makes the plant redistribute the forces for one step and can slip another contact.
+        settle_undershoot: A slide that ends with the contact still sliding settles with the
+            fixed-contact law asking for (μ - this) f_n of friction in the sliding direction [-],
+            just inside the cone: the plant's kinetic friction exceeds it by this much f_n, so the
+            contact slows down gently and sticks. The plain fixed-contact law would predict static
+            friction of either sign there, which a sliding contact cannot give; the plant would
+            redistribute the forces for a step, enough to slip another contact when the slider
+            carries much friction (the palm under the object).
         arrive_tolerance: A slide ends when |ξ - ξ*| is below this [m] ...
         arrive_speed: ... and |ξ̇| below this [m/s].
         max_slide_time: A slide that has not arrived after this long ends where it is [s].
@@ -111,15 +118,26 @@ class SupervisorSettings:
         feasibility: Margins the sliding-direction predicate requires before a slide starts (at
             least those of ``internal_force``, so that the priming QP is feasible).
         regrasp: False: never slide (every contact stays where it is; for comparison runs).
+        path_checks: The predicate is asked at this many points of a slide, evenly from the start
+            to the target, each at the desired state of when the filter is expected to pass there
+            (a slide takes about 6/ω_n): whether a slide is possible depends on where the contact
+            is (its lever arm), so a slide can be possible where it starts and not on the way.
+        enabling: When a contact's slide is rejected, look for a slide of another contact that
+            makes it possible (e.g. the palm finger moving under the side that must slide down),
+            and do that first.
+        enabling_candidates: Candidate targets per other contact, evenly across what the plan keeps
+            feasible for it (out of its danger zones), the nearest first.
+        enabling_recheck_time: Search for an enabling slide at most this often per contact [s].
     """
 
     danger_fraction: float = 0.1
     reaction_time: float = 0.4
-    target_horizon: float = 0.5
+    target_horizon: float = 0.6
     omega_n: float = 20.0
     zeta: float = 1.0
     prime_time: float = 0.02
     prime_overshoot: float = 0.05
+    settle_undershoot: float = 0.05
     arrive_tolerance: float = 5e-4
     arrive_speed: float = 5e-3
     max_slide_time: float = 1.5
@@ -131,11 +149,20 @@ class SupervisorSettings:
     feasibility: InternalForceSettings = field(
         default_factory=lambda: InternalForceSettings(f_min=0.2, margin=0.05, f_max=20.0))
     regrasp: bool = True
+    path_checks: int = 3
+    enabling: bool = True
+    enabling_candidates: int = 9
+    enabling_recheck_time: float = 0.05
 
     def __post_init__(self):
-        for name in ("reaction_time", "target_horizon", "omega_n", "zeta", "prime_time", "prime_overshoot", "arrive_tolerance",
-                     "arrive_speed", "max_slide_time", "recheck_time", "control_omega"):
+        for name in ("reaction_time", "target_horizon", "omega_n", "zeta", "prime_time", "prime_overshoot", "settle_undershoot",
+                     "arrive_tolerance",
+                     "arrive_speed", "max_slide_time", "recheck_time", "control_omega", "enabling_recheck_time"):
             as_positive_float(name, getattr(self, name))
+        for name, least in (("path_checks", 1), ("enabling_candidates", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or int(value) != value or value < least:
+                raise InvalidParameterError(name, value, f"an integer >= {least}")
         if not 0.0 < self.danger_fraction < 0.5:
             raise InvalidParameterError("danger_fraction", self.danger_fraction, "a fraction in (0, 0.5)")
         if isinstance(self.envelope_every, bool) or int(self.envelope_every) != self.envelope_every \
@@ -156,8 +183,8 @@ class Measurement:
         X, V: Object pose (x, y, β) and twist in the hand frame [m, rad], [m/s, rad/s].
         xi, xi_dot: Each contact's position along its edge and its rate [m], [m/s].
         sliding: Whether each contact is sliding (a slip sensor), (m,) bool.
-        friction: Tangential contact force on the object at each contact [N], (m,) (read at the
-            sliding contacts only, by Proposition 2).
+        friction: Tangential contact force on the object at each contact [N], (m,) (a force
+            sensor; the supervisor's laws do not read it, Proposition 2 would).
     """
 
     t: float
@@ -308,6 +335,8 @@ class RegraspSupervisor:
         self._rejected: dict[int, str] = {}    # last logged rejection per contact (log once per reason)
         self._in_danger = [False] * m
         self._recheck = [-math.inf] * m       # when a rejected slide may be asked about again
+        self._enable_recheck = [-math.inf] * m  # when to search for an enabling slide again
+        self._feasibility = InternalForceSolver(settings.feasibility)  # the predicate's persistent QP
         self._previous: tuple[float, np.ndarray] | None = None   # (t, bounds) of the last envelope
         self._rates = np.zeros((m, 2))                          # d(lo)/dt, d(hi)/dt [m/s]
         self._controller = self._fixed_controller()
@@ -320,24 +349,25 @@ class RegraspSupervisor:
         return ReducedModel(self.hand, self.grasp.with_modes(modes), self.xi, object_mass=self.object_mass,
                             object_inertia=self.object_inertia)
 
-    def _fixed_controller(self, cone_edge: ConeEdge | None = None) -> ComputedTorqueController:
+    def _fixed_controller(self, cone_edge: ConeEdge | None = None, overshoot: float | None = None
+                          ) -> ComputedTorqueController:
+        """The fixed-contact law; with ``cone_edge``, that contact's force asks for (μ + overshoot) f_n
+        of friction (default ``prime_overshoot``: just past the cone's edge, so that it starts to
+        slip; negative: just inside, so that a sliding contact slows down and sticks)."""
         model = self._model(["fixed"] * self.hand.m)
         mu = self.mu
-        if cone_edge is not None:  # just past the cone's edge, so that the contact starts to slip
+        if cone_edge is not None:
             mu = mu.copy()
-            mu[cone_edge.contact] += self.settings.prime_overshoot
+            mu[cone_edge.contact] += self.settings.prime_overshoot if overshoot is None else overshoot
         return FixedContactController(model, self._gains(3), mu, internal_force=self.settings.internal_force,
                                       cone_edge=cone_edge)
 
     def _sliding_controller(self, i: int) -> ComputedTorqueController:
         modes = ["sliding" if j == i else "fixed" for j in range(self.hand.m)]
-        model = self._model(modes)
-        if self.hand.m == 2:
-            return Proposition3Controller(model, self._gains(4), self.mu, internal_force=self.settings.internal_force)
-        # with m > 2 the internal force could change the sliding contact's normal force; keeping it on
-        # its cone edge makes the normal force the one the (measured) friction implies
-        return Proposition2Controller(model, self._gains(4), self.mu, internal_force=self.settings.internal_force,
-                                      cone_edge=ConeEdge(i, self._direction))
+        # Proposition 3 predicts the friction from the commanded motion; with m > 2 it chooses the
+        # slider's normal force together with the internal force (its class docstring)
+        return Proposition3Controller(self._model(modes), self._gains(4), self.mu, direction=self._direction,
+                                      internal_force=self.settings.internal_force)
 
     # ------------------------------------------------------------------ logging
     def _log(self, out: list, t: float, i: int, kind: str, detail: str) -> None:
@@ -397,8 +427,14 @@ class RegraspSupervisor:
         """(ξ*, until): the middle of the widest piece of ``interval`` that the plan keeps feasible
         over [t, t + target_horizon] (or its longest prefix with a non-empty intersection), and
         the last planned time of that prefix."""
+        (lo, hi), until = self._kept_feasible(i, t, interval)
+        return 0.5 * (lo + hi), until
+
+    def _kept_feasible(self, i: int, t: float, interval: tuple[float, float]) -> tuple[tuple[float, float], float | None]:
+        """The widest piece of ``interval`` the plan keeps feasible for contact i (see
+        :meth:`_slide_target`), and until when; without a plan, ``interval`` itself."""
         if self.plan is None:
-            return 0.5 * (interval[0] + interval[1]), None
+            return interval, None
         prefix, until = (interval,), None
         for sample in self.plan.fingers[i].samples[self._plan_index(t):]:
             if sample.time > t + self.settings.target_horizon:
@@ -407,8 +443,7 @@ class RegraspSupervisor:
             if not nxt:
                 break
             prefix, until = nxt, sample.time
-        lo, hi = widest(prefix)
-        return 0.5 * (lo + hi), until
+        return widest(prefix), until
 
     def _time_to_bound(self, i: int, xi: float, bounds) -> float:
         """Time [s] until the nearer moving bound reaches ``xi`` at its current rate (inf if never)."""
@@ -420,7 +455,7 @@ class RegraspSupervisor:
             times.append((hi - xi) / -self._rates[i, 1])
         return min(times)
 
-    def _try_start(self, meas: Measurement, margins, bounds, desired, out: list) -> None:
+    def _try_start(self, meas: Measurement, margins, bounds, out: list) -> None:
         """Start priming the most endangered contact whose slide the predicate accepts."""
         fraction = self.settings.danger_fraction
         danger = []
@@ -454,7 +489,6 @@ class RegraspSupervisor:
             return
         if not danger:
             return
-        pose_d, acc_d = desired.pose, desired.acceleration
         for *_, i in sorted(danger):  # the soonest squeezed first
             if meas.t < self._recheck[i]:
                 continue
@@ -463,42 +497,103 @@ class RegraspSupervisor:
             if abs(target - meas.xi[i]) < 2.0 * self.settings.arrive_tolerance:
                 continue  # already where a slide would take it
             direction = 1.0 if target > meas.xi[i] else -1.0
+            verdict, where = self._slide_verdict(i, direction, meas.xi, target, meas.t)
+            if verdict.possible:
+                self._rejected.pop(i, None)
+                self._start_priming(meas, out, i, direction, target, (lo, hi), until, verdict, "")
+                return
+            reason = f"slide {'+' if direction > 0 else '-'}xi rejected: {verdict.reason}" + (
+                f" (at xi = {where * 1e3:.2f} mm on the way)" if where != meas.xi[i] else "")
+            key = _NUMBER.sub("#", reason)
+            if self._rejected.get(i) != key:  # log each kind of rejection once per danger episode
+                self._log(out, meas.t, i, "slide_rejected", reason + "; waiting")
+                self._rejected[i] = key
+            self._recheck[i] = meas.t + self.settings.recheck_time
+            if self.settings.enabling and meas.t >= self._enable_recheck[i]:
+                self._enable_recheck[i] = meas.t + self.settings.enabling_recheck_time
+                found = self._enabling_slide(meas, i, direction, target, bounds)
+                if found is not None:
+                    k, target_k, verdict_k, piece, until_k = found
+                    self._start_priming(meas, out, k, 1.0 if target_k > meas.xi[k] else -1.0, target_k, piece, until_k,
+                                        verdict_k, f" to let {self.names[i]} slide {'+' if direction > 0 else '-'}xi")
+                    return
+
+    def _slide_verdict(self, i: int, direction: float, xi, target: float, t: float):
+        """The predicate at ``path_checks`` points of contact i's slide from xi[i] to ``target`` (the
+        other contacts at ``xi``), each at the desired state of when the slide should pass there:
+        (the first rejection, or the last acceptance; the ξ_i [m] where it was asked)."""
+        s = self.settings
+        n = s.path_checks
+        duration = 6.0 / s.omega_n  # a critically damped filter covers ~98 % of a step in 6/ω_n
+        xi = np.array(xi, dtype=float)
+        start = xi[i]
+        for k in range(n):
+            fraction = k / (n - 1) if n > 1 else 0.0
+            xi[i] = start + fraction * (target - start)
+            desired = self.trajectory.sample(min(t + fraction * duration, self.trajectory.t_end))
             mu = self.mu.copy()
-            mu[i] += self.settings.prime_overshoot  # the priming asks for that much friction
+            if k == 0:
+                mu[i] += s.prime_overshoot  # the priming asks for that much friction
             verdict = sliding_feasibility(
-                self.grasp, pose_d, meas.xi, acc_d, i, direction, mu, object_mass=self.object_mass,
+                self.grasp, desired.pose, xi, desired.acceleration, i, direction, mu, object_mass=self.object_mass,
                 object_inertia=self.object_inertia, gravity_in_hand=self.hand.gravity_in_hand,
-                settings=self.settings.feasibility)
+                settings=s.feasibility, solver=self._feasibility)
             if not verdict.possible:
-                reason = f"slide {'+' if direction > 0 else '-'}xi rejected: {verdict.reason}"
-                key = _NUMBER.sub("#", reason)
-                if self._rejected.get(i) != key:  # log each kind of rejection once per danger episode
-                    self._log(out, meas.t, i, "slide_rejected", reason + "; waiting")
-                    self._rejected[i] = key
-                self._recheck[i] = meas.t + self.settings.recheck_time
+                break
+        return verdict, float(xi[i])
+
+    def _enabling_slide(self, meas: Measurement, i: int, direction: float, target: float, bounds):
+        """A slide of another fixed contact k after which contact i's rejected slide is possible:
+        (k, ξ_k*, k's verdict, k's kept-feasible piece, until) with the nearest such ξ_k* over the
+        candidates, or None."""
+        s = self.settings
+        later = meas.t + 6.0 / s.omega_n  # contact i slides once k has arrived
+        for k in range(self.hand.m):
+            lo, hi = bounds[k]
+            if k == i or self.phases[k] is not ContactPhase.FIXED or not math.isfinite(hi - lo):
                 continue
-            self._rejected.pop(i, None)
-            self._active, self._direction, self._target = i, direction, target
-            self._phase_start = meas.t
-            self.phases[i] = ContactPhase.PRIMING
-            self.xi = meas.xi.copy()
-            self._controller = self._fixed_controller(ConeEdge(i, direction))
-            self._log(out, meas.t, i, "prime", f"to slide {'+' if direction > 0 else '-'}xi from "
-                      f"{meas.xi[i] * 1e3:.2f} mm to {target * 1e3:.2f} mm (feasible [{lo * 1e3:.2f}, "
-                      f"{hi * 1e3:.2f}] mm" + (f", planned feasible until t = {until:.3f} s" if until is not None else "")
-                      + "); predicted normal forces "
-                      + ", ".join(f"{f:.2f}" for f in verdict.normal_forces) + " N")
-            return
+            (plo, phi), until = self._kept_feasible(k, meas.t, (lo, hi))
+            keep = s.danger_fraction * (phi - plo)
+            candidates = np.linspace(plo + keep, phi - keep, s.enabling_candidates) if phi - plo > 0 else []
+            for target_k in sorted(candidates, key=lambda c: abs(c - meas.xi[k])):
+                if abs(target_k - meas.xi[k]) < 2.0 * s.arrive_tolerance:
+                    continue
+                moved = meas.xi.copy()
+                moved[k] = target_k
+                if not self._slide_verdict(i, direction, moved, target, later)[0].possible:
+                    continue
+                verdict_k, _ = self._slide_verdict(k, 1.0 if target_k > meas.xi[k] else -1.0, meas.xi, target_k, meas.t)
+                if verdict_k.possible:
+                    return k, float(target_k), verdict_k, (plo, phi), until
+        return None
+
+    def _start_priming(self, meas: Measurement, out: list, i: int, direction: float, target: float, interval,
+                       until, verdict, why: str) -> None:
+        """Prime contact i's slide: the fixed law with i just past its cone edge in ``direction``."""
+        lo, hi = interval
+        self._active, self._direction, self._target = i, direction, target
+        self._phase_start = meas.t
+        self.phases[i] = ContactPhase.PRIMING
+        self.xi = meas.xi.copy()
+        self._controller = self._fixed_controller(ConeEdge(i, direction))
+        self._log(out, meas.t, i, "prime", f"to slide {'+' if direction > 0 else '-'}xi from "
+                  f"{meas.xi[i] * 1e3:.2f} mm to {target * 1e3:.2f} mm{why} (feasible [{lo * 1e3:.2f}, "
+                  f"{hi * 1e3:.2f}] mm" + (f", planned feasible until t = {until:.3f} s" if until is not None else "")
+                  + "); predicted normal forces " + ", ".join(f"{f:.2f}" for f in verdict.normal_forces) + " N")
 
     def _end_slide(self, meas: Measurement, out: list, kind: str, detail: str) -> None:
-        """Back to the fixed-contact law at the reached ξ; settle until the contact sticks."""
+        """Stop the slide where it is; a contact still sliding settles until it sticks (see
+        ``SupervisorSettings.settle_undershoot``), then the fixed-contact law at the reached ξ."""
         i = self._active
         self.xi = meas.xi.copy()
-        self._controller = self._fixed_controller()
         self._log(out, meas.t, i, kind, detail)
         if meas.sliding[i]:
             self.phases[i] = ContactPhase.SETTLING
+            moving = float(meas.xi_dot[i])
+            self._controller = self._fixed_controller(ConeEdge(i, math.copysign(1.0, moving) if moving else self._direction),
+                                                      -self.settings.settle_undershoot)
         else:
+            self._controller = self._fixed_controller()
             self._finish(meas, out)
 
     def _finish(self, meas: Measurement, out: list) -> None:
@@ -507,7 +602,7 @@ class RegraspSupervisor:
         if not self._aborted:  # an aborted slide that settles is not a regrasp
             self.regrasps[i] += 1
         self._aborted = False
-        if abs(self.xi[i] - meas.xi[i]) > 1e-12:
+        if abs(self.xi[i] - meas.xi[i]) > 1e-12 or not isinstance(self._controller, FixedContactController):
             self.xi = meas.xi.copy()
             self._controller = self._fixed_controller()
         self._active = None
@@ -568,12 +663,11 @@ class RegraspSupervisor:
             self._advance(meas, out)
         desired = self.trajectory.sample(float(meas.t))
         if self._active is None:
-            self._try_start(meas, margins, bounds, desired, out)
+            self._try_start(meas, margins, bounds, out)
         X_d, V_d, A_d = desired.pose, desired.velocity, desired.acceleration
         targets = np.full(self.hand.m, np.nan)
         reference = np.full(self.hand.m, np.nan)
         controller = self._controller
-        kwargs = {}
         if self._active is not None and self.phases[self._active] is ContactPhase.SLIDING:
             i = self._active
             xr, vr, ar = self._filter_step(dt)
@@ -581,18 +675,13 @@ class RegraspSupervisor:
             S = np.append(meas.X, meas.xi[i])
             S_dot = np.append(meas.V, meas.xi_dot[i])
             S_d, S_d_dot, S_d_ddot = np.append(X_d, xr), np.append(V_d, vr), np.append(A_d, ar)
-            if isinstance(controller, Proposition2Controller):
-                # the measured friction, but never less than the minimum push allows: on the cone
-                # edge it sets the slider's normal force, which must stay >= f_min
-                floor = self.mu[i] * 1.05 * self.settings.internal_force.f_min
-                kwargs["friction"] = np.array([self._direction * max(abs(meas.friction[i]), floor)])
         else:
             if self._active is not None:
                 targets[self._active] = self._target
             S, S_dot, S_d, S_d_dot, S_d_ddot = meas.X, meas.V, X_d, V_d, A_d
         supervisor_seconds = time.perf_counter() - start
         try:
-            control = controller(S, S_dot, S_d, S_d_dot, S_d_ddot, **kwargs)
+            control = controller(S, S_dot, S_d, S_d_dot, S_d_ddot)
         except InternalForceInfeasibleError as exc:
             if self._active is None or self.phases[self._active] not in (ContactPhase.PRIMING, ContactPhase.SLIDING):
                 raise
