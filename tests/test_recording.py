@@ -262,3 +262,50 @@ def test_bad_input_raises_typed_errors(tmp_path):
         with pytest.raises(InvalidParameterError, match="desired_pose"):
             rec.log_step(plant, None, desired_pose=[0.0, 0.1])
     verify(path)
+
+
+def test_a_buffered_rollout_recording_holds_each_steps_values_at_its_time(tmp_path):
+    """Blocks of steps sent with ``send_columns`` read back as the rollout's own numbers, step by
+    step, and the same whether the steps go out one at a time or in blocks of any size."""
+    from regrasp.rollout import build_rollout
+
+    sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml")
+    recorded = {}
+    for flush_every in (1, 7, 500):  # one step per send (per-step logging), odd blocks, one block
+        rollout = build_rollout(sc, duration=0.03)
+        path = tmp_path / f"flush_{flush_every}.rrd"
+        with RolloutRecorder(rollout.plant, rrd_path=path, flush_every=flush_every) as rec:
+            result = rollout.run(recorder=rec)
+        verify(path)
+        recorded[flush_every] = (read(path)[0], result)
+    rows, result = recorded[1]
+    n = result.steps
+    assert n == 30 and result.success
+    for flush_every in (7, 500):
+        other, other_result = recorded[flush_every]
+        assert np.array_equal(other_result.forces_surface, result.forces_surface)
+        assert set(other) == set(rows)
+        for entity, cols in rows.items():
+            for name, values in cols.items():
+                if name.startswith("rerun.controls"):  # row ids differ between recordings
+                    continue
+                assert repr(other[entity][name]) == repr(values), (flush_every, entity, name)
+
+    # step k + 1 is the state after the rollout's k-th step, at the plant's time then
+    assert rows["plots/force"]["step"] == list(range(n + 1))
+    assert rows["plots/force"]["time"][1:n] == [round(t * 1e9) for t in result.times[1:]]
+    force = np.array(rows["plots/force"]["Scalars:scalars"], dtype=float)  # f_n..., f_t..., predicted...
+    m = len(result.names)
+    assert np.isnan(force[0, :2 * m]).all()  # the initial state has no plant step
+    assert np.array_equal(force[1:, :m], result.forces_surface[:, :, 0])  # the plant's, as they are
+    assert np.array_equal(force[1:, m:2 * m], result.forces_surface[:, :, 1])
+    mode = np.array(rows["plots/mode"]["Scalars:scalars"], dtype=float)
+    assert set(np.unique(mode)) <= {0.0, 1.0} and (mode[:, 1:] == 0.0).all()  # finger 1 may start priming
+    error = np.array(rows["plots/error"]["Scalars:scalars"], dtype=float)  # X_d - X [mm, mm, deg]
+    assert np.allclose(error[1:n, :2], result.object_error[1:, :2] * 1e3, rtol=0.0, atol=1e-9)
+    assert np.allclose(error[1:n, 2], np.degrees(result.object_error[1:, 2]), rtol=0.0, atol=1e-9)
+    for i, key in enumerate(result.names):
+        xi = np.array(rows[f"plots/xi/{key}"]["Scalars:scalars"], dtype=float)  # ξ, desired, bounds... [mm]
+        assert np.allclose(xi[1:n, 0], result.xi[1:, i] * 1e3, rtol=0.0, atol=1e-4)  # held vs tip: drift
+        assert np.isnan(xi[:, 1]).all()  # the recorder's error series are the object's only
+        assert (xi[:, 2] <= xi[:, 0]).all() and (xi[:, 0] <= xi[:, 3]).all()  # inside its feasible interval

@@ -164,15 +164,17 @@ class Rollout:
         """What the hand's sensors read now (from the last plant step, or the plant's state)."""
         plant = self.plant
         st = plant.state
-        m = plant.hand.m
+        contacts = plant.contacts
         if last is None:
+            m = plant.hand.m
             xi = np.array([plant.contact_xi(st, i) for i in range(m)])
             xi, xi_dot, friction = xi[:, 0], xi[:, 1], np.zeros(m)
         else:
             xi, xi_dot, friction = last.xi, last.xi_dot, last.forces_surface[:, 1]
-        sliding = np.array([c.mode == "sliding" for c in plant.contacts])
+        modes = [c.mode for c in contacts]
+        sliding = np.array([mode == "sliding" for mode in modes])
         # a fixed contact's ξ is where it is held (the plant's projection differs by the drift)
-        xi = np.array([c.xi if c.mode == "fixed" else x for c, x in zip(plant.contacts, xi)])
+        xi = np.array([c.xi if mode == "fixed" else x for c, mode, x in zip(contacts, modes, xi.tolist())])
         return Measurement(st.t, st.X.copy(), st.V.copy(), xi, xi_dot, sliding, friction)
 
     def run(self, *, recorder=None, progress: Callable[[int, int], None] | None = None) -> RolloutResult:
@@ -188,7 +190,7 @@ class Rollout:
         dt = plant.dt
         total = int(round(self.duration / dt))
         log: list[RolloutEvent] = []
-        rows = []
+        rows = _Rows(total, plant.hand.m, plant.mu)
         failure: RolloutFailure | None = None
         last: PlantStep | None = None
         wall0 = time.perf_counter()
@@ -204,29 +206,31 @@ class Rollout:
                 log.extend(RolloutEvent(e.time, e.contact, e.kind, e.detail, "supervisor") for e in sup.events[seen:])
                 failure = RolloutFailure(t, f"control failed: {exc}")
                 break
-            log.extend(RolloutEvent(e.time, e.contact, e.kind, e.detail, "supervisor") for e in out.events)
-            left = [e for e in out.events if e.kind == "left_envelope"]
-            if left:
-                failure = RolloutFailure(t, f"{left[0].contact} left its feasible envelope: {left[0].detail}")
-                break
+            if out.events:
+                log.extend(RolloutEvent(e.time, e.contact, e.kind, e.detail, "supervisor") for e in out.events)
+                left = [e for e in out.events if e.kind == "left_envelope"]
+                if left:
+                    failure = RolloutFailure(t, f"{left[0].contact} left its feasible envelope: {left[0].detail}")
+                    break
             t0 = time.perf_counter()
             step = plant.step(out.tau)
             plant_seconds = time.perf_counter() - t0
             last = step
-            rows.append(self._row(meas, out, step, plant_seconds))
+            rows.add(meas, out, step, plant_seconds)
             if recorder is not None:
                 # the recorder's error series are the object's (the sliding set changes with each slide)
                 control = replace(out.control, error=out.control.error[:3])
                 recorder.log_step(plant, control, desired_pose=sup.trajectory.pose(plant.state.t), plant_step=step)
-            for e in step.events:
-                log.append(RolloutEvent(e.time, e.contact, e.kind, e.detail, "plant"))
-            failure = self._check_events(step, out)
-            if failure is not None:
-                break
+            if step.events:
+                for e in step.events:
+                    log.append(RolloutEvent(e.time, e.contact, e.kind, e.detail, "plant"))
+                failure = self._check_events(step, out)
+                if failure is not None:
+                    break
             if progress is not None and (k + 1) % 50 == 0:
                 progress(k + 1, total)
         if progress is not None:
-            progress(len(rows), total)
+            progress(rows.n, total)
         return self._result(rows, log, failure, time.perf_counter() - wall0, recorder)
 
     def _check_events(self, step: PlantStep, out: SupervisorOutput) -> RolloutFailure | None:
@@ -241,20 +245,10 @@ class Rollout:
                 return RolloutFailure(e.time, f"{e.kind} of {e.contact}: {e.detail}")
         return None
 
-    def _row(self, meas: Measurement, out: SupervisorOutput, step: PlantStep, plant_seconds: float):
-        # fixed contacts the supervisor holds fixed (a contact being primed slips on purpose)
-        fixed = np.array([c == "fixed" and p is ContactPhase.FIXED for c, p in zip(step.modes, out.phases)])
-        margins = self.plant.mu * step.forces_surface[:, 0] - np.abs(step.forces_surface[:, 1])
-        cone = float(margins[fixed].min()) if fixed.any() else np.inf
-        # the control law's error E = S_d - S starts with the object's X_d - X
-        return (meas.t, meas.xi, out.bounds, [p.value for p in out.phases], out.control.error[:3], step.forces_surface,
-                float(np.min(out.margins)), cone, out.supervisor_seconds, out.control_seconds, plant_seconds)
-
-    def _result(self, rows, log, failure, wall, recorder) -> RolloutResult:
-        m = self.plant.hand.m
-        cols = list(zip(*rows)) if rows else [[] for _ in range(11)]
-        times = np.array(cols[0], dtype=float)
-        err = np.array(cols[4], dtype=float).reshape(-1, 3)
+    def _result(self, rows: _Rows, log, failure, wall, recorder) -> RolloutResult:
+        n = rows.n
+        times = rows.times[:n].copy()
+        err = rows.object_error[:n].copy()
         late = times > TRANSIENT
         pos_err = np.hypot(err[late, 0], err[late, 1])
         log.sort(key=lambda e: e.time)
@@ -262,27 +256,72 @@ class Rollout:
             success=failure is None,
             failure=failure,
             duration=self.duration,
-            steps=len(rows),
+            steps=n,
             object_width=self.plant.polygon.scale,
             max_object_error_after_transient=float(pos_err.max()) if pos_err.size else float("nan"),
             max_orientation_error_after_transient=float(np.abs(err[late, 2]).max()) if late.any() else float("nan"),
-            regrasps={n: c for n, c in zip(self.names, self.supervisor.regrasps)},
+            regrasps={name: c for name, c in zip(self.names, self.supervisor.regrasps)},
             events=tuple(log),
-            min_cone_margin=float(min(cols[7], default=np.inf)),
-            min_envelope_margin=float(min(cols[6], default=np.inf)),
+            min_cone_margin=float(min(rows.cone_margin[:n].tolist(), default=np.inf)),
+            min_envelope_margin=float(min(rows.envelope_margin[:n].tolist(), default=np.inf)),
             times=times,
-            xi=np.array(cols[1], dtype=float).reshape(-1, m),
-            bounds=np.array(cols[2], dtype=float).reshape(-1, m, 2),
-            phases=np.array(cols[3], dtype=object).reshape(-1, m),
+            xi=rows.xi[:n].copy(),
+            bounds=rows.bounds[:n].copy(),
+            phases=rows.phases[:n].copy(),
             object_error=err,
-            forces_surface=np.array(cols[5], dtype=float).reshape(-1, m, 2),
-            supervisor_seconds=np.array(cols[8], dtype=float),
-            control_seconds=np.array(cols[9], dtype=float),
-            plant_seconds=np.array(cols[10], dtype=float),
+            forces_surface=rows.forces_surface[:n].copy(),
+            supervisor_seconds=rows.supervisor_seconds[:n].copy(),
+            control_seconds=rows.control_seconds[:n].copy(),
+            plant_seconds=rows.plant_seconds[:n].copy(),
             wall_seconds=wall,
             names=self.names,
             rrd=None if recorder is None or recorder.rrd_path is None else str(recorder.rrd_path),
         )
+
+
+class _Rows:
+    """The per-step series of a run, in buffers allocated once for the whole run."""
+
+    def __init__(self, total: int, m: int, mu):
+        self.n = 0
+        self.mu = np.asarray(mu, dtype=float).tolist()
+        self.times = np.empty(total)
+        self.xi = np.empty((total, m))
+        self.bounds = np.empty((total, m, 2))
+        self.phases = np.empty((total, m), dtype=object)
+        self.object_error = np.empty((total, 3))
+        self.forces_surface = np.empty((total, m, 2))
+        self.envelope_margin = np.empty(total)
+        self.cone_margin = np.empty(total)
+        self.supervisor_seconds = np.empty(total)
+        self.control_seconds = np.empty(total)
+        self.plant_seconds = np.empty(total)
+
+    def add(self, meas: Measurement, out: SupervisorOutput, step: PlantStep, plant_seconds: float) -> None:
+        k = self.n
+        forces = step.forces_surface
+        self.times[k] = meas.t
+        self.xi[k] = meas.xi
+        self.bounds[k] = out.bounds
+        self.phases[k] = [p.value for p in out.phases]
+        self.object_error[k] = out.control.error[:3]  # the control law's E = S_d - S starts with X_d - X
+        self.forces_surface[k] = forces
+        self.envelope_margin[k] = out.margins.min()
+        # the plant's cone margins μ f_n - |f_t| at the contacts the supervisor holds fixed (a contact
+        # being primed slips on purpose)
+        cone = [mu * fn - abs(ft) for mu, (fn, ft), mode, phase
+                in zip(self.mu, forces.tolist(), step.modes, out.phases)
+                if mode == "fixed" and phase is ContactPhase.FIXED]
+        if not cone:
+            self.cone_margin[k] = np.inf
+        elif any(c != c for c in cone):  # NaN propagates, as numpy's min does
+            self.cone_margin[k] = np.nan
+        else:
+            self.cone_margin[k] = min(cone)
+        self.supervisor_seconds[k] = out.supervisor_seconds
+        self.control_seconds[k] = out.control_seconds
+        self.plant_seconds[k] = plant_seconds
+        self.n = k + 1
 
 
 def build_rollout(scenario: Scenario, *, duration: float | None = None, settings: SupervisorSettings | None = None,
