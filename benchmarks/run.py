@@ -12,7 +12,9 @@ Items and their floors:
 * one supervisor step (``RegraspSupervisor.step`` minus its control law: the runtime envelopes of
   all fingers at the measured pose, the look-ahead in the plan, the danger test), three fingers of
   ``paper_trajectory_2_three_fingers.toml`` holding still, with the scenario's ``urdf`` envelopes
-  and with ``ideal`` ones; floor: one envelope sample per finger (``FingerEnvelope.at``);
+  and with ``ideal`` ones; floor: one envelope sample per finger (``FingerEnvelope.at``); and with the
+  ``urdf`` envelopes followed from step to step (``track_envelopes``, ``EnvelopeTracker``), whose floor
+  is the coal distance calls the tracked steps make (bare ``coal.ComputeDistance`` calls);
 * the rollout of paper trajectory 2 with the palm finger (``paper_trajectory_2_three_fingers.toml``,
   two periods at 1 kHz, or until it fails): real-time factor = simulated time / wall time, with
   recording off and on (a ``RolloutRecorder`` writing an .rrd to a temporary directory).
@@ -39,20 +41,39 @@ from regrasp.supervisor import SupervisorSettings
 THREE = ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
 
 
-def supervisor_step_us(geometry: str, n: int) -> tuple[float, float]:
-    """Median of the supervisor's own time per step and its floor (one envelope sample per finger at
-    the same pose). Three fingers at t = 0 on the middles of their feasible sets; ``regrasp=False``,
-    so each step evaluates the envelopes, the look-ahead and the danger test but starts no slide."""
+def supervisor_step_us(geometry: str, n: int, track: bool = False) -> tuple[float, float]:
+    """Median of the supervisor's own time per step and its floor. Three fingers at t = 0 on the
+    middles of their feasible sets; ``regrasp=False``, so each step evaluates the envelopes, the
+    look-ahead and the danger test but starts no slide. Floor: one envelope sample per finger at the
+    same pose (``FingerEnvelope.at``); with ``track`` (``EnvelopeTracker``), the coal distance calls
+    the tracked steps made, each at the cost of one bare ``coal.ComputeDistance`` call."""
     sc = load_scenario(THREE)
-    rollout = build_rollout(sc, duration=0.01, settings=SupervisorSettings(geometry=geometry, regrasp=False),
-                            xi0=[-0.0125, 0.0125, 0.0])
+    settings = SupervisorSettings(geometry=geometry, regrasp=False, track_envelopes=track)
+    rollout = build_rollout(sc, duration=0.01, settings=settings, xi0=[-0.0125, 0.0125, 0.0])
     sup, plant = rollout.supervisor, rollout.plant
     meas = rollout.measure(None)
     times = []
     for _ in range(n + 1):
         times.append(sup.step(meas, plant.dt).supervisor_seconds)
-    floor = sum(median_us(lambda env=env: env.at(meas.X, meas.t), n) for env in sup.envelopes)
-    return float(np.median(times[1:]) * 1e6), floor
+    if not track:
+        floor = sum(median_us(lambda env=env: env.at(meas.X, meas.t), n) for env in sup.envelopes)
+        return float(np.median(times[1:]) * 1e6), floor
+    calls = [0]
+    for env in sup.envelopes:  # count the coal calls of a few more steps
+        def counted(*args, inner=env.checker._link_distance):
+            calls[0] += 1
+            return inner(*args)
+        env.checker._link_distance = counted
+    for _ in range(n):
+        sup.step(meas, plant.dt)
+    for env in sup.envelopes:
+        del env.checker._link_distance
+    checker = sup.envelopes[0].checker
+    distance, placement, _ = checker._links[1][5][0]
+    tf = checker._object_in_link(1, 0.0, 0.0, 1.0, 0.0)
+    request, result = checker._request, checker._result
+    bare = batch_us(lambda: distance(placement, tf, request, result), 100)
+    return float(np.median(times[1:]) * 1e6), calls[0] / n * bare
 
 
 def rollout_realtime(quick: bool) -> dict:
@@ -153,6 +174,8 @@ def main() -> None:
     for geometry in ("urdf", "ideal"):
         med, floor = supervisor_step_us(geometry, max(5, n // 10) if geometry == "urdf" else n)
         results[f"supervisor_step_{geometry}"] = {"median_us": med, "floor_us": floor}
+    med, floor = supervisor_step_us("urdf", n, track=True)
+    results["supervisor_step_urdf_tracked"] = {"median_us": med, "floor_us": floor}
     results["rollout_realtime_factor"] = rollout_realtime(args.quick)
     if args.json:
         print(json.dumps(results))
@@ -170,7 +193,7 @@ def main() -> None:
           f"({rt['simulated_s']:.3f} of {rt['requested_s']:.3f} s simulated; {rt['outcome']})")
     print(f"(Pinocchio floor of one 2-finger dynamics evaluation: {floor_dyn:.1f} us; "
           f"persistent OSQP solve of the 2-finger QP: {osqp_floor:.1f} us; supervisor floors: one "
-          f"envelope sample per finger)")
+          f"envelope sample per finger; tracked: its coal calls)")
 
 
 if __name__ == "__main__":

@@ -41,7 +41,7 @@ def test_benchmark_table_quick_smoke():
         assert doc[key]["median_us"] > 0 and doc[key]["floor_us"] > 0
     assert doc["control_fixed_qp"]["floor_us"] > doc["control_fixed_no_qp"]["floor_us"]
     assert doc["planner_sample_ideal"]["median_us"] > 0 and doc["planner_sample_ideal"]["floor_us"] is None
-    for key in ("supervisor_step_urdf", "supervisor_step_ideal"):
+    for key in ("supervisor_step_urdf", "supervisor_step_ideal", "supervisor_step_urdf_tracked"):
         assert doc[key]["median_us"] > 0 and doc[key]["floor_us"] > 0
     rollout = doc["rollout_realtime_factor"]
     assert set(rollout) >= {"recording_off", "recording_on"}

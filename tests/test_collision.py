@@ -391,17 +391,23 @@ def pinocchio_coal_distances(checker, finger: Finger, q: np.ndarray, pose: np.nd
     return np.array(out)
 
 
+def thin_finger_checkers(seed: int):
+    """(case, finger, checker, reach l1 + l2 [m]) of seeded case ``seed`` for both configurations, links
+    of radius 0.05 l1."""
+    case = make_case(seed)
+    for conf in ("left", "right"):
+        finger = make_random_finger(case["l1"], case["l2"], case["base"], conf, radius=0.05 * case["l1"])
+        yield case, finger, FingerEnvelope(finger, case["polygon"], case["edge"], geometry="urdf").checker, \
+            case["l1"] + case["l2"]
+
+
 @pytest.mark.parametrize("seed", range(0, 200, 20))
 def test_planar_signed_distances_match_pinocchio_placements(seed):
     """The checker places each shape with the planar link frames (no Pinocchio per query) and
     tests it against the object expressed in that frame; coal's distances agree with shapes
     placed by Pinocchio's forward kinematics (to coal's own tolerance), and so do the verdicts."""
-    case = make_case(seed)
     rng = np.random.default_rng(seed)
-    for conf in ("left", "right"):
-        finger = make_random_finger(case["l1"], case["l2"], case["base"], conf, radius=0.05 * case["l1"])
-        checker = FingerEnvelope(finger, case["polygon"], case["edge"], geometry="urdf").checker
-        scale = case["l1"] + case["l2"]
+    for case, finger, checker, scale in thin_finger_checkers(seed):
         for _ in range(20):
             q = rng.uniform(-np.pi, np.pi, size=2)
             pose = case["pose"] + rng.normal(0.0, 0.3 * scale, size=3)
@@ -433,6 +439,28 @@ def test_certified_free_postures_give_coal_verdicts(seed):
         stateful = [checker.links_collide(*checker._posture(p)) for p in postures]
         fresh = [checker.collides(p, pose) for p in postures]  # resets the certificates each time
         assert stateful == fresh
+
+
+@pytest.mark.parametrize("seed", range(7, 200, 20))
+def test_kept_certificates_give_coal_verdicts_while_the_object_moves(seed):
+    """links_collide_kept certifies free and colliding links across object poses; along joint sweeps
+    with the object drifting and jumping, its verdicts equal fresh coal verdicts."""
+    rng = np.random.default_rng(seed)
+    for case, _, checker, scale in thin_finger_checkers(seed):
+        q, q_step = rng.uniform(-np.pi, np.pi, size=2), rng.normal(0.0, 0.01, size=2)
+        pose, pose_step = np.array(case["pose"], float), rng.normal(0.0, 1e-3, size=3) * [scale, scale, 1.0]
+        kept = [None, None]
+        coal_calls = 0
+        for k in range(150):
+            if k % 50 == 49:
+                pose = pose + rng.normal(0.0, 0.05, size=3) * [scale, scale, 1.0]  # a jump
+            q, pose = q + q_step, pose + pose_step
+            checker.set_object_pose(*pose)
+            before = [c for c in kept]
+            verdict = checker.links_collide_kept(kept, *checker._posture(q))
+            coal_calls += sum(a is not b for a, b in zip(before, kept))
+            assert verdict == checker.collides(q, pose)  # fresh certificates each time
+        assert coal_calls < 2 * 150  # (the certificates were used)
 
 
 @pytest.mark.parametrize("seed", range(5, 200, 10))

@@ -27,12 +27,17 @@ from __future__ import annotations
 
 import functools
 import math
+from collections import Counter
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from factories import make_case, make_finger, perp2, rot
+from regrasp import load_scenario
 from regrasp.envelope import Condition, FingerEnvelope
+from regrasp.envelope_tracker import EnvelopeTracker
+from regrasp.exceptions import InvalidParameterError
 from regrasp.polygon import ConvexPolygon
 
 N_CASES = 200
@@ -523,3 +528,127 @@ def test_pose_is_validated(bad):
     for same in (pose.tolist(), tuple(pose.tolist())):
         assert env.at(same).feasible == ref.feasible
     assert env.at(pose.astype(np.float32)).condition is env.at(pose.astype(np.float32).astype(float)).condition
+
+
+# --------------------------------------------------------------------------- the step-to-step tracker
+THREE = Path(__file__).resolve().parents[1] / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
+
+
+@functools.lru_cache(maxsize=None)
+def _three_fingers():
+    return load_scenario(THREE)
+
+
+def _urdf_envelopes(sc):
+    return [FingerEnvelope(c.finger, sc.polygon, c.edge, geometry="urdf", tip_clearance=c.tip_clearance)
+            for c in sc.contacts]
+
+
+def _assert_same_envelope(tracker: EnvelopeTracker, tracked, fresh, fallback: bool):
+    """Tracked vs fresh: the same pieces, ends within the bisection tolerance; a fallback is bitwise at()."""
+    tol = tracker.envelope.urdf_tolerance * tracker.envelope.edge.length
+    assert len(tracked.feasible) == len(fresh.feasible), (tracked.time, tracked.feasible, fresh.feasible)
+    for (a, b), (c, e) in zip(tracked.feasible, fresh.feasible):
+        assert abs(a - c) <= tol and abs(b - e) <= tol, (tracked.time, tracked.feasible, fresh.feasible)
+    assert (tracked.reachable, tracked.reason, tracked.condition, tracked.d) == \
+        (fresh.reachable, fresh.reason, fresh.condition, fresh.d)
+    if fallback:
+        assert tracked.feasible == fresh.feasible
+
+
+def _follow(trackers, fresh_envelopes, poses, times) -> list[float]:
+    """Update every tracker along the poses, compare with fresh at() at every step; the largest
+    end deviation per finger as a fraction of its tolerance."""
+    worst = [0.0] * len(trackers)
+    for pose, t in zip(poses, times):
+        for i, (tracker, env) in enumerate(zip(trackers, fresh_envelopes)):
+            before = tracker.fallbacks
+            tracked, fresh = tracker.update(pose, t), env.at(pose, t)
+            _assert_same_envelope(tracker, tracked, fresh, tracker.fallbacks > before)
+            tol = env.urdf_tolerance * env.edge.length
+            for (a, b), (c, e) in zip(tracked.feasible, fresh.feasible):
+                worst[i] = max(worst[i], abs(a - c) / tol, abs(b - e) / tol)
+    return worst
+
+
+def test_tracker_matches_fresh_envelopes_along_the_three_finger_trajectory():
+    """One period of paper trajectory 2 at 1 kHz: every tracked sample has at()'s pieces, ends within
+    the bisection tolerance, and the structure changes on the way force fallbacks."""
+    sc = _three_fingers()
+    traj = sc.trajectory
+    times = np.arange(traj.t_start, traj.t_start + np.pi, 1e-3)
+    trackers = [EnvelopeTracker(env) for env in _urdf_envelopes(sc)]
+    worst = _follow(trackers, _urdf_envelopes(sc), [traj.pose(t) for t in times], times)
+    assert max(worst) <= 1.0
+    counts = sum((t.counts for t in trackers), Counter())
+    assert counts["tracked"] >= 0.95 * 3 * times.size  # the fast path is what was tested
+    assert counts["structure"] + counts["piece end"] > 0  # pieces changed on the way: fallbacks
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_tracker_matches_fresh_envelopes_on_random_pose_sequences(seed):
+    """Seeded random walks of the object around the trajectory, with occasional jumps: the same
+    equality at every step; jumps force fallbacks."""
+    rng = np.random.default_rng(seed)
+    sc = _three_fingers()
+    trackers = [EnvelopeTracker(env) for env in _urdf_envelopes(sc)]
+    X = sc.trajectory.pose(rng.uniform(0.0, np.pi))
+    v = rng.normal(size=3) * np.array([2e-4, 2e-4, 2e-3])
+    poses = []
+    for k in range(200):
+        if k in (60, 140):
+            X = X + rng.normal(size=3) * np.array([3e-3, 3e-3, 3e-2])  # a jump
+        v = 0.95 * v + rng.normal(size=3) * np.array([4e-5, 4e-5, 4e-4])
+        X = X + v
+        poses.append(X)
+    worst = _follow(trackers, _urdf_envelopes(sc), poses, 1e-3 * np.arange(len(poses)))
+    assert max(worst) <= 1.0
+    counts = sum((t.counts for t in trackers), Counter())
+    assert counts["tracked"] > counts["closed form"]
+    assert counts["pose jump"] > 0  # the jumps fell back
+
+
+def test_tracker_falls_back_on_a_pose_jump_a_reset_and_the_first_call():
+    sc = _three_fingers()
+    env = _urdf_envelopes(sc)[0]
+    tracker = EnvelopeTracker(_urdf_envelopes(sc)[0], max_pose_step=1e-3)
+    X = sc.trajectory.pose(0.3)
+    for pose, reason in ((X, "first call"), (X + [1e-4, 0.0, 0.0], "tracked"), (X + [2e-3, 0.0, 0.0], "pose jump"),
+                         (X + [2e-3, 0.0, 0.0], "tracked"), (X + [2e-3, 0.0, 0.02], "pose jump")):
+        before = tracker.counts[reason]
+        sample = tracker.update(pose, 0.1)
+        assert tracker.counts[reason] == before + 1
+        _assert_same_envelope(tracker, sample, env.at(pose, 0.1), reason != "tracked")
+        assert tracker.last is sample
+    tracker.reset()
+    assert tracker.last is None
+    tracker.update(X, 0.2)
+    assert tracker.counts["first call"] == 2
+    assert tracker.fallbacks == 4
+
+
+def test_tracker_of_an_ideal_envelope_is_at():
+    sc = _three_fingers()
+    c = sc.contacts[0]
+    env = FingerEnvelope(c.finger, sc.polygon, c.edge)
+    tracker = EnvelopeTracker(FingerEnvelope(c.finger, sc.polygon, c.edge))
+    for t in np.linspace(0.0, 3.0, 7):
+        fresh, tracked = env.at(sc.trajectory.pose(t), t), tracker.update(sc.trajectory.pose(t), t)
+        assert (tracked.feasible, tracked.reachable, tracked.reason) == (fresh.feasible, fresh.reachable, fresh.reason)
+    assert tracker.counts == Counter({"closed form": 7})
+
+
+@pytest.mark.parametrize("kwargs", [{"envelope": "not an envelope"}, {"max_pose_step": 0.0},
+                                    {"max_pose_step": np.nan}])
+def test_tracker_rejects_bad_arguments(kwargs):
+    sc = _three_fingers()
+    args = {"envelope": _urdf_envelopes(sc)[0], **kwargs}
+    with pytest.raises(InvalidParameterError):
+        EnvelopeTracker(args.pop("envelope"), **args)
+
+
+@pytest.mark.parametrize("pose, time", [([0.0, np.nan, 0.0], 0.0), ([0.0, 0.17], 0.0), ([0.0, 0.17, 0.0], np.inf)])
+def test_tracker_rejects_bad_poses_and_times(pose, time):
+    tracker = EnvelopeTracker(_urdf_envelopes(_three_fingers())[0])
+    with pytest.raises(InvalidParameterError):
+        tracker.update(pose, time)

@@ -38,7 +38,7 @@ def measurement(sc, t, xi) -> Measurement:
     ("danger_fraction", 0.0), ("danger_fraction", 0.5), ("omega_n", -1.0), ("zeta", 0.0), ("prime_time", np.nan),
     ("reaction_time", -0.1), ("envelope_every", 0), ("envelope_every", 1.5), ("geometry", "mesh"),
     ("settle_undershoot", 0.0), ("path_checks", 0), ("path_checks", 2.5), ("enabling_candidates", True),
-    ("enabling_recheck_time", -1.0),
+    ("enabling_recheck_time", -1.0), ("track_envelopes", 1),
 ])
 def test_settings_reject_bad_values(name, value):
     with pytest.raises(InvalidParameterError) as info:
@@ -148,7 +148,7 @@ def test_with_a_plan_the_supervisor_looks_ahead(two_fingers):
     assert danger_ahead and "the plan squeezes it" in danger_ahead[0].detail
 
 
-THREE = Path(__file__).resolve().parents[1] / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
+THREE = SCENARIOS / "paper_trajectory_2_three_fingers.toml"
 
 
 def test_a_rejected_slide_gets_another_contact_to_enable_it():
@@ -199,3 +199,25 @@ def test_a_slide_that_ends_sliding_settles_just_inside_the_cone_and_sticks():
     for k, (contact, kind) in enumerate(kinds):  # every slip is a primed one
         if kind == "slip":
             assert (contact, "prime") in kinds[:k], kinds[:k + 1]
+
+
+def test_tracked_runtime_envelopes_match_fresh_ones():
+    """With track_envelopes the supervisor's urdf envelopes have the pieces of fresh ones, ends within
+    the bisection tolerance, at every step along the three-finger trajectory (the measured pose is the
+    desired one; no slide starts)."""
+    sc = load_scenario(THREE)
+    xi = [-0.0125, 0.0125, 0.0]
+    tracked = make_supervisor(sc, xi, geometry="urdf", regrasp=False, track_envelopes=True)
+    fresh = make_supervisor(sc, xi, geometry="urdf", regrasp=False)
+    assert fresh.trackers is None and len(tracked.trackers) == 3
+    assert make_supervisor(sc, xi, track_envelopes=True).trackers is None  # ideal: nothing to track
+    for k in range(150):
+        meas = measurement(sc, 1e-3 * k, xi)
+        a, b = tracked._envelope_state(meas), fresh._envelope_state(meas)
+        for i, env in enumerate(fresh.envelopes):
+            tol = env.urdf_tolerance * env.edge.length
+            sa, sb = tracked._samples[i], fresh._samples[i]
+            assert len(sa.feasible) == len(sb.feasible)
+            assert np.allclose(sa.feasible, sb.feasible, rtol=0.0, atol=tol)
+            assert abs(a[0][i] - b[0][i]) <= tol
+    assert sum(t.counts["tracked"] for t in tracked.trackers) > 0.9 * 3 * 150

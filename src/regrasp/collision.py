@@ -183,6 +183,7 @@ class UrdfCollisionChecker:
         self.shapes: tuple[LinkShape, ...] = tuple(kept)
         h = half_thickness if half_thickness is not None else sum(finger.link_lengths)
         self.object_geometry = polygon.to_coal(h)
+        self._object_radius = float(np.max(np.hypot(polygon.vertices[:, 0], polygon.vertices[:, 1])))
         self._request = coal.DistanceRequest()
         self._request.enable_signed_distance = True
         self._result = coal.DistanceResult()
@@ -303,6 +304,41 @@ class UrdfCollisionChecker:
                 return True
             self._certificates[1] = (x2, y2, c2, s2, dist * (1.0 - 1e-3) - self._margin)
         return False
+
+    def links_collide_kept(self, kept: list, c1: float, s1: float, x2: float, y2: float, c2: float,
+                           s2: float) -> bool:
+        r""":meth:`links_collide` with certificates that the caller keeps and that outlive the object pose.
+
+        ``kept`` is a list of two entries (None at first), one per link, which this method reads and
+        writes: the link frame (joint x, y [m], direction cos, sin), the object pose (x, y [m], cos,
+        sin of beta) and the signed distance :math:`\delta` [m] coal returned there (the smallest over
+        the link's shapes, or the first negative one). Signed distances of convex shapes are
+        1-Lipschitz in a rigid motion of either, so coal's verdict stands wherever no point of the
+        link's shapes or of the object has moved by :math:`|\delta| (1 - 10^{-3}) - m` or more (the
+        margin of :meth:`links_collide`): a shape point by at most :math:`|\Delta o| + |\Delta u| R`
+        (as there), an object point by at most :math:`|\Delta x_o| + |\Delta(\cos\beta, \sin\beta)|
+        R_o` (:math:`R_o`: the object's largest vertex radius). A negative :math:`\delta` certifies a
+        collision the same way. Coal is called for a link only when its certificate does not hold.
+        The object pose is the one of :meth:`set_object_pose`; no validation (hot path).
+        """
+        x, y, cb, sb = self._object
+        hypot = math.hypot
+        r_o = self._object_radius
+        cert = kept[0]  # link 1 turns about joint 1
+        if cert is None or (hypot(c1 - cert[2], s1 - cert[3]) * self._links[0][6] + hypot(x - cert[4], y - cert[5])
+                            + hypot(cb - cert[6], sb - cert[7]) * r_o >= abs(cert[8]) * (1.0 - 1e-3) - self._margin):
+            ox, oy = self._joint1
+            dist = self._link_distance(0, ox, oy, c1, s1)
+            kept[0] = cert = (ox, oy, c1, s1, x, y, cb, sb, dist)
+        if cert[8] < 0.0:
+            return True
+        cert = kept[1]
+        if cert is None or (hypot(x2 - cert[0], y2 - cert[1]) + hypot(c2 - cert[2], s2 - cert[3]) * self._links[1][6]
+                            + hypot(x - cert[4], y - cert[5]) + hypot(cb - cert[6], sb - cert[7]) * r_o
+                            >= abs(cert[8]) * (1.0 - 1e-3) - self._margin):
+            dist = self._link_distance(1, x2, y2, c2, s2)
+            kept[1] = cert = (x2, y2, c2, s2, x, y, cb, sb, dist)
+        return cert[8] < 0.0
 
     def _posture(self, q) -> tuple[float, float, float, float, float, float]:
         """(cos psi1, sin psi1, elbow x [m], elbow y [m], cos psi2, sin psi2) for joint positions q."""

@@ -54,6 +54,7 @@ import math
 import time as _time
 from dataclasses import dataclass
 from enum import Enum
+from typing import NamedTuple
 
 import numpy as np
 
@@ -248,6 +249,38 @@ def _linspace(lo: float, hi: float, num: int) -> list[float]:
     return out
 
 
+class _Frame(NamedTuple):
+    """The closed-form part of a sample (line coordinates s [m]; see :class:`EdgeLine`)."""
+
+    d: float
+    lam: float
+    s0: float
+    nx: float
+    ny: float
+    c: float  # cos beta
+    s: float  # sin beta
+    condition: Condition
+    reach: Intervals  # reachable set on the line
+    base: Intervals  # reachable ∩ edge
+    ideal: Intervals  # feasible with segment links (the ``urdf`` mode's hints)
+
+
+def _urdf_pieces(base: Intervals, ends) -> Intervals:
+    """The free pieces of ``base`` from :meth:`FingerEnvelope._urdf_ends`'s (start verdict, flips) per piece."""
+    pieces = []
+    for (lo, hi), (start_free, flips) in zip(base, ends):
+        start = lo if start_free else None
+        for e in flips:
+            if start is None:  # colliding -> free: open a piece at the free side
+                start = e
+            else:  # free -> colliding: close the piece at the free side
+                pieces.append((start, e))
+                start = None
+        if start is not None:
+            pieces.append((start, hi))
+    return merge(pieces)
+
+
 class FingerEnvelope:
     r"""Computes the feasible-contact envelope of one finger on one polygon edge.
 
@@ -351,17 +384,14 @@ class FingerEnvelope:
         _, _, ex, ey = self._tip_and_elbow(line.d, nx, ny, s)
         return self.finger.joint1_in_hand + np.array([ex, ey])
 
-    def _ideal_feasible(self, base: Intervals, x: float, y: float, c: float, s: float,
-                        d: float, nx: float, ny: float) -> Intervals:
-        """Feasible pieces of ``base`` with segment links (line coordinates s)."""
+    def _vertex_cuts(self, x: float, y: float, c: float, s: float, d: float, nx: float,
+                     ny: float) -> tuple[list[tuple[float, float]], list[float]]:
+        """(the object's vertices in the hand frame [m], the line coordinates s [m] of the tip where
+        link 1 passes through one of them (Example 2.2's limiting vertices)) at the object pose
+        (x, y, cos beta, sin beta) with the edge's line at distance ``d`` and inward normal (nx, ny)."""
         o1x, o1y = self._joint1
-        l1, eps = self.l1, self._eps
+        l1 = self.l1
         verts = [(x + (c * vx - s * vy), y + (s * vx + c * vy)) for vx, vy in self._vertices]
-        halfplanes = []
-        for (mx, my), (vx, vy) in zip(self._normals, verts):
-            kx, ky = c * mx - s * my, s * mx + c * my
-            halfplanes.append((kx, ky, kx * vx + ky * vy))
-        # tip coordinates where link 1 passes through a vertex (Example 2.2)
         extra = []
         for vx, vy in verts:
             wx, wy = vx - o1x, vy - o1y
@@ -373,6 +403,18 @@ class FingerEnvelope:
             if disc >= 0.0:
                 et, root = ey * nx - ex * ny, math.sqrt(disc)
                 extra += (et - root, et + root)
+        return verts, extra
+
+    def _ideal_feasible(self, base: Intervals, x: float, y: float, c: float, s: float,
+                        d: float, nx: float, ny: float) -> Intervals:
+        """Feasible pieces of ``base`` with segment links (line coordinates s)."""
+        o1x, o1y = self._joint1
+        eps = self._eps
+        verts, extra = self._vertex_cuts(x, y, c, s, d, nx, ny)
+        halfplanes = []
+        for (mx, my), (vx, vy) in zip(self._normals, verts):
+            kx, ky = c * mx - s * my, s * mx + c * my
+            halfplanes.append((kx, ky, kx * vx + ky * vy))
         pieces = []
         for lo, hi in base:
             cuts = sorted({lo, hi, *(t for t in extra if lo < t < hi)})
@@ -385,31 +427,46 @@ class FingerEnvelope:
                     pieces.append((a, b))
         return merge(pieces)
 
-    def _urdf_feasible(self, base: Intervals, hints: Intervals, x: float, y: float, beta: float,
-                       d: float, nx: float, ny: float) -> Intervals:
-        """Feasible pieces of ``base`` with the URDF shapes: grid, then bisection of every flip."""
-        tol = self.urdf_tolerance * self.edge.length
+    def _free_test(self, x: float, y: float, beta: float, d: float, nx: float, ny: float):
+        """The ``urdf`` verdict ``free(s) -> bool`` (no link shape penetrates the object) for the tip at
+        line coordinate ``s`` [m], the object at (x [m], y [m], beta [rad]) and its edge's line at
+        distance ``d`` [m] with inward normal (nx, ny). Sets the checker's object pose. With a list
+        ``kept`` as second argument, the checker's certificates kept across object poses are used
+        (:meth:`~regrasp.collision.UrdfCollisionChecker.links_collide_kept`)."""
         self.checker.set_object_pose(x, y, beta)
         links_collide = self.checker.links_collide
+        links_collide_kept = self.checker.links_collide_kept
         tip_and_elbow = self._tip_and_elbow
         o1x, o1y = self._joint1
         hypot = math.hypot
 
-        def free(s: float) -> bool:
+        def free(s: float, kept: list | None = None) -> bool:
             px, py, ex, ey = tip_and_elbow(d, nx, ny, s)
             n1 = hypot(ex, ey)
             vx, vy = px - ex, py - ey
             n2 = hypot(vx, vy)
-            return not links_collide(ex / n1, ey / n1, o1x + ex, o1y + ey, vx / n2, vy / n2)
+            if kept is None:
+                return not links_collide(ex / n1, ey / n1, o1x + ex, o1y + ey, vx / n2, vy / n2)
+            return not links_collide_kept(kept, ex / n1, ey / n1, o1x + ex, o1y + ey, vx / n2, vy / n2)
 
+        return free
+
+    def _urdf_ends(self, base: Intervals, hints: Intervals, free) -> tuple[tuple[bool, tuple[float, ...]], ...]:
+        """The ``urdf`` cuts of ``base`` (line coordinates s [m]): grid, then bisection of every flip.
+
+        Per piece of ``base``: (whether ``free`` holds at its start, the free side of every flip of
+        the verdict, in order, each within the bisection tolerance of the flip). The flips alternate
+        between free → colliding and colliding → free; :func:`_urdf_pieces` turns this into intervals.
+        """
+        tol = self.urdf_tolerance * self.edge.length
         hint_points = [t for iv in hints for t in iv]
-        pieces = []
+        out = []
         for lo, hi in base:
             grid = set(_linspace(lo, hi, self.urdf_grid))
             grid.update(t for t in hint_points if lo < t < hi)
             pts = sorted(grid)
             verdicts = [free(s) for s in pts]
-            start = pts[0] if verdicts[0] else None
+            ends = []
             for k in range(1, len(pts)):
                 if verdicts[k] == verdicts[k - 1]:
                     continue
@@ -421,45 +478,52 @@ class FingerEnvelope:
                         a = m
                     else:
                         b = m
-                if fa:  # free -> colliding: close the piece at the free side
-                    pieces.append((start, a))
-                    start = None
-                else:  # colliding -> free: open a piece at the free side
-                    start = b
-            if start is not None:
-                pieces.append((start, pts[-1]))
-        return merge(pieces)
+                ends.append(a if fa else b)  # the free side
+            out.append((verdicts[0], tuple(ends)))
+        return tuple(out)
 
     # ------------------------------------------------------------------ envelope
     def at(self, pose_object_in_hand, time: float = 0.0) -> EnvelopeSample:
         """The envelope at one object pose ``(x [m], y [m], beta [rad])`` in the hand frame."""
         t_start = _time.perf_counter()
         x, y, beta = _pose_floats(pose_object_in_hand)
+        frame = self._frame(x, y, beta)
+        feasible_s = frame.ideal
+        if self.checker is not None and frame.base:
+            ends = self._urdf_ends(frame.base, frame.ideal, self._free_test(x, y, beta, frame.d, frame.nx, frame.ny))
+            feasible_s = _urdf_pieces(frame.base, ends)
+        return self._sample(frame, feasible_s, time, t_start)
+
+    def _frame(self, x: float, y: float, beta: float, ideal: bool = True) -> _Frame:
+        """The closed-form part of a sample at the object pose (x [m], y [m], beta [rad]) (without the
+        ``ideal`` feasible set when ``ideal`` is False)."""
         d, lam, s0, nx, ny, c, s = self._line(x, y, beta)
-        condition = condition_of(d, self.l1)
         reach_s = reachable_on_line(d, self.l1, self.l2, self.sign)
         lo_xi, hi_xi = self.edge.xi_range
         base = intersect(reach_s, ((lo_xi + s0, hi_xi + s0),))
-        feasible_s = self._ideal_feasible(base, x, y, c, s, d, nx, ny) if base else ()
-        if self.checker is not None and base:
-            feasible_s = self._urdf_feasible(base, feasible_s, x, y, beta, d, nx, ny)
+        feasible = self._ideal_feasible(base, x, y, c, s, d, nx, ny) if base and ideal else ()
+        return _Frame(d, lam, s0, nx, ny, c, s, condition_of(d, self.l1), reach_s, base, feasible)
+
+    def _sample(self, frame: _Frame, feasible_s: Intervals, time: float, t_start: float) -> EnvelopeSample:
+        """The :class:`EnvelopeSample` of ``frame`` with the feasible pieces ``feasible_s`` (line coordinates)."""
         if feasible_s:
             reason = None
-        elif condition is Condition.I:
+        elif frame.condition is Condition.I:
             reason = "condition I"
-        elif not reach_s:
+        elif not frame.reach:
             reason = "out of reach"
-        elif not base:
+        elif not frame.base:
             reason = "off the edge"
         else:
             reason = "collision"
+        s0 = frame.s0
         return EnvelopeSample(
             time=float(time),
-            d=d,
-            lam=lam,
-            condition=condition,
-            reachable=tuple((a - s0, b - s0) for a, b in reach_s),
-            edge_range=(lo_xi, hi_xi),
+            d=frame.d,
+            lam=frame.lam,
+            condition=frame.condition,
+            reachable=tuple((a - s0, b - s0) for a, b in frame.reach),
+            edge_range=self.edge.xi_range,
             feasible=tuple((a - s0, b - s0) for a, b in feasible_s),
             reason=reason,
             seconds=_time.perf_counter() - t_start,
