@@ -162,8 +162,9 @@ def test_proposition3_force_distribution_reduces_to_the_papers_P_for_two_fingers
         S_dot = np.append(rng.normal(0, 0.01, 3), speed)
         S_d = S + rng.normal(0, 1e-3, 4)
         out = law(S, S_dot, S_d, S_dot, rng.normal(0, 0.5, 4))
-        st, _, A, frames_bd = model._state(S, S_dot)
-        tau, f_hat, forces, _ = law._distributed_torque(st, A, frames_bd, out.command, law._direction)
+        terms = model._terms(S.tolist(), S_dot.tolist())
+        st = model._state_from(S, S_dot, terms)
+        tau, f_hat, forces, _ = law._distributed_torque(st, terms, out.command, law._direction)
         scale = np.abs(out.tau).max()
         assert np.abs(tau - out.tau).max() < 1e-9 * scale
         assert abs(f_hat[0] - out.friction_estimate[0]) < 1e-9 * scale

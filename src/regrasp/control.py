@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import lapack
 
+from ._scalar import solve_small
 from .exceptions import InvalidParameterError
 from .grasp import ContactMode
 from .internal_force import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver
@@ -128,6 +129,8 @@ class ComputedTorqueController:
         self.cone_edge = cone_edge
         self._qp = InternalForceSolver(internal_force) if internal_force is not None else None
         self._fixed = np.array([mode is ContactMode.FIXED for mode in model.grasp.modes])
+        # whether the law's f̂_ξ needs the ReducedState (the base law's is zero)
+        self._estimates_friction = type(self).friction_estimate is not ComputedTorqueController.friction_estimate
 
     def friction_estimate(self, st: ReducedState, command: np.ndarray, friction) -> np.ndarray:
         """f̂_ξ (p,) [N]; the laws override this."""
@@ -141,54 +144,82 @@ class ComputedTorqueController:
         """
         start = time.perf_counter()
         model = self.model
-        S, S_dot, S_d, S_d_dot, S_d_ddot = as_finite_vectors(
-            _ARGUMENTS, (S, S_dot, S_d, S_d_dot, S_d_ddot), model.n)
-        st, J_inv, A, frames_bd = model._state(S, S_dot)
-        error = S_d - S
-        error_rate = S_d_dot - S_dot
-        command = S_d_ddot + self.gains.kv * error_rate + self.gains.ks * error
-        tau, f_hat, forces, internal = self._torque(st, J_inv, A, frames_bd, command, friction)
-        surface = forces.reshape(-1).dot(frames_bd).reshape(-1, 2)  # (n_i^T f_i, t_i^T f_i) per contact
-        margins = np.array([mu * f_n - abs(f_t) for mu, (f_n, f_t) in zip(self.mu.tolist(), surface.tolist())])
-        return ControlOutput(tau, command, error, error_rate, f_hat, forces, surface, margins, internal,
-                             time.perf_counter() - start)
+        args = as_finite_vectors(_ARGUMENTS, (S, S_dot, S_d, S_d_dot, S_d_ddot), model.n)
+        s, s_dot, s_d, s_d_dot, s_d_ddot = args.tolist()
+        terms = model._terms(s, s_dot)
+        # the law in plain floats (numpy's per-call cost would dominate on these (2m, 3 + p) arrays)
+        error = [a - b for a, b in zip(s_d, s)]
+        error_rate = [a - b for a, b in zip(s_d_dot, s_dot)]
+        command = [a + kv * r + ks * e
+                   for a, kv, r, ks, e in zip(s_d_ddot, self.gains.kv.tolist(), error_rate, self.gains.ks.tolist(), error)]
+        command_array = np.array(command)
+        tau, f_hat, forces, force_list, internal = self._torque(terms, args, command_array, friction)
+        # (n_i^T f_i, t_i^T f_i) per contact, and the cone margins μ f_n - |f_t|
+        surface = [(nx * force_list[2 * i] + ny * force_list[2 * i + 1], tx * force_list[2 * i] + ty * force_list[2 * i + 1])
+                   for i, (nx, ny, tx, ty) in enumerate(terms.frames)]
+        margins = [mu * f_n - abs(f_t) for mu, (f_n, f_t) in zip(self.mu.tolist(), surface)]
+        return ControlOutput(np.array(tau), command_array, np.array(error), np.array(error_rate), f_hat, forces,
+                             np.array(surface), np.array(margins), internal, time.perf_counter() - start)
 
-    def _torque(self, st: ReducedState, J_inv: np.ndarray, A: np.ndarray, frames_bd: np.ndarray,
-                command: np.ndarray, friction):
-        """(τ, f̂_ξ, predicted contact forces (m, 2), internal-force result) for the commanded S̈."""
+    def _torque(self, terms, args: np.ndarray, command_array: np.ndarray, friction):
+        """(τ (list), f̂_ξ, predicted contact forces (m, 2), the same as a flat list, internal-force
+        result) for the commanded S̈ (``args``: the validated (S, Ṡ, ...) rows)."""
         model = self.model
-        f_hat = self.friction_estimate(st, command, friction)
-        H = st.H
-        # (ndarray.dot: matmul's ufunc machinery costs ~1 us per call on these small arrays)
-        q_ddot = H.dot(command) + st.H_dot_S_dot
-        # (H^T M H + M_s) a + N_s = H^T (M q̈ + N) + M_s a with q̈ = H a + Ḣ Ṡ
-        wrench = st.hand.mass_matrix.dot(q_ddot) + st.hand.nonlinear
-        gx, gy = model.hand.gravity_in_hand.tolist()  # -[f_g; -f̂_ξ], f_g = m_o g
-        external = np.array([-model.object_mass * gx, -model.object_mass * gy, 0.0,
-                             *np.asarray(f_hat, dtype=float).tolist()])
-        rhs = H.T.dot(wrench) + model.M_s.dot(command) + external
-        tau = H.dot(_solve(H.T.dot(H), rhs))
-        motion_forces = J_inv.T.dot(tau - wrench)  # f = J^{-T}(τ - M q̈ - N)
+        if self._estimates_friction:
+            st = model._state_from(args[0], args[1], terms)
+            f_hat = self.friction_estimate(st, command_array, friction)
+        else:
+            f_hat = np.zeros(model.grasp.p)
+        tau, wrench = _computed_torque(model, terms, command_array, np.asarray(f_hat, dtype=float).tolist())
+        # f = J^{-T}(τ - M q̈ - N)
+        motion_forces = []
+        for i, (i00, i01, i10, i11) in enumerate(terms.inverses):
+            d0, d1 = tau[2 * i] - wrench[2 * i], tau[2 * i + 1] - wrench[2 * i + 1]
+            motion_forces += (i00 * d0 + i10 * d1, i01 * d0 + i11 * d1)
         internal = None
         if self._qp is not None:
-            internal = self._qp._solve(A, motion_forces, frames_bd, self._fixed, self.mu, self.cone_edge,
-                                      time.perf_counter())
-            tau = tau + st.hand.jacobian.T.dot(internal.f_c)
+            internal = self._qp._solve(np.array(terms.a_rows), motion_forces, terms.frames, self._fixed, self.mu,
+                                      self.cone_edge, time.perf_counter())
+            f_c = internal.f_c.tolist()
+            for i, (a, b, c, d) in enumerate(terms.jacobians):  # τ + J^T f_c
+                f0, f1 = f_c[2 * i], f_c[2 * i + 1]
+                tau[2 * i] += a * f0 + c * f1
+                tau[2 * i + 1] += b * f0 + d * f1
             forces = internal.forces
+            force_list = forces.reshape(-1).tolist()
         else:
-            forces = motion_forces.reshape(model.grasp.m, 2)
-        return tau, f_hat, forces, internal
+            forces = np.array(motion_forces).reshape(model.grasp.m, 2)
+            force_list = motion_forces
+        return tau, f_hat, forces, force_list, internal
 
 
 _ARGUMENTS = ("S", "S_dot", "S_d", "S_d_dot", "S_d_ddot")
 
 
-def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.linalg.solve(a, b)`` (the same LAPACK dgesv) without numpy's per-call overhead."""
-    _, _, x, info = lapack.dgesv(a, b)
+def _computed_torque(model: ReducedModel, terms, command: np.ndarray, f_hat: list) -> tuple[list, list]:
+    r"""The motion torque :math:`\tau = (H^T)^+ [(H^T M H + M_s) a + N_s - [f_g; -\hat f_\xi]]` and the
+    wrench :math:`M \ddot q + N` (lists, q̈ = H a + Ḣ Ṡ), from the model's :class:`~regrasp.reduced._Terms`:
+    :math:`(H^T M H + M_s) a + N_s = H^T (M \ddot q + N) + M_s a` and :math:`(H^T)^+ = H (H^T H)^{-1}`.
+    (ndarray.dot for the products with H: matmul's ufunc machinery costs ~1 us per call here.)"""
+    H, h_dot_s_dot, nonlinear = terms.H, terms.h_dot_s_dot, terms.nonlinear
+    q_ddot = H.dot(command).tolist()
+    wrench = []
+    for i, (m00, m01, m11) in enumerate(terms.masses):  # M is block diagonal
+        r = 2 * i
+        a0, a1 = q_ddot[r] + h_dot_s_dot[r], q_ddot[r + 1] + h_dot_s_dot[r + 1]
+        wrench += (m00 * a0 + m01 * a1 + nonlinear[r], m01 * a0 + m11 * a1 + nonlinear[r + 1])
+    H_t = H.T
+    gx, gy = model.hand.gravity_in_hand.tolist()  # -[f_g; -f̂_ξ], f_g = m_o g
+    mass = model.object_mass
+    rhs = [h + ms * a + e for h, ms, a, e in zip(H_t.dot(wrench).tolist(), model._m_s_diagonal, command.tolist(),
+                                                 (-mass * gx, -mass * gy, 0.0, *f_hat))]
+    normal = H_t.dot(H)
+    if len(rhs) <= 3:  # Cramer's rule in floats
+        return H.dot(solve_small(normal.tolist(), rhs)).tolist(), wrench
+    _, _, x, info = lapack.dgesv(normal, rhs)  # (np.linalg.solve's LAPACK routine without its overhead)
     if info != 0:
         raise np.linalg.LinAlgError("Singular matrix")
-    return x
+    return H.dot(x).tolist(), wrench
 
 
 class FixedContactController(ComputedTorqueController):
@@ -281,28 +312,34 @@ class Proposition3Controller(ComputedTorqueController):
         P = self.model.grasp.friction_map(st.S[:3], st.xi, [direction], mu)
         return P @ (self.model.M_o @ command[:3] - self.model.f_g)
 
-    def _torque(self, st, J_inv, A, frames_bd, command, friction):
+    def _torque(self, terms, args, command_array, friction):
         if self.model.grasp.m == 2:
-            return super()._torque(st, J_inv, A, frames_bd, command, friction)
-        direction = self.sliding_direction(float(st.S_dot[3]), float(command[3]))
-        return self._distributed_torque(st, A, frames_bd, command, direction)
+            return super()._torque(terms, args, command_array, friction)
+        direction = self.sliding_direction(float(args[1][3]), float(command_array[3]))
+        st = self.model._state_from(args[0], args[1], terms)
+        tau, f_hat, forces, internal = self._distributed_torque(st, terms, command_array, direction)
+        return tau.tolist(), f_hat, forces, forces.reshape(-1).tolist(), internal
 
-    def _distributed_torque(self, st, A, frames_bd, command, direction: float):
+    def _distributed_torque(self, st, terms, command, direction: float):
         """The m > 2 law of the class docstring (valid for m = 2 too: then f is unique)."""
         model, j = self.model, self._slider
-        n_j, t_j = frames_bd[2 * j:2 * j + 2, 2 * j], frames_bd[2 * j:2 * j + 2, 2 * j + 1]
-        edge = A.copy()  # [G^T | e_j (t_j - s μ_j n_j)]: its columns' transposes are the equations
+        nx, ny, tx, ty = terms.frames[j]
+        edge = np.array(terms.a_rows)  # [G^T | e_j (t_j - s μ_j n_j)]: its columns' transposes are the equations
         edge[:, 3] = 0.0
-        edge[2 * j:2 * j + 2, 3] = t_j - direction * self.mu[j] * n_j
+        edge[2 * j:2 * j + 2, 3] = (tx - direction * self.mu[j] * nx, ty - direction * self.mu[j] * ny)
         rhs = np.append(model.M_o.dot(command[:3]) - model.f_g, 0.0)
-        particular = edge.dot(_solve(edge.T.dot(edge), rhs))  # least-norm f_p
+        _, _, x, info = lapack.dgesv(edge.T.dot(edge), rhs)
+        if info != 0:
+            raise np.linalg.LinAlgError("Singular matrix")
+        particular = edge.dot(x)  # least-norm f_p
         internal = None
         if self._qp is not None:
-            internal = self._qp._solve(edge, particular, frames_bd, self._fixed, self.mu, None, time.perf_counter())
+            internal = self._qp._solve(edge, particular.tolist(), terms.frames, self._fixed, self.mu, None,
+                                      time.perf_counter())
             forces = internal.forces
         else:
             forces = particular.reshape(model.grasp.m, 2)
         q_ddot = st.H.dot(command) + st.H_dot_S_dot
         tau = st.hand.mass_matrix.dot(q_ddot) + st.hand.nonlinear + st.hand.jacobian.T.dot(forces.reshape(-1))
-        f_hat = np.array([float(t_j.dot(forces[j]))])
+        f_hat = np.array([tx * forces[j, 0] + ty * forces[j, 1]])
         return tau, f_hat, forces, internal

@@ -206,6 +206,7 @@ class Finger:
         tip_in_j2 = self.model.frames[self.tip_frame_id].placement.translation[:2].copy()
         #: Position [m] of joint 1's axis in the hand frame.
         self.joint1_in_hand = joint1.translation[:2].copy()
+        self.joint1_in_hand_floats = tuple(self.joint1_in_hand.tolist())  # (hot paths)
         self._l1 = float(np.linalg.norm(elbow_in_j1))
         self._l2 = float(np.linalg.norm(tip_in_j2))
         self._alpha1 = float(np.arctan2(elbow_in_j1[1], elbow_in_j1[0]))
@@ -371,8 +372,9 @@ class Finger:
         """:meth:`inverse_kinematics` on a validated (2,) target (hot paths)."""
         return np.array(self._joint_angles(float(target[0]), float(target[1])))
 
-    def _joint_angles(self, x: float, y: float) -> tuple[float, float]:
-        """(q1, q2) [rad] for the tip at (x, y) in the hand frame, in scalar arithmetic (hot paths)."""
+    def _joint_angles(self, x: float, y: float, elbow: bool = False) -> tuple[float, ...]:
+        """(q1, q2) [rad] for the tip at (x, y) in the hand frame, in scalar arithmetic (hot paths);
+        with ``elbow``, (q1, q2, e_x, e_y), e the elbow (joint 2's axis) [m]."""
         ox, oy, sigma, inner, outer, slack = self._ik_constants
         rx, ry = x - ox, y - oy
         dist = math.hypot(rx, ry)
@@ -382,6 +384,9 @@ class Finger:
         cos2 = min(max((dist**2 - l1**2 - l2**2) / (2.0 * l1 * l2), -1.0), 1.0)
         theta2 = sigma * math.acos(cos2)
         psi1 = math.atan2(ry, rx) - math.atan2(l2 * math.sin(theta2), l1 + l2 * math.cos(theta2))
+        if elbow:  # psi1: link 1's direction in the hand frame
+            return (wrap_angle(psi1 - self.psi1_offset), wrap_angle(theta2 - self.theta2_offset),
+                    ox + l1 * math.cos(psi1), oy + l1 * math.sin(psi1))
         return wrap_angle(psi1 - self.psi1_offset), wrap_angle(theta2 - self.theta2_offset)
 
     def joint_positions_from_points(self, elbow_in_hand: np.ndarray, tip_in_hand: np.ndarray) -> np.ndarray:

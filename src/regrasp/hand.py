@@ -99,6 +99,7 @@ class Hand:
         self._hand_model, self._hand_tips = _whole_hand(self._models, self._tip_ids)
         self._hand_data = self._hand_model.createData()
         self._damping = np.concatenate([np.asarray(model.damping, dtype=float) for model in self._models])
+        self._damping_list = self._damping.tolist()
         upper = [2 * i * self.nq + 2 * i + 1 for i in range(self.m)]  # (2i, 2i + 1), row-major
         self._mass_mirror = (np.array([u + self.nq - 1 for u in upper]), np.array(upper))
         # whether this Pinocchio's computeAllTerms leaves M's lower triangle to us (crba does)
@@ -197,15 +198,30 @@ class Hand:
 
     def _check_singular(self, qs: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
         blocks = [jacobian[2 * i:2 * i + 2, 2 * i:2 * i + 2].reshape(-1).tolist() for i in range(self.m)]
-        return np.array(self._check_singular_blocks(qs, blocks))
+        return np.array(self._check_singular_blocks(qs.reshape(-1).tolist(), blocks))
 
-    def _check_singular_blocks(self, qs: np.ndarray, blocks) -> list[float]:
-        """Condition numbers of the tip Jacobians given as (a, b, c, d) = row-major 2x2 blocks (floats)."""
+    def _check_singular_blocks(self, q, blocks) -> list[float]:
+        """Condition numbers of the tip Jacobians given as (a, b, c, d) = row-major 2x2 blocks (floats);
+        ``q``: the joint positions (2m) (floats), for the error."""
         conds = [_condition(*block) for block in blocks]
         for i, c in enumerate(conds):
             if not c <= self.singular_threshold:  # also catches inf/nan
-                raise SingularFingerError(self.fingers[i].name, qs[i], c, self.singular_threshold)
+                raise SingularFingerError(self.fingers[i].name, np.array(q[2 * i:2 * i + 2]), c,
+                                          self.singular_threshold)
         return conds
+
+    def _mass_blocks_and_bias(self, q, v) -> tuple[list[tuple[float, float, float]], list[float]]:
+        """Each finger's (m00, m01, m11) of M and N (2m) at joint positions ``q`` and velocities ``v``
+        (floats), as floats (hot paths): ``pin.crba`` and ``pin.nonLinearEffects`` on the whole hand."""
+        model, data = self._hand_model, self._hand_data
+        q = np.array(q)
+        v_array = np.array(v)
+        rows = pin.crba(model, data, q).tolist()  # (its upper triangle: the lower one may be left unset)
+        nle = pin.nonLinearEffects(model, data, q, v_array).tolist()
+        if self.damping_enabled:
+            nle = [n + d * u for n, d, u in zip(nle, self._damping_list, v)]
+        masses = [(rows[2 * i][2 * i], rows[2 * i][2 * i + 1], rows[2 * i + 1][2 * i + 1]) for i in range(self.m)]
+        return masses, nle
 
     def inverse_kinematics(self, tips_in_hand) -> np.ndarray:
         """Joint positions q (2m,) putting each tip at ``tips_in_hand`` (m, 2), keeping configurations."""

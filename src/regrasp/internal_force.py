@@ -168,6 +168,8 @@ class _Rows:
         self.lower = np.array([lo for _, _, lo in ineq + eq])
         self.n_ineq, self.n_eq = len(ineq), len(eq)
         self.upper = np.full(self.n_ineq + self.n_eq, _OSQP_INFTY)  # equalities' bounds set per problem
+        #: per row (2i, α_r, β_r, lo_r) as floats (hot paths)
+        self.terms = [(2 * i, *(float(v) for v in coef), float(lo)) for i, coef, lo in ineq + eq]
 
     def matrix(self, frames_bd: np.ndarray) -> np.ndarray:
         """C (rows, 2m): the rows' left-hand sides are C f for contact forces f (2m,) in the hand frame;
@@ -176,9 +178,29 @@ class _Rows:
 
     def satisfied(self, C: np.ndarray, forces: np.ndarray, slack: float) -> bool:
         """Whether forces (2m,) satisfy every row to ``slack`` [N]."""
-        residual = (C.dot(forces) - self.lower).tolist()
+        return self._within((C.dot(forces) - self.lower).tolist(), slack)
+
+    def _within(self, residual: list, slack: float) -> bool:
         n = self.n_ineq
         return min(residual[:n], default=0.0) >= -slack and all(abs(r) <= slack for r in residual[n:])
+
+    def rows_at(self, frames: list) -> list:
+        """The rows of :meth:`matrix` as floats: per row (2i, c_x, c_y, lo), row r of C being (c_x, c_y)
+        in the columns of contact i; ``frames``: per contact (n_x, n_y, t_x, t_y), hand frame."""
+        out = []
+        for i2, alpha, beta, lo in self.terms:
+            nx, ny, tx, ty = frames[i2 >> 1]
+            out.append((i2, alpha * nx + beta * tx, alpha * ny + beta * ty, lo))
+        return out
+
+    def satisfied_at(self, rows: list, forces: list, slack: float) -> bool:
+        """:meth:`satisfied` with the rows of :meth:`rows_at` and forces (2m) as floats."""
+        n = self.n_ineq
+        for r, (i2, cx, cy, lo) in enumerate(rows):
+            residual = cx * forces[i2] + cy * forces[i2 + 1] - lo
+            if not (residual >= -slack if r < n else abs(residual) <= slack):
+                return False
+        return True
 
 
 _EPS = float(np.finfo(float).eps)
@@ -195,7 +217,7 @@ def _null_basis(constraint_matrix) -> np.ndarray:
     rows, cols = a.shape
     if rows >= cols > 0:
         qr, tau, _, info = lapack.dgeqrf(a)
-        diagonal = [abs(d) for d in qr.diagonal().tolist()]
+        diagonal = list(map(abs, qr.diagonal().tolist()))
         if info == 0 and min(diagonal) > max(diagonal) * max(rows, cols) * _EPS:
             if rows == cols:
                 return np.zeros((rows, 0))
@@ -316,7 +338,7 @@ class InternalForceSolver:
 
     def _osqp(self, k: int, rows: _Rows, a_t: np.ndarray, lower: np.ndarray) -> osqp.OSQP:
         """The persistent solver of this shape, set up or updated with the numbers of this problem
-        (``a_t``: the constraint matrix transposed, (k, rows), C-contiguous: its column-major data)."""
+        (``a_t``: the constraint matrix's column-major data, k * rows)."""
         key = (k, len(lower), rows.n_eq)
         upper = rows.upper
         if rows.n_eq:
@@ -336,8 +358,8 @@ class InternalForceSolver:
             self._solvers[key] = solver
         else:
             # what ``solver.update(Ax=..., l=..., u=...)`` does, without its bookkeeping for derivatives
-            # (the upper bounds of the inequalities are OSQP's infinity in every problem of this shape)
-            np.maximum(lower, -_OSQP_INFTY, out=lower)
+            # (the upper bounds of the inequalities are OSQP's infinity in every problem of this shape;
+            # the lower bounds are at least minus it)
             solver._solver.update_data_vec(q=None, l=lower, u=upper if rows.n_eq else None)
             solver._solver.update_data_mat(P_x=None, P_i=None, A_x=a_t.reshape(-1), A_i=None)
         return solver
@@ -345,33 +367,40 @@ class InternalForceSolver:
     def solve(self, constraint_matrix, motion_forces, surface_frames, fixed, mu,
               cone_edge: ConeEdge | None = None) -> InternalForceResult:
         """Solve the QP of the module docstring; see :func:`build_internal_force_qp` for the arguments."""
-        frames = np.asarray(surface_frames, dtype=float)
-        return self._solve(constraint_matrix, motion_forces, block_diagonal(frames), fixed, mu, cone_edge,
-                           time.perf_counter())
+        frames = [(n_x, n_y, t_x, t_y) for (n_x, t_x), (n_y, t_y) in np.asarray(surface_frames, dtype=float).tolist()]
+        return self._solve(constraint_matrix, np.asarray(motion_forces, dtype=float).reshape(-1).tolist(), frames,
+                           fixed, mu, cone_edge, time.perf_counter())
 
-    def _solve(self, constraint_matrix, motion_forces, frames_bd: np.ndarray, fixed, mu, cone_edge, start: float):
-        """:meth:`solve` with the surface frames as blockdiag(R_fi) (2m, 2m) (hot paths)."""
-        m = len(frames_bd) // 2
+    def _solve(self, constraint_matrix, motion_forces: list, frames: list, fixed, mu, cone_edge, start: float):
+        """:meth:`solve` with f_m (2m) and the surface frames, per contact (n_x, n_y, t_x, t_y), as floats
+        (hot paths)."""
+        m = len(frames)
         rows = self._rows_for(m, fixed, mu, cone_edge)
         null = _null_basis(constraint_matrix)
         k = null.shape[1]
-        C = rows.matrix(frames_bd)
-        f_m = np.asarray(motion_forces, dtype=float)
-        scale = max(1.0, max(map(abs, f_m.tolist()), default=0.0))
+        C = rows.rows_at(frames)
+        f_m = motion_forces
+        scale = max(1.0, max(map(abs, f_m), default=0.0))
         if k == 0:
-            ok = rows.satisfied(C, f_m, 1e-9 * scale)
-            return InternalForceResult(np.zeros(2 * m), f_m.reshape(m, 2), 0, ok, "empty null space",
+            ok = rows.satisfied_at(C, f_m, 1e-9 * scale)
+            return InternalForceResult(np.zeros(2 * m), np.array(f_m).reshape(m, 2), 0, ok, "empty null space",
                                        time.perf_counter() - start)
-        solver = self._osqp(k, rows, null.T.dot(C.T), rows.lower - C.dot(f_m))
+        # a y >= lo - C f_m, with a = C N_c; OSQP takes a column by column, i.e. a^T's rows
+        lower = [v if (v := lo - (cx * f_m[i2] + cy * f_m[i2 + 1])) >= -_OSQP_INFTY else -_OSQP_INFTY
+                 for i2, cx, cy, lo in C]  # (NaN stays NaN)
+        a_t = [cx * b[i2] + cy * b[i2 + 1] for b in null.T.tolist() for i2, cx, cy, _ in C]
+        solver = self._osqp(k, rows, np.array(a_t), np.array(lower))
         solver._solver.solve()
         status = str(solver._solver.info.status)
         x = solver._solver.solution.x
         if status in ("solved", "solved inaccurate") and x is not None and all(map(math.isfinite, x.tolist())):
             f_c = null.dot(x)
-            forces = f_m + f_c
-            if rows.satisfied(C, forces, 1e-6 * scale):
-                return InternalForceResult(f_c, forces.reshape(m, 2), k, True, status, time.perf_counter() - start)
+            forces = [a + b for a, b in zip(f_m, f_c.tolist())]
+            if rows.satisfied_at(C, forces, 1e-6 * scale):
+                return InternalForceResult(f_c, np.array(forces).reshape(m, 2), k, True, status,
+                                           time.perf_counter() - start)
             status = f"{status} (solution violates the constraints)"
-        frames = np.stack([frames_bd[2 * i:2 * i + 2, 2 * i:2 * i + 2] for i in range(m)])
-        qp = build_internal_force_qp(constraint_matrix, motion_forces, frames, fixed, mu, self.settings, cone_edge)
+        surface_frames = np.array([((n_x, t_x), (n_y, t_y)) for n_x, n_y, t_x, t_y in frames])
+        qp = build_internal_force_qp(constraint_matrix, np.array(f_m), surface_frames, fixed, mu, self.settings,
+                                     cone_edge)
         raise InternalForceInfeasibleError(qp, status)

@@ -55,6 +55,7 @@ import pinocchio as pin
 
 from .collision import UrdfCollisionChecker, default_tip_clearance
 from .exceptions import InvalidParameterError
+from ._scalar import solve_small as _solve_small
 from .hand import Hand, _condition
 from .polygon import ConvexPolygon
 from .validation import as_finite_array, as_friction_coefficients, as_positive_float
@@ -78,60 +79,6 @@ class _EdgeGeometry(NamedTuple):
     offset: float
     lo: float
     hi: float
-
-
-def _solve_small(a: list[list[float]], b: list[float]) -> list[float]:
-    """x with a x = b for a small dense system (lists; overwritten) in plain floats (numpy's per-call
-    overhead dwarfs a 1..2m system): Cramer's rule up to 3 unknowns, else Gaussian elimination with
-    partial pivoting."""
-    k = len(b)
-    if k <= 3:
-        if k == 3:
-            (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
-            c00, c01, c02 = a11 * a22 - a12 * a21, a12 * a20 - a10 * a22, a10 * a21 - a11 * a20
-            det = a00 * c00 + a01 * c01 + a02 * c02
-            if not abs(det) > 0.0:
-                raise np.linalg.LinAlgError("Singular matrix")
-            b0, b1, b2 = b
-            return [(c00 * b0 + (a02 * a21 - a01 * a22) * b1 + (a01 * a12 - a02 * a11) * b2) / det,
-                    (c01 * b0 + (a00 * a22 - a02 * a20) * b1 + (a02 * a10 - a00 * a12) * b2) / det,
-                    (c02 * b0 + (a01 * a20 - a00 * a21) * b1 + (a00 * a11 - a01 * a10) * b2) / det]
-        if k == 2:
-            (a00, a01), (a10, a11) = a
-            det = a00 * a11 - a01 * a10
-            if not abs(det) > 0.0:
-                raise np.linalg.LinAlgError("Singular matrix")
-            return [(a11 * b[0] - a01 * b[1]) / det, (a00 * b[1] - a10 * b[0]) / det]
-        if not abs(a[0][0]) > 0.0:
-            raise np.linalg.LinAlgError("Singular matrix")
-        return [b[0] / a[0][0]]
-    for col in range(k):
-        top = a[col]
-        piv, best = col, abs(top[col])
-        for r in range(col + 1, k):
-            if abs(a[r][col]) > best:
-                piv, best = r, abs(a[r][col])
-        if not best > 0.0:
-            raise np.linalg.LinAlgError("Singular matrix")
-        if piv != col:
-            a[col], a[piv] = a[piv], top
-            top = a[col]
-            b[col], b[piv] = b[piv], b[col]
-        p, bc = top[col], b[col]
-        for r in range(col + 1, k):
-            row = a[r]
-            factor = row[col] / p
-            if factor:
-                for j in range(col + 1, k):
-                    row[j] -= factor * top[j]
-                b[r] -= factor * bc
-    x = [0.0] * k
-    for col in range(k - 1, -1, -1):
-        row, acc = a[col], b[col]
-        for j in range(col + 1, k):
-            acc -= row[j] * x[j]
-        x[col] = acc / row[col]
-    return x
 
 
 def _reach(shape) -> float:
@@ -286,13 +233,14 @@ class Plant:
             self._link_radii = [tuple(max((_reach(s) for s in checker.shapes if s.link == k), default=0.0)
                                       for k in (0, 1)) for checker in self.checkers]
             self._certificates = [None] * hand.m  # see _collisions()
-        # the plant's own Pinocchio data on the hand's models (their gravity and link masses)
-        self._pin = [(slice(2 * i, 2 * i + 2), model, model.createData(), fid,
-                      *np.asarray(model.damping, dtype=float).tolist(),
+        # the plant's own Pinocchio data on the hand's model of all fingers (their gravity and link masses)
+        self._hand_pin = (hand._hand_model, hand._hand_model.createData())
+        # per finger: its tip frame in that model, its joints' damping and joint 1's axis
+        self._pin = [(tip, *np.asarray(model.damping, dtype=float).tolist(),
                       *model.jointPlacements[1].translation[:2].tolist())
-                     for i, (model, fid) in enumerate(zip(hand._models, hand._tip_ids))]
+                     for model, tip in zip(hand._models, hand._hand_tips)]
         self._last_key, self._last_evaluation = (None,) * 4, None  # see step()
-        self._damping = tuple(d for entry in self._pin for d in entry[4:6])
+        self._damping = tuple(d for entry in self._pin for d in entry[1:3])
         self._no_damping = (0.0,) * hand.nq
         self._edge_cache: dict[int, _EdgeGeometry] = {}
         self.state: PlantState | None = None
@@ -407,25 +355,27 @@ class Plant:
         its velocity J q̇ (13-14), :math:`M^{-1}` (15-17: i00, i01, i11), :math:`J M^{-1} J^T`
         (18-20: l00, l01, l11).
 
-        One ``computeAllTerms`` (M, N) and one ``getFrameJacobian`` per finger, on the plant's own
-        Pinocchio data. The finger is a planar chain of revolute joints about z (validated by
+        One ``computeAllTerms`` (M, N) of the whole hand and one ``getFrameJacobian`` per finger, on the
+        plant's own Pinocchio data. The finger is a planar chain of revolute joints about z (validated by
         :class:`~regrasp.finger.Finger`), so J's columns are :math:`e_z \times (p - o_1)` and
         :math:`e_z \times (p - o_2)` (joint axes :math:`o_1` fixed, :math:`o_2` the elbow): p follows
         from :math:`o_1`, and :math:`\dot J\dot q = -\dot q_1^2 (o_2 - o_1) - (\dot q_1 + \dot q_2)^2
         (p - o_2)`, the tip's acceleration at :math:`\ddot q = 0` (Pinocchio's classical
         acceleration; ``tests/test_plant.py`` checks both against :meth:`Hand.dynamics`)."""
         damped = self.hand.damping_enabled
+        model, data = self._hand_pin
+        pin.computeAllTerms(model, data, q, v)
+        mass, nle, vel = data.M.tolist(), data.nle.tolist(), v.tolist()  # (M's upper triangle: crba's)
         out = []
-        for sl, model, data, fid, d0, d1, ox, oy in self._pin:
-            qi, vi = q[sl], v[sl]
-            pin.computeAllTerms(model, data, qi, vi)
-            (m00, m01), (_, m11) = data.M.tolist()
-            n0, n1 = data.nle.tolist()
-            v0, v1 = vi.tolist()
+        for i, (fid, d0, d1, ox, oy) in enumerate(self._pin):
+            r = 2 * i
+            m00, m01, m11 = mass[r][r], mass[r][r + 1], mass[r + 1][r + 1]
+            n0, n1 = nle[r], nle[r + 1]
+            v0, v1 = vel[r], vel[r + 1]
             if damped:
                 n0 += d0 * v0
                 n1 += d1 * v1
-            (j00, j01), (j10, j11) = pin.getFrameJacobian(model, data, fid, _LWA)[:2].tolist()
+            (j00, j01), (j10, j11) = pin.getFrameJacobian(model, data, fid, _LWA)[:2, r:r + 2].tolist()
             w1, w2 = v0 * v0, (v0 + v1) * (v0 + v1)
             det = m00 * m11 - m01 * m01
             i00, i01, i11 = m11 / det, -m01 / det, m00 / det
@@ -699,7 +649,7 @@ class Plant:
         q = st.q.tolist()
         for i, checker in enumerate(self.checkers):
             f = fingers[i]
-            ox, oy = self._pin[i][6:8]
+            ox, oy = self._pin[i][3:5]
             ex, ey = f[11] - f[8], f[12] + f[6]  # the elbow: p - o_2 = (j11, -j01)
             posture = (q[2 * i], q[2 * i + 1], beta, c * (ox - x) + s * (oy - y), c * (oy - y) - s * (ox - x),
                        c * (ex - x) + s * (ey - y), c * (ey - y) - s * (ex - x))

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -73,6 +74,29 @@ class ReducedState:
     hand: HandDynamics
 
 
+class _Terms(NamedTuple):
+    """:class:`ReducedState`'s quantities as floats (hot paths; H as an array): per joint or per row of A, or per
+    finger: ``tips``, ``tip_velocities`` (x, y); ``jacobians``, ``inverses`` J_i and J_i^{-1} as
+    row-major (a, b, c, d); ``masses`` M_i's (m00, m01, m11); ``frames`` the surface frame (n_x, n_y,
+    t_x, t_y) in the hand frame."""
+
+    xi: list
+    xi_dot: list
+    q: list
+    q_dot: list
+    tips: list
+    tip_velocities: list
+    a_rows: list
+    H: np.ndarray
+    h_dot_s_dot: list
+    jacobians: list
+    inverses: list
+    masses: list
+    nonlinear: list
+    jdv: list
+    frames: list
+
+
 class ReducedModel:
     r"""The paper's model of a hand holding a polygon with fixed and sliding contacts.
 
@@ -100,6 +124,7 @@ class ReducedModel:
         self.n = 3 + grasp.p
         self.M_s = np.zeros((self.n, self.n))
         self.M_s[:3, :3] = self.M_o
+        self._m_s_diagonal = [mass, mass, inertia] + [0.0] * grasp.p
         self._bv = grasp.sliding_directions()
         self._identity = np.eye(hand.nq)
         self._sliding_column = {i: 3 + j for j, i in enumerate(grasp.sliding)}  # contact -> column of S
@@ -137,69 +162,101 @@ class ReducedModel:
     def state(self, S, S_dot) -> ReducedState:
         """All the model's quantities at (S, Ṡ); raises SingularFingerError at a singular finger."""
         S, S_dot = as_finite_vectors(("S", "S_dot"), (S, S_dot), self.n)
-        return self._state(S, S_dot)[0]
+        return self._state(S, S_dot)
 
-    def _state(self, S: np.ndarray, S_dot: np.ndarray) -> tuple[ReducedState, np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`state` on validated (n,) arrays (hot paths), with J⁻¹, A and blockdiag(R_fi) of
-        every contact's surface frame (2m, 2m).
+    def _state(self, S: np.ndarray, S_dot: np.ndarray) -> ReducedState:
+        """:meth:`state` on validated (n,) arrays."""
+        return self._state_from(S, S_dot, self._terms(S.tolist(), S_dot.tolist()))
 
-        The per-contact kinematics is scalar arithmetic (m is 2 or 3: numpy's per-call cost would
-        dominate); the matrices are built once from it.
+    def _terms(self, s_list: list, sd_list: list) -> "_Terms":
+        r"""The model's quantities at (S, Ṡ) (lists of floats) as floats (hot paths; see :class:`_Terms`).
+
+        Scalar arithmetic (m is 2 or 3: numpy's per-call cost would dominate). Each finger is a planar
+        chain of revolute joints about z (validated by :class:`~regrasp.finger.Finger`), so its tip
+        Jacobian's columns are :math:`e_z \times (p - o_1)` and :math:`e_z \times (p - o_2)` (o_1 joint
+        1's axis, o_2 the elbow, p the tip, on its contact point) and :math:`\dot J\dot q = -\dot q_1^2
+        (o_2 - o_1) - (\dot q_1 + \dot q_2)^2 (p - o_2)`; M and N come from Pinocchio
+        (:meth:`Hand._mass_blocks_and_bias`).
         """
-        grasp, hand, m, n, nq = self.grasp, self.hand, self.grasp.m, self.n, self.hand.nq
-        s_list, sd_list = S.tolist(), S_dot.tolist()
+        grasp, hand, m, n = self.grasp, self.hand, self.grasp.m, self.n
         x, y, beta = s_list[:3]
-        omega = sd_list[2]
+        vx, vy, omega = sd_list[:3]
         xi, xi_dot = self.xi.tolist(), [0.0] * m
         for i, col in self._sliding_column.items():
             xi[i], xi_dot[i] = s_list[col], sd_list[col]
         c, s = math.cos(beta), math.sin(beta)
-        q, tips, a_rows, a_dot = [], [], [], []
-        frames = [0.0] * (nq * nq)  # blockdiag(R_fi), row-major
+        zeros = [0.0] * (n - 3)
+        q, q_dot, tips, tip_velocities, a_rows, h_rows, a_dot, jacobians, inverses, frames, elbows = (
+            [], [], [], [], [], [], [], [], [], [], [])
         for i, (ox, oy, tx, ty, nx, ny) in enumerate(grasp._contact_constants):
             cx, cy = ox + xi[i] * tx, oy + xi[i] * ty
             rx, ry = c * cx - s * cy, s * cx + c * cy  # lever arm r_i = R c_i(ξ_i)
             nx, ny = c * nx - s * ny, s * nx + c * ny  # surface frame [n_i t_i] = R [n°_i t°_i]
             tx, ty = c * tx - s * ty, s * tx + c * ty
-            tips.append((x + rx, y + ry))  # the contact point, where the tip is
-            q.extend(hand.fingers[i]._joint_angles(x + rx, y + ry))
-            k = 2 * i * (nq + 1)
-            frames[k], frames[k + 1], frames[k + nq], frames[k + nq + 1] = nx, tx, ny, ty
-            # rows 2i, 2i+1 of A = [G^T | R_f B_v]: [I_2 | ⊥r_i | t_i in the column of ξ_i if it slides]
-            row_x, row_y = [1.0, 0.0, -ry] + [0.0] * (n - 3), [0.0, 1.0, rx] + [0.0] * (n - 3)
+            px, py = x + rx, y + ry  # the contact point, where the tip is
+            finger = hand.fingers[i]
+            q1, q2, ex, ey = finger._joint_angles(px, py, elbow=True)
+            o1x, o1y = finger.joint1_in_hand_floats
+            ja, jb, jc, jd = o1y - py, ey - py, px - o1x, px - ex  # J_i = [e_z x (p - o_1), e_z x (p - o_2)]
+            det = ja * jd - jb * jc
+            i00, i01, i10, i11 = jd / det, -jb / det, -jc / det, ja / det
+            # rows 2i, 2i+1 of A = [G^T | R_f B_v]: [I_2 | ⊥r_i | t_i in the column of ξ_i if it slides],
+            # and of H = J^-1 A
+            row_x, row_y = [1.0, 0.0, -ry, *zeros], [0.0, 1.0, rx, *zeros]
+            hx, hy = [i00, i01, i01 * rx - i00 * ry, *zeros], [i10, i11, i11 * rx - i10 * ry, *zeros]
+            # q̇_i = H_i Ṡ
+            v0 = i00 * vx + i01 * vy + hx[2] * omega
+            v1 = i10 * vx + i11 * vy + hy[2] * omega
             col = self._sliding_column.get(i)
             if col is not None:
                 row_x[col], row_y[col] = tx, ty
+                hx[col], hy[col] = i00 * tx + i01 * ty, i10 * tx + i11 * ty
+                v0 += hx[col] * sd_list[col]
+                v1 += hy[col] * sd_list[col]
+            q += (q1, q2)
+            q_dot += (v0, v1)
+            tips.append((px, py))
+            tip_velocities.append((ja * v0 + jb * v1, jc * v0 + jd * v1))
+            elbows.append((o1x, o1y, ex, ey))
+            frames.append((nx, ny, tx, ty))
             a_rows += (row_x, row_y)
+            h_rows += (hx, hy)
+            jacobians.append((ja, jb, jc, jd))
+            inverses.append((i00, i01, i10, i11))
             # Ȧ Ṡ = Ġ^T Ẋ + Ṙ_f B_v ξ̇: ω ⊥ṙ_i + ω ξ̇_i ⊥t_i with ṙ_i = ω ⊥r_i + ξ̇_i t_i
             a_dot += (-omega * omega * rx - 2.0 * omega * xi_dot[i] * ty,
                       -omega * omega * ry + 2.0 * omega * xi_dot[i] * tx)
-        qs = np.array(q).reshape(m, 2)
-        J = hand._jacobian(qs)
-        rows = J.tolist()
-        blocks = [(rows[2 * i][2 * i], rows[2 * i][2 * i + 1], rows[2 * i + 1][2 * i], rows[2 * i + 1][2 * i + 1])
-                  for i in range(m)]
-        hand._check_singular_blocks(qs, blocks)
-        J_inv = [0.0] * (nq * nq)  # blockdiag(J_i^{-1}), row-major
-        for i, (a, b, c_, d) in enumerate(blocks):
-            det, k = a * d - b * c_, 2 * i * (nq + 1)
-            J_inv[k], J_inv[k + 1], J_inv[k + nq], J_inv[k + nq + 1] = d / det, -b / det, -c_ / det, a / det
-        J_inv = np.array(J_inv).reshape(nq, nq)
-        A = np.array(a_rows)
-        H = J_inv.dot(A)  # (ndarray.dot: matmul's ufunc machinery costs ~1 us per call here)
-        q_dot = H.dot(S_dot)
-        dyn = hand._dynamics(qs, q_dot.reshape(m, 2), (J, np.array(tips)))
-        H_dot_S_dot = J_inv.dot(np.array(a_dot) - dyn.jacobian_dot_v)
-        frames = np.array(frames).reshape(nq, nq)
+        hand._check_singular_blocks(q, jacobians)
+        masses, nonlinear = hand._mass_blocks_and_bias(q, q_dot)
+        jdv, h_dot_s_dot = [], []
+        for i, ((i00, i01, i10, i11), (px, py), (o1x, o1y, ex, ey)) in enumerate(zip(inverses, tips, elbows)):
+            v0, v1 = q_dot[2 * i], q_dot[2 * i + 1]
+            w1, w2 = v0 * v0, (v0 + v1) * (v0 + v1)
+            j0, j1 = -w1 * (ex - o1x) - w2 * (px - ex), -w1 * (ey - o1y) - w2 * (py - ey)
+            jdv += (j0, j1)
+            b0, b1 = a_dot[2 * i] - j0, a_dot[2 * i + 1] - j1
+            h_dot_s_dot += (i00 * b0 + i01 * b1, i10 * b0 + i11 * b1)  # Ḣ Ṡ = J^-1 (Ȧ Ṡ - J̇ q̇)
+        return _Terms(xi, xi_dot, q, q_dot, tips, tip_velocities, a_rows, np.array(h_rows), h_dot_s_dot, jacobians,
+                      inverses, masses, nonlinear, jdv, frames)
+
+    def _state_from(self, S: np.ndarray, S_dot: np.ndarray, terms: "_Terms") -> ReducedState:
+        """The :class:`ReducedState` of :meth:`_terms` at (S, Ṡ)."""
+        m, nq = self.grasp.m, self.hand.nq
+        A = np.array(terms.a_rows)
         R_f = self._identity.copy()
-        for i in grasp.sliding:
-            R_f[2 * i:2 * i + 2, 2 * i:2 * i + 2] = frames[2 * i:2 * i + 2, 2 * i:2 * i + 2]
-        if grasp.p:
-            xi, xi_dot = np.array(xi), np.array(xi_dot)
-        else:  # (cheaper than converting the lists)
-            xi, xi_dot = self.xi.astype(float), np.zeros(m)
-        st = ReducedState(S, S_dot, xi, xi_dot, qs.reshape(-1), q_dot, H, H_dot_S_dot, A[:, :3].T, R_f, self._bv, dyn)
-        return st, J_inv, A, frames
+        for i in self.grasp.sliding:
+            nx, ny, tx, ty = terms.frames[i]
+            R_f[2 * i:2 * i + 2, 2 * i:2 * i + 2] = ((nx, tx), (ny, ty))
+        mass = np.zeros((nq, nq))
+        jacobian = np.zeros((nq, nq))
+        for i, ((m00, m01, m11), block) in enumerate(zip(terms.masses, terms.jacobians)):
+            mass[2 * i:2 * i + 2, 2 * i:2 * i + 2] = ((m00, m01), (m01, m11))
+            jacobian[2 * i:2 * i + 2, 2 * i:2 * i + 2] = np.reshape(block, (2, 2))
+        dyn = HandDynamics(mass, np.array(terms.nonlinear), jacobian, np.array(terms.jdv), np.array(terms.tips),
+                           np.array(terms.tip_velocities))
+        return ReducedState(S, S_dot, np.array(terms.xi), np.array(terms.xi_dot), np.array(terms.q),
+                            np.array(terms.q_dot), terms.H, np.array(terms.h_dot_s_dot), A[:, :3].T,
+                            R_f, self._bv, dyn)
 
     # ------------------------------------------------------------------ dynamics
     def mass_matrix(self, st: ReducedState) -> np.ndarray:
