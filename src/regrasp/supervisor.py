@@ -7,17 +7,20 @@ At every control step the supervisor
    ``envelope_every`` > 1 re-evaluates it only every k-th step and reuses the last sample in
    between);
 2. for a fixed contact whose margin to the nearer bound of its feasible interval is below
-   ``danger_fraction`` × the interval's width (its *danger zone*), plans a slide to the
-   interval's midpoint, but only if :func:`~regrasp.sliding.sliding_feasibility` accepts that
-   direction at the current pose and the desired object acceleration; otherwise it logs why and
-   tries the next contact in danger, or waits;
+   ``danger_fraction`` × the interval's width (its *danger zone*), or that the plan squeezes within
+   ``reaction_time``, plans a slide to the middle of what stays feasible, but only if
+   :func:`~regrasp.sliding.sliding_feasibility` accepts that direction at ``path_checks`` points
+   from the contact to the target (at the desired pose and object acceleration); otherwise it
+   looks for a slide of another contact that makes it possible and does that first
+   (``enabling``), or logs why and tries the next contact in danger, or waits;
 3. runs a slide in three phases: **priming** (the fixed-contact law with the internal force moved
    so the contact sits just past the edge of its friction cone, in the sliding direction, until
-   it is sensed slipping or for at most ``prime_time``), **sliding** (the sliding law: Proposition 3, which predicts the friction from
-   the commanded motion and, for more than two fingers, chooses the slider's normal force with the
-   internal force; ξ follows a second-order filter towards the target,
-   :math:`\ddot\xi_r = \omega_n^2 (\xi^* - \xi_r) - 2\zeta\omega_n\dot\xi_r`), and **settling**
-   (the fixed-contact law at the reached ξ, until the plant's contact sticks);
+   it is sensed slipping or for at most ``prime_time``), **sliding** (Proposition 3, which
+   predicts the friction from the commanded motion and, for more than two fingers, chooses the
+   slider's normal force with the internal force; ξ follows a second-order filter towards the
+   target, :math:`\ddot\xi_r = \omega_n^2 (\xi^* - \xi_r) - 2\zeta\omega_n\dot\xi_r`), and
+   **settling** (the fixed-contact law with the contact just inside its cone in the sliding
+   direction, ``settle_undershoot``, until the plant's contact sticks);
 4. starts at most one slide at a time, so p ≤ 1 and 2m ≥ 3 + p holds for every m ≥ 2.
 
 The supervisor reads only what a hand could sense: the object pose and twist, each contact's
@@ -607,8 +610,10 @@ class RegraspSupervisor:
         if meas.sliding[i]:
             self.phases[i] = ContactPhase.SETTLING
             moving = float(meas.xi_dot[i])
+            # (never below half of μ: a contact with μ under the undershoot still gets a cone)
+            undershoot = min(self.settings.settle_undershoot, 0.5 * float(self.mu[i]))
             self._controller = self._fixed_controller(ConeEdge(i, math.copysign(1.0, moving) if moving else self._direction),
-                                                      -self.settings.settle_undershoot)
+                                                      -undershoot)
         else:
             self._controller = self._fixed_controller()
             self._finish(meas, out)
