@@ -15,23 +15,18 @@ Medians over repeated calls (time.perf_counter), never means.
 
 from __future__ import annotations
 
-import argparse
 import json
 
 import numpy as np
 
-from common import ROOT, median_us, sliding_hold
+from common import ROOT, median_us, parse_args, sliding_hold
 
 from regrasp import Finger, Grasp, Hand, ReducedModel
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="few iterations (CI smoke run)")
-    parser.add_argument("--json", action="store_true", help="one JSON document on stdout")
-    args = parser.parse_args()
-    n = 20 if args.quick else 500
+    args, n = parse_args(__doc__, 500)
 
     setup = sliding_hold()
     sc, hand, model, S, S_dot, st, tau, plant = (setup.scenario, setup.hand, setup.model, setup.S, setup.S_dot,

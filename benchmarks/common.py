@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -59,3 +60,13 @@ def sliding_hold() -> SlidingHold:
                   mu=0.0, stop_on=())
     plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
     return SlidingHold(sc, hand, model, S, S_dot, st, tau, plant)
+
+
+def parse_args(doc: str, full: int) -> tuple[argparse.Namespace, int]:
+    """``--quick`` / ``--json`` of a benchmark script (``doc``: its docstring), and the number of timed
+    calls per item: ``full``, or 20 for the CI smoke run."""
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="few iterations (CI smoke run)")
+    parser.add_argument("--json", action="store_true", help="one JSON document on stdout")
+    args = parser.parse_args()
+    return args, 20 if args.quick else full

@@ -23,7 +23,6 @@ Medians of repeated calls (time.perf_counter); the Pinocchio floors time batches
 
 from __future__ import annotations
 
-import argparse
 import json
 import tempfile
 import time
@@ -32,7 +31,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from common import ROOT, median_us, sliding_hold
+from common import ROOT, median_us, parse_args, sliding_hold
 
 from regrasp import FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
@@ -125,11 +124,7 @@ def pinocchio_floor_us(hand: Hand, quick: bool) -> float:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="few iterations (CI smoke run)")
-    parser.add_argument("--json", action="store_true", help="one JSON document on stdout")
-    args = parser.parse_args()
-    n = 20 if args.quick else 300
+    args, n = parse_args(__doc__, 300)
 
     setup = sliding_hold()
     sc, hand = setup.scenario, setup.hand
