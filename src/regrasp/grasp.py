@@ -39,23 +39,16 @@ Time derivatives are exact (no numerical differentiation):
 from __future__ import annotations
 
 from collections.abc import Sequence
-from enum import Enum
 
 import numpy as np
 
+from .contact import ContactMode
 from .exceptions import InvalidParameterError, SlidingContactCountError
 from .planar import rotation
 from .polygon import ConvexPolygon
 from .validation import as_finite_array
 
 __all__ = ["ContactMode", "Grasp"]
-
-
-class ContactMode(str, Enum):
-    """How a fingertip touches the object."""
-
-    FIXED = "fixed"
-    SLIDING = "sliding"
 
 
 class Grasp:
@@ -77,6 +70,8 @@ class Grasp:
             self.modes = tuple(ContactMode(m) for m in modes)
         except ValueError:
             raise InvalidParameterError("modes", modes, "'fixed' or 'sliding' for each contact") from None
+        if ContactMode.SEPARATED in self.modes:
+            raise InvalidParameterError("modes", modes, "'fixed' or 'sliding' for each contact (not 'separated')")
         self.polygon = polygon
         self.edges = tuple(polygon.edge(k) for k in edges)
         self.m = len(self.edges)
