@@ -9,6 +9,7 @@ import functools
 import math
 
 import numpy as np
+import scipy.optimize
 from scipy.spatial import ConvexHull
 
 from regrasp.exceptions import PolygonError
@@ -113,3 +114,56 @@ def make_case(seed: int) -> dict:
             break
     return dict(seed=seed, l1=l1, l2=l2, lclass=lclass, dclass=dclass, polygon=polygon, edge=k,
                 pose=pose, base=base)
+
+
+def force_lp(polygon, edges, pose, acc, xi, ratios, mu_s, limits, gravity, *, maximise_margin=False):
+    """Whether contact forces hold the object at ``pose`` with acceleration ``acc`` [m/s², rad/s²]
+    and contacts at ``xi`` [m] on ``edges``: an LP in the hand-frame forces f = (f_1x, f_1y, ...),
+    Newton-Euler written here, every normal force in [f_min, f_max] (``limits``), a contact with
+    ``ratios[i]`` = r on its cone edge t.f = r n.f, the others inside their static cones
+    (``mu_s``) by ``limits.cone_margin``. With ``maximise_margin``: the largest smallest such cone
+    margin [N] (None when infeasible)."""
+    m = len(edges)
+    R = rot(pose[2])
+    rows_eq, rhs_eq, rows_ub, rhs_ub = [], [], [], []
+    mass, inertia = polygon.mass, polygon.inertia
+    wrench = [mass * (acc[0] - gravity[0]), mass * (acc[1] - gravity[1]), inertia * acc[2]]
+    lever, normal, tangent = [], [], []
+    for k, x in zip(edges, xi):
+        e = polygon.edge(k)
+        lever.append(R @ e.point(x))
+        normal.append(R @ e.inward_normal)
+        tangent.append(R @ np.array([-e.inward_normal[1], e.inward_normal[0]]))
+    for axis in range(2):  # Σ f_i = m (a - g)
+        row = np.zeros(2 * m + 1)
+        row[axis:2 * m:2] = 1.0
+        rows_eq.append(row)
+    row = np.zeros(2 * m + 1)  # Σ r_i × f_i = I α
+    for i, r in enumerate(lever):
+        row[2 * i], row[2 * i + 1] = -r[1], r[0]
+    rows_eq.append(row)
+    rhs_eq += wrench
+    for i in range(m):
+        n_row, t_row = np.zeros(2 * m + 1), np.zeros(2 * m + 1)
+        n_row[2 * i:2 * i + 2], t_row[2 * i:2 * i + 2] = normal[i], tangent[i]
+        rows_ub += [-n_row, n_row]  # f_min <= n.f <= f_max
+        rhs_ub += [-limits.f_min, limits.f_max]
+        if ratios[i] is None:  # |t.f| <= mu n.f - c  (c the margin variable when maximising)
+            for sign in (1.0, -1.0):
+                row = sign * t_row - mu_s[i] * n_row
+                row[-1] = 1.0 if maximise_margin else 0.0
+                rows_ub.append(row)
+                rhs_ub.append(0.0 if maximise_margin else -limits.cone_margin)
+        else:
+            row = t_row - ratios[i] * n_row
+            rows_eq.append(row)
+            rhs_eq.append(0.0)
+    cost = np.zeros(2 * m + 1)
+    bounds = [(None, None)] * (2 * m) + [(None, None) if maximise_margin else (0.0, 0.0)]
+    if maximise_margin:
+        cost[-1] = -1.0
+    res = scipy.optimize.linprog(cost, A_ub=np.array(rows_ub), b_ub=rhs_ub, A_eq=np.array(rows_eq), b_eq=rhs_eq,
+                                 bounds=bounds, method="highs")
+    if maximise_margin:
+        return -res.fun if res.status == 0 else None
+    return res.status == 0
