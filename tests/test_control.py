@@ -31,7 +31,7 @@ FINGER3 = Finger.from_urdf(ROOT / "urdf" / "planar_2r_finger.urdf", base_in_hand
 OMEGA = 20.0  # closed-loop bandwidth [rad/s]: K_s = ω², K_v = 2ω
 E0 = np.array([0.002, -0.001, 0.02, 0.001])  # initial error: x, y [m], β [rad], ξ [m]
 
-# (law, m, modes, xi of every contact, mu per contact, sliding speed [m/s])
+# (law, m, modes, xi of every contact, friction per contact, sliding speed [m/s])
 CASES = {
     "fixed": (FixedContactController, 2, ["fixed", "fixed"], [0.0, 0.0], [0.5, 0.5], 0.0),
     "prop1_mu0": (Proposition1Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.0, 0.5, 0.5], 0.01),
@@ -65,9 +65,9 @@ def run(name, duration=0.4, dt=1e-3, friction_noise=0.0):
     for j, i in enumerate(grasp.sliding):
         xi_plant[i] = S0[3 + j]
     contacts = [PlantContact(e, mode, x, float(np.sign(speed) or 1.0)) for e, mode, x in zip(edges, modes, xi_plant)]
-    plant = Plant(hand, SC.polygon, contacts, mu=mu, dt=dt)
+    plant = Plant(hand, SC.polygon, contacts, friction=mu, dt=dt)
     plant.reset(st.q, st.q_dot, S0[:3], velocity[:3])
-    controller = law(model, Gains.critically_damped(OMEGA, n), mu=mu)
+    controller = law(model, Gains.critically_damped(OMEGA, n), friction=mu)
     log = run_closed_loop(plant, controller, reference, duration, friction_noise=friction_noise,
                           rng=np.random.default_rng(0))
     t = log.times
@@ -83,7 +83,7 @@ def test_error_follows_the_closed_loop_ode(name):
     assert log.events == ()
     assert deviation <= 1.5 * OMEGA * 1e-3  # zero-order hold: within ω·dt of the initial error
     assert np.abs(log.errors[-1]).max() <= 1.5 * OMEGA * 1e-3 * np.abs(E0).max()  # settled to the ZOH bound
-    # fixed contacts stay inside their friction cones (the plant's forces)
+    # fixed contacts stay inside their (static) friction cones (the plant's forces)
     assert log.cone_margins[:, fixed].min() > 0.0
     assert log.plant_forces[:, :, 0].min() > 0.0  # every contact keeps pushing
 
@@ -157,7 +157,7 @@ def test_proposition3_force_distribution_reduces_to_the_papers_P_for_two_fingers
     """With m = 2 the m-finger law's equations have a unique solution, which is (3.4.9)'s."""
     model, S, mu, speed = model_of(name)
     rng = np.random.default_rng(3)
-    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), mu=mu)
+    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), friction=mu)
     for _ in range(5):
         S_dot = np.append(rng.normal(0, 0.01, 3), speed)
         S_d = S + rng.normal(0, 1e-3, 4)
@@ -178,7 +178,7 @@ def test_proposition3_with_three_fingers_chooses_the_sliders_normal_force():
     model, S, mu, speed = model_of("prop3_m3")
     settings = InternalForceSettings(f_min=0.5, margin=0.05)
     rng = np.random.default_rng(4)
-    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), mu=mu, internal_force=settings)
+    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), friction=mu, internal_force=settings)
     for _ in range(5):
         S_dot = np.append(rng.normal(0, 0.01, 3), speed)
         out = law(S, S_dot, S + rng.normal(0, 1e-4, 4), S_dot, rng.normal(0, 0.1, 4))
@@ -193,8 +193,8 @@ def test_proposition3_with_three_fingers_chooses_the_sliders_normal_force():
         assert abs(out.friction_estimate[0] - f_t[0]) < 1e-9  # f̂_ξ is the slider's predicted friction
         assert f_n.min() >= settings.f_min - 1e-6
         assert np.all(np.abs(f_t[1:]) <= (mu[1:] - settings.margin) * f_n[1:] + 1e-6)
-    pinned = Proposition2Controller(model, Gains.critically_damped(OMEGA, 4), mu=mu, internal_force=settings,
-                                    cone_edge=ConeEdge(0, 1.0))
+    pinned = Proposition2Controller(model, Gains.critically_damped(OMEGA, 4), friction=mu, internal_force=settings,
+                                    cone_edge=ConeEdge(0, 1.0, mu[0]))
     with pytest.raises(InternalForceInfeasibleError):
         pinned(S, np.append(np.zeros(3), speed), S, np.append(np.zeros(3), speed), np.zeros(4),
                friction=[0.5 * mu[0] * settings.f_min])
@@ -207,4 +207,5 @@ def test_proposition3_checks_its_arguments():
     with pytest.raises(InvalidParameterError, match="direction"):
         Proposition3Controller(model, gains, direction=0.0)
     with pytest.raises(InvalidParameterError, match="cone_edge"):
-        Proposition3Controller(model, gains, cone_edge=ConeEdge(0, 1.0))
+        Proposition3Controller(model, gains, cone_edge=ConeEdge(0, 1.0, 0.5))
+

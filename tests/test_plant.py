@@ -86,7 +86,7 @@ def from_surface(beta: float, surface) -> np.ndarray:
     return np.stack([frames[i] @ np.asarray(surface)[i] for i in range(2)])
 
 
-def start(hand: Hand, modes, xi, S, S_dot, *, mu: float, model_modes=None, **plant_kw):
+def start(hand: Hand, modes, xi, S, S_dot, *, friction, model_modes=None, **plant_kw):
     """A plant in the reduced state (S, Ṡ) (sliding signs = sign ξ̇), and that reduced state.
 
     The reduced model uses a hand with the default singular threshold (its ``state`` refuses
@@ -100,7 +100,7 @@ def start(hand: Hand, modes, xi, S, S_dot, *, mu: float, model_modes=None, **pla
     for i, (edge, mode) in enumerate(zip(EDGES, modes)):
         sign = float(np.sign(rst.xi_dot[i])) if mode == "sliding" else 1.0
         contacts.append(PlantContact(edge=edge, mode=mode, xi=float(rst.xi[i]), sign=sign or 1.0))
-    plant = Plant(hand, polygon(), contacts, mu=mu, dt=DT, **plant_kw)
+    plant = Plant(hand, polygon(), contacts, friction=friction, dt=DT, **plant_kw)
     plant.reset(rst.q, rst.q_dot, np.asarray(S, float)[:3], np.asarray(S_dot, float)[:3])
     return plant, rst
 
@@ -114,8 +114,8 @@ class Driver:
     :math:`\\tau = M(H\\ddot S + \\dot H\\dot S) + N + J^T f`.
     """
 
-    def __init__(self, hand: Hand, modes, xi, mu: float):
-        self.mu = mu
+    def __init__(self, hand: Hand, modes, xi, friction):
+        self.friction = friction
         self.grasp = Grasp(polygon(), EDGES, modes)
         self.model = ReducedModel(make_hand(hand.gravity_in_hand, hand.damping_enabled), self.grasp, xi)
 
@@ -138,9 +138,9 @@ class Driver:
             inward = sum(frames[i][:, 0] @ null[2 * i:2 * i + 2] for i in range(2))
             f = f + squeeze * np.sign(inward) * null
         else:
-            gf = self.grasp.sliding_grasp_matrix(pose, rst.xi, signs, self.mu)
+            gf = self.grasp.sliding_grasp_matrix(pose, rst.xi, signs, self.friction)
             eta = np.linalg.solve(gf, w)
-            f = self.grasp.surface_rotation(pose) @ self.grasp.force_basis(signs, self.mu) @ eta
+            f = self.grasp.surface_rotation(pose) @ self.grasp.force_basis(signs, self.friction) @ eta
         return f.reshape(2, 2)
 
     def object_acceleration(self, rst, forces) -> np.ndarray:
@@ -247,7 +247,7 @@ def test_energy_conserved_two_fixed_contacts(seed):
     hand = make_hand(gravity=(0.0, 0.0), damping=False)
     S, S_dot = random_pose_and_twist(rng)
     xi = rng.uniform(-0.005, 0.005, 2)
-    plant, _ = start(hand, ["fixed", "fixed"], xi, S, S_dot, mu=1.0)
+    plant, _ = start(hand, ["fixed", "fixed"], xi, S, S_dot, friction=1.0)
     E0, work, min_normal, _ = run_energy(plant, hand)
     st = plant.state
     assert st.t == pytest.approx(1.0)
@@ -271,7 +271,7 @@ def test_energy_conserved_frictionless_sliding(seed):
     xi_dot = rng.choice([-1.0, 1.0], 2) * rng.uniform(0.001, 0.003, 2)
     # finger 1 slides by the reduced model; finger 2's sliding velocity is added by hand
     plant, rst = start(hand, ["sliding", "sliding"], xi, np.append(S, xi[0]), np.append(S_dot, xi_dot[0]),
-                       mu=0.0, model_modes=["sliding", "fixed"])
+                       friction=0.0, model_modes=["sliding", "fixed"])
     t2 = surface_frames(S[2])[1][:, 1]
     v = rst.q_dot.copy()
     v[2:] += np.linalg.solve(rst.hand.jacobian[2:, 2:], t2 * xi_dot[1])
@@ -300,7 +300,7 @@ def test_torque_free_motion_pulls_on_contacts():
     rng = np.random.default_rng(7)
     hand = make_hand(gravity=(0.0, 0.0), damping=False)
     S, S_dot = random_pose_and_twist(rng)
-    plant, rst = start(hand, ["fixed", "fixed"], [0.0, 0.0], S, S_dot, mu=1.0, stop_on=())
+    plant, rst = start(hand, ["fixed", "fixed"], [0.0, 0.0], S, S_dot, friction=1.0, stop_on=())
     _, f_model = ReducedModel(make_hand((0.0, 0.0), False), Grasp(polygon(), EDGES, ["fixed", "fixed"]),
                               [0.0, 0.0]).forward_dynamics(rst, np.zeros(4))
     step = plant.step(np.zeros(4))
@@ -321,7 +321,7 @@ def test_friction_work_balance():
     modes, xi = ["sliding", "fixed"], [-0.015, 0.0]
     S0 = np.array([0.0, 0.12, 0.0])
     xi_dot = 0.01
-    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, xi_dot], mu=mu)
+    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, xi_dot], friction=mu)
     driver = Driver(hand, modes, xi, mu)
     E0 = plant.energy()
     residuals, lam_xi_dot = [], 0.0
@@ -354,7 +354,7 @@ def test_separation_event():
     hand = make_hand(gravity=(0.0, 0.0), damping=True)
     modes, xi = ["fixed", "fixed"], [0.0, 0.0]
     S0 = np.array([0.0, 0.12, 0.0])
-    plant, _ = start(hand, modes, xi, S0, np.zeros(3), mu=1.0)
+    plant, _ = start(hand, modes, xi, S0, np.zeros(3), friction=1.0)
     driver = Driver(hand, modes, xi, 1.0)
     t_cross = 0.0405  # between two steps
     normal = lambda t: 0.2 * (1.0 - t / t_cross)  # noqa: E731
@@ -380,7 +380,7 @@ def test_slip_event():
     rate = mu * squeeze / t_slip  # [N/s]
     hand = make_hand(gravity=(0.0, 0.0), damping=True)
     modes, xi = ["fixed", "fixed"], [0.0, 0.0]
-    plant, _ = start(hand, modes, xi, [0.0, 0.12, 0.0], np.zeros(3), mu=mu)
+    plant, _ = start(hand, modes, xi, [0.0, 0.12, 0.0], np.zeros(3), friction=mu)
     driver = Driver(hand, modes, xi, mu)
     def torque(rst, t):
         forces = from_surface(rst.S[2], [[squeeze, rate * t], [squeeze, 0.0]])
@@ -436,7 +436,7 @@ def run_until_stick():
     hand = make_hand(gravity=(0.0, -GRAVITY), damping=False)
     modes, xi, S0 = ["sliding", "fixed"], STICK_XI, STICK_S0
     v0, decel = STICK_V0, STICK_DECEL
-    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, v0], mu=mu)
+    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, v0], friction=mu)
     driver = Driver(hand, modes, xi, mu)
     event_step, previous = None, None
     for _ in range(40):
@@ -488,7 +488,7 @@ def test_left_edge_event():
     S0 = np.array([0.0, 0.12, 0.0])
     v = 0.3
     t_leave = (0.02 - xi[0]) / v
-    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, v], mu=mu)
+    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, v], friction=mu)
     driver = Driver(hand, modes, xi, mu)
     event_step, last_xi = None, xi[0]
     for _ in range(60):
@@ -521,7 +521,7 @@ def test_collision_event():
     hand = make_hand(gravity=(0.0, -GRAVITY), damping=True)
     modes, xi = ["fixed", "fixed"], [0.0, 0.0]
     x0, y0 = 0.0, 0.12
-    plant, _ = start(hand, modes, xi, [x0, y0, beta0], [0.0, 0.0, omega], mu=mu)
+    plant, _ = start(hand, modes, xi, [x0, y0, beta0], [0.0, 0.0, omega], friction=mu)
     driver = Driver(hand, modes, xi, mu)
     fingers = [c.finger for c in scenario().contacts]
     radius = max(float(s.geometry.radius) for s in fingers[1].link_shapes() if s.link == 1)
@@ -562,7 +562,7 @@ def test_singular_event():
     x0, y0 = 0.0, 0.145
     # stretched along its (vertical) edge, finger 1's distal link necessarily dips into the object
     # (the urdf geometry's grazing-angle limit): collisions are not what this test is about
-    plant, _ = start(hand, modes, xi, [x0, y0, 0.0], [0.0, v, 0.0], mu=1.0, collision_check=False)
+    plant, _ = start(hand, modes, xi, [x0, y0, 0.0], [0.0, v, 0.0], friction=1.0, collision_check=False)
     driver = Driver(hand, modes, xi, 1.0)
     fingers = [c.finger for c in scenario().contacts]
 
@@ -600,7 +600,7 @@ def test_fixed_hold_forces_and_object_equation():
     S0 = np.array([0.0, 0.12, 0.0])
     amp, w = np.array([0.01, 0.005, 0.2]), 2 * np.pi * 2.0
     ref = lambda t: (S0 + amp * np.sin(w * t), amp * w * np.cos(w * t), -amp * w * w * np.sin(w * t))  # noqa: E731
-    plant, _ = start(hand, modes, xi, S0, amp * w, mu=mu)
+    plant, _ = start(hand, modes, xi, S0, amp * w, friction=mu)
     driver = Driver(hand, modes, xi, mu)
     M_o = np.diag([plant.mass, plant.mass, plant.inertia])
     f_g = np.append(plant.mass * hand.gravity_in_hand, 0.0)
@@ -645,9 +645,9 @@ def test_bad_input():
         _plant([PlantContact(1, "sliding", sign=0.0), PlantContact(3, "fixed")])
     with pytest.raises(UnknownEdgeError):
         _plant([PlantContact(4, "fixed"), PlantContact(3, "fixed")])
-    for mu in (-0.1, float("nan"), float("inf")):
+    for friction in (-0.1, float("nan"), float("inf"), [0.5], "0.5", None, (0.5, 0.6, 0.7)):
         with pytest.raises(InvalidParameterError):
-            _plant(good, mu=mu)
+            _plant(good, friction=friction)
     for kw in ({"dt": 0.0}, {"dt": -1e-3}, {"object_mass": -1.0}, {"baumgarte": -1.0}):
         with pytest.raises(InvalidParameterError):
             _plant(good, **kw)
@@ -704,7 +704,7 @@ def test_torque_free_energy_conservation_with_ideal_contacts(modes, seed):
     st = model.state(S, S_dot)
     contacts = [PlantContact(e, mo, x, float(np.sign(S_dot[3])) if mo == "sliding" else 1.0)
                 for e, mo, x in zip([1, 3], modes, xi)]
-    plant = Plant(hand, sc.polygon, contacts, mu=0.0, collision_check=False, contact_events=False)
+    plant = Plant(hand, sc.polygon, contacts, friction=0.0, collision_check=False, contact_events=False)
     plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
     e0 = plant.energy()
     for _ in range(1000):

@@ -50,9 +50,10 @@ def setup():
     model = ReducedModel(hand, grasp, xi=[LO, XI_HOLD])
     S0, S0_dot, _ = reference(0.0)
     st = model.state(S0, S0_dot)
-    plant = Plant(hand, SC.polygon, [PlantContact(1, "sliding", LO, 1.0), PlantContact(3, "fixed", XI_HOLD)], mu=MU)
+    plant = Plant(hand, SC.polygon, [PlantContact(1, "sliding", LO, 1.0), PlantContact(3, "fixed", XI_HOLD)],
+                  friction=MU)
     plant.reset(st.q, st.q_dot, S0[:3], S0_dot[:3])
-    return plant, Proposition3Controller(model, Gains.critically_damped(40.0, 4), mu=MU)
+    return plant, Proposition3Controller(model, Gains.critically_damped(40.0, 4), friction=MU)
 
 
 def rerun_cli() -> list[str]:
@@ -309,3 +310,4 @@ def test_a_buffered_rollout_recording_holds_each_steps_values_at_its_time(tmp_pa
         assert np.allclose(xi[1:n, 0], result.xi[1:, i] * 1e3, rtol=0.0, atol=1e-4)  # held vs tip: drift
         assert np.isnan(xi[:, 1]).all()  # the recorder's error series are the object's only
         assert (xi[:, 2] <= xi[:, 0]).all() and (xi[:, 0] <= xi[:, 3]).all()  # inside its feasible interval
+

@@ -85,7 +85,7 @@ def test_H_dot_S_dot_matches_finite_differences(m, modes, seed):
     np.testing.assert_allclose(st.H_dot_S_dot, fd, atol=1e-7 * max(1.0, np.abs(fd).max()))
 
 
-def plant_for(model, st, mu, gravity):
+def plant_for(model, st, friction, gravity):
     contacts = []
     k = 0
     for i, mode in enumerate(model.grasp.modes):
@@ -95,7 +95,7 @@ def plant_for(model, st, mu, gravity):
             k += 1
         contacts.append(PlantContact(model.grasp.edges[i].index, mode.value, float(st.xi[i]), sign))
     hand = Hand(model.hand.fingers, gravity_in_hand=gravity)
-    plant = Plant(hand, RECT, contacts, mu=mu, collision_check=False)
+    plant = Plant(hand, RECT, contacts, friction=friction, collision_check=False)
     plant.reset(st.q, st.q_dot, st.S[:3], st.S_dot[:3])
     return plant
 
@@ -198,7 +198,7 @@ def test_plant_accepts_mismatched_parameters():
     heavy_hand = Hand(model.hand.fingers, gravity_in_hand=(0.0, -9.81), link_mass_scale=1.3)
     plant = Plant(heavy_hand, RECT, [PlantContact(1, "sliding", st.xi[0], float(np.sign(S_dot[3]))),
                                      PlantContact(3, "fixed", st.xi[1])],
-                  mu=0.6, object_mass=0.1, object_inertia=2e-4, collision_check=False)
+                  friction=0.6, object_mass=0.1, object_inertia=2e-4, collision_check=False)
     plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
     _, X_plant, _ = plant.accelerations(plant.state, tau)
     nominal, _ = model.forward_dynamics(st, tau, 0.3)

@@ -141,20 +141,22 @@ def random_slide_case(seed: int, m: int):
     else:
         f_min, margin = rng.uniform(0.0, 0.5), rng.uniform(0.0, 0.08)
         settings = InternalForceSettings(f_min=f_min, margin=margin)
-    return dict(polygon=polygon, edges=edges, pose=pose, xi=xi, acc=acc, j=j, s=s, mu=mu, mu_arg=mu_arg,
-                gravity=gravity, mass=mass, inertia=inertia, settings=settings, f_min=f_min, margin=margin)
+    kinetic, friction = mu.copy(), mu_arg
+    return dict(polygon=polygon, edges=edges, pose=pose, xi=xi, acc=acc, j=j, s=s, mu=mu, kinetic=kinetic,
+                friction=friction, gravity=gravity, mass=mass, inertia=inertia, settings=settings, f_min=f_min,
+                margin=margin)
 
 
 def run(case) -> SlideFeasibility:
     c = case
-    return call(c["polygon"], c["edges"], c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["mu_arg"], c["gravity"],
+    return call(c["polygon"], c["edges"], c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["friction"], c["gravity"],
                 c["mass"], c["inertia"], c["settings"])
 
 
 def system_of(case):
     c = case
     return slide_system(c["polygon"], c["edges"], c["pose"], c["xi"], c["acc"], c["gravity"], c["mass"],
-                        c["inertia"], c["j"], c["s"], c["mu"])
+                        c["inertia"], c["j"], c["s"], c["kinetic"])
 
 
 def two_finger_verdict(case):
@@ -215,8 +217,8 @@ def test_two_finger_per_contact_mu_uses_each_contacts_coefficient():
     pose, xi = [0.0, 0.12, 0.0], [-0.0075, -0.0075]
     for mu in ([0.3, 0.3], [0.3, 0.9], [0.9, 0.3], [0.05, 0.6]):
         case = dict(polygon=polygon, edges=[1, 3], pose=np.array(pose), xi=np.array(xi), acc=np.zeros(3), j=0,
-                    s=1.0, mu=np.array(mu), mu_arg=mu, gravity=np.array([0.0, -G0]), mass=polygon.mass,
-                    inertia=polygon.inertia, settings=None, f_min=0.0, margin=0.0)
+                    s=1.0, mu=np.array(mu), kinetic=np.array(mu), friction=mu, gravity=np.array([0.0, -G0]),
+                    mass=polygon.mass, inertia=polygon.inertia, settings=None, f_min=0.0, margin=0.0)
         possible, surface, _ = two_finger_verdict(case)
         result = run(case)
         assert result.possible == possible, mu
@@ -318,7 +320,7 @@ def test_persistent_solver_gives_the_one_shot_verdicts():
         one_shot = run(c)
         settings = c["settings"] or InternalForceSettings(f_min=0.0, margin=0.0)  # the predicate's default
         grasp = Grasp(c["polygon"], c["edges"], ["fixed"] * 3)
-        fast = sliding_feasibility(grasp, c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["mu_arg"],
+        fast = sliding_feasibility(grasp, c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["friction"],
                                    object_mass=c["mass"], object_inertia=c["inertia"], gravity_in_hand=c["gravity"],
                                    settings=settings, solver=InternalForceSolver(settings))
         assert fast.possible == one_shot.possible, seed
@@ -327,7 +329,7 @@ def test_persistent_solver_gives_the_one_shot_verdicts():
         compared += 1
     assert compared == len(THREE_FINGER_SEEDS)
     with pytest.raises(InvalidParameterError, match="solver"):
-        sliding_feasibility(grasp, c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["mu_arg"], object_mass=c["mass"],
+        sliding_feasibility(grasp, c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["friction"], object_mass=c["mass"],
                             object_inertia=c["inertia"], settings=InternalForceSettings(f_min=1.0),
                             solver=InternalForceSolver(InternalForceSettings(f_min=2.0)))
 
@@ -369,9 +371,9 @@ def closed_loop_slide(v0: float):
     polygon = rectangle()
     hand = Hand([c.finger for c in scenario().contacts], gravity_in_hand=(0.0, -G0))
     model = ReducedModel(hand, Grasp(polygon, [1, 3], ["sliding", "fixed"]), xi=[XI0, XI0])
-    controller = Proposition3Controller(model, Gains.critically_damped(20.0, 4), mu=MU)
+    controller = Proposition3Controller(model, Gains.critically_damped(20.0, 4), friction=MU)
     sign = float(np.sign(v0))
-    plant = Plant(hand, polygon, [PlantContact(1, "sliding", XI0, sign), PlantContact(3, "fixed", XI0)], mu=MU)
+    plant = Plant(hand, polygon, [PlantContact(1, "sliding", XI0, sign), PlantContact(3, "fixed", XI0)], friction=MU)
     S = np.array([0.0, 0.12, 0.0, XI0])
     S_dot = np.array([0.0, 0.0, 0.0, v0])
     st = model.state(S, S_dot)

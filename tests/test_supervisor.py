@@ -24,7 +24,7 @@ def two_fingers():
 
 def make_supervisor(sc, xi, *, plan=None, **settings) -> RegraspSupervisor:
     hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
-    return RegraspSupervisor(hand, sc.polygon, [c.edge for c in sc.contacts], sc.trajectory, xi, sc.mu,
+    return RegraspSupervisor(hand, sc.polygon, [c.edge for c in sc.contacts], sc.trajectory, xi, sc.friction,
                              plan=plan, settings=SupervisorSettings(**settings))
 
 
@@ -104,7 +104,7 @@ def test_a_possible_slide_is_primed_on_the_cone_edge_towards_the_target(two_fing
     assert out.law == "fixed contacts (cone edge)"
     f_n, f_t = out.control.contact_forces_surface[0]
     overshoot = sup.settings.prime_overshoot
-    assert f_t == pytest.approx((sup.mu[0] + overshoot) * f_n, rel=1e-6)  # + direction: up the edge
+    assert f_t == pytest.approx((sup.friction[0].static + overshoot) * f_n, rel=1e-6)  # + direction: up the edge
 
 
 def test_a_slide_is_asked_about_along_its_path(two_fingers):
@@ -122,14 +122,14 @@ def test_a_slide_is_asked_about_along_its_path(two_fingers):
     assert "fixed contact 1 would slip" in rejected.detail and "-12.50 mm on the way" in rejected.detail
     target = 0.5 * (lo + hi)
     desired = two_fingers.trajectory.sample(min(6.0 / sup.settings.omega_n, two_fingers.trajectory.t_end))
-    at_target = sliding_feasibility(sup.grasp, desired.pose, [target, 0.012], desired.acceleration, 0, 1.0, sup.mu,
+    at_target = sliding_feasibility(sup.grasp, desired.pose, [target, 0.012], desired.acceleration, 0, 1.0, sup.friction,
                                     object_mass=sup.object_mass, object_inertia=sup.object_inertia,
                                     gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility)
     at_start = sliding_feasibility(sup.grasp, two_fingers.trajectory.pose(0.0), xi,
-                                   two_fingers.trajectory.sample(0.0).acceleration, 0, 1.0,
-                                   sup.mu + [sup.settings.prime_overshoot, 0.0], object_mass=sup.object_mass,
-                                   object_inertia=sup.object_inertia, gravity_in_hand=sup.hand.gravity_in_hand,
-                                   settings=sup.settings.feasibility)
+                                   two_fingers.trajectory.sample(0.0).acceleration, 0, 1.0, sup.friction,
+                                   object_mass=sup.object_mass, object_inertia=sup.object_inertia,
+                                   gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility,
+                                   edge_mu=sup.friction[0].static + sup.settings.prime_overshoot)
     assert at_start.possible and not at_target.possible
 
 
@@ -172,7 +172,7 @@ def test_a_rejected_slide_gets_another_contact_to_enable_it():
     def possible(where, when, palm):
         desired = sc.trajectory.sample(when)
         return sliding_feasibility(sup.grasp, desired.pose, [where, xi[1], palm], desired.acceleration, 0, -1.0,
-                                   sup.mu, object_mass=sup.object_mass, object_inertia=sup.object_inertia,
+                                   sup.friction, object_mass=sup.object_mass, object_inertia=sup.object_inertia,
                                    gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility).possible
 
     duration = 6.0 / sup.settings.omega_n
@@ -182,7 +182,7 @@ def test_a_rejected_slide_gets_another_contact_to_enable_it():
 
 
 def test_a_slide_that_ends_sliding_settles_just_inside_the_cone_and_sticks():
-    """After a slide arrives the contact is still sliding; the settling law asks (μ - 0.05) f_n of
+    """After a slide arrives the contact is still sliding; the settling law asks (μ_k - 0.05) f_n of
     friction in the sliding direction, so the plant's kinetic friction slows it and it sticks
     within a few periods, without slipping any other contact."""
     from regrasp import build_rollout

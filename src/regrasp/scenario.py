@@ -55,6 +55,7 @@ from typing import Any
 
 import numpy as np
 
+from .contact import Friction
 from .envelope import Geometry
 from .exceptions import InvalidParameterError, RegraspError, ScenarioError
 from .finger import Finger
@@ -62,6 +63,9 @@ from .polygon import ConvexPolygon
 from .trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
 
 __all__ = ["FingerContact", "Scenario", "load_scenario"]
+
+#: The friction when a finger gives none.
+_DEFAULT_FRICTION = Friction(0.5)
 
 
 @dataclass(frozen=True)
@@ -72,13 +76,13 @@ class FingerContact:
         finger: The finger (URDF, base pose, configuration).
         edge: Index of the contact edge.
         tip_clearance: Tip clearance [m] for the ``urdf`` geometry, or None for the default.
-        mu: Coulomb friction coefficient of the fingertip on the object [-] (used by rollouts).
+        friction: Coulomb friction of the fingertip on the object (μ_s, μ_k [-]; used by rollouts).
     """
 
     finger: Finger
     edge: int
     tip_clearance: float | None = None
-    mu: float = 0.5
+    friction: Friction = _DEFAULT_FRICTION
 
 
 @dataclass(frozen=True)
@@ -96,9 +100,9 @@ class Scenario:
     geometry: Geometry = Geometry.IDEAL
 
     @property
-    def mu(self) -> np.ndarray:
-        """Each fingertip's friction coefficient [-], (m,)."""
-        return np.array([c.mu for c in self.contacts])
+    def friction(self) -> tuple[Friction, ...]:
+        """Each fingertip's friction (μ_s, μ_k [-]), in finger order."""
+        return tuple(c.friction for c in self.contacts)
 
 
 class _Reader:
@@ -252,7 +256,7 @@ def _fingers(path: Path, tables: Any, polygon: ConvexPolygon) -> tuple[FingerCon
         finger = _wrap(r, "urdf", lambda: Finger.from_urdf(
             urdf, base_in_hand=base, configuration=configuration, name=name))
         r.finish()
-        contacts.append(FingerContact(finger, edge, clearance, float(mu)))
+        contacts.append(FingerContact(finger, edge, clearance, Friction(mu)))
     return tuple(contacts)
 
 
