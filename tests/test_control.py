@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import Finger, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+from regrasp import Finger, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
 from regrasp.closed_loop import run_closed_loop
 from regrasp.control import (
     FixedContactController,
@@ -31,7 +31,10 @@ FINGER3 = Finger.from_urdf(ROOT / "urdf" / "planar_2r_finger.urdf", base_in_hand
 OMEGA = 20.0  # closed-loop bandwidth [rad/s]: K_s = ω², K_v = 2ω
 E0 = np.array([0.002, -0.001, 0.02, 0.001])  # initial error: x, y [m], β [rad], ξ [m]
 
-# (law, m, modes, xi of every contact, friction per contact, sliding speed [m/s])
+# (law, m, modes, xi of every contact, friction per contact, sliding speed [m/s]); the "_kinetic" cases have
+# μ_s > μ_k: the plant slides at μ_k, which Proposition 3 must predict
+SLOW = [Friction(0.6, 0.3), Friction(0.6, 0.3)]
+SLOW3 = [Friction(0.7, 0.3), Friction(0.8, 0.5), Friction(0.8, 0.5)]
 CASES = {
     "fixed": (FixedContactController, 2, ["fixed", "fixed"], [0.0, 0.0], [0.5, 0.5], 0.0),
     "prop1_mu0": (Proposition1Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.0, 0.5, 0.5], 0.01),
@@ -42,6 +45,8 @@ CASES = {
     "prop3_m3": (Proposition3Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.3, 0.5, 0.5], 0.01),
     "prop3_m3_down": (Proposition3Controller, 3, ["fixed", "sliding", "fixed"], [0.0, 0.01, 0.02], [0.5, 0.3, 0.5],
                       -0.01),
+    "prop3_up_kinetic": (Proposition3Controller, 2, ["sliding", "fixed"], [-0.0075, -0.0075], SLOW, 0.01),
+    "prop3_m3_kinetic": (Proposition3Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], SLOW3, 0.01),
 }
 
 
@@ -77,7 +82,7 @@ def run(name, duration=0.4, dt=1e-3, friction_noise=0.0):
 
 
 @pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop2", "prop3_up", "prop3_down", "prop3_m3",
-                                  "prop3_m3_down"])
+                                  "prop3_m3_down", "prop3_up_kinetic", "prop3_m3_kinetic"])
 def test_error_follows_the_closed_loop_ode(name):
     log, deviation, fixed = run(name)
     assert log.events == ()
@@ -95,7 +100,8 @@ def test_exact_laws_converge_to_the_ode_as_dt_shrinks(name):
     assert 1.6 < coarse / fine < 2.4  # first order in dt: the only error is the sampling
 
 
-@pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop3_up", "prop3_down", "prop3_m3", "prop3_m3_down"])
+@pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop3_up", "prop3_down", "prop3_m3", "prop3_m3_down",
+                                  "prop3_up_kinetic", "prop3_m3_kinetic"])
 def test_achieved_internal_force_equals_the_commanded_one(name):
     """The plant's contact forces equal the controller's predicted ones (motion part + f_c), so the
     internal force achieved is the commanded one (τ_I = τ_Ic)."""
@@ -209,3 +215,26 @@ def test_proposition3_checks_its_arguments():
     with pytest.raises(InvalidParameterError, match="cone_edge"):
         Proposition3Controller(model, gains, cone_edge=ConeEdge(0, 1.0, 0.5))
 
+
+@pytest.mark.parametrize("name", ["prop3_up_kinetic", "prop3_m3_kinetic"])
+def test_proposition3_puts_the_slider_on_its_kinetic_edge_and_reports_each_modes_margin(name):
+    """μ_s > μ_k: the predicted slider force has t·f = μ_k n·f (m = 2 through P, m > 2 through the
+    cone-edge row), the fixed contacts stay inside (μ_s - margin) cones (m > 2: the QP, which
+    tests/test_internal_force.py checks against μ_k), and the reported cone margins are
+    μ_k f_n - |f_t| at the slider (0) and μ_s f_n - |f_t| at the others."""
+    law_class, m, modes, xi, friction, speed = CASES[name]
+    model, S, _, _ = model_of(name)
+    settings = InternalForceSettings(f_min=0.5, margin=0.05)
+    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), friction=friction, internal_force=settings)
+    static = np.array([f.static for f in friction])
+    rng = np.random.default_rng(8)
+    for _ in range(5):
+        S_dot = np.append(rng.normal(0, 0.01, 3), speed)
+        out = law(S, S_dot, S + rng.normal(0, 1e-4, 4), S_dot, rng.normal(0, 0.1, 4))
+        f_n, f_t = out.contact_forces_surface.T
+        assert f_t[0] == pytest.approx(friction[0].kinetic * f_n[0], rel=1e-9)  # sliding up: along +t
+        assert out.friction_estimate[0] == pytest.approx(f_t[0], rel=1e-9)
+        expected = np.concatenate([[friction[0].kinetic * f_n[0] - abs(f_t[0])], static[1:] * f_n[1:] - np.abs(f_t[1:])])
+        np.testing.assert_allclose(out.cone_margins, expected, rtol=0, atol=1e-12)
+        if m > 2:
+            assert np.all(np.abs(f_t[1:]) <= (static[1:] - settings.margin) * f_n[1:] + 1e-6)

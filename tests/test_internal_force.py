@@ -12,15 +12,17 @@ drawn around a particular solution of :math:`G f = M_o\\ddot X - f_g`:
 
 * :math:`A^T f_c = 0` (the object's wrench and the sliding contacts' tangential forces are
   unchanged) and :math:`f = f_m + f_c`;
-* every constraint of the QP holds at f (normal ≥ f_min, |f_t| ≤ (μ - margin) f_n at fixed
-  contacts), to a tolerance tied to the OSQP tolerance;
+* every constraint of the QP holds at f (normal ≥ f_min, |f_t| ≤ (μ_s - margin) f_n at fixed
+  contacts: the static coefficient, random pairs μ_s > μ_k), to a tolerance tied to the OSQP
+  tolerance;
 * optimality: :math:`\\|f_c\\|` equals the minimum found by an *exact* brute force written here:
   the minimiser of a strictly convex QP is the least-norm point of the affine set of some
   subset of at most k active constraints (plus :math:`A^T f_c = 0`), so enumerating every
   subset, keeping the feasible least-norm points and taking the smallest gives the optimum
   without any solver or the library's null-space basis;
-* the cone-edge option, infeasible problems (typed error carrying the problem and the status,
-  the status confirmed by an LP), and the empty null space of m = 2, p = 1.
+* the cone-edge option (at the coefficient the ConeEdge carries), infeasible problems (typed
+  error carrying the problem and the status, the status confirmed by an LP), the empty null
+  space of m = 2, p = 1, and a hold whose least squeeze is μ_s's, not μ_k's (closed form).
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ import pytest
 import qpsolvers
 import scipy.optimize
 
-from regrasp import Finger, Grasp, Hand, ReducedModel, load_scenario
+from regrasp import ContactMode, Finger, Friction, Grasp, Hand, ReducedModel, load_scenario
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
 from regrasp.exceptions import InvalidParameterError, SingularFingerError, UnreachableError
 from regrasp.internal_force import (
@@ -100,7 +102,7 @@ def constraint_rows(frames, fixed, mu, settings: InternalForceSettings):
     """The QP's inequalities on the total force f = f_m + f_c as rows (a, lo): a . f >= lo.
 
     Written from the module docstring: n_i . f_i >= f_min for every contact, and
-    (μ_i - margin) n_i . f_i ∓ t_i . f_i >= 0 for fixed contacts.
+    (μ_i - margin) n_i . f_i ∓ t_i . f_i >= 0 for fixed contacts (μ_i: the static coefficients).
     """
     m = len(frames)
     rows = []
@@ -201,7 +203,8 @@ def random_case(kind: str, seed: int):
         f_m = f_m + null_g @ rng.normal(0.0, 1.0, null_g.shape[1])
         assert np.allclose(st.G @ f_m, wrench, atol=1e-12)
         source = "random"
-    friction = mu
+    # μ are the static coefficients; the kinetic ones are 20 to 90 % of them (the QP must not use them)
+    friction = [Friction(s, s * k) for s, k in zip(mu, rng.uniform(0.2, 0.9, m))]
     return dict(kind=kind, m=m, model=model, st=st, A=A, frames=frames, fixed=fixed, mu=mu, settings=settings,
                 f_m=f_m, source=source, seed=seed, modes=grasp.modes, friction=friction)
 
@@ -396,12 +399,71 @@ def test_cone_edge_two_finger_hold_one_direction_only():
                                 frames, modes, mu, down)
 
 
+def test_fixed_cones_use_the_static_coefficient_and_a_cone_edge_its_own():
+    """Two fixed side fingers hold the object against gravity (symmetric, f_min small): the least
+    squeeze puts each on its cone with the margin, |f_t| = (μ_s - margin) f_n, so that each finger
+    carries half the weight W with f_n = W / 2 / (μ_s - margin) (closed form). With μ_s = 0.6,
+    μ_k = 0.2 that is W / 1.1, not W / 0.3 (μ_k's). A ConeEdge puts finger 1 at the coefficient it
+    carries, whatever the contact's friction. The persistent solver's row cache tells frictions and
+    modes apart (the same solver, the same geometry, other answers)."""
+    from regrasp.internal_force import InternalForceSolver
+
+    model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
+    st, A, frames, _ = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
+    weight = model.object_mass * 9.81
+    settings = InternalForceSettings(f_min=0.01, margin=0.05)
+    f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]  # (W/2 up each, no squeeze)
+    modes = model.grasp.modes
+    solver = InternalForceSolver(settings)
+    for friction, mu_s in ((Friction(0.6, 0.2), 0.6), (Friction(0.3, 0.2), 0.3), ([Friction(0.6, 0.2), 0.3], None)):
+        one_shot = solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, modes, friction, settings), frames,
+                                           modes, friction)
+        persistent = solver.solve(A, f_m, frames, modes, friction)
+        for result in (one_shot, persistent):
+            surface = to_surface(frames, result.forces)
+            np.testing.assert_allclose(np.abs(surface[:, 1]), [weight / 2, weight / 2], rtol=1e-7)  # (ξ up, ξ down)
+            if mu_s is not None:
+                np.testing.assert_allclose(surface[:, 0], weight / 2 / (mu_s - settings.margin), rtol=1e-6)
+            else:  # finger 2 (μ_s = 0.3) needs the larger squeeze; finger 1 then sits inside its cone
+                assert surface[1, 0] == pytest.approx(weight / 2 / (0.3 - settings.margin), rel=1e-6)
+                assert abs(surface[0, 1]) < (0.6 - settings.margin) * surface[0, 0]
+    # a cone edge at μ_k puts finger 1 at t·f = μ_k n·f: f_n = W / 2 / 0.2 (finger 2 then well inside)
+    edge = ConeEdge(0, 1.0, 0.2)
+    for result in (solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, modes, Friction(0.6, 0.2),
+                                                                   settings, edge), frames, modes, Friction(0.6, 0.2),
+                                           edge),
+                   solver.solve(A, f_m, frames, modes, Friction(0.6, 0.2), edge)):
+        surface = to_surface(frames, result.forces)
+        np.testing.assert_allclose(surface[0], [weight / 2 / 0.2, weight / 2], rtol=1e-7)
+    # a sliding finger gets no cone row: m = 3, the left finger sliding with |f_t| = 0.3 f_n, which no
+    # squeeze changes (A's sliding column): feasible as it is, infeasible if the modes call it fixed
+    # (its static cone, μ_s = 0.06, could hold that force only with f_n >= 30 N > f_max)
+    three = ReducedModel(make_hand(3), Grasp(polygon(), EDGES[3], ["sliding", "fixed", "fixed"]), [0.0, 0.0, 0.01])
+    st3, A3, frames3, _ = qp_data(three, [0.0, Y0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0])
+    f3 = from_surface(frames3, [[1.0, 0.3], [1.0, 0.0], [1.0, 0.0]])
+    f3[2:] += np.linalg.lstsq(st3.G[:, 2:], -three.f_g - st3.G @ f3, rcond=None)[0]  # (the others balance)
+    tiny = [Friction(0.06, 0.0), Friction(0.8, 0.5), Friction(0.8, 0.5)]
+    bounded = InternalForceSolver(InternalForceSettings(f_min=0.01, margin=0.05, f_max=5.0))
+    sliding = bounded.solve(A3, f3, frames3, three.grasp.modes, tiny)
+    assert sliding.feasible
+    assert to_surface(frames3, sliding.forces)[0, 1] == pytest.approx(to_surface(frames3, f3)[0, 1], rel=1e-9)
+    with pytest.raises(InternalForceInfeasibleError):
+        bounded.solve(A3, f3, frames3, [ContactMode.FIXED] * 3, tiny)
+
+
 def test_cone_edge_contact_index_is_validated():
     model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
     st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
     with pytest.raises(InvalidParameterError):
         build_internal_force_qp(A, np.zeros(4), frames, model.grasp.modes, np.full(2, 0.5), InternalForceSettings(),
                                 ConeEdge(2, 1.0, 0.5))
+    for sign, mu in ((0.0, 0.5), (2.0, 0.5), (1.0, -0.1), (1.0, float("nan")), (1.0, float("inf")), (1.0, "0.5")):
+        with pytest.raises(InvalidParameterError):
+            ConeEdge(0, sign, mu)
+    # the contacts' modes: ContactMode members or their strings, one per contact (not a boolean mask)
+    for modes in (np.array([True, True]), ["fixed"], ["fixed", "rolling"], "fixed"):
+        with pytest.raises(InvalidParameterError):
+            build_internal_force_qp(A, np.zeros(4), frames, modes, 0.5)
 
 
 # ---------------------------------------------------------------------------- infeasible
