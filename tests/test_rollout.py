@@ -98,9 +98,9 @@ def test_a_fingertips_friction_comes_from_the_scenario(tmp_path):
     text = (SCENARIOS / "paper_trajectory_2.toml").read_text()
     text = text.replace('"../../urdf/', f'"{SCENARIOS.parents[1] / "urdf"}/')
     good = tmp_path / "good.toml"
-    good.write_text(text.replace("edge = 3\n", "edge = 3\nmu = 0.8\n"))
+    good.write_text(text.replace("edge = 3\n", "edge = 3\nmu_static = 0.8\nmu_kinetic = 0.6\n"))
     sc = load_scenario(good)
-    assert sc.friction == (Friction(0.5), Friction(0.8))  # 0.5 when unset
+    assert sc.friction == (Friction(0.5), Friction(0.8, 0.6))  # 0.5 when unset
     rollout = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01])
     assert rollout.plant.friction == rollout.supervisor.friction == sc.friction
     other = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01], plant_friction=Friction(0.9, 0.3))
