@@ -41,15 +41,15 @@ def main() -> None:
 
     fixed = ReducedModel(hand, Grasp(sc.polygon, [1, 3], ["fixed", "fixed"]), xi=[0.0, 0.0])
     X, zero = np.array([0.0, 0.12, 0.0]), np.zeros(3)
-    with_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), mu=0.5)
-    without_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), mu=0.5, internal_force=None)
+    with_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), friction=0.5)
+    without_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), friction=0.5, internal_force=None)
     results["control_step_qp"] = median_us(lambda: with_qp(X, zero, X, zero, zero), n)
     results["control_step_no_qp"] = median_us(lambda: without_qp(X, zero, X, zero, zero), n)
     third = Finger.from_urdf(ROOT / "urdf" / "planar_2r_finger.urdf", base_in_hand=(0.04, -0.02, np.pi / 2),
                              configuration="left", name="finger3")
     hand3 = Hand([*hand.fingers, third], gravity_in_hand=sc.gravity_in_hand)
     three = ReducedModel(hand3, Grasp(sc.polygon, [1, 3, 2], ["sliding", "fixed", "fixed"]), xi=[-0.01, -0.01, 0.02])
-    prop1 = Proposition1Controller(three, Gains.critically_damped(20.0, 4), mu=[0.0, 0.5, 0.5])
+    prop1 = Proposition1Controller(three, Gains.critically_damped(20.0, 4), friction=[0.0, 0.5, 0.5])
     S3, S3_dot = np.array([0.0, 0.12, 0.0, -0.01]), np.array([0.0, 0.0, 0.0, 0.01])
     results["control_step_m3_qp"] = median_us(lambda: prop1(S3, S3_dot, S3, S3_dot, np.zeros(4)), n)
     if args.json:

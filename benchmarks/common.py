@@ -57,7 +57,7 @@ def sliding_hold() -> SlidingHold:
     forces += 2.0 * np.concatenate([frames[0][:, 0], frames[1][:, 0]])
     tau = st.hand.nonlinear + st.hand.jacobian.T @ forces
     plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", 0.0, 1.0), PlantContact(3, "fixed", 0.0)],
-                  mu=0.0, stop_on=())
+                  friction=0.0, stop_on=())
     plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
     return SlidingHold(sc, hand, model, S, S_dot, st, tau, plant)
 

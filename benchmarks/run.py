@@ -132,8 +132,8 @@ def main() -> None:
 
     X, zero3 = np.array([0.0, 0.12, 0.0]), np.zeros(3)
     fixed = ReducedModel(hand, Grasp(sc.polygon, [1, 3], ["fixed", "fixed"]), xi=[0.0, 0.0])
-    fixed_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), mu=0.5)
-    fixed_no = FixedContactController(fixed, Gains.critically_damped(20.0, 3), mu=0.5, internal_force=None)
+    fixed_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), friction=0.5)
+    fixed_no = FixedContactController(fixed, Gains.critically_damped(20.0, 3), friction=0.5, internal_force=None)
     out = fixed_qp(X, zero3, X, zero3, zero3)
     # the QP's floor: the controller's persistent osqp.OSQP object solving its (warm-started) problem
     (raw_osqp,) = [solver for solver in fixed_qp._qp._solvers.values()]
@@ -145,8 +145,8 @@ def main() -> None:
     hand3 = Hand([*hand.fingers, third], gravity_in_hand=sc.gravity_in_hand)
     three = ReducedModel(hand3, Grasp(sc.polygon, [1, 3, 2], ["sliding", "fixed", "fixed"]), xi=[-0.01, -0.01, 0.02])
     S3, S3d = np.array([0.0, 0.12, 0.0, -0.01]), np.array([0.0, 0.0, 0.0, 0.01])
-    slide_qp = Proposition1Controller(three, Gains.critically_damped(20.0, 4), mu=[0.0, 0.5, 0.5])
-    slide_no = Proposition1Controller(three, Gains.critically_damped(20.0, 4), mu=[0.0, 0.5, 0.5], internal_force=None)
+    slide_qp = Proposition1Controller(three, Gains.critically_damped(20.0, 4), friction=[0.0, 0.5, 0.5])
+    slide_no = Proposition1Controller(three, Gains.critically_damped(20.0, 4), friction=[0.0, 0.5, 0.5], internal_force=None)
     floor_dyn3 = pinocchio_floor_us(hand3, args.quick)
 
     env_ideal = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1)

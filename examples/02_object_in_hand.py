@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from regrasp import Hand, Plant, PlantContact, load_scenario
+from regrasp import Friction, Hand, Plant, PlantContact, load_scenario
 
 HERE = Path(__file__).resolve().parent
 
@@ -35,9 +35,11 @@ def main() -> None:
         f = np.array([squeeze_1, weight / 2, -squeeze_2, weight / 2])
         return dyn.nonlinear + dyn.jacobian.T @ f
 
-    plant = Plant(hand, sc.polygon, [PlantContact(1, "fixed", 0.0), PlantContact(3, "fixed", 0.0)], mu=0.5)
+    plant = Plant(hand, sc.polygon, [PlantContact(1, "fixed", 0.0), PlantContact(3, "fixed", 0.0)],
+                  friction=Friction(0.5))  # mu_s = mu_k = 0.5; Friction(static, kinetic) for two
     plant.reset(q, np.zeros(4), pose, np.zeros(3))
-    print(f"object {sc.polygon.mass:.3f} kg, weight {weight:.3f} N, mu = {plant.mu}, dt = {plant.dt * 1e3:.0f} ms")
+    print(f"object {sc.polygon.mass:.3f} kg, weight {weight:.3f} N, {plant.friction[0]} at both tips, "
+          f"dt = {plant.dt * 1e3:.0f} ms")
     hold, relax = torques(2.0, 2.0), torques(0.3, 2.0)
     steps = 0
     while plant.state.t < 1.0 - 1e-12 and not plant.stopped:
@@ -45,7 +47,8 @@ def main() -> None:
         steps += 1
         if steps in (1, 300, 301) or step.events or plant.stopped:
             fn, ft = step.forces_surface.T
-            print(f"t = {step.state.t:.3f} s  modes {step.modes}  normal forces {np.round(fn, 3)} N, "
+            modes = [mode.value for mode in step.modes]
+            print(f"t = {step.state.t:.3f} s  modes {modes}  normal forces {np.round(fn, 3)} N, "
                   f"tangential {np.round(ft, 3)} N, xi [mm] {np.round(step.xi * 1e3, 2)}")
     print(f"\nstopped: {plant.stopped} after {steps} steps (t = {plant.state.t:.3f} s)")
     print("event log:")

@@ -23,14 +23,14 @@ from pathlib import Path
 
 import numpy as np
 
-from regrasp import FingerEnvelope, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+from regrasp import FingerEnvelope, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
 from regrasp.closed_loop import run_closed_loop
 from regrasp.control import Gains, Proposition3Controller
 from regrasp.internal_force import InternalForceSettings
 from regrasp.sliding import sliding_feasibility
 
 HERE = Path(__file__).resolve().parent
-MU = [0.05, 0.8]            # sliding tip, holding tip
+FRICTION = [Friction(0.05), Friction(0.8)]  # sliding tip, holding tip (mu_s = mu_k each)
 XI_HOLD = 0.019             # finger 2's contact: 19 mm below the centre of the right edge
 X0 = np.array([0.0, 0.12, 0.0])
 T_LEG = 1.5                 # [s] per slide leg
@@ -45,7 +45,7 @@ def slide_range(sc, grasp):
     lo, hi = lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo)
     settings = InternalForceSettings(f_min=0.3, margin=0.05, f_max=6.0)
     both = [x for x in np.arange(lo, hi + 1e-12, 5e-4)
-            if all(sliding_feasibility(grasp, X0, [x, XI_HOLD], np.zeros(3), 0, s, MU, object_mass=sc.polygon.mass,
+            if all(sliding_feasibility(grasp, X0, [x, XI_HOLD], np.zeros(3), 0, s, FRICTION, object_mass=sc.polygon.mass,
                                        object_inertia=sc.polygon.inertia, gravity_in_hand=sc.gravity_in_hand,
                                        settings=settings).possible for s in (1, -1))]
     return (lo, hi), (min(both), max(both))
@@ -89,9 +89,10 @@ def main() -> None:
     reference = make_reference(lo, hi)
     S0, S0_dot, _ = reference(0.0)
     st = model.state(S0, S0_dot)
-    plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", lo, 1.0), PlantContact(3, "fixed", XI_HOLD)], mu=MU)
+    plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", lo, 1.0), PlantContact(3, "fixed", XI_HOLD)],
+                  friction=FRICTION)
     plant.reset(st.q, st.q_dot, S0[:3], S0_dot[:3])
-    controller = Proposition3Controller(model, Gains.critically_damped(40.0, 4), mu=MU)
+    controller = Proposition3Controller(model, Gains.critically_damped(40.0, 4), friction=FRICTION)
     log = run_closed_loop(plant, controller, reference, 2 * T_LEG)
 
     err = log.errors

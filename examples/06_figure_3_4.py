@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from regrasp import Grasp, load_scenario
+from regrasp import Friction, Grasp, load_scenario
 from regrasp.plotting import plot_slide_feasibility
 from regrasp.sliding import sliding_feasibility
 
@@ -26,16 +26,16 @@ def main() -> None:
     parser.add_argument("--out", default=".", help="directory for figure_3_4.png (default: here)")
     args = parser.parse_args()
     sc = load_scenario(HERE / "scenarios" / "paper_trajectory_2.toml")
-    pose, xi, mu = np.array([0.0, 0.12, 0.0]), np.array([-0.0075, -0.0075]), [0.3, 0.3]
+    pose, xi, friction = np.array([0.0, 0.12, 0.0]), np.array([-0.0075, -0.0075]), Friction(0.3)
     grasp = Grasp(sc.polygon, [1, 3], ["fixed", "fixed"])
-    results = [sliding_feasibility(grasp, pose, xi, np.zeros(3), 0, direction, mu, object_mass=sc.polygon.mass,
+    results = [sliding_feasibility(grasp, pose, xi, np.zeros(3), 0, direction, friction, object_mass=sc.polygon.mass,
                                    object_inertia=sc.polygon.inertia, gravity_in_hand=sc.gravity_in_hand)
                for direction in (+1, -1)]
     for r in results:
         forces = ", ".join(f"finger{i + 1} (n {fn:+.3f} N, t {ft:+.3f} N)" for i, (fn, ft) in enumerate(r.forces_surface))
         print(f"slide finger 1 {'up  ' if r.direction > 0 else 'down'}: {'possible  ' if r.possible else 'impossible'}"
               f" {forces}" + (f"  <- {r.reason}" if r.reason else ""))
-    path = plot_slide_feasibility(sc.polygon, pose, [c.finger for c in sc.contacts], grasp.points(pose, xi), [1, 3], mu,
+    path = plot_slide_feasibility(sc.polygon, pose, [c.finger for c in sc.contacts], grasp.points(pose, xi), [1, 3], friction,
                                   results, Path(args.out) / "figure_3_4.png", gravity_in_hand=sc.gravity_in_hand,
                                   title="Remark 3.3 / Figure 3.4: a block held against gravity, finger 1 sliding")
     print(f"figure: {path}")

@@ -54,11 +54,11 @@ def main() -> None:
     S0, S0_dot, _ = reference(0.0)
     st = model.state(S0, S0_dot)
     plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", lo, 1.0), PlantContact(3, "fixed", ex.XI_HOLD)],
-                  mu=ex.MU)
+                  friction=ex.FRICTION)
     plant.reset(st.q, st.q_dot, S0[:3], S0_dot[:3])
-    controller = Proposition3Controller(model, Gains.critically_damped(40.0, 4), mu=ex.MU)
+    controller = Proposition3Controller(model, Gains.critically_damped(40.0, 4), friction=ex.FRICTION)
     print(f"example 03's slide: finger 1 from xi = {lo * 1e3:.1f} mm towards {hi * 1e3:.1f} mm "
-          f"(mu = {ex.MU[0]} sliding, {ex.MU[1]} holding), {args.duration:g} s at dt = {plant.dt * 1e3:g} ms")
+          f"({ex.FRICTION[0]} sliding, {ex.FRICTION[1]} holding), {args.duration:g} s at dt = {plant.dt * 1e3:g} ms")
 
     start = time.perf_counter()
     interrupted = False

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import Finger, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+from regrasp import Finger, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
 from regrasp.closed_loop import run_closed_loop
 from regrasp.control import (
     FixedContactController,
@@ -31,7 +31,10 @@ FINGER3 = Finger.from_urdf(ROOT / "urdf" / "planar_2r_finger.urdf", base_in_hand
 OMEGA = 20.0  # closed-loop bandwidth [rad/s]: K_s = ω², K_v = 2ω
 E0 = np.array([0.002, -0.001, 0.02, 0.001])  # initial error: x, y [m], β [rad], ξ [m]
 
-# (law, m, modes, xi of every contact, mu per contact, sliding speed [m/s])
+# (law, m, modes, xi of every contact, friction per contact, sliding speed [m/s]); the "_kinetic" cases have
+# μ_s > μ_k: the plant slides at μ_k, which Proposition 3 must predict
+SLOW = [Friction(0.6, 0.3), Friction(0.6, 0.3)]
+SLOW3 = [Friction(0.7, 0.3), Friction(0.8, 0.5), Friction(0.8, 0.5)]
 CASES = {
     "fixed": (FixedContactController, 2, ["fixed", "fixed"], [0.0, 0.0], [0.5, 0.5], 0.0),
     "prop1_mu0": (Proposition1Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.0, 0.5, 0.5], 0.01),
@@ -42,6 +45,8 @@ CASES = {
     "prop3_m3": (Proposition3Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.3, 0.5, 0.5], 0.01),
     "prop3_m3_down": (Proposition3Controller, 3, ["fixed", "sliding", "fixed"], [0.0, 0.01, 0.02], [0.5, 0.3, 0.5],
                       -0.01),
+    "prop3_up_kinetic": (Proposition3Controller, 2, ["sliding", "fixed"], [-0.0075, -0.0075], SLOW, 0.01),
+    "prop3_m3_kinetic": (Proposition3Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], SLOW3, 0.01),
 }
 
 
@@ -65,9 +70,9 @@ def run(name, duration=0.4, dt=1e-3, friction_noise=0.0):
     for j, i in enumerate(grasp.sliding):
         xi_plant[i] = S0[3 + j]
     contacts = [PlantContact(e, mode, x, float(np.sign(speed) or 1.0)) for e, mode, x in zip(edges, modes, xi_plant)]
-    plant = Plant(hand, SC.polygon, contacts, mu=mu, dt=dt)
+    plant = Plant(hand, SC.polygon, contacts, friction=mu, dt=dt)
     plant.reset(st.q, st.q_dot, S0[:3], velocity[:3])
-    controller = law(model, Gains.critically_damped(OMEGA, n), mu=mu)
+    controller = law(model, Gains.critically_damped(OMEGA, n), friction=mu)
     log = run_closed_loop(plant, controller, reference, duration, friction_noise=friction_noise,
                           rng=np.random.default_rng(0))
     t = log.times
@@ -77,13 +82,13 @@ def run(name, duration=0.4, dt=1e-3, friction_noise=0.0):
 
 
 @pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop2", "prop3_up", "prop3_down", "prop3_m3",
-                                  "prop3_m3_down"])
+                                  "prop3_m3_down", "prop3_up_kinetic", "prop3_m3_kinetic"])
 def test_error_follows_the_closed_loop_ode(name):
     log, deviation, fixed = run(name)
     assert log.events == ()
     assert deviation <= 1.5 * OMEGA * 1e-3  # zero-order hold: within ω·dt of the initial error
     assert np.abs(log.errors[-1]).max() <= 1.5 * OMEGA * 1e-3 * np.abs(E0).max()  # settled to the ZOH bound
-    # fixed contacts stay inside their friction cones (the plant's forces)
+    # fixed contacts stay inside their (static) friction cones (the plant's forces)
     assert log.cone_margins[:, fixed].min() > 0.0
     assert log.plant_forces[:, :, 0].min() > 0.0  # every contact keeps pushing
 
@@ -95,7 +100,8 @@ def test_exact_laws_converge_to_the_ode_as_dt_shrinks(name):
     assert 1.6 < coarse / fine < 2.4  # first order in dt: the only error is the sampling
 
 
-@pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop3_up", "prop3_down", "prop3_m3", "prop3_m3_down"])
+@pytest.mark.parametrize("name", ["fixed", "prop1_mu0", "prop3_up", "prop3_down", "prop3_m3", "prop3_m3_down",
+                                  "prop3_up_kinetic", "prop3_m3_kinetic"])
 def test_achieved_internal_force_equals_the_commanded_one(name):
     """The plant's contact forces equal the controller's predicted ones (motion part + f_c), so the
     internal force achieved is the commanded one (τ_I = τ_Ic)."""
@@ -157,7 +163,7 @@ def test_proposition3_force_distribution_reduces_to_the_papers_P_for_two_fingers
     """With m = 2 the m-finger law's equations have a unique solution, which is (3.4.9)'s."""
     model, S, mu, speed = model_of(name)
     rng = np.random.default_rng(3)
-    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), mu=mu)
+    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), friction=mu)
     for _ in range(5):
         S_dot = np.append(rng.normal(0, 0.01, 3), speed)
         S_d = S + rng.normal(0, 1e-3, 4)
@@ -178,7 +184,7 @@ def test_proposition3_with_three_fingers_chooses_the_sliders_normal_force():
     model, S, mu, speed = model_of("prop3_m3")
     settings = InternalForceSettings(f_min=0.5, margin=0.05)
     rng = np.random.default_rng(4)
-    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), mu=mu, internal_force=settings)
+    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), friction=mu, internal_force=settings)
     for _ in range(5):
         S_dot = np.append(rng.normal(0, 0.01, 3), speed)
         out = law(S, S_dot, S + rng.normal(0, 1e-4, 4), S_dot, rng.normal(0, 0.1, 4))
@@ -193,8 +199,8 @@ def test_proposition3_with_three_fingers_chooses_the_sliders_normal_force():
         assert abs(out.friction_estimate[0] - f_t[0]) < 1e-9  # f̂_ξ is the slider's predicted friction
         assert f_n.min() >= settings.f_min - 1e-6
         assert np.all(np.abs(f_t[1:]) <= (mu[1:] - settings.margin) * f_n[1:] + 1e-6)
-    pinned = Proposition2Controller(model, Gains.critically_damped(OMEGA, 4), mu=mu, internal_force=settings,
-                                    cone_edge=ConeEdge(0, 1.0))
+    pinned = Proposition2Controller(model, Gains.critically_damped(OMEGA, 4), friction=mu, internal_force=settings,
+                                    cone_edge=ConeEdge(0, 1.0, mu[0]))
     with pytest.raises(InternalForceInfeasibleError):
         pinned(S, np.append(np.zeros(3), speed), S, np.append(np.zeros(3), speed), np.zeros(4),
                friction=[0.5 * mu[0] * settings.f_min])
@@ -207,4 +213,28 @@ def test_proposition3_checks_its_arguments():
     with pytest.raises(InvalidParameterError, match="direction"):
         Proposition3Controller(model, gains, direction=0.0)
     with pytest.raises(InvalidParameterError, match="cone_edge"):
-        Proposition3Controller(model, gains, cone_edge=ConeEdge(0, 1.0))
+        Proposition3Controller(model, gains, cone_edge=ConeEdge(0, 1.0, 0.5))
+
+
+@pytest.mark.parametrize("name", ["prop3_up_kinetic", "prop3_m3_kinetic"])
+def test_proposition3_puts_the_slider_on_its_kinetic_edge_and_reports_each_modes_margin(name):
+    """μ_s > μ_k: the predicted slider force has t·f = μ_k n·f (m = 2 through P, m > 2 through the
+    cone-edge row), the fixed contacts stay inside (μ_s - margin) cones (m > 2: the QP, which
+    tests/test_internal_force.py checks against μ_k), and the reported cone margins are
+    μ_k f_n - |f_t| at the slider (0) and μ_s f_n - |f_t| at the others."""
+    law_class, m, modes, xi, friction, speed = CASES[name]
+    model, S, _, _ = model_of(name)
+    settings = InternalForceSettings(f_min=0.5, margin=0.05)
+    law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), friction=friction, internal_force=settings)
+    static = np.array([f.static for f in friction])
+    rng = np.random.default_rng(8)
+    for _ in range(5):
+        S_dot = np.append(rng.normal(0, 0.01, 3), speed)
+        out = law(S, S_dot, S + rng.normal(0, 1e-4, 4), S_dot, rng.normal(0, 0.1, 4))
+        f_n, f_t = out.contact_forces_surface.T
+        assert f_t[0] == pytest.approx(friction[0].kinetic * f_n[0], rel=1e-9)  # sliding up: along +t
+        assert out.friction_estimate[0] == pytest.approx(f_t[0], rel=1e-9)
+        expected = np.concatenate([[friction[0].kinetic * f_n[0] - abs(f_t[0])], static[1:] * f_n[1:] - np.abs(f_t[1:])])
+        np.testing.assert_allclose(out.cone_margins, expected, rtol=0, atol=1e-12)
+        if m > 2:
+            assert np.all(np.abs(f_t[1:]) <= (static[1:] - settings.margin) * f_n[1:] + 1e-6)

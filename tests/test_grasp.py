@@ -4,7 +4,7 @@ differences, B_v/B_f/G_f/P against the object's equation solved directly, and Re
 import numpy as np
 import pytest
 
-from regrasp import ConvexPolygon, SlidingContactCountError
+from regrasp import ConvexPolygon, Friction, InvalidParameterError, SlidingContactCountError
 from regrasp.grasp import Grasp
 
 H_STEP = 1e-6
@@ -87,7 +87,9 @@ def test_friction_map_P_matches_the_object_equation_solved_directly(seed):
     pose, xi, _, _ = random_state(rng, grasp)
     mu, s = 0.35, float(rng.choice([-1.0, 1.0]))
     wrench = rng.normal(size=3)  # M_o Ẍ - f_g
-    P = grasp.friction_map(pose, xi, [s], mu)
+    # the sliding contact's kinetic coefficient (its μ_s and the fixed contact's friction play no part)
+    P = grasp.friction_map(pose, xi, [s], [Friction(0.9, mu), Friction(0.2, 0.1)])
+    np.testing.assert_array_equal(P, grasp.friction_map(pose, xi, [s], mu))
     frames = grasp.surface_frames(pose)
     n1, t1 = frames[0][:, 0], frames[0][:, 1]
     G = grasp.grasp_matrix(pose, xi)
@@ -108,3 +110,18 @@ def test_remark_3_2_limits_sliding_contacts():
         Grasp(rectangle(), [1], ["fixed"])  # one finger cannot hold a planar object
     with pytest.raises(Exception, match="m = 2 fingers with p = 1"):
         Grasp(rectangle(), [1, 3, 2], ["sliding", "fixed", "fixed"]).friction_map(np.zeros(3), np.zeros(3), [1.0], 0.3)
+
+
+def test_force_basis_takes_each_sliding_contacts_kinetic_coefficient():
+    """B_f's column of sliding contact i is (1, s_i μ_k,i) in its surface frame; fixed blocks are I_2."""
+    grasp = Grasp(rectangle(), [1, 3, 2], ["sliding", "fixed", "sliding"])
+    bf = grasp.force_basis([1.0, -1.0], [Friction(0.9, 0.4), Friction(0.8, 0.1), Friction(0.7, 0.25)])
+    expected = np.zeros((6, 4))
+    expected[0:2, 0] = (1.0, 0.4)
+    expected[2:4, 1:3] = np.eye(2)
+    expected[4:6, 3] = (1.0, -0.25)
+    np.testing.assert_array_equal(bf, expected)
+    np.testing.assert_array_equal(grasp.force_basis([1.0, -1.0], Friction(0.5)), grasp.force_basis([1.0, -1.0], 0.5))
+    for bad in (-0.1, float("nan"), [0.5, 0.5], "0.5"):
+        with pytest.raises(InvalidParameterError):
+            grasp.force_basis([1.0, -1.0], bad)

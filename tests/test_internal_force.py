@@ -12,15 +12,17 @@ drawn around a particular solution of :math:`G f = M_o\\ddot X - f_g`:
 
 * :math:`A^T f_c = 0` (the object's wrench and the sliding contacts' tangential forces are
   unchanged) and :math:`f = f_m + f_c`;
-* every constraint of the QP holds at f (normal ≥ f_min, |f_t| ≤ (μ - margin) f_n at fixed
-  contacts), to a tolerance tied to the OSQP tolerance;
+* every constraint of the QP holds at f (normal ≥ f_min, |f_t| ≤ (μ_s - margin) f_n at fixed
+  contacts: the static coefficient, random pairs μ_s > μ_k), to a tolerance tied to the OSQP
+  tolerance;
 * optimality: :math:`\\|f_c\\|` equals the minimum found by an *exact* brute force written here:
   the minimiser of a strictly convex QP is the least-norm point of the affine set of some
   subset of at most k active constraints (plus :math:`A^T f_c = 0`), so enumerating every
   subset, keeping the feasible least-norm points and taking the smallest gives the optimum
   without any solver or the library's null-space basis;
-* the cone-edge option, infeasible problems (typed error carrying the problem and the status,
-  the status confirmed by an LP), and the empty null space of m = 2, p = 1.
+* the cone-edge option (at the coefficient the ConeEdge carries), infeasible problems (typed
+  error carrying the problem and the status, the status confirmed by an LP), the empty null
+  space of m = 2, p = 1, and a hold whose least squeeze is μ_s's, not μ_k's (closed form).
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ import pytest
 import qpsolvers
 import scipy.optimize
 
-from regrasp import Finger, Grasp, Hand, ReducedModel, load_scenario
+from regrasp import ContactMode, Finger, Friction, Grasp, Hand, ReducedModel, load_scenario
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
 from regrasp.exceptions import InvalidParameterError, SingularFingerError, UnreachableError
 from regrasp.internal_force import (
@@ -76,7 +78,8 @@ def make_hand(m: int, gravity=(0.0, -9.81)) -> Hand:
 
 
 def qp_data(model: ReducedModel, S, S_dot):
-    """(state, A, surface frames, fixed mask) at (S, Ṡ)."""
+    """(state, A, surface frames, fixed mask) at (S, Ṡ) (the mask for this file's own checks; the
+    library takes the grasp's modes)."""
     st = model.state(S, S_dot)
     A = np.hstack([st.G.T, st.R_f @ st.B_v])
     frames = model.grasp.surface_frames(st.S[:3])
@@ -99,7 +102,7 @@ def constraint_rows(frames, fixed, mu, settings: InternalForceSettings):
     """The QP's inequalities on the total force f = f_m + f_c as rows (a, lo): a . f >= lo.
 
     Written from the module docstring: n_i . f_i >= f_min for every contact, and
-    (μ_i - margin) n_i . f_i ∓ t_i . f_i >= 0 for fixed contacts.
+    (μ_i - margin) n_i . f_i ∓ t_i . f_i >= 0 for fixed contacts (μ_i: the static coefficients).
     """
     m = len(frames)
     rows = []
@@ -200,8 +203,10 @@ def random_case(kind: str, seed: int):
         f_m = f_m + null_g @ rng.normal(0.0, 1.0, null_g.shape[1])
         assert np.allclose(st.G @ f_m, wrench, atol=1e-12)
         source = "random"
+    # μ are the static coefficients; the kinetic ones are 20 to 90 % of them (the QP must not use them)
+    friction = [Friction(s, s * k) for s, k in zip(mu, rng.uniform(0.2, 0.9, m))]
     return dict(kind=kind, m=m, model=model, st=st, A=A, frames=frames, fixed=fixed, mu=mu, settings=settings,
-                f_m=f_m, source=source, seed=seed)
+                f_m=f_m, source=source, seed=seed, modes=grasp.modes, friction=friction)
 
 
 CASES = [(kind, seed) for kind in KINDS for seed in range(12)]
@@ -211,9 +216,10 @@ CASES = [(kind, seed) for kind in KINDS for seed in range(12)]
 def test_qp_solution_is_internal_feasible_and_least_squeeze(kind, seed):
     case = random_case(kind, seed)
     A, f_m, frames, fixed, mu, settings = (case[k] for k in ("A", "f_m", "frames", "fixed", "mu", "settings"))
+    modes, friction = case["modes"], case["friction"]
     m = case["m"]
     k = 2 * m - 3 - case["model"].grasp.p
-    qp = build_internal_force_qp(A, f_m, frames, fixed, mu, settings)
+    qp = build_internal_force_qp(A, f_m, frames, modes, friction, settings)
     assert isinstance(qp.problem, qpsolvers.Problem)
     assert qp.null_basis.shape == (2 * m, k)
     best, candidates = brute_force_min_norm(A, f_m, frames, fixed, mu, settings)
@@ -222,9 +228,9 @@ def test_qp_solution_is_internal_feasible_and_least_squeeze(kind, seed):
         # enumeration agrees, and the library raises its typed error
         assert best is None
         with pytest.raises(InternalForceInfeasibleError):
-            solve_internal_force_qp(qp, frames, fixed, mu)
+            solve_internal_force_qp(qp, frames, modes, friction)
         return
-    result = solve_internal_force_qp(qp, frames, fixed, mu)
+    result = solve_internal_force_qp(qp, frames, modes, friction)
     scale = max(1.0, np.abs(f_m).max())
 
     assert result.null_space_dim == k
@@ -258,7 +264,7 @@ def test_qp_cases_cover_both_force_sources_and_active_squeezes():
         violation = worst_violation(case["f_m"].reshape(case["m"], 2), case["frames"], case["fixed"], case["mu"],
                                     case["settings"])
         squeezed += violation > 0
-        qp = build_internal_force_qp(case["A"], case["f_m"], case["frames"], case["fixed"], case["mu"],
+        qp = build_internal_force_qp(case["A"], case["f_m"], case["frames"], case["modes"], case["friction"],
                                      case["settings"])
         feasible += lp_feasible(qp.problem)
     assert sources == {"controller", "random"}
@@ -276,7 +282,8 @@ def test_already_feasible_motion_forces_need_no_squeeze():
     f = f + np.linalg.lstsq(st.G, -model.f_g - st.G @ f, rcond=None)[0]
     settings = InternalForceSettings()
     assert worst_violation(f.reshape(3, 2), frames, fixed, mu, settings) < -0.1
-    result = solve_internal_force_qp(build_internal_force_qp(A, f, frames, fixed, mu, settings), frames, fixed, mu)
+    modes = model.grasp.modes
+    result = solve_internal_force_qp(build_internal_force_qp(A, f, frames, modes, mu, settings), frames, modes, mu)
     assert np.linalg.norm(result.f_c) <= 1e-7
     assert result.feasible
 
@@ -290,7 +297,7 @@ def cone_edge_case(seed: int):
     st, A, frames, fixed = qp_data(model, S, [0.0, 0.0, 0.0])
     mu = rng.uniform(0.5, 1.0, 3)
     f_m = np.linalg.lstsq(st.G, model.M_o @ rng.uniform(-1, 1, 3) - model.f_g, rcond=None)[0]
-    return A, f_m, frames, fixed, mu
+    return A, f_m, frames, fixed, mu, model.grasp.modes
 
 
 def cone_edge_brute_force(A, f_m, frames, others, mu, settings, j, sign):
@@ -320,17 +327,17 @@ CONE_EDGE_SEEDS = range(6)
 
 @pytest.mark.parametrize("seed", CONE_EDGE_SEEDS)
 def test_cone_edge_puts_the_contact_on_its_cone_edge(seed):
-    """ConeEdge(j, s) for every fixed contact j and both s, m = 3, p = 0: when the problem is
+    """ConeEdge(j, s, μ_j) for every fixed contact j and both s, m = 3, p = 0: when the problem is
     feasible (independent LP), t_j . f_j = s μ_j n_j . f_j to tight tolerance, n_j . f_j >= f_min,
     the other contacts keep their constraints, Aᵀ f_c = 0, and ‖f_c‖ is the enumeration's minimum;
     otherwise the typed error."""
-    A, f_m, frames, fixed, mu = cone_edge_case(seed)
+    A, f_m, frames, fixed, mu, modes = cone_edge_case(seed)
     settings = InternalForceSettings(f_min=0.5, margin=0.05)
     scale = max(1.0, np.abs(f_m).max())
     for j in range(3):
         for sign in (1.0, -1.0):
-            edge = ConeEdge(j, sign)
-            qp = build_internal_force_qp(A, f_m, frames, fixed, mu, settings, edge)
+            edge = ConeEdge(j, sign, mu[j])
+            qp = build_internal_force_qp(A, f_m, frames, modes, mu, settings, edge)
             assert qp.problem.A is not None and qp.problem.A.shape[0] == 1  # one equality row
             others = fixed.copy()
             others[j] = False  # contact j: only its normal bound besides the equality
@@ -338,9 +345,9 @@ def test_cone_edge_puts_the_contact_on_its_cone_edge(seed):
             if not lp_feasible(qp.problem):
                 assert best is None
                 with pytest.raises(InternalForceInfeasibleError):
-                    solve_internal_force_qp(qp, frames, fixed, mu, edge)
+                    solve_internal_force_qp(qp, frames, modes, mu, edge)
                 continue
-            result = solve_internal_force_qp(qp, frames, fixed, mu, edge)
+            result = solve_internal_force_qp(qp, frames, modes, mu, edge)
             fn, ft = to_surface(frames, result.forces)[j]
             # OSQP's primal residual bound: eps_abs + eps_rel * |row| (tolerance 1e-9)
             tight = 10 * settings.tolerance * max(scale, np.abs(result.forces).max())
@@ -359,12 +366,12 @@ def test_cone_edge_cases_are_mostly_feasible():
     settings = InternalForceSettings(f_min=0.5, margin=0.05)
     feasible = total = 0
     for seed in CONE_EDGE_SEEDS:
-        A, f_m, frames, fixed, mu = cone_edge_case(seed)
+        A, f_m, frames, fixed, mu, modes = cone_edge_case(seed)
         for j in range(3):
             for sign in (1.0, -1.0):
                 total += 1
-                feasible += lp_feasible(build_internal_force_qp(A, f_m, frames, fixed, mu, settings,
-                                                                ConeEdge(j, sign)).problem)
+                feasible += lp_feasible(build_internal_force_qp(A, f_m, frames, modes, mu, settings,
+                                                                ConeEdge(j, sign, mu[j])).problem)
     assert feasible >= total // 2, (feasible, total)
 
 
@@ -375,28 +382,88 @@ def test_cone_edge_two_finger_hold_one_direction_only():
     model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
     st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
     mu = np.array([0.5, 0.6])  # finger 2 keeps |f_t| <= 0.55 f_n: room for the same f_t / f_n = 0.5
+    modes = model.grasp.modes
     settings = InternalForceSettings()
     f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
-    up = ConeEdge(0, 1.0)
-    result = solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, fixed, mu, settings, up),
-                                     frames, fixed, mu, up)
+    up = ConeEdge(0, 1.0, 0.5)
+    result = solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, modes, mu, settings, up),
+                                     frames, modes, mu, up)
     surface = to_surface(frames, result.forces)
     weight = model.object_mass * 9.81
     # symmetric hold: each finger carries half the weight, finger 1 exactly on its cone edge
     np.testing.assert_allclose(surface[0], [weight / 2 / 0.5, weight / 2], rtol=1e-8)
     assert surface[0, 1] == pytest.approx(0.5 * surface[0, 0], rel=1e-10)
-    down = ConeEdge(0, -1.0)
+    down = ConeEdge(0, -1.0, 0.5)
     with pytest.raises(InternalForceInfeasibleError):
-        solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, fixed, mu, settings, down),
-                                frames, fixed, mu, down)
+        solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, modes, mu, settings, down),
+                                frames, modes, mu, down)
+
+
+def test_fixed_cones_use_the_static_coefficient_and_a_cone_edge_its_own():
+    """Two fixed side fingers hold the object against gravity (symmetric, f_min small): the least
+    squeeze puts each on its cone with the margin, |f_t| = (μ_s - margin) f_n, so that each finger
+    carries half the weight W with f_n = W / 2 / (μ_s - margin) (closed form). With μ_s = 0.6,
+    μ_k = 0.2 that is W / 1.1, not W / 0.3 (μ_k's). A ConeEdge puts finger 1 at the coefficient it
+    carries, whatever the contact's friction. The persistent solver's row cache tells frictions and
+    modes apart (the same solver, the same geometry, other answers)."""
+    from regrasp.internal_force import InternalForceSolver
+
+    model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
+    st, A, frames, _ = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
+    weight = model.object_mass * 9.81
+    settings = InternalForceSettings(f_min=0.01, margin=0.05)
+    f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]  # (W/2 up each, no squeeze)
+    modes = model.grasp.modes
+    solver = InternalForceSolver(settings)
+    for friction, mu_s in ((Friction(0.6, 0.2), 0.6), (Friction(0.3, 0.2), 0.3), ([Friction(0.6, 0.2), 0.3], None)):
+        one_shot = solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, modes, friction, settings), frames,
+                                           modes, friction)
+        persistent = solver.solve(A, f_m, frames, modes, friction)
+        for result in (one_shot, persistent):
+            surface = to_surface(frames, result.forces)
+            np.testing.assert_allclose(np.abs(surface[:, 1]), [weight / 2, weight / 2], rtol=1e-7)  # (ξ up, ξ down)
+            if mu_s is not None:
+                np.testing.assert_allclose(surface[:, 0], weight / 2 / (mu_s - settings.margin), rtol=1e-6)
+            else:  # finger 2 (μ_s = 0.3) needs the larger squeeze; finger 1 then sits inside its cone
+                assert surface[1, 0] == pytest.approx(weight / 2 / (0.3 - settings.margin), rel=1e-6)
+                assert abs(surface[0, 1]) < (0.6 - settings.margin) * surface[0, 0]
+    # a cone edge at μ_k puts finger 1 at t·f = μ_k n·f: f_n = W / 2 / 0.2 (finger 2 then well inside)
+    edge = ConeEdge(0, 1.0, 0.2)
+    for result in (solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, modes, Friction(0.6, 0.2),
+                                                                   settings, edge), frames, modes, Friction(0.6, 0.2),
+                                           edge),
+                   solver.solve(A, f_m, frames, modes, Friction(0.6, 0.2), edge)):
+        surface = to_surface(frames, result.forces)
+        np.testing.assert_allclose(surface[0], [weight / 2 / 0.2, weight / 2], rtol=1e-7)
+    # a sliding finger gets no cone row: m = 3, the left finger sliding with |f_t| = 0.3 f_n, which no
+    # squeeze changes (A's sliding column): feasible as it is, infeasible if the modes call it fixed
+    # (its static cone, μ_s = 0.06, could hold that force only with f_n >= 30 N > f_max)
+    three = ReducedModel(make_hand(3), Grasp(polygon(), EDGES[3], ["sliding", "fixed", "fixed"]), [0.0, 0.0, 0.01])
+    st3, A3, frames3, _ = qp_data(three, [0.0, Y0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0])
+    f3 = from_surface(frames3, [[1.0, 0.3], [1.0, 0.0], [1.0, 0.0]])
+    f3[2:] += np.linalg.lstsq(st3.G[:, 2:], -three.f_g - st3.G @ f3, rcond=None)[0]  # (the others balance)
+    tiny = [Friction(0.06, 0.0), Friction(0.8, 0.5), Friction(0.8, 0.5)]
+    bounded = InternalForceSolver(InternalForceSettings(f_min=0.01, margin=0.05, f_max=5.0))
+    sliding = bounded.solve(A3, f3, frames3, three.grasp.modes, tiny)
+    assert sliding.feasible
+    assert to_surface(frames3, sliding.forces)[0, 1] == pytest.approx(to_surface(frames3, f3)[0, 1], rel=1e-9)
+    with pytest.raises(InternalForceInfeasibleError):
+        bounded.solve(A3, f3, frames3, [ContactMode.FIXED] * 3, tiny)
 
 
 def test_cone_edge_contact_index_is_validated():
     model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
     st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
     with pytest.raises(InvalidParameterError):
-        build_internal_force_qp(A, np.zeros(4), frames, fixed, np.full(2, 0.5), InternalForceSettings(),
-                                ConeEdge(2, 1.0))
+        build_internal_force_qp(A, np.zeros(4), frames, model.grasp.modes, np.full(2, 0.5), InternalForceSettings(),
+                                ConeEdge(2, 1.0, 0.5))
+    for sign, mu in ((0.0, 0.5), (2.0, 0.5), (1.0, -0.1), (1.0, float("nan")), (1.0, float("inf")), (1.0, "0.5")):
+        with pytest.raises(InvalidParameterError):
+            ConeEdge(0, sign, mu)
+    # the contacts' modes: ContactMode members or their strings, one per contact (not a boolean mask)
+    for modes in (np.array([True, True]), ["fixed"], ["fixed", "rolling"], "fixed"):
+        with pytest.raises(InvalidParameterError):
+            build_internal_force_qp(A, np.zeros(4), frames, modes, 0.5)
 
 
 # ---------------------------------------------------------------------------- infeasible
@@ -428,13 +495,15 @@ def infeasible_cases():
     model = ReducedModel(hand, Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
     st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
     f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
-    cases.append(("mu=0.05", A, f_m, frames, fixed, np.full(2, 0.05), InternalForceSettings(f_min=0.5, margin=0.05)))
+    cases.append(("mu=0.05", A, f_m, frames, model.grasp.modes, np.full(2, 0.05),
+                  InternalForceSettings(f_min=0.5, margin=0.05)))
     # (b) f_min huge for the geometry: contacts 30 mm apart vertically over 100 mm, so the squeeze
     # direction is 16.7° off the normals, outside cones of slope 0.25; a big squeeze leaves the cones
     model = ReducedModel(hand, Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [-0.015, -0.015])
     st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
     f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
-    cases.append(("f_min=50", A, f_m, frames, fixed, np.full(2, 0.3), InternalForceSettings(f_min=50.0, margin=0.05)))
+    cases.append(("f_min=50", A, f_m, frames, model.grasp.modes, np.full(2, 0.3),
+                  InternalForceSettings(f_min=50.0, margin=0.05)))
     # (c) m = 3, sliding left finger, low friction, and a large upward tangential motion force at
     # the sliding contact (which no squeeze may change): the moments cannot be balanced by pushes
     model = ReducedModel(make_hand(3), Grasp(polygon(), EDGES[3], ["sliding", "fixed", "fixed"]),
@@ -442,18 +511,18 @@ def infeasible_cases():
     st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0])
     f_m = from_surface(frames, [[0.0, 20.0], [0.0, 0.0], [0.0, 0.0]])
     f_m = f_m + np.linalg.lstsq(st.G, -model.f_g - st.G @ f_m, rcond=None)[0]
-    cases.append(("m3 large tangential", A, f_m, frames, fixed, np.full(3, 0.1),
+    cases.append(("m3 large tangential", A, f_m, frames, model.grasp.modes, np.full(3, 0.1),
                   InternalForceSettings(f_min=0.5, margin=0.05)))
     return cases
 
 
 @pytest.mark.parametrize("index", range(3))
 def test_infeasible_problem_raises_typed_error(index):
-    name, A, f_m, frames, fixed, mu, settings = infeasible_cases()[index]
-    qp = build_internal_force_qp(A, f_m, frames, fixed, mu, settings)
+    name, A, f_m, frames, modes, mu, settings = infeasible_cases()[index]
+    qp = build_internal_force_qp(A, f_m, frames, modes, mu, settings)
     assert not lp_feasible(qp.problem), name  # the problem really has no solution
     with pytest.raises(InternalForceInfeasibleError) as info:
-        solve_internal_force_qp(qp, frames, fixed, mu)
+        solve_internal_force_qp(qp, frames, modes, mu)
     exc = info.value
     assert isinstance(exc.qp, InternalForceQP)
     assert isinstance(exc.qp.problem, qpsolvers.Problem)
@@ -484,10 +553,10 @@ def test_empty_null_space_only_checks_the_given_forces():
     }
     for name, (surface, expected) in cases.items():
         f_m = from_surface(frames, surface)
-        qp = build_internal_force_qp(A, f_m, frames, fixed, mu, settings)
+        qp = build_internal_force_qp(A, f_m, frames, model.grasp.modes, mu, settings)
         assert qp.problem is None, name
         assert qp.null_basis.shape == (4, 0), name
-        result = solve_internal_force_qp(qp, frames, fixed, mu)
+        result = solve_internal_force_qp(qp, frames, model.grasp.modes, mu)
         assert result.null_space_dim == 0, name
         assert result.status == "empty null space", name
         np.testing.assert_array_equal(result.f_c, np.zeros(4))
@@ -505,18 +574,19 @@ def test_persistent_solver_matches_the_one_shot_qp():
     compared = raised = 0
     for kind, seed in CASES:
         case = random_case(kind, seed)
-        A, f_m, frames, fixed, mu, settings = (case[k] for k in ("A", "f_m", "frames", "fixed", "mu", "settings"))
+        A, f_m, frames, settings = (case[k] for k in ("A", "f_m", "frames", "settings"))
+        modes, friction = case["modes"], case["friction"]
         solver = solvers.setdefault((kind, settings), InternalForceSolver(settings))
         try:
-            expected = solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, fixed, mu, settings),
-                                               frames, fixed, mu)
+            expected = solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, modes, friction, settings),
+                                               frames, modes, friction)
         except InternalForceInfeasibleError:
             with pytest.raises(InternalForceInfeasibleError) as err:
-                solver.solve(A, f_m, frames, fixed, mu)
+                solver.solve(A, f_m, frames, modes, friction)
             assert isinstance(err.value.qp.problem, qpsolvers.Problem)
             raised += 1
             continue
-        got = solver.solve(A, f_m, frames, fixed, mu)
+        got = solver.solve(A, f_m, frames, modes, friction)
         scale = max(1.0, np.abs(expected.f_c).max())
         np.testing.assert_allclose(got.f_c, expected.f_c, atol=1e-6 * scale)
         assert got.null_space_dim == expected.null_space_dim and got.feasible
@@ -525,12 +595,13 @@ def test_persistent_solver_matches_the_one_shot_qp():
     shared = InternalForceSolver(InternalForceSettings())
     for seed in range(6):
         case = random_case("m3p0", seed)
-        A, f_m, frames, fixed, mu = (case[k] for k in ("A", "f_m", "frames", "fixed", "mu"))
+        A, f_m, frames, modes, friction = (case[k] for k in ("A", "f_m", "frames", "modes", "friction"))
         try:
-            expected = solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, fixed, mu), frames, fixed, mu)
+            expected = solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, modes, friction), frames,
+                                               modes, friction)
         except InternalForceInfeasibleError:
             continue
-        np.testing.assert_allclose(shared.solve(A, f_m, frames, fixed, mu).f_c, expected.f_c,
+        np.testing.assert_allclose(shared.solve(A, f_m, frames, modes, friction).f_c, expected.f_c,
                                    atol=1e-6 * max(1.0, np.abs(expected.f_c).max()))
     assert compared >= 30 and raised >= 1
 

@@ -34,6 +34,8 @@ import numpy as np
 import pytest
 
 from regrasp import (
+    ContactMode,
+    Friction,
     Grasp,
     Hand,
     Plant,
@@ -86,7 +88,7 @@ def from_surface(beta: float, surface) -> np.ndarray:
     return np.stack([frames[i] @ np.asarray(surface)[i] for i in range(2)])
 
 
-def start(hand: Hand, modes, xi, S, S_dot, *, mu: float, model_modes=None, **plant_kw):
+def start(hand: Hand, modes, xi, S, S_dot, *, friction, model_modes=None, **plant_kw):
     """A plant in the reduced state (S, Ṡ) (sliding signs = sign ξ̇), and that reduced state.
 
     The reduced model uses a hand with the default singular threshold (its ``state`` refuses
@@ -100,7 +102,7 @@ def start(hand: Hand, modes, xi, S, S_dot, *, mu: float, model_modes=None, **pla
     for i, (edge, mode) in enumerate(zip(EDGES, modes)):
         sign = float(np.sign(rst.xi_dot[i])) if mode == "sliding" else 1.0
         contacts.append(PlantContact(edge=edge, mode=mode, xi=float(rst.xi[i]), sign=sign or 1.0))
-    plant = Plant(hand, polygon(), contacts, mu=mu, dt=DT, **plant_kw)
+    plant = Plant(hand, polygon(), contacts, friction=friction, dt=DT, **plant_kw)
     plant.reset(rst.q, rst.q_dot, np.asarray(S, float)[:3], np.asarray(S_dot, float)[:3])
     return plant, rst
 
@@ -114,8 +116,8 @@ class Driver:
     :math:`\\tau = M(H\\ddot S + \\dot H\\dot S) + N + J^T f`.
     """
 
-    def __init__(self, hand: Hand, modes, xi, mu: float):
-        self.mu = mu
+    def __init__(self, hand: Hand, modes, xi, friction):
+        self.friction = friction
         self.grasp = Grasp(polygon(), EDGES, modes)
         self.model = ReducedModel(make_hand(hand.gravity_in_hand, hand.damping_enabled), self.grasp, xi)
 
@@ -138,9 +140,9 @@ class Driver:
             inward = sum(frames[i][:, 0] @ null[2 * i:2 * i + 2] for i in range(2))
             f = f + squeeze * np.sign(inward) * null
         else:
-            gf = self.grasp.sliding_grasp_matrix(pose, rst.xi, signs, self.mu)
+            gf = self.grasp.sliding_grasp_matrix(pose, rst.xi, signs, self.friction)
             eta = np.linalg.solve(gf, w)
-            f = self.grasp.surface_rotation(pose) @ self.grasp.force_basis(signs, self.mu) @ eta
+            f = self.grasp.surface_rotation(pose) @ self.grasp.force_basis(signs, self.friction) @ eta
         return f.reshape(2, 2)
 
     def object_acceleration(self, rst, forces) -> np.ndarray:
@@ -247,7 +249,7 @@ def test_energy_conserved_two_fixed_contacts(seed):
     hand = make_hand(gravity=(0.0, 0.0), damping=False)
     S, S_dot = random_pose_and_twist(rng)
     xi = rng.uniform(-0.005, 0.005, 2)
-    plant, _ = start(hand, ["fixed", "fixed"], xi, S, S_dot, mu=1.0)
+    plant, _ = start(hand, ["fixed", "fixed"], xi, S, S_dot, friction=1.0)
     E0, work, min_normal, _ = run_energy(plant, hand)
     st = plant.state
     assert st.t == pytest.approx(1.0)
@@ -271,7 +273,7 @@ def test_energy_conserved_frictionless_sliding(seed):
     xi_dot = rng.choice([-1.0, 1.0], 2) * rng.uniform(0.001, 0.003, 2)
     # finger 1 slides by the reduced model; finger 2's sliding velocity is added by hand
     plant, rst = start(hand, ["sliding", "sliding"], xi, np.append(S, xi[0]), np.append(S_dot, xi_dot[0]),
-                       mu=0.0, model_modes=["sliding", "fixed"])
+                       friction=0.0, model_modes=["sliding", "fixed"])
     t2 = surface_frames(S[2])[1][:, 1]
     v = rst.q_dot.copy()
     v[2:] += np.linalg.solve(rst.hand.jacobian[2:, 2:], t2 * xi_dot[1])
@@ -300,7 +302,7 @@ def test_torque_free_motion_pulls_on_contacts():
     rng = np.random.default_rng(7)
     hand = make_hand(gravity=(0.0, 0.0), damping=False)
     S, S_dot = random_pose_and_twist(rng)
-    plant, rst = start(hand, ["fixed", "fixed"], [0.0, 0.0], S, S_dot, mu=1.0, stop_on=())
+    plant, rst = start(hand, ["fixed", "fixed"], [0.0, 0.0], S, S_dot, friction=1.0, stop_on=())
     _, f_model = ReducedModel(make_hand((0.0, 0.0), False), Grasp(polygon(), EDGES, ["fixed", "fixed"]),
                               [0.0, 0.0]).forward_dynamics(rst, np.zeros(4))
     step = plant.step(np.zeros(4))
@@ -313,16 +315,20 @@ def test_torque_free_motion_pulls_on_contacts():
 
 
 # ---------------------------------------------------------------------------- 2. friction
-def test_friction_work_balance():
-    """Finger 1 slides up its edge at 10 mm/s (μ = 0.3, gravity, joint damping) while the
-    object is held still; the energy change is the sum of the three integrated works."""
-    mu = 0.3
+@pytest.mark.parametrize("friction", [Friction(0.3), [Friction(0.7, 0.3), Friction(0.8, 0.6)]],
+                         ids=["mu=0.3", "mu_s!=mu_k"])
+def test_friction_work_balance(friction):
+    """Finger 1 slides up its edge at 10 mm/s (μ_k = 0.3, gravity, joint damping) while the
+    object is held still; the energy change is the sum of the three integrated works. With
+    μ_s ≠ μ_k (0.7 and 0.3 at the slider, 0.8 and 0.6 at the holder) the slider carries μ_k f_n and
+    dissipates μ_k ∫ λ ξ̇ dt: the same run as with μ = 0.3 (the holder stays fixed in both)."""
+    mu = 0.3  # the slider's kinetic coefficient in both cases
     hand = make_hand(gravity=(0.0, -GRAVITY), damping=True)
     modes, xi = ["sliding", "fixed"], [-0.015, 0.0]
     S0 = np.array([0.0, 0.12, 0.0])
     xi_dot = 0.01
-    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, xi_dot], mu=mu)
-    driver = Driver(hand, modes, xi, mu)
+    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, xi_dot], friction=friction)
+    driver = Driver(hand, modes, xi, friction)
     E0 = plant.energy()
     residuals, lam_xi_dot = [], 0.0
     for k in range(300):
@@ -347,6 +353,148 @@ def test_friction_work_balance():
     assert plant.max_constraint_error < 1e-7
 
 
+# ---------------------------------------------------------------------------- 2b. static and kinetic
+# The object as an immovable wall (mass and inertia 1e9: under ~1 N it accelerates by ~1e-9 m/s²),
+# gravity off. Each finger then meets the wall on its own, and a commanded tip force
+# τ = N(q, q̇) + Jᵀ F gives the closed forms below. μ_s = 0.8 and μ_k = 0.4: a slip at μ_k, or a
+# slide at μ_s, would be a different event time, force and acceleration.
+WALL, MU_S, MU_K = 1e9, 0.8, 0.4
+
+
+def wall_plant(friction, contacts, v=None) -> Plant:
+    """Tips at the middles of edges 1 and 3 of the object (a wall) at (0, 0.12, 0), velocities ``v``."""
+    hand = make_hand(gravity=(0.0, 0.0), damping=True)
+    q = hand.inverse_kinematics(np.array([[-0.05, 0.12], [0.05, 0.12]]))
+    plant = Plant(hand, polygon(), contacts, friction=friction, dt=DT, object_mass=WALL, object_inertia=WALL)
+    plant.reset(q, np.zeros(4) if v is None else v, [0.0, 0.12, 0.0], np.zeros(3))
+    return plant
+
+
+def tip_force_torque(plant: Plant, st, forces) -> np.ndarray:
+    """τ = N(q, q̇) + Jᵀ F for tip forces F (2, 2) on the object: a tip at rest against the wall,
+    held fixed, pushes with exactly F (M q̈ = Jᵀ (F - f) and q̈ = 0)."""
+    dyn = plant.hand.dynamics(st.q, st.v)
+    return dyn.nonlinear + dyn.jacobian.T @ np.asarray(forces, dtype=float).reshape(-1)
+
+
+def wall_slide(plant: Plant, st, tau, sign: float, mu_k: float):
+    r"""Closed form for finger 1 sliding on the wall (edge 1) at state ``st`` under ``tau``: its tip
+    acceleration is :math:`\ddot p = a - \Lambda^{-1} f` with :math:`a = J M^{-1}(\tau - N) + \dot J\dot q`,
+    :math:`\Lambda^{-1} = J M^{-1} J^T`, the force :math:`f = \lambda d`, :math:`d = n + \mu_k s t`, and
+    the (Baumgarte-stabilised) constraint :math:`n\cdot\ddot p = -2\alpha\dot\psi - \alpha^2\psi` of the
+    straight edge, :math:`\psi = n\cdot(p - x_o) - e`, gives
+    :math:`\lambda = (n\cdot a + 2\alpha\dot\psi + \alpha^2\psi) / (n\cdot\Lambda^{-1} d)`.
+    Returns (f, p̈); the wall's own motion (~1e-9 m/s²) is neglected."""
+    dyn = plant.hand.dynamics(st.q, st.v)
+    J, M = dyn.jacobian[:2, :2], dyn.mass_matrix[:2, :2]
+    tip_inertia_inv = J @ np.linalg.solve(M, J.T)
+    free = J @ np.linalg.solve(M, tau[:2] - dyn.nonlinear[:2]) + dyn.jacobian_dot_v[:2]
+    edge = polygon().edge(1)
+    n, t = rotation(st.X[2]) @ edge.inward_normal, rotation(st.X[2]) @ edge.xi_direction
+    psi = n @ (dyn.tips[0] - st.X[:2]) - edge.inward_normal @ edge.xi_origin
+    psi_dot = n @ (dyn.tip_velocities[0] - st.V[:2])
+    d = n + mu_k * sign * t
+    lam = (n @ free + 2 * plant.alpha * psi_dot + plant.alpha**2 * psi) / (n @ tip_inertia_inv @ d)
+    return lam * d, free - tip_inertia_inv @ (lam * d)
+
+
+def test_breakaway_at_the_static_coefficient_then_sliding_at_the_kinetic_one():
+    """Finger 1 presses the wall with 1 N and a tangential push along its ξ ramped at μ_s / 40.5 ms
+    (finger 2 presses with 1 N). While it is fixed the plant's force is the commanded one (closed
+    form: the push itself), so |f_t| / f_n = rate t: the contact holds past μ_k (at 20 ms) and up to
+    μ_s, and slips in the step whose force first exceeds μ_s f_n (from t = 41 ms, reported at 42 ms).
+    Then it slides with |f_t| = μ_k f_n (to 1e-9), and its force and tip acceleration are the closed
+    form of a tip sliding on a wall (:func:`wall_slide`), the object's acceleration
+    M_o⁻¹ Σ (f_i, r_i × f_i)."""
+    friction = [Friction(MU_S, MU_K), Friction(MU_S, MU_K)]
+    plant = wall_plant(friction, [PlantContact(1, ContactMode.FIXED), PlantContact(3, ContactMode.FIXED)])
+    push, t_cross = 1.0, 0.0405
+    rate = MU_S * push / t_cross  # [N/s]
+    (n1, t1), n2 = surface_frames(0.0)[0].T, surface_frames(0.0)[1][:, 0]
+
+    def command(t):
+        return [push * n1 + rate * t * t1, push * n2]
+
+    k_slip = int(t_cross / DT) + 1  # the first step whose push exceeds μ_s f_n
+    ratios = []
+    for k in range(k_slip + 1):
+        st = plant.state.copy()
+        step = plant.step(tip_force_torque(plant, st, command(st.t)))
+        assert step.modes[0] is ContactMode.FIXED
+        np.testing.assert_allclose(step.forces_surface[0], [push, rate * st.t], rtol=0, atol=1e-9)
+        f_n, f_t = step.forces_surface[0]
+        ratios.append(abs(f_t) / f_n)
+        if k < k_slip:
+            assert not step.events, (k, step.events)
+            assert abs(f_t) <= MU_S * f_n
+    assert max(ratios[:k_slip]) > MU_K + 0.35  # held far past μ_k f_n ...
+    assert ratios[k_slip - 1] < MU_S < ratios[k_slip]  # ... and slipped where the force crossed μ_s f_n
+    assert kinds(step.events) == [("slip", "finger1")]
+    assert step.events[0].time == pytest.approx((k_slip + 1) * DT)
+    assert plant.contacts[0].mode is ContactMode.SLIDING and plant.contacts[0].sign == 1.0
+    assert plant.contacts[1].mode is ContactMode.FIXED
+    speeds = []
+    for _ in range(3):
+        st = plant.state.copy()
+        tau = tip_force_torque(plant, st, command(st.t))
+        force, tip_acceleration = wall_slide(plant, st, tau, 1.0, MU_K)
+        q_ddot, X_ddot, forces = plant.accelerations(st, tau)
+        step = plant.step(tau)
+        assert not step.events and step.modes == (ContactMode.SLIDING, ContactMode.FIXED)
+        f_n, f_t = step.forces_surface[0]
+        assert f_t / f_n == pytest.approx(MU_K, rel=0, abs=1e-9)
+        np.testing.assert_allclose(forces[0], force, rtol=1e-9)
+        dyn = plant.hand.dynamics(st.q, st.v)
+        # (the closed form neglects the wall's motion, ~1e-9 m/s², against ~100 m/s² of tip acceleration)
+        np.testing.assert_allclose(dyn.jacobian[:2, :2] @ q_ddot[:2] + dyn.jacobian_dot_v[:2], tip_acceleration,
+                                   rtol=0, atol=1e-8)
+        r = dyn.tips - st.X[:2]
+        wrench = [forces[:, 0].sum(), forces[:, 1].sum(), float(np.sum(r[:, 0] * forces[:, 1] - r[:, 1] * forces[:, 0]))]
+        np.testing.assert_allclose(X_ddot, np.array(wrench) / [WALL, WALL, WALL], rtol=1e-9, atol=1e-22)
+        speeds.append(step.xi_dot[0])
+    assert 0.0 < speeds[0] < speeds[1] < speeds[2]  # the push exceeds the kinetic friction: it speeds up
+
+
+@pytest.mark.parametrize("mu_s,sticks", [(MU_S, True), (0.5, False)], ids=["inside", "outside"])
+def test_a_reversing_slider_sticks_only_inside_its_static_cone(mu_s, sticks):
+    """Finger 1 slides down the wall at 0.3 m/s (μ_k = 0.4) while it is commanded to push with 1 N and
+    0.6 N up its edge: friction and the push stop it within a few ms. Where ξ̇ reverses, the fixed-
+    contact force is the push (|f_t| / f_n = 0.6, the tip at rest against the wall): inside the static
+    cone for μ_s = 0.8, so it sticks and then holds that force; outside it for μ_s = 0.5 (though
+    0.6 > μ_k), so it keeps sliding, now up, with |f_t| = μ_k f_n and speeding up."""
+    hand = make_hand(gravity=(0.0, 0.0), damping=True)
+    q = hand.inverse_kinematics(np.array([[-0.05, 0.12], [0.05, 0.12]]))
+    t1 = surface_frames(0.0)[0][:, 1]
+    v = np.zeros(4)
+    v[:2] = np.linalg.solve(hand.jacobian(q)[:2, :2], -0.3 * t1)
+    plant = wall_plant(Friction(mu_s, MU_K), [PlantContact(1, ContactMode.SLIDING, 0.0, -1.0),
+                                              PlantContact(3, ContactMode.FIXED)], v)
+    (n1, _), n2 = surface_frames(0.0)[0].T, surface_frames(0.0)[1][:, 0]
+    push = [n1 + 0.6 * t1, n2]
+    events, reversed_at = [], None
+    for k in range(30):
+        step = plant.step(tip_force_torque(plant, plant.state, push))
+        events += step.events
+        if reversed_at is None and step.xi_dot[0] > 0:
+            reversed_at = k
+        if reversed_at is None or k == reversed_at:
+            assert step.modes[0] is ContactMode.SLIDING
+            assert step.forces_surface[0, 1] == pytest.approx(-MU_K * step.forces_surface[0, 0], rel=1e-12)
+        elif sticks:
+            assert step.modes[0] is ContactMode.FIXED
+            f_n, f_t = step.forces_surface[0]
+            assert f_t / f_n == pytest.approx(0.6, abs=1e-6) and f_t <= mu_s * f_n
+        else:
+            assert step.modes[0] is ContactMode.SLIDING and step.xi_dot[0] > 0
+            assert step.forces_surface[0, 1] == pytest.approx(MU_K * step.forces_surface[0, 0], rel=1e-12)
+    assert reversed_at is not None and reversed_at >= 1
+    if sticks:
+        assert kinds(events) == [("stick", "finger1")]
+        assert events[0].time == pytest.approx((reversed_at + 1) * DT)
+    else:
+        assert events == [] and plant.contacts[0].sign == 1.0
+
+
 # ---------------------------------------------------------------------------- 3. events
 def test_separation_event():
     """Finger 1's normal force is ramped from +0.2 N to -0.2 N (gravity off, finger 2 keeps
@@ -354,7 +502,7 @@ def test_separation_event():
     hand = make_hand(gravity=(0.0, 0.0), damping=True)
     modes, xi = ["fixed", "fixed"], [0.0, 0.0]
     S0 = np.array([0.0, 0.12, 0.0])
-    plant, _ = start(hand, modes, xi, S0, np.zeros(3), mu=1.0)
+    plant, _ = start(hand, modes, xi, S0, np.zeros(3), friction=1.0)
     driver = Driver(hand, modes, xi, 1.0)
     t_cross = 0.0405  # between two steps
     normal = lambda t: 0.2 * (1.0 - t / t_cross)  # noqa: E731
@@ -380,7 +528,7 @@ def test_slip_event():
     rate = mu * squeeze / t_slip  # [N/s]
     hand = make_hand(gravity=(0.0, 0.0), damping=True)
     modes, xi = ["fixed", "fixed"], [0.0, 0.0]
-    plant, _ = start(hand, modes, xi, [0.0, 0.12, 0.0], np.zeros(3), mu=mu)
+    plant, _ = start(hand, modes, xi, [0.0, 0.12, 0.0], np.zeros(3), friction=mu)
     driver = Driver(hand, modes, xi, mu)
     def torque(rst, t):
         forces = from_surface(rst.S[2], [[squeeze, rate * t], [squeeze, 0.0]])
@@ -436,7 +584,7 @@ def run_until_stick():
     hand = make_hand(gravity=(0.0, -GRAVITY), damping=False)
     modes, xi, S0 = ["sliding", "fixed"], STICK_XI, STICK_S0
     v0, decel = STICK_V0, STICK_DECEL
-    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, v0], mu=mu)
+    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, v0], friction=mu)
     driver = Driver(hand, modes, xi, mu)
     event_step, previous = None, None
     for _ in range(40):
@@ -488,7 +636,7 @@ def test_left_edge_event():
     S0 = np.array([0.0, 0.12, 0.0])
     v = 0.3
     t_leave = (0.02 - xi[0]) / v
-    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, v], mu=mu)
+    plant, _ = start(hand, modes, xi, np.append(S0, xi[0]), [0.0, 0.0, 0.0, v], friction=mu)
     driver = Driver(hand, modes, xi, mu)
     event_step, last_xi = None, xi[0]
     for _ in range(60):
@@ -521,7 +669,7 @@ def test_collision_event():
     hand = make_hand(gravity=(0.0, -GRAVITY), damping=True)
     modes, xi = ["fixed", "fixed"], [0.0, 0.0]
     x0, y0 = 0.0, 0.12
-    plant, _ = start(hand, modes, xi, [x0, y0, beta0], [0.0, 0.0, omega], mu=mu)
+    plant, _ = start(hand, modes, xi, [x0, y0, beta0], [0.0, 0.0, omega], friction=mu)
     driver = Driver(hand, modes, xi, mu)
     fingers = [c.finger for c in scenario().contacts]
     radius = max(float(s.geometry.radius) for s in fingers[1].link_shapes() if s.link == 1)
@@ -562,7 +710,7 @@ def test_singular_event():
     x0, y0 = 0.0, 0.145
     # stretched along its (vertical) edge, finger 1's distal link necessarily dips into the object
     # (the urdf geometry's grazing-angle limit): collisions are not what this test is about
-    plant, _ = start(hand, modes, xi, [x0, y0, 0.0], [0.0, v, 0.0], mu=1.0, collision_check=False)
+    plant, _ = start(hand, modes, xi, [x0, y0, 0.0], [0.0, v, 0.0], friction=1.0, collision_check=False)
     driver = Driver(hand, modes, xi, 1.0)
     fingers = [c.finger for c in scenario().contacts]
 
@@ -600,7 +748,7 @@ def test_fixed_hold_forces_and_object_equation():
     S0 = np.array([0.0, 0.12, 0.0])
     amp, w = np.array([0.01, 0.005, 0.2]), 2 * np.pi * 2.0
     ref = lambda t: (S0 + amp * np.sin(w * t), amp * w * np.cos(w * t), -amp * w * w * np.sin(w * t))  # noqa: E731
-    plant, _ = start(hand, modes, xi, S0, amp * w, mu=mu)
+    plant, _ = start(hand, modes, xi, S0, amp * w, friction=mu)
     driver = Driver(hand, modes, xi, mu)
     M_o = np.diag([plant.mass, plant.mass, plant.inertia])
     f_g = np.append(plant.mass * hand.gravity_in_hand, 0.0)
@@ -645,9 +793,9 @@ def test_bad_input():
         _plant([PlantContact(1, "sliding", sign=0.0), PlantContact(3, "fixed")])
     with pytest.raises(UnknownEdgeError):
         _plant([PlantContact(4, "fixed"), PlantContact(3, "fixed")])
-    for mu in (-0.1, float("nan"), float("inf")):
+    for friction in (-0.1, float("nan"), float("inf"), [0.5], "0.5", None, (0.5, 0.6, 0.7)):
         with pytest.raises(InvalidParameterError):
-            _plant(good, mu=mu)
+            _plant(good, friction=friction)
     for kw in ({"dt": 0.0}, {"dt": -1e-3}, {"object_mass": -1.0}, {"baumgarte": -1.0}):
         with pytest.raises(InvalidParameterError):
             _plant(good, **kw)
@@ -704,7 +852,7 @@ def test_torque_free_energy_conservation_with_ideal_contacts(modes, seed):
     st = model.state(S, S_dot)
     contacts = [PlantContact(e, mo, x, float(np.sign(S_dot[3])) if mo == "sliding" else 1.0)
                 for e, mo, x in zip([1, 3], modes, xi)]
-    plant = Plant(hand, sc.polygon, contacts, mu=0.0, collision_check=False, contact_events=False)
+    plant = Plant(hand, sc.polygon, contacts, friction=0.0, collision_check=False, contact_events=False)
     plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
     e0 = plant.energy()
     for _ in range(1000):

@@ -16,7 +16,7 @@ import pytest
 import rerun as rr
 from rerun.chunk import RrdReader
 
-from regrasp import Grasp, Hand, Plant, PlantContact, PlantEvent, ReducedModel, load_scenario
+from regrasp import Friction, Grasp, Hand, Plant, PlantContact, PlantEvent, ReducedModel, load_scenario
 from regrasp.closed_loop import run_closed_loop
 from regrasp.control import Gains, Proposition3Controller
 from regrasp.exceptions import InvalidParameterError, RegraspError, UnknownEdgeError
@@ -44,15 +44,16 @@ def reference(t):
     return np.append(X0, xi), np.append(np.zeros(3), xi_d), np.append(np.zeros(3), xi_dd)
 
 
-def setup():
+def setup(friction=MU):
     hand = Hand([c.finger for c in SC.contacts], gravity_in_hand=SC.gravity_in_hand)
     grasp = Grasp(SC.polygon, [1, 3], ["sliding", "fixed"])
     model = ReducedModel(hand, grasp, xi=[LO, XI_HOLD])
     S0, S0_dot, _ = reference(0.0)
     st = model.state(S0, S0_dot)
-    plant = Plant(hand, SC.polygon, [PlantContact(1, "sliding", LO, 1.0), PlantContact(3, "fixed", XI_HOLD)], mu=MU)
+    plant = Plant(hand, SC.polygon, [PlantContact(1, "sliding", LO, 1.0), PlantContact(3, "fixed", XI_HOLD)],
+                  friction=friction)
     plant.reset(st.q, st.q_dot, S0[:3], S0_dot[:3])
-    return plant, Proposition3Controller(model, Gains.critically_damped(40.0, 4), mu=MU)
+    return plant, Proposition3Controller(model, Gains.critically_damped(40.0, 4), friction=friction)
 
 
 def rerun_cli() -> list[str]:
@@ -309,3 +310,32 @@ def test_a_buffered_rollout_recording_holds_each_steps_values_at_its_time(tmp_pa
         assert np.allclose(xi[1:n, 0], result.xi[1:, i] * 1e3, rtol=0.0, atol=1e-4)  # held vs tip: drift
         assert np.isnan(xi[:, 1]).all()  # the recorder's error series are the object's only
         assert (xi[:, 2] <= xi[:, 0]).all() and (xi[:, 0] <= xi[:, 3]).all()  # inside its feasible interval
+
+
+def test_cones_and_margins_use_each_contacts_coefficient_of_its_mode(tmp_path):
+    """μ_s ≠ μ_k: the sliding finger's cone is drawn at ±atan μ_k and its plant cone margin is
+    μ_k f_n - |f_t| (0: it slides on its kinetic edge), the holding finger's at ±atan μ_s with
+    μ_s f_n - |f_t|; the set-up table shows each tip's friction as ``str(Friction)``."""
+    friction = [Friction(0.3, 0.05), Friction(0.8, 0.6)]
+    plant, controller = setup(friction)
+    path = tmp_path / "cones.rrd"
+    with RolloutRecorder(plant, rrd_path=path) as rec:
+        log = run_closed_loop(plant, controller, reference, 0.02, on_step=rec.hook(plant, reference))
+    assert not log.events
+    verify(path)
+    rows, *_ = read(path)
+    for strips in rows["scene/contacts/cones"]["LineStrips2D:strips"][1:]:
+        for (a, tip, b), mu in zip(strips, (0.05, 0.8)):  # (ray, tip, ray) per contact [mm]
+            u, v = np.subtract(a, tip), np.subtract(b, tip)
+            opening = np.arccos(u @ v / (np.linalg.norm(u) * np.linalg.norm(v)))
+            assert opening == pytest.approx(2 * np.arctan(mu), abs=1e-5)  # (float32 points)
+    forces = np.array(rows["plots/force"]["Scalars:scalars"][1:], dtype=float)  # f_n1, f_n2, f_t1, f_t2, ...
+    margins = np.array(rows["plots/cone_margin"]["Scalars:scalars"][1:], dtype=float)[:, :2]
+    np.testing.assert_allclose(margins[:, 0], 0.0, atol=1e-9)
+    np.testing.assert_allclose(margins[:, 1], 0.8 * forces[:, 1] - np.abs(forces[:, 3]), rtol=1e-12)
+    text = ""
+    for chunk in RrdReader(path).stream().to_chunks():
+        if chunk.is_static and chunk.entity_path.lstrip("/") == "model/setup":
+            batch = chunk.to_record_batch()
+            text = str(batch.column("TextDocument:text").to_pylist())
+    assert "| sliding | mu_s = 0.3, mu_k = 0.05 |" in text and "| fixed | mu_s = 0.8, mu_k = 0.6 |" in text

@@ -2,7 +2,8 @@
 
 The decisive test for eq. (3.2.11): the reduced dynamics without the paper's extra
 G R_f B_v f_ξ term agree with the full-coordinate plant to 1e-8 (relative); with the term
-they do not (docs/derivations.md).
+they do not (docs/derivations.md). Both put the sliding contacts at their kinetic coefficient
+(random μ_s > μ_k per contact there).
 """
 
 from pathlib import Path
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 
 from regrasp import ConvexPolygon, Finger, Grasp, Hand, Plant, PlantContact, ReducedModel, SingularFingerError
+from regrasp.contact import Friction
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"
@@ -85,7 +87,7 @@ def test_H_dot_S_dot_matches_finite_differences(m, modes, seed):
     np.testing.assert_allclose(st.H_dot_S_dot, fd, atol=1e-7 * max(1.0, np.abs(fd).max()))
 
 
-def plant_for(model, st, mu, gravity):
+def plant_for(model, st, friction, gravity):
     contacts = []
     k = 0
     for i, mode in enumerate(model.grasp.modes):
@@ -95,7 +97,7 @@ def plant_for(model, st, mu, gravity):
             k += 1
         contacts.append(PlantContact(model.grasp.edges[i].index, mode.value, float(st.xi[i]), sign))
     hand = Hand(model.hand.fingers, gravity_in_hand=gravity)
-    plant = Plant(hand, RECT, contacts, mu=mu, collision_check=False)
+    plant = Plant(hand, RECT, contacts, friction=friction, collision_check=False)
     plant.reset(st.q, st.q_dot, st.S[:3], st.S_dot[:3])
     return plant
 
@@ -109,9 +111,10 @@ def test_reduced_model_and_plant_agree_on_accelerations_and_forces(m, modes, see
     S, S_dot = random_state(rng, model)
     st = model.state(S, S_dot)
     tau = rng.normal(size=2 * m) * 0.05
-    mu = rng.uniform(0.0, 0.8)
-    S_ddot, forces = model.forward_dynamics(st, tau, mu)
-    plant = plant_for(model, st, mu, gravity)
+    kinetic = rng.uniform(0.0, 0.8, size=m)  # per contact, μ_s = μ_k + 0.1 ... 0.7
+    friction = [Friction(k + rng.uniform(0.1, 0.7), k) for k in kinetic]
+    S_ddot, forces = model.forward_dynamics(st, tau, friction)
+    plant = plant_for(model, st, friction, gravity)
     assert plant.constraint_error(plant.state) < 1e-15
     q_ddot, X_ddot, plant_forces = plant.accelerations(plant.state, tau)
 
@@ -121,9 +124,14 @@ def test_reduced_model_and_plant_agree_on_accelerations_and_forces(m, modes, see
     assert rel(X_ddot, S_ddot[:3]) < 1e-8
     assert rel(q_ddot, st.H @ S_ddot + st.H_dot_S_dot) < 1e-8
     assert rel(plant_forces, forces) < 1e-8
-    # ξ̈ of the sliding contacts, from the plant's own accelerations (rigid-body kinematics)
+    # ξ̈ of the sliding contacts, from the plant's own accelerations (rigid-body kinematics), and
+    # their forces on the kinetic cone edge, t·f = s μ_k n·f
     pose = st.S[:3]
     for j, i in enumerate(model.grasp.sliding):
+        n, t = model.grasp.surface_frames(pose)[i].T
+        sign = np.sign(st.S_dot[3 + j])
+        assert t @ plant_forces[i] == pytest.approx(sign * kinetic[i] * (n @ plant_forces[i]), rel=1e-12, abs=1e-15)
+        assert t @ forces[i] == pytest.approx(sign * kinetic[i] * (n @ forces[i]), rel=1e-12, abs=1e-15)
         J = st.hand.jacobian[2 * i:2 * i + 2, 2 * i:2 * i + 2]
         tip_acc = J @ q_ddot[2 * i:2 * i + 2] + st.hand.jacobian_dot_v[2 * i:2 * i + 2]
         r = st.hand.tips[i] - pose[:2]
@@ -198,7 +206,7 @@ def test_plant_accepts_mismatched_parameters():
     heavy_hand = Hand(model.hand.fingers, gravity_in_hand=(0.0, -9.81), link_mass_scale=1.3)
     plant = Plant(heavy_hand, RECT, [PlantContact(1, "sliding", st.xi[0], float(np.sign(S_dot[3]))),
                                      PlantContact(3, "fixed", st.xi[1])],
-                  mu=0.6, object_mass=0.1, object_inertia=2e-4, collision_check=False)
+                  friction=0.6, object_mass=0.1, object_inertia=2e-4, collision_check=False)
     plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
     _, X_plant, _ = plant.accelerations(plant.state, tau)
     nominal, _ = model.forward_dynamics(st, tau, 0.3)

@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import FingerEnvelope, load_scenario
+from regrasp import ContactMode, FingerEnvelope, Friction, load_scenario
 from regrasp.exceptions import InvalidParameterError, ScenarioError
 from regrasp.rollout import build_rollout
 
@@ -50,7 +50,7 @@ def test_slides_go_where_the_planner_says_it_is_safe(three_fingers_run):
     st = rollout.plant.state
     for i, contact in enumerate(sc.contacts):
         held = rollout.plant.contacts[i]
-        assert held.mode == "fixed"
+        assert held.mode is ContactMode.FIXED
         # an independent check: the urdf envelope at the plant's final object pose
         sample = FingerEnvelope(contact.finger, sc.polygon, contact.edge, geometry="urdf").at(st.X)
         assert sample.margin(held.xi) > 0.0, (contact.finger.name, held.xi, sample.feasible)
@@ -93,11 +93,18 @@ def test_bad_durations_are_rejected(duration):
 
 
 def test_a_fingertips_friction_comes_from_the_scenario(tmp_path):
+    """The scenario's friction goes to the supervisor (its controllers and predicate) and the plant;
+    ``plant_friction`` gives the plant another one."""
     text = (SCENARIOS / "paper_trajectory_2.toml").read_text()
     text = text.replace('"../../urdf/', f'"{SCENARIOS.parents[1] / "urdf"}/')
     good = tmp_path / "good.toml"
-    good.write_text(text.replace("edge = 3\n", "edge = 3\nmu = 0.8\n"))
-    assert load_scenario(good).mu.tolist() == [0.5, 0.8]  # 0.5 when unset
+    good.write_text(text.replace("edge = 3\n", "edge = 3\nmu_static = 0.8\nmu_kinetic = 0.6\n"))
+    sc = load_scenario(good)
+    assert sc.friction == (Friction(0.5), Friction(0.8, 0.6))  # 0.5 when unset
+    rollout = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01])
+    assert rollout.plant.friction == rollout.supervisor.friction == sc.friction
+    other = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01], plant_friction=Friction(0.9, 0.3))
+    assert other.plant.friction == (Friction(0.9, 0.3),) * 2 and other.supervisor.friction == sc.friction
     bad = tmp_path / "bad.toml"
     bad.write_text(text.replace("edge = 1\n", "edge = 1\nmu = -0.2\n"))
     with pytest.raises(ScenarioError) as info:

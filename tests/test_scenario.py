@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import ScenarioError, load_scenario
+from regrasp import Friction, ScenarioError, load_scenario
 from regrasp.envelope import Geometry
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -115,3 +115,54 @@ def test_planner_section(tmp_path):
     assert sc.samples == 11 and sc.geometry is Geometry.URDF
     with pytest.raises(ScenarioError, match="planner.samples"):
         load_scenario(write(tmp_path, VALID + "\n[planner]\nsamples = 1\n", "b.toml"))
+
+
+# ---------------------------------------------------------------------------- friction keys
+def with_friction(finger1: str = "", hand: str = "", finger2: str = "") -> str:
+    """VALID with friction keys (TOML lines) in finger f1's table, finger f2's and a [hand] table."""
+    text = VALID.replace("edge = 1\n", f"edge = 1\n{finger1}\n", 1).replace("edge = 3\n", f"edge = 3\n{finger2}\n", 1)
+    return text + ("\n[hand]\n" + hand + "\n" if hand else "")
+
+
+@pytest.mark.parametrize("finger1,hand,finger2,expected", [
+    ("", "", "", (Friction(0.5), Friction(0.5))),  # today's default, μ_s = μ_k = 0.5
+    ("mu = 0.8", "", "", (Friction(0.8), Friction(0.5))),
+    ("mu_static = 0.8\nmu_kinetic = 0.4", "", "", (Friction(0.8, 0.4), Friction(0.5))),
+    ("mu_static = 0.6\nmu_kinetic = 0.6", "", "mu = 0", (Friction(0.6), Friction(0.0))),
+    ("", "mu = 0.7", "", (Friction(0.7), Friction(0.7))),
+    ("", "mu_static = 0.9\nmu_kinetic = 0.3", "", (Friction(0.9, 0.3), Friction(0.9, 0.3))),
+    # a finger's own keys override the hand's, whichever form either uses
+    ("mu = 0.2", "mu_static = 0.9\nmu_kinetic = 0.3", "", (Friction(0.2), Friction(0.9, 0.3))),
+    ("mu_static = 1.2\nmu_kinetic = 1", "mu = 0.4", "", (Friction(1.2, 1.0), Friction(0.4))),
+])
+def test_friction_keys_per_finger_and_for_the_hand(tmp_path, finger1, hand, finger2, expected):
+    sc = load_scenario(write(tmp_path, with_friction(finger1, hand, finger2)))
+    assert sc.friction == expected
+    assert tuple(c.friction for c in sc.contacts) == expected
+    assert all(isinstance(f, Friction) for f in sc.friction)
+
+
+@pytest.mark.parametrize("where", ["finger", "hand"])
+@pytest.mark.parametrize("keys,name,words", [
+    ("mu = 0.5\nmu_static = 0.6", "mu", "not both"),
+    ("mu = 0.5\nmu_kinetic = 0.4", "mu", "not both"),
+    ("mu = 0.5\nmu_static = 0.6\nmu_kinetic = 0.4", "mu", "not both"),
+    ("mu_static = 0.6", "mu_static", "together"),
+    ("mu_kinetic = 0.4", "mu_kinetic", "together"),
+    ("mu = -0.2", "mu", ">= 0"),
+    ("mu_static = -0.1\nmu_kinetic = -0.2", "mu_static", ">= 0"),
+    ("mu_static = 0.5\nmu_kinetic = -0.1", "mu_kinetic", ">= 0"),
+    ("mu = inf", "mu", "finite"),
+    ("mu = nan", "mu", "finite"),
+    ("mu_static = inf\nmu_kinetic = 0.4", "mu_static", "finite"),
+    ("mu_static = 0.5\nmu_kinetic = nan", "mu_kinetic", "finite"),
+    ('mu = "high"', "mu", "number"),
+    ("mu_static = 0.4\nmu_kinetic = 0.6", "mu_kinetic", "<= mu_static"),
+])
+def test_bad_friction_keys_name_the_key(tmp_path, where, keys, name, words):
+    text = with_friction(finger1=keys) if where == "finger" else with_friction(hand=keys)
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(write(tmp_path, text))
+    key = ("fingers[0]." if where == "finger" else "hand.") + name
+    assert err.value.key == key
+    assert key in str(err.value) and words in str(err.value)

@@ -4,19 +4,22 @@ The oracle here is written from the physics, not from the library's matrices: co
 surface frames and the grasp matrix are rebuilt from the polygon's edge data (inward normal,
 ξ direction, ξ origin) and the pose; the object's equation is
 :math:`\\sum_i f_i = m(a - g)`, :math:`\\sum_i r_i \\times f_i = I\\alpha`, and a contact j sliding in
-direction s has :math:`t_j \\cdot f_j = s\\mu_j\\, n_j \\cdot f_j` (the fingertip drags the object along
-its sliding direction).
+direction s has :math:`t_j \\cdot f_j = s\\mu_{k,j}\\, n_j \\cdot f_j` (the fingertip drags the object
+along its sliding direction, with its kinetic coefficient) while the fixed contacts stay inside
+their static cones, :math:`|t_i \\cdot f_i| \\le (\\mu_{s,i} - \\text{margin})\\, n_i \\cdot f_i`.
 
 * m = 2: those four equations fix f; the slide is possible iff every normal force ≥ f_min and
   the fixed contact is inside its (margin-reduced) cone. Checked on seeded random poses,
-  contact positions, gravity vectors, accelerations, directions, μ (scalar and per contact) and
-  margins, on the paper's rectangle and on random convex polygons.
+  contact positions, gravity vectors, accelerations, directions, μ (scalar and per contact; half
+  the cases with μ_k < μ_s) and margins, on the paper's rectangle and on random convex polygons.
 * m = 3: possible ⇔ an LP (HiGHS) that maximises the smallest constraint slack finds a positive
   one; when possible, the library's forces are checked against the equations and constraints
   and against the least-norm force distribution found by enumerating active sets.
 * Figure 3.4: the paper's rectangle held against gravity by its two side fingers, finger 2
   7.5 mm above the centre and finger 1 7.5 mm below: finger 1 can slide up, not down; the
   closed loop on the full-coordinate plant agrees.
+* μ_s ≠ μ_k: a hold where the slide is possible only with the slider at μ_k and the holder's cone
+  at μ_s (closed form), and the supervisor's ``edge_mu``.
 """
 
 from __future__ import annotations
@@ -30,7 +33,7 @@ import pytest
 import scipy.optimize
 
 from factories import random_polygon
-from regrasp import Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+from regrasp import Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
 from regrasp.closed_loop import run_closed_loop
 from regrasp.control import Gains, Proposition3Controller
 from regrasp.exceptions import InvalidParameterError
@@ -141,20 +144,25 @@ def random_slide_case(seed: int, m: int):
     else:
         f_min, margin = rng.uniform(0.0, 0.5), rng.uniform(0.0, 0.08)
         settings = InternalForceSettings(f_min=f_min, margin=margin)
-    return dict(polygon=polygon, edges=edges, pose=pose, xi=xi, acc=acc, j=j, s=s, mu=mu, mu_arg=mu_arg,
-                gravity=gravity, mass=mass, inertia=inertia, settings=settings, f_min=f_min, margin=margin)
+    # half the cases: kinetic coefficients 30 to 100 % of the static ones (mu); the friction law of the
+    # slider uses its μ_k, the fixed contacts' cones their μ_s
+    kinetic = mu * rng.uniform(0.3, 1.0, m) if rng.random() < 0.5 else mu.copy()
+    friction = mu_arg if np.array_equal(kinetic, mu) else [Friction(a, b) for a, b in zip(mu, kinetic)]
+    return dict(polygon=polygon, edges=edges, pose=pose, xi=xi, acc=acc, j=j, s=s, mu=mu, kinetic=kinetic,
+                friction=friction, gravity=gravity, mass=mass, inertia=inertia, settings=settings, f_min=f_min,
+                margin=margin)
 
 
 def run(case) -> SlideFeasibility:
     c = case
-    return call(c["polygon"], c["edges"], c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["mu_arg"], c["gravity"],
+    return call(c["polygon"], c["edges"], c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["friction"], c["gravity"],
                 c["mass"], c["inertia"], c["settings"])
 
 
 def system_of(case):
     c = case
     return slide_system(c["polygon"], c["edges"], c["pose"], c["xi"], c["acc"], c["gravity"], c["mass"],
-                        c["inertia"], c["j"], c["s"], c["mu"])
+                        c["inertia"], c["j"], c["s"], c["kinetic"])
 
 
 def two_finger_verdict(case):
@@ -185,7 +193,9 @@ def test_two_finger_slide_matches_the_square_system():
         scale = max(1.0, np.abs(surface).max())
         np.testing.assert_allclose(result.forces_surface, surface, rtol=0, atol=1e-9 * scale, err_msg=f"seed {seed}")
         np.testing.assert_allclose(result.normal_forces, surface[:, 0], rtol=0, atol=1e-9 * scale)
-        np.testing.assert_allclose(result.cone_margins, case["mu"] * surface[:, 0] - np.abs(surface[:, 1]),
+        # μ_s at the fixed contact, μ_k at the slider
+        margin_mu = np.where(np.arange(2) == case["j"], case["kinetic"], case["mu"])
+        np.testing.assert_allclose(result.cone_margins, margin_mu * surface[:, 0] - np.abs(surface[:, 1]),
                                    rtol=0, atol=1e-9 * scale)
         assert result.contact == case["j"] and result.direction == case["s"]
         if abs(worst) < AMBIGUOUS * scale:
@@ -215,14 +225,59 @@ def test_two_finger_per_contact_mu_uses_each_contacts_coefficient():
     pose, xi = [0.0, 0.12, 0.0], [-0.0075, -0.0075]
     for mu in ([0.3, 0.3], [0.3, 0.9], [0.9, 0.3], [0.05, 0.6]):
         case = dict(polygon=polygon, edges=[1, 3], pose=np.array(pose), xi=np.array(xi), acc=np.zeros(3), j=0,
-                    s=1.0, mu=np.array(mu), mu_arg=mu, gravity=np.array([0.0, -G0]), mass=polygon.mass,
-                    inertia=polygon.inertia, settings=None, f_min=0.0, margin=0.0)
+                    s=1.0, mu=np.array(mu), kinetic=np.array(mu), friction=mu, gravity=np.array([0.0, -G0]),
+                    mass=polygon.mass, inertia=polygon.inertia, settings=None, f_min=0.0, margin=0.0)
         possible, surface, _ = two_finger_verdict(case)
         result = run(case)
         assert result.possible == possible, mu
         np.testing.assert_allclose(result.forces_surface, surface, rtol=0, atol=1e-9)
         # the sliding contact is exactly on its own cone edge
         assert result.forces_surface[0, 1] == pytest.approx(mu[0] * result.forces_surface[0, 0], abs=1e-12)
+
+
+def test_a_slide_needs_the_slider_at_mu_k_and_the_holder_inside_mu_s():
+    """Hand computation (the rectangle held at its vertical sides, no acceleration, x = ±0.05 m):
+    finger 1 at height y1 = 0 slides up (t1 = +y) carrying t·f = μ_k N, finger 2 (fixed) at
+    y2 = -7.5 mm. Forces balance with N1 = N2 = N, μ_k N - F2 = m g (F2 = t2·f2, finger 2's force
+    along its ξ, t2 = -y) and moments -0.05 μ_k N - y1 N - 0.05 F2 + y2 N = 0, so
+    N = 0.05 m g / (0.1 μ_k - (y2 - y1)) and finger 2 needs |F2| / N = 20 (y2 - y1) - μ_k in magnitude
+    = 0.15 + μ_k. With μ_s = 0.6, μ_k = 0.3 on both tips: 0.45 <= 0.6, possible. Mixing them up fails
+    both ways: the slider at μ_s needs 0.75 > 0.6, the holder's cone at μ_k allows 0.3 < 0.45. And
+    ``edge_mu`` = μ_s + 0.05 (the supervisor's priming) needs 0.8: impossible, the holder would slip."""
+    polygon = rectangle()
+    weight = polygon.mass * G0
+    grasp = Grasp(polygon, [1, 3], ["fixed", "fixed"])
+    pose, xi = [0.0, 0.12, 0.0], [0.0, 0.0075]  # finger 2's ξ points down: ξ = 7.5 mm is y2 = -7.5 mm
+    d = -0.0075
+
+    def ask(friction, **kw):
+        return sliding_feasibility(grasp, pose, xi, np.zeros(3), 0, 1.0, friction, object_mass=polygon.mass,
+                                   object_inertia=polygon.inertia, gravity_in_hand=(0.0, -G0), **kw)
+
+    def forces(mu_edge):
+        n = 0.05 * weight / (0.1 * mu_edge - d)
+        return n, np.array([[n, mu_edge * n], [n, mu_edge * n - weight]])  # F2 = μ N - m g
+
+    result = ask(Friction(0.6, 0.3))
+    n, expected = forces(0.3)
+    assert result.possible and result.reason is None
+    np.testing.assert_allclose(result.forces_surface, expected, rtol=1e-12, atol=1e-12)
+    assert abs(result.forces_surface[1, 1]) / n == pytest.approx(0.45, rel=1e-12)
+    # cone margins: μ_k at the slider (on its edge), μ_s at the holder
+    np.testing.assert_allclose(result.cone_margins, [0.0, 0.6 * n - 0.45 * n], rtol=0, atol=1e-12)
+    # the same tips with one coefficient: neither 0.3 nor 0.6 allows the slide
+    for mu, why in ((0.3, "slip"), (0.6, "slip")):
+        other = ask(mu)
+        assert not other.possible and why in other.reason, (mu, other.reason)
+    # the same slide asked at the priming's ratio μ_s + 0.05 = 0.65
+    primed = ask(Friction(0.6, 0.3), edge_mu=0.65)
+    n, expected = forces(0.65)
+    assert not primed.possible and "fixed contact 1 would slip" in primed.reason
+    np.testing.assert_allclose(primed.forces_surface, expected, rtol=1e-12, atol=1e-12)
+    assert primed.cone_margins[0] == pytest.approx((0.3 - 0.65) * n, rel=1e-12)  # past its kinetic edge
+    for bad in (-0.1, float("nan"), float("inf")):
+        with pytest.raises(InvalidParameterError):
+            ask(Friction(0.6, 0.3), edge_mu=bad)
 
 
 # ---------------------------------------------------------------------------- m = 3
@@ -318,7 +373,7 @@ def test_persistent_solver_gives_the_one_shot_verdicts():
         one_shot = run(c)
         settings = c["settings"] or InternalForceSettings(f_min=0.0, margin=0.0)  # the predicate's default
         grasp = Grasp(c["polygon"], c["edges"], ["fixed"] * 3)
-        fast = sliding_feasibility(grasp, c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["mu_arg"],
+        fast = sliding_feasibility(grasp, c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["friction"],
                                    object_mass=c["mass"], object_inertia=c["inertia"], gravity_in_hand=c["gravity"],
                                    settings=settings, solver=InternalForceSolver(settings))
         assert fast.possible == one_shot.possible, seed
@@ -327,7 +382,7 @@ def test_persistent_solver_gives_the_one_shot_verdicts():
         compared += 1
     assert compared == len(THREE_FINGER_SEEDS)
     with pytest.raises(InvalidParameterError, match="solver"):
-        sliding_feasibility(grasp, c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["mu_arg"], object_mass=c["mass"],
+        sliding_feasibility(grasp, c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["friction"], object_mass=c["mass"],
                             object_inertia=c["inertia"], settings=InternalForceSettings(f_min=1.0),
                             solver=InternalForceSolver(InternalForceSettings(f_min=2.0)))
 
@@ -369,9 +424,9 @@ def closed_loop_slide(v0: float):
     polygon = rectangle()
     hand = Hand([c.finger for c in scenario().contacts], gravity_in_hand=(0.0, -G0))
     model = ReducedModel(hand, Grasp(polygon, [1, 3], ["sliding", "fixed"]), xi=[XI0, XI0])
-    controller = Proposition3Controller(model, Gains.critically_damped(20.0, 4), mu=MU)
+    controller = Proposition3Controller(model, Gains.critically_damped(20.0, 4), friction=MU)
     sign = float(np.sign(v0))
-    plant = Plant(hand, polygon, [PlantContact(1, "sliding", XI0, sign), PlantContact(3, "fixed", XI0)], mu=MU)
+    plant = Plant(hand, polygon, [PlantContact(1, "sliding", XI0, sign), PlantContact(3, "fixed", XI0)], friction=MU)
     S = np.array([0.0, 0.12, 0.0, XI0])
     S_dot = np.array([0.0, 0.0, 0.0, v0])
     st = model.state(S, S_dot)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import Hand, load_scenario
+from regrasp import Friction, Hand, load_scenario
 from regrasp.exceptions import InvalidParameterError
 from regrasp.planner import plan, plan_scenario
 from regrasp.sliding import sliding_feasibility
@@ -22,10 +22,11 @@ def two_fingers():
     return load_scenario(SCENARIOS / "paper_trajectory_2.toml")
 
 
-def make_supervisor(sc, xi, *, plan=None, **settings) -> RegraspSupervisor:
+def make_supervisor(sc, xi, *, plan=None, friction=None, **settings) -> RegraspSupervisor:
     hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
-    return RegraspSupervisor(hand, sc.polygon, [c.edge for c in sc.contacts], sc.trajectory, xi, sc.mu,
-                             plan=plan, settings=SupervisorSettings(**settings))
+    return RegraspSupervisor(hand, sc.polygon, [c.edge for c in sc.contacts], sc.trajectory, xi,
+                             sc.friction if friction is None else friction, plan=plan,
+                             settings=SupervisorSettings(**settings))
 
 
 def measurement(sc, t, xi) -> Measurement:
@@ -104,7 +105,58 @@ def test_a_possible_slide_is_primed_on_the_cone_edge_towards_the_target(two_fing
     assert out.law == "fixed contacts (cone edge)"
     f_n, f_t = out.control.contact_forces_surface[0]
     overshoot = sup.settings.prime_overshoot
-    assert f_t == pytest.approx((sup.mu[0] + overshoot) * f_n, rel=1e-6)  # + direction: up the edge
+    assert f_t == pytest.approx((sup.friction[0].static + overshoot) * f_n, rel=1e-6)  # + direction: up the edge
+
+
+@pytest.mark.parametrize("kinetic,settle", [(0.4, 0.35), (0.06, 0.03)])
+def test_priming_breaks_away_past_mu_s_and_settling_stays_inside_mu_k(two_fingers, kinetic, settle):
+    """μ_s = 0.8 on both tips: the priming asks for (μ_s + prime_overshoot) f_n = 0.85 f_n at the slider
+    (past its static cone: it must break away); a slide that arrives still sliding settles with
+    (μ_k - settle_undershoot) f_n, 0.35 f_n for μ_k = 0.4 (inside the kinetic cone; the plant's friction
+    μ_k f_n slows it), and μ_k / 2 for a μ_k = 0.06 below twice the undershoot. The controllers report
+    the static cone margin at the fixed contact (negative while priming, by the overshoot)."""
+    friction = [Friction(0.8, kinetic)] * 2
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    ((lo, hi),) = sample.feasible
+    xi = [lo + 0.02 * (hi - lo), 0.012]
+    sup = make_supervisor(two_fingers, xi, path_checks=1, friction=friction)
+    assert sup.friction == tuple(friction)
+    out = sup.step(measurement(two_fingers, 0.0, xi), 1e-3)
+    assert out.phases[0] is ContactPhase.PRIMING and out.law == "fixed contacts (cone edge)"
+    f_n, f_t = out.control.contact_forces_surface[0]
+    assert f_t == pytest.approx(0.85 * f_n, rel=1e-9)
+    assert out.control.cone_margins[0] == pytest.approx(0.8 * f_n - f_t, rel=1e-9) and out.control.cone_margins[0] < 0
+    traj = two_fingers.trajectory
+
+    def sensed(t, where, xi_dot):  # finger 1 sensed sliding
+        return Measurement(t, traj.pose(t), traj.velocity(t), np.array([where, xi[1]]), np.array([xi_dot, 0.0]),
+                           np.array([True, False]), np.zeros(2))
+
+    out = sup.step(sensed(0.001, xi[0], 0.001), 1e-3)
+    assert out.phases[0] is ContactPhase.SLIDING and out.law == "Proposition 3"
+    f_n, f_t = out.control.contact_forces_surface[0]
+    assert f_t == pytest.approx(kinetic * f_n, rel=1e-9)  # the slider on its kinetic edge
+    out = sup.step(sensed(0.002, out.targets[0], 0.001), 1e-3)  # arrived, still sliding up
+    assert [e.kind for e in out.events] == ["arrived"] and out.phases[0] is ContactPhase.SETTLING
+    f_n, f_t = out.control.contact_forces_surface[0]
+    assert f_t == pytest.approx(settle * f_n, rel=1e-9)
+
+
+def test_a_slide_is_refused_when_the_holder_cannot_take_the_breakaway(two_fingers):
+    """Finger 1 (μ_s = 0.8, μ_k = 0.1) would slide easily once moving, but its priming must first break
+    it away past (0.8 + 0.05) f_n: finger 2 (μ = 0.5) cannot hold the moment of that much friction,
+    so the predicate, asked at μ_s + prime_overshoot where the slide starts, refuses it; a slider with
+    μ_s = 0.15 (the same μ_k) primes."""
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    ((lo, hi),) = sample.feasible
+    xi = [lo + 0.02 * (hi - lo), 0.012]
+    sticky = make_supervisor(two_fingers, xi, path_checks=1, friction=[Friction(0.8, 0.1), Friction(0.5)])
+    out = sticky.step(measurement(two_fingers, 0.0, xi), 1e-3)
+    (rejected,) = [e for e in out.events if e.kind == "slide_rejected"]
+    assert "fixed contact 1 would slip" in rejected.detail and "on the way" not in rejected.detail
+    assert out.phases[0] is ContactPhase.FIXED
+    smooth = make_supervisor(two_fingers, xi, path_checks=1, friction=[Friction(0.15, 0.1), Friction(0.5)])
+    assert smooth.step(measurement(two_fingers, 0.0, xi), 1e-3).phases[0] is ContactPhase.PRIMING
 
 
 def test_a_slide_is_asked_about_along_its_path(two_fingers):
@@ -122,14 +174,14 @@ def test_a_slide_is_asked_about_along_its_path(two_fingers):
     assert "fixed contact 1 would slip" in rejected.detail and "-12.50 mm on the way" in rejected.detail
     target = 0.5 * (lo + hi)
     desired = two_fingers.trajectory.sample(min(6.0 / sup.settings.omega_n, two_fingers.trajectory.t_end))
-    at_target = sliding_feasibility(sup.grasp, desired.pose, [target, 0.012], desired.acceleration, 0, 1.0, sup.mu,
+    at_target = sliding_feasibility(sup.grasp, desired.pose, [target, 0.012], desired.acceleration, 0, 1.0, sup.friction,
                                     object_mass=sup.object_mass, object_inertia=sup.object_inertia,
                                     gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility)
     at_start = sliding_feasibility(sup.grasp, two_fingers.trajectory.pose(0.0), xi,
-                                   two_fingers.trajectory.sample(0.0).acceleration, 0, 1.0,
-                                   sup.mu + [sup.settings.prime_overshoot, 0.0], object_mass=sup.object_mass,
-                                   object_inertia=sup.object_inertia, gravity_in_hand=sup.hand.gravity_in_hand,
-                                   settings=sup.settings.feasibility)
+                                   two_fingers.trajectory.sample(0.0).acceleration, 0, 1.0, sup.friction,
+                                   object_mass=sup.object_mass, object_inertia=sup.object_inertia,
+                                   gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility,
+                                   edge_mu=sup.friction[0].static + sup.settings.prime_overshoot)
     assert at_start.possible and not at_target.possible
 
 
@@ -172,7 +224,7 @@ def test_a_rejected_slide_gets_another_contact_to_enable_it():
     def possible(where, when, palm):
         desired = sc.trajectory.sample(when)
         return sliding_feasibility(sup.grasp, desired.pose, [where, xi[1], palm], desired.acceleration, 0, -1.0,
-                                   sup.mu, object_mass=sup.object_mass, object_inertia=sup.object_inertia,
+                                   sup.friction, object_mass=sup.object_mass, object_inertia=sup.object_inertia,
                                    gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility).possible
 
     duration = 6.0 / sup.settings.omega_n
@@ -182,7 +234,7 @@ def test_a_rejected_slide_gets_another_contact_to_enable_it():
 
 
 def test_a_slide_that_ends_sliding_settles_just_inside_the_cone_and_sticks():
-    """After a slide arrives the contact is still sliding; the settling law asks (μ - 0.05) f_n of
+    """After a slide arrives the contact is still sliding; the settling law asks (μ_k - 0.05) f_n of
     friction in the sliding direction, so the plant's kinetic friction slows it and it sticks
     within a few periods, without slipping any other contact."""
     from regrasp import build_rollout

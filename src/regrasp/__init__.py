@@ -3,6 +3,7 @@ fingertips and regrasp dynamically (after "Dynamic regrasping by sliding")."""
 
 from .closed_loop import ClosedLoopLog, measure_reduced_state, run_closed_loop
 from .collision import UrdfCollisionChecker, default_tip_clearance, segment_hits_polygon
+from .contact import ContactMode, Friction, cone_margin
 from .control import (
     ComputedTorqueController,
     ControlOutput,
@@ -35,7 +36,7 @@ from .exceptions import (
 )
 from .finger import Configuration, Finger, LinkShape
 from .finger_urdf import planar_2r_urdf
-from .grasp import ContactMode, Grasp
+from .grasp import Grasp
 from .hand import Hand, HandDynamics
 from .planner import FingerPlan, InfeasibleInterval, PlanResult, plan, plan_scenario
 from .internal_force import (
@@ -87,6 +88,7 @@ __all__ = [
     "FingerModelError",
     "FingerPlan",
     "FixedContactController",
+    "Friction",
     "Gains",
     "Geometry",
     "Grasp",
@@ -138,6 +140,7 @@ __all__ = [
     "build_internal_force_qp",
     "build_rollout",
     "condition_of",
+    "cone_margin",
     "default_tip_clearance",
     "load_scenario",
     "measure_reduced_state",

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .contact import coefficients, cone_margin
 from .control import ComputedTorqueController, ControlOutput, Proposition2Controller
 from .plant import Plant, PlantEvent
 from .reduced import ReducedModel
@@ -55,7 +56,8 @@ class ClosedLoopLog:
         errors: S_d - S, (k, 3 + p).
         plant_forces: The plant's contact forces in surface frames (normal, tangential), (k, m, 2).
         predicted_forces: The controller's predicted contact forces, same layout.
-        cone_margins: The plant's μ f_n - |f_t| per contact, (k, m).
+        cone_margins: The plant's μ f_n - |f_t| per contact, (k, m), with the coefficient of the
+            contact's mode during the step (μ_s fixed, μ_k sliding, 0 separated).
         internal_forces: The commanded internal forces f_c, (k, 2m).
         control_seconds: Wall time of each control step [s], (k,).
         events: The plant's events.
@@ -116,7 +118,8 @@ def run_closed_loop(
         out = controller(S, S_dot, S_d, S_d_dot, S_d_ddot, **kwargs)
         step = plant.step(out.tau)
         friction = step.forces_surface[sliding, 1].copy()
-        margins = plant.mu * step.forces_surface[:, 0] - np.abs(step.forces_surface[:, 1])
+        margins = cone_margin(np.array(coefficients(plant.friction, step.modes)), step.forces_surface[:, 0],
+                              step.forces_surface[:, 1])
         rows.append((t, S, np.asarray(S_d, dtype=float), out.error, step.forces_surface, out.contact_forces_surface,
                      margins, out.internal.f_c if out.internal is not None else np.zeros(2 * model.grasp.m),
                      out.seconds))

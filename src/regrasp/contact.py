@@ -6,7 +6,12 @@ r"""The contact's value types: its mode, its Coulomb friction and the cone margi
   (Drake's ``CoulombFriction``). A fixed contact sticks while :math:`|f_t| \le \mu_s f_n`; a sliding
   one carries :math:`|f_t| = \mu_k f_n`, opposing the relative motion.
 * :func:`cone_margin`: :math:`\mu f_n - |f_t|` [N], how far a contact force is inside its cone
-  (negative: outside).
+  (negative: outside); elementwise on numpy arrays too.
+
+Which coefficient applies where (``docs/derivations.md``, "Friction: static and kinetic
+coefficients"): :meth:`Friction.coefficient` of the contact's mode, :func:`coefficients` for all
+contacts: μ_s bounds a fixed contact's force (its cone; slip when it leaves it), μ_k is the
+sliding contact's force ratio.
 """
 
 from __future__ import annotations
@@ -20,15 +25,32 @@ import numpy as np
 
 from .exceptions import InvalidParameterError
 
-__all__ = ["ContactMode", "Friction", "as_frictions", "cone_margin"]
+__all__ = ["ContactMode", "Friction", "as_frictions", "as_modes", "coefficients", "cone_margin"]
 
 
 class ContactMode(str, Enum):
-    """How a fingertip touches the object."""
+    """How a fingertip touches the object (equal to its string value: ``ContactMode.FIXED == "fixed"``)."""
 
     FIXED = "fixed"
     SLIDING = "sliding"
     SEPARATED = "separated"
+
+
+_MODES_BY_VALUE = {mode.value: mode for mode in ContactMode}
+
+
+def as_modes(modes, m: int | None = None) -> tuple[ContactMode, ...]:
+    """``modes`` (ContactMode members or their strings ``"fixed"``, ``"sliding"``, ``"separated"``)
+    as a tuple of :class:`ContactMode`, ``m`` of them when given."""
+    if isinstance(modes, (str, bytes)):
+        raise InvalidParameterError("modes", modes, "one contact mode per contact")
+    try:
+        out = tuple(mode if type(mode) is ContactMode else _MODES_BY_VALUE[mode] for mode in modes)
+    except (KeyError, TypeError):
+        raise InvalidParameterError("modes", modes, "'fixed', 'sliding' or 'separated' per contact") from None
+    if m is not None and len(out) != m:
+        raise InvalidParameterError("modes", modes, f"one contact mode per contact ({m})")
+    return out
 
 
 def _coefficient(name: str, value) -> float:
@@ -100,7 +122,18 @@ def as_frictions(friction, m: int) -> tuple[Friction, ...]:
     return tuple(f if isinstance(f, Friction) else Friction(f.item() if hasattr(f, "item") else f) for f in items)
 
 
-def cone_margin(mu: float, f_n: float, f_t: float) -> float:
+def coefficients(frictions: Sequence[Friction], modes: Sequence[ContactMode]) -> tuple[float, ...]:
+    """Per contact, the coefficient [-] of its mode (:meth:`Friction.coefficient`): μ_s where it is
+    fixed, μ_k where it slides, 0 where it is separated."""
+    if len(frictions) != len(modes):
+        raise InvalidParameterError("modes", modes, f"one mode per friction ({len(frictions)})")
+    return tuple(f.coefficient(mode) for f, mode in zip(frictions, modes))
+
+
+def cone_margin(mu, f_n, f_t):
     r""":math:`\mu f_n - |f_t|` [N]: how far a contact force (normal ``f_n``, tangential ``f_t`` [N]) is
-    inside the friction cone of coefficient ``mu`` [-] (negative: outside)."""
+    inside the friction cone of coefficient ``mu`` [-] (negative: outside).
+
+    Floats give a float; numpy arrays (of one shape, or broadcasting) give the margins elementwise.
+    """
     return mu * f_n - abs(f_t)

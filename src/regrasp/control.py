@@ -26,9 +26,14 @@ Two corrections to the printed laws (``docs/derivations.md``): the gravity term 
 the :math:`G R_f B_v f_\xi` terms, which count the friction twice.
 
 The internal force :math:`J^T f_c` (3.3.7) is chosen by :mod:`regrasp.internal_force`: the
-least squeeze that keeps every contact pushing and every fixed contact inside its friction
-cone with margins, given the contact forces :math:`f_m` the motion torque produces. Each
-controller keeps a persistent OSQP solver (:class:`~regrasp.internal_force.InternalForceSolver`).
+least squeeze that keeps every contact pushing and every fixed contact inside its static friction
+cone (:math:`\mu_s`) with margins, given the contact forces :math:`f_m` the motion torque produces.
+Each controller keeps a persistent OSQP solver (:class:`~regrasp.internal_force.InternalForceSolver`).
+
+Friction (:class:`~regrasp.contact.Friction`): a controller's ``friction`` is what it assumes of the
+fingertips; a sliding contact carries the kinetic coefficient :math:`\mu_k` (Proposition 3 puts it
+on its kinetic cone edge), a fixed one is kept inside its static cone. The reported cone margins use
+the coefficient of each contact's mode.
 """
 
 from __future__ import annotations
@@ -40,11 +45,11 @@ import numpy as np
 from scipy.linalg import lapack
 
 from ._scalar import solve_small
+from .contact import as_frictions, coefficients, cone_margin
 from .exceptions import InvalidParameterError
-from .grasp import ContactMode
 from .internal_force import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver
 from .reduced import ReducedModel, ReducedState
-from .validation import as_finite_array, as_finite_vectors, as_friction_coefficients
+from .validation import as_finite_array, as_finite_vectors
 
 __all__ = [
     "ComputedTorqueController",
@@ -84,7 +89,8 @@ class ControlOutput:
         friction_estimate: f̂_ξ at the sliding contacts (p,) [N] (force on the object along t).
         contact_forces: Predicted contact forces on the object (m, 2) [N], hand frame.
         contact_forces_surface: The same in each surface frame (normal, tangential).
-        cone_margins: μ f_n - |f_t| per contact [N] (≈ 0 at a sliding contact).
+        cone_margins: μ f_n - |f_t| per contact [N]: μ_s at a fixed contact, μ_k at a sliding one
+            (≈ 0 there).
         internal: The internal-force QP's result, or None when disabled.
         seconds: Wall time of the step [s].
     """
@@ -107,14 +113,16 @@ class ComputedTorqueController:
     Args:
         model: The reduced model (its grasp sets which contacts slide).
         gains: K_v and K_s, one per reduced coordinate.
-        mu: Friction coefficients the controller assumes (one, or one per contact).
+        friction: The friction the controller assumes: a :class:`~regrasp.contact.Friction` or a
+            coefficient [-] for all contacts, or one per contact.
         internal_force: QP margins, or None to apply no internal force.
-        cone_edge: Put this contact on its cone edge (the transition before a slide).
+        cone_edge: Put this contact on a cone edge, with the coefficient the
+            :class:`~regrasp.internal_force.ConeEdge` carries (the transition before a slide).
     """
 
     law = "computed torque"
 
-    def __init__(self, model: ReducedModel, gains: Gains, mu=0.5, *,
+    def __init__(self, model: ReducedModel, gains: Gains, friction=0.5, *,
                  internal_force: InternalForceSettings | None = InternalForceSettings(),
                  cone_edge: ConeEdge | None = None):
         n = model.n
@@ -124,11 +132,13 @@ class ComputedTorqueController:
             raise InvalidParameterError("gains", gains, "positive K_v and K_s")
         self.model = model
         self.gains = Gains(kv, ks)
-        self.mu = as_friction_coefficients(mu, model.grasp.m)
+        self.friction = as_frictions(friction, model.grasp.m)
         self.internal_force = internal_force
         self.cone_edge = cone_edge
         self._qp = InternalForceSolver(internal_force) if internal_force is not None else None
-        self._fixed = np.array([mode is ContactMode.FIXED for mode in model.grasp.modes])
+        self._modes = model.grasp.modes
+        # the cone margins' coefficients: μ_s where fixed, μ_k where sliding
+        self._margin_mu = coefficients(self.friction, self._modes)
         # whether the law's f̂_ξ needs the ReducedState (the base law's is zero)
         self._estimates_friction = type(self).friction_estimate is not ComputedTorqueController.friction_estimate
 
@@ -140,7 +150,7 @@ class ComputedTorqueController:
         """Torques for the measured (S, Ṡ) and the desired (S_d, Ṡ_d, S̈_d).
 
         ``friction``: the measured friction force at the sliding contacts (p,) [N], for
-        Proposition 2.
+        Proposition 2 (not the coefficients: those are the constructor's).
         """
         start = time.perf_counter()
         model = self.model
@@ -154,10 +164,10 @@ class ComputedTorqueController:
                    for a, kv, r, ks, e in zip(s_d_ddot, self.gains.kv.tolist(), error_rate, self.gains.ks.tolist(), error)]
         command_array = np.array(command)
         tau, f_hat, forces, force_list, internal = self._torque(terms, args, command_array, friction)
-        # (n_i^T f_i, t_i^T f_i) per contact, and the cone margins μ f_n - |f_t|
+        # (n_i^T f_i, t_i^T f_i) per contact, and the cone margins μ f_n - |f_t| (μ of the contact's mode)
         surface = [(nx * force_list[2 * i] + ny * force_list[2 * i + 1], tx * force_list[2 * i] + ty * force_list[2 * i + 1])
                    for i, (nx, ny, tx, ty) in enumerate(terms.frames)]
-        margins = [mu * f_n - abs(f_t) for mu, (f_n, f_t) in zip(self.mu.tolist(), surface)]
+        margins = [cone_margin(mu, f_n, f_t) for mu, (f_n, f_t) in zip(self._margin_mu, surface)]
         return ControlOutput(np.array(tau), command_array, np.array(error), np.array(error_rate), f_hat, forces,
                              np.array(surface), np.array(margins), internal, time.perf_counter() - start)
 
@@ -178,7 +188,7 @@ class ComputedTorqueController:
             motion_forces += (i00 * d0 + i10 * d1, i01 * d0 + i11 * d1)
         internal = None
         if self._qp is not None:
-            internal = self._qp._solve(np.array(terms.a_rows), motion_forces, terms.frames, self._fixed, self.mu,
+            internal = self._qp._solve(np.array(terms.a_rows), motion_forces, terms.frames, self._modes, self.friction,
                                       self.cone_edge, time.perf_counter())
             f_c = internal.f_c.tolist()
             for i, (a, b, c, d) in enumerate(terms.jacobians):  # τ + J^T f_c
@@ -227,10 +237,10 @@ class FixedContactController(ComputedTorqueController):
 
     law = "fixed contacts"
 
-    def __init__(self, model: ReducedModel, gains: Gains, mu=0.5, **kwargs):
+    def __init__(self, model: ReducedModel, gains: Gains, friction=0.5, **kwargs):
         if model.grasp.p != 0:
             raise InvalidParameterError("model", model.grasp.modes, "only fixed contacts (p = 0)")
-        super().__init__(model, gains, mu, **kwargs)
+        super().__init__(model, gains, friction, **kwargs)
 
 
 class Proposition1Controller(ComputedTorqueController):
@@ -255,16 +265,16 @@ class Proposition3Controller(ComputedTorqueController):
 
     The friction at the sliding contact j is not measured but predicted from the commanded motion.
     The contact forces f that move the object as commanded with contact j on the edge of its
-    friction cone in the sliding direction s solve
+    kinetic friction cone in the sliding direction s solve
 
-    .. math:: G f = M_o a_X - f_g, \qquad (t_j - s \mu_j n_j)^T f_j = 0.
+    .. math:: G f = M_o a_X - f_g, \qquad (t_j - s \mu_{k,j} n_j)^T f_j = 0.
 
     * m = 2: these are four equations in four unknowns; f is unique and
       :math:`\hat f_\xi = t_j^T f_j = P (M_o a_X - f_g)` with the paper's P (3.4.9).
     * m > 2: f has 2m - 4 degrees of freedom. The internal-force QP (:mod:`regrasp.internal_force`)
       picks the least-squeeze f, :math:`f = f_p + N_c y` with :math:`f_p` the least-norm solution
       and :math:`N_c` a basis of the null space of the same equations, so that every contact
-      pushes and every fixed contact stays in its cone while j stays on its cone edge; then
+      pushes and every fixed contact stays in its static cone while j stays on its cone edge; then
       :math:`\hat f_\xi = t_j^T f_j` and :math:`\tau = M(H a + \dot H \dot S) + N + J^T f`. Because
       :math:`H^T J^T = A^T`, this τ satisfies the reduced equation with that :math:`\hat f_\xi`,
       so the error obeys the same ODE. Unlike Proposition 2 with the slider held on its cone edge,
@@ -281,11 +291,11 @@ class Proposition3Controller(ComputedTorqueController):
 
     law = "Proposition 3"
 
-    def __init__(self, model: ReducedModel, gains: Gains, mu=0.5, *, sample_time: float = 1e-3,
+    def __init__(self, model: ReducedModel, gains: Gains, friction=0.5, *, sample_time: float = 1e-3,
                  direction: float = 1.0, **kwargs):
         if model.grasp.m < 2 or model.grasp.p != 1:
             raise InvalidParameterError("model", model.grasp.modes, "m >= 2 fingers with p = 1 sliding contact")
-        super().__init__(model, gains, mu, **kwargs)
+        super().__init__(model, gains, friction, **kwargs)
         if not np.isfinite(sample_time) or sample_time <= 0:
             raise InvalidParameterError("sample_time", sample_time, "a control period > 0 [s]")
         if direction not in (-1, 1, -1.0, 1.0):
@@ -306,10 +316,9 @@ class Proposition3Controller(ComputedTorqueController):
         return self._direction
 
     def friction_estimate(self, st, command, friction) -> np.ndarray:
-        """m = 2: :math:`P (M_o a_X - f_g)` (3.4.9); m > 2: see :meth:`_torque`."""
-        mu = self.mu[self._slider]
+        """m = 2: :math:`P (M_o a_X - f_g)` (3.4.9, the slider's μ_k); m > 2: see :meth:`_torque`."""
         direction = self.sliding_direction(float(st.S_dot[3]), float(command[3]))
-        P = self.model.grasp.friction_map(st.S[:3], st.xi, [direction], mu)
+        P = self.model.grasp.friction_map(st.S[:3], st.xi, [direction], self.friction)
         return P @ (self.model.M_o @ command[:3] - self.model.f_g)
 
     def _torque(self, terms, args, command_array, friction):
@@ -324,9 +333,10 @@ class Proposition3Controller(ComputedTorqueController):
         """The m > 2 law of the class docstring (valid for m = 2 too: then f is unique)."""
         model, j = self.model, self._slider
         nx, ny, tx, ty = terms.frames[j]
-        edge = np.array(terms.a_rows)  # [G^T | e_j (t_j - s μ_j n_j)]: its columns' transposes are the equations
+        edge = np.array(terms.a_rows)  # [G^T | e_j (t_j - s μ_k,j n_j)]: its columns' transposes are the equations
         edge[:, 3] = 0.0
-        edge[2 * j:2 * j + 2, 3] = (tx - direction * self.mu[j] * nx, ty - direction * self.mu[j] * ny)
+        kinetic = self.friction[j].kinetic
+        edge[2 * j:2 * j + 2, 3] = (tx - direction * kinetic * nx, ty - direction * kinetic * ny)
         rhs = np.append(model.M_o.dot(command[:3]) - model.f_g, 0.0)
         _, _, x, info = lapack.dgesv(edge.T.dot(edge), rhs)
         if info != 0:
@@ -334,7 +344,7 @@ class Proposition3Controller(ComputedTorqueController):
         particular = edge.dot(x)  # least-norm f_p
         internal = None
         if self._qp is not None:
-            internal = self._qp._solve(edge, particular.tolist(), terms.frames, self._fixed, self.mu, None,
+            internal = self._qp._solve(edge, particular.tolist(), terms.frames, self._modes, self.friction, None,
                                       time.perf_counter())
             forces = internal.forces
         else:

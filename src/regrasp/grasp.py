@@ -25,8 +25,9 @@ sliding contacts and :math:`I_2` for fixed ones, :math:`B_v \in \mathbb R^{2m \t
 the paper lists sliding contacts first, which only permutes rows.
 
 Friction (§3.4): a sliding contact's force on the object is
-:math:`f_i = R_{fi} B_{fi} \eta_i`, :math:`B_{fi} = (1, \mathrm{sign}(\dot\xi_i)\mu)^T`
-(eq. 3.4.1: the fingertip drags the object along its sliding direction), a fixed one is
+:math:`f_i = R_{fi} B_{fi} \eta_i`, :math:`B_{fi} = (1, \mathrm{sign}(\dot\xi_i)\mu_{k,i})^T`
+(eq. 3.4.1 with the kinetic coefficient :math:`\mu_{k,i}` of :class:`~regrasp.contact.Friction`:
+the fingertip drags the object along its sliding direction), a fixed one is
 :math:`f_i = \eta_i \in \mathbb R^2`; :math:`G_f = G R_f B_f` (3.4.5) and, for m = 2, p = 1,
 :math:`P = B_v^T B_f G_f^{-1}` (3.4.9) gives the friction force
 :math:`f_\xi = P (M_o \ddot X - f_g)`.
@@ -42,7 +43,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .contact import ContactMode
+from .contact import ContactMode, as_frictions
 from .exceptions import InvalidParameterError, SlidingContactCountError
 from .planar import rotation
 from .polygon import ConvexPolygon
@@ -181,34 +182,37 @@ class Grasp:
         """B_v (2m x p): the sliding direction (0, 1) of each sliding contact in its surface frame."""
         return self._bv.copy()
 
-    def force_basis(self, signs, mu: float) -> np.ndarray:
-        r"""B_f (2m x (2m - p)): :math:`(1, s_i \mu)^T` per sliding contact, :math:`I_2` per fixed one.
+    def force_basis(self, signs, friction) -> np.ndarray:
+        r"""B_f (2m x (2m - p)): :math:`(1, s_i \mu_{k,i})^T` per sliding contact, :math:`I_2` per fixed one.
 
         ``signs`` are the sliding directions :math:`s_i = \mathrm{sign}(\dot\xi_i) \in \{-1, +1\}`
-        of the sliding contacts, in order.
+        of the sliding contacts, in order; ``friction`` is one :class:`~regrasp.contact.Friction` or
+        coefficient [-] for all contacts, or one per contact (:func:`~regrasp.contact.as_frictions`):
+        a sliding contact's kinetic coefficient :math:`\mu_{k,i}` is used.
         """
         signs = as_finite_array("signs", signs, (self.p,))
         if not np.all(np.isin(signs, (-1.0, 1.0))):
             raise InvalidParameterError("signs", signs, "+1 or -1 per sliding contact")
-        if not np.isfinite(mu) or mu < 0:
-            raise InvalidParameterError("mu", mu, "a friction coefficient >= 0")
+        frictions = as_frictions(friction, self.m)
         bf = np.zeros((2 * self.m, 2 * self.m - self.p))
         col, k = 0, 0
         for i, mode in enumerate(self.modes):
             if mode is ContactMode.SLIDING:
-                bf[2 * i:2 * i + 2, col] = (1.0, signs[k] * mu)
+                bf[2 * i:2 * i + 2, col] = (1.0, signs[k] * frictions[i].kinetic)
                 col, k = col + 1, k + 1
             else:
                 bf[2 * i:2 * i + 2, col:col + 2] = np.eye(2)
                 col += 2
         return bf
 
-    def sliding_grasp_matrix(self, pose, xi, signs, mu: float) -> np.ndarray:
-        """G_f = G R_f B_f (3 x (2m - p)), the sliding grasp matrix (eq. 3.4.5)."""
-        return self.grasp_matrix(pose, xi) @ self.surface_rotation(pose) @ self.force_basis(signs, mu)
+    def sliding_grasp_matrix(self, pose, xi, signs, friction) -> np.ndarray:
+        """G_f = G R_f B_f (3 x (2m - p)), the sliding grasp matrix (eq. 3.4.5; ``friction`` as in
+        :meth:`force_basis`)."""
+        return self.grasp_matrix(pose, xi) @ self.surface_rotation(pose) @ self.force_basis(signs, friction)
 
-    def friction_map(self, pose, xi, signs, mu: float) -> np.ndarray:
-        r"""P = B_v^T B_f G_f^{-1} (p x 3, eq. 3.4.9): :math:`f_\xi = P (M_o \ddot X - f_g)`.
+    def friction_map(self, pose, xi, signs, friction) -> np.ndarray:
+        r"""P = B_v^T B_f G_f^{-1} (p x 3, eq. 3.4.9): :math:`f_\xi = P (M_o \ddot X - f_g)`, with the
+        sliding contact's kinetic coefficient (``friction`` as in :meth:`force_basis`).
 
         Defined only when G_f is square (m = 2, p = 1): otherwise the friction force is not
         determined by the object's motion alone.
@@ -217,5 +221,7 @@ class Grasp:
             raise InvalidParameterError(
                 "grasp", f"m={self.m}, p={self.p}", "m = 2 fingers with p = 1 sliding contact for P (eq. 3.4.9)"
             )
-        gf = self.sliding_grasp_matrix(pose, xi, signs, mu)
-        return self._bv.T @ self.force_basis(signs, mu) @ np.linalg.inv(gf)
+        frictions = as_frictions(friction, self.m)
+        bf = self.force_basis(signs, frictions)
+        gf = self.grasp_matrix(pose, xi) @ self.surface_rotation(pose) @ bf
+        return self._bv.T @ bf @ np.linalg.inv(gf)

@@ -9,11 +9,17 @@ space, :math:`\dim = 2m - 3 - p`). The QP
 
 .. math:: \min_y \tfrac12 \|f_c\|^2 = \tfrac12 y^T y \quad \text{s.t.}\quad
           f_{min} \le n_i^T f_i\ (\le f_{max})\ \forall i,\qquad
-          |t_i^T f_i| \le (\mu_i - \text{margin})\, n_i^T f_i\ \text{for fixed } i
+          |t_i^T f_i| \le (\mu_{s,i} - \text{margin})\, n_i^T f_i\ \text{for fixed } i
 
-keeps every contact pushing and every fixed contact inside a linearized friction cone with
-a margin, with the least squeeze. Optionally one contact is put exactly on its cone edge in
-a given direction, :math:`t_j^T f_j = s \mu_j n_j^T f_j` (the transition before it slides, §4).
+keeps every contact pushing and every fixed contact inside its static friction cone
+(:math:`\mu_{s,i}`, :class:`~regrasp.contact.Friction`) with a margin, with the least squeeze; a
+sliding contact gets no cone row (its friction is part of the motion). Optionally one contact is
+put exactly on a cone edge in a given direction, :math:`t_j^T f_j = s \mu n_j^T f_j` with the
+coefficient :math:`\mu` the :class:`ConeEdge` carries (the caller's choice: the kinetic
+coefficient for a slider, :math:`\mu_s` + an overshoot for the transition before a slide, §4).
+
+The contacts' modes are a sequence of :class:`~regrasp.contact.ContactMode` (or their strings), the
+friction anything :func:`~regrasp.contact.as_frictions` takes.
 
 :func:`build_internal_force_qp` returns the ``qpsolvers.Problem`` (and the data to read its
 solution); :func:`solve_internal_force_qp` solves it with OSQP and raises
@@ -37,6 +43,7 @@ import scipy.linalg
 import scipy.sparse as sp
 from scipy.linalg import lapack
 
+from .contact import ContactMode, as_frictions, as_modes
 from .exceptions import InvalidParameterError, RegraspError
 from .hand import block_diagonal
 
@@ -58,7 +65,7 @@ class InternalForceSettings:
 
     Attributes:
         f_min: Minimum normal force [N] at every contact.
-        margin: Friction margin [-]: fixed contacts keep |f_t| <= (μ - margin) f_n.
+        margin: Friction margin [-]: fixed contacts keep |f_t| <= (μ_s - margin) f_n.
         tolerance: OSQP absolute and relative tolerance.
         f_max: Maximum normal force [N] at every contact (what the fingers can push), or inf.
     """
@@ -71,10 +78,28 @@ class InternalForceSettings:
 
 @dataclass(frozen=True)
 class ConeEdge:
-    """Put contact ``contact`` on the edge of its friction cone, sliding direction ``sign`` (±1)."""
+    r"""Put contact ``contact`` on a cone edge: :math:`t \cdot f = \text{sign}\,\mu\, n \cdot f` there.
+
+    Attributes:
+        contact: The contact's index.
+        sign: The sliding direction, ±1 (the friction on the object points along sign · t).
+        mu: The edge's coefficient [-], >= 0, chosen by the caller: the kinetic one for a sliding
+            contact, the static one plus an overshoot to make a fixed contact break away, the kinetic
+            one minus an undershoot to let a sliding contact slow down and stick.
+    """
 
     contact: int
     sign: float
+    mu: float
+
+    def __post_init__(self):
+        if self.sign not in (-1, 1, -1.0, 1.0):
+            raise InvalidParameterError("cone_edge.sign", self.sign, "+1 or -1")
+        if isinstance(self.mu, bool) or not isinstance(self.mu, (int, float, np.floating, np.integer)) \
+                or not math.isfinite(self.mu) or self.mu < 0.0:
+            raise InvalidParameterError("cone_edge.mu", self.mu, "a finite friction coefficient >= 0")
+        object.__setattr__(self, "sign", float(self.sign))
+        object.__setattr__(self, "mu", float(self.mu))
 
 
 @dataclass(frozen=True)
@@ -133,35 +158,42 @@ class InternalForceInfeasibleError(RegraspError):
         )
 
 
-def _constraint_rows(frames, fixed, mu, settings, cone_edge):
-    """Rows (a, lo) meaning a . f_i >= lo on the predicted force of contact i (plus equalities)."""
+def _constraint_rows(frames, modes, frictions, settings, cone_edge):
+    """Rows (a, lo) meaning a . f_i >= lo on the predicted force of contact i (plus equalities):
+    every contact pushes, every fixed one (but the cone edge's) stays inside its static cone."""
     ineq, eq = [], []
     for i, frame in enumerate(frames):
         n, t = frame[:, 0], frame[:, 1]
         ineq.append((i, n, settings.f_min))
         if np.isfinite(settings.f_max):
             ineq.append((i, -n, -settings.f_max))
-        if fixed[i] and (cone_edge is None or cone_edge.contact != i):
-            slope = mu[i] - settings.margin
+        if modes[i] is ContactMode.FIXED and (cone_edge is None or cone_edge.contact != i):
+            slope = frictions[i].static - settings.margin
             ineq.append((i, slope * n - t, 0.0))
             ineq.append((i, slope * n + t, 0.0))
     if cone_edge is not None:
         j = cone_edge.contact
         n, t = frames[j][:, 0], frames[j][:, 1]
-        eq.append((j, t - cone_edge.sign * mu[j] * n, 0.0))
+        eq.append((j, t - cone_edge.sign * cone_edge.mu * n, 0.0))
     return ineq, eq
 
 
-class _Rows:
-    r"""The constraint rows of :func:`_constraint_rows` for one (fixed, μ, settings, cone edge), as
-    matrices: row r reads :math:`\alpha_r n_i^T f_i + \beta_r t_i^T f_i \ge lo_r` (equalities last, = lo_r),
-    so that for given surface frames all rows are one product :math:`C f` (:meth:`matrix`)."""
+def _contacts(m: int, modes, friction) -> tuple[tuple[ContactMode, ...], tuple]:
+    """The modes and the frictions of ``m`` contacts, validated."""
+    return as_modes(modes, m), as_frictions(friction, m)
 
-    def __init__(self, m: int, fixed, mu, settings: InternalForceSettings, cone_edge: ConeEdge | None):
+
+class _Rows:
+    r"""The constraint rows of :func:`_constraint_rows` for one (modes, frictions, settings, cone edge),
+    as matrices: row r reads :math:`\alpha_r n_i^T f_i + \beta_r t_i^T f_i \ge lo_r` (equalities last,
+    = lo_r), so that for given surface frames all rows are one product :math:`C f` (:meth:`matrix`)."""
+
+    def __init__(self, m: int, modes, friction, settings: InternalForceSettings, cone_edge: ConeEdge | None):
         if cone_edge is not None and not 0 <= cone_edge.contact < m:
             raise InvalidParameterError("cone_edge", cone_edge, f"a contact index in 0..{m - 1}")
+        modes, frictions = _contacts(m, modes, friction)
         # in surface coordinates (n = e_x, t = e_y) each row's coefficients are (α_r, β_r)
-        ineq, eq = _constraint_rows(np.broadcast_to(np.eye(2), (m, 2, 2)), fixed, mu, settings, cone_edge)
+        ineq, eq = _constraint_rows(np.broadcast_to(np.eye(2), (m, 2, 2)), modes, frictions, settings, cone_edge)
         self.coefficients = np.zeros((len(ineq) + len(eq), 2 * m))
         for r, (i, coef, _) in enumerate(ineq + eq):
             self.coefficients[r, 2 * i:2 * i + 2] = coef
@@ -240,8 +272,8 @@ def build_internal_force_qp(
     constraint_matrix: np.ndarray,
     motion_forces: np.ndarray,
     surface_frames: np.ndarray,
-    fixed: np.ndarray,
-    mu: np.ndarray,
+    modes,
+    friction,
     settings: InternalForceSettings = InternalForceSettings(),
     cone_edge: ConeEdge | None = None,
 ) -> InternalForceQP:
@@ -251,12 +283,13 @@ def build_internal_force_qp(
         constraint_matrix: :math:`A = [G^T \mid R_f B_v]` (2m, 3 + p); f_c spans null(Aᵀ).
         motion_forces: f_m, (2m,) [N].
         surface_frames: (m, 2, 2), columns (normal, tangent) in the hand frame.
-        fixed: (m,) bool, which contacts are fixed.
-        mu: (m,) friction coefficients.
+        modes: Each contact's :class:`~regrasp.contact.ContactMode`: the fixed ones get static cones.
+        friction: The contacts' :class:`~regrasp.contact.Friction` (one for all, a coefficient [-], or
+            one per contact).
         settings: Margins.
-        cone_edge: Optional contact to put on its cone edge.
+        cone_edge: Optional contact to put on a cone edge (its coefficient is the ConeEdge's).
     """
-    rows = _Rows(len(surface_frames), fixed, mu, settings, cone_edge)
+    rows = _Rows(len(surface_frames), modes, friction, settings, cone_edge)
     null = _null_basis(constraint_matrix)
     k = null.shape[1]
     if k == 0:
@@ -271,8 +304,8 @@ def build_internal_force_qp(
     return InternalForceQP(qpsolvers.Problem(**problem_args), null, motion_forces, settings)
 
 
-def _satisfied(qp: InternalForceQP, forces, frames, fixed, mu, cone_edge, slack) -> bool:
-    rows = _Rows(len(frames), fixed, mu, qp.settings, cone_edge)
+def _satisfied(qp: InternalForceQP, forces, frames, modes, friction, cone_edge, slack) -> bool:
+    rows = _Rows(len(frames), modes, friction, qp.settings, cone_edge)
     C = rows.matrix(block_diagonal(np.asarray(frames, dtype=float)))
     return rows.satisfied(C, np.asarray(forces).reshape(-1), slack)
 
@@ -280,18 +313,19 @@ def _satisfied(qp: InternalForceQP, forces, frames, fixed, mu, cone_edge, slack)
 def solve_internal_force_qp(
     qp: InternalForceQP,
     surface_frames: np.ndarray,
-    fixed: np.ndarray,
-    mu: np.ndarray,
+    modes,
+    friction,
     cone_edge: ConeEdge | None = None,
 ) -> InternalForceResult:
-    """Solve a built QP with OSQP; raises InternalForceInfeasibleError when it has no solution."""
+    """Solve a built QP with OSQP (the contacts' ``modes``, ``friction`` and ``cone_edge`` as it was built
+    with, to check the solution); raises InternalForceInfeasibleError when it has no solution."""
     start = time.perf_counter()
     m = len(surface_frames)
     tol = qp.settings.tolerance
     scale = max(1.0, float(np.abs(qp.motion_forces).max(initial=0.0)))
     if qp.problem is None:
         forces = qp.motion_forces.reshape(m, 2)
-        ok = _satisfied(qp, forces, surface_frames, fixed, mu, cone_edge, 1e-9 * scale)
+        ok = _satisfied(qp, forces, surface_frames, modes, friction, cone_edge, 1e-9 * scale)
         return InternalForceResult(np.zeros(2 * m), forces, 0, ok, "empty null space",
                                    time.perf_counter() - start)
     with warnings.catch_warnings():
@@ -304,7 +338,7 @@ def solve_internal_force_qp(
         raise InternalForceInfeasibleError(qp, status)
     f_c = qp.null_basis @ solution.x
     forces = (qp.motion_forces + f_c).reshape(m, 2)
-    ok = _satisfied(qp, forces, surface_frames, fixed, mu, cone_edge, 1e-6 * scale)
+    ok = _satisfied(qp, forces, surface_frames, modes, friction, cone_edge, 1e-6 * scale)
     if not ok:
         raise InternalForceInfeasibleError(qp, f"{status} (solution violates the constraints)")
     return InternalForceResult(f_c, forces, qp.null_basis.shape[1], True, status, time.perf_counter() - start)
@@ -324,16 +358,24 @@ class InternalForceSolver:
         self._solvers: dict[tuple[int, int, int], osqp.OSQP] = {}
         self._rows: dict[tuple, _Rows] = {}
         self._rows_settings = settings
+        self._last_contacts = None  # (modes, friction) as last passed (tuples), and validated
 
-    def _rows_for(self, m: int, fixed, mu, cone_edge: ConeEdge | None) -> _Rows:
+    def _rows_for(self, m: int, modes, friction, cone_edge: ConeEdge | None) -> _Rows:
+        """The rows of these modes, frictions and cone edge (cached: the key holds all three)."""
         if self._rows_settings is not self.settings:
             self._rows.clear()
             self._rows_settings = self.settings
-        key = (m, tuple(np.asarray(fixed, dtype=bool).tolist()), tuple(np.asarray(mu, dtype=float).tolist()),
-               cone_edge)
+        last = self._last_contacts
+        if last is not None and modes is last[0] and friction is last[1] and len(last[2][0]) == m:
+            contacts = last[2]
+        else:
+            contacts = _contacts(m, modes, friction)
+            if type(modes) is tuple and type(friction) is tuple:  # immutable: the same objects, the same values
+                self._last_contacts = (modes, friction, contacts)
+        key = (m, *contacts, cone_edge)
         rows = self._rows.get(key)
         if rows is None:
-            rows = self._rows[key] = _Rows(m, fixed, mu, self.settings, cone_edge)
+            rows = self._rows[key] = _Rows(m, *contacts, self.settings, cone_edge)
         return rows
 
     def _osqp(self, k: int, rows: _Rows, a_t: np.ndarray, lower: np.ndarray) -> osqp.OSQP:
@@ -364,18 +406,18 @@ class InternalForceSolver:
             solver._solver.update_data_mat(P_x=None, P_i=None, A_x=a_t.reshape(-1), A_i=None)
         return solver
 
-    def solve(self, constraint_matrix, motion_forces, surface_frames, fixed, mu,
+    def solve(self, constraint_matrix, motion_forces, surface_frames, modes, friction,
               cone_edge: ConeEdge | None = None) -> InternalForceResult:
         """Solve the QP of the module docstring; see :func:`build_internal_force_qp` for the arguments."""
         frames = [(n_x, n_y, t_x, t_y) for (n_x, t_x), (n_y, t_y) in np.asarray(surface_frames, dtype=float).tolist()]
         return self._solve(constraint_matrix, np.asarray(motion_forces, dtype=float).reshape(-1).tolist(), frames,
-                           fixed, mu, cone_edge, time.perf_counter())
+                           modes, friction, cone_edge, time.perf_counter())
 
-    def _solve(self, constraint_matrix, motion_forces: list, frames: list, fixed, mu, cone_edge, start: float):
+    def _solve(self, constraint_matrix, motion_forces: list, frames: list, modes, friction, cone_edge, start: float):
         """:meth:`solve` with f_m (2m) and the surface frames, per contact (n_x, n_y, t_x, t_y), as floats
         (hot paths)."""
         m = len(frames)
-        rows = self._rows_for(m, fixed, mu, cone_edge)
+        rows = self._rows_for(m, modes, friction, cone_edge)
         null = _null_basis(constraint_matrix)
         k = null.shape[1]
         C = rows.rows_at(frames)
@@ -401,6 +443,6 @@ class InternalForceSolver:
                                            time.perf_counter() - start)
             status = f"{status} (solution violates the constraints)"
         surface_frames = np.array([((n_x, t_x), (n_y, t_y)) for n_x, n_y, t_x, t_y in frames])
-        qp = build_internal_force_qp(constraint_matrix, np.array(f_m), surface_frames, fixed, mu, self.settings,
+        qp = build_internal_force_qp(constraint_matrix, np.array(f_m), surface_frames, modes, friction, self.settings,
                                      cone_edge)
         raise InternalForceInfeasibleError(qp, status)

@@ -2,22 +2,25 @@ r"""An independent simulator of the hand and the object in full coordinates.
 
 It shares with :mod:`regrasp.reduced` only primitive models: the fingers' Pinocchio models
 (the :class:`~regrasp.hand.Hand`'s, with their gravity and link masses; the plant evaluates M,
-N, J and J̇q̇ on its own Pinocchio data), the object's geometry and inertia, and μ. It never
+N, J and J̇q̇ on its own Pinocchio data), the object's geometry and inertia, and the friction
+(:class:`~regrasp.contact.Friction`, μ_s and μ_k per contact). It never
 uses H, G, G_f, P or eq. (3.2.11), so a controller that works on the plant works on physics,
 not on its own model.
 
 **Coordinates.** Joint positions q (2m) and the object pose X = (x_o, β), with velocities
 v and V = (v_o, ω). Contact i joins the tip :math:`p_i(q)` to the object:
 
-* ``fixed``: the tip stays at the object point :math:`c_i` (object frame):
+* ``FIXED``: the tip stays at the object point :math:`c_i` (object frame):
   :math:`\phi_i = p_i - x_o - R(\beta) c_i = 0` (two rows); the force on the object
   :math:`f_i = \lambda_i \in \mathbb R^2` is a multiplier;
-* ``sliding``: the tip stays on the edge's line :math:`\{c : n^o\cdot c = e\}`:
+* ``SLIDING``: the tip stays on the edge's line :math:`\{c : n^o\cdot c = e\}`:
   :math:`\psi_i = n_i \cdot (p_i - x_o) - e = 0` with :math:`n_i = R n^o` (one row); the force
-  on the object is :math:`f_i = \lambda_{n}(n_i + \mu s_i t_i)`: Coulomb friction of magnitude
-  :math:`\mu\lambda_n`, opposing the tip's sliding velocity relative to the object
-  (:math:`s_i` is the sign of that velocity along :math:`t_i`);
-* ``separated``: no constraint, no force.
+  on the object is :math:`f_i = \lambda_{n}(n_i + \mu_k s_i t_i)`: Coulomb friction of magnitude
+  :math:`\mu_k\lambda_n` (the kinetic coefficient), opposing the tip's sliding velocity relative
+  to the object (:math:`s_i` is the sign of that velocity along :math:`t_i`);
+* ``SEPARATED``: no constraint, no force.
+
+(The modes are :class:`~regrasp.contact.ContactMode` members.)
 
 **Equations.** :math:`M\ddot q + N = \tau - \sum_i J_i^T f_i`,
 :math:`M_o \ddot X = f_g + \sum_i (f_i,\ (p_i - x_o)\times f_i)`, and every constraint's second
@@ -34,10 +37,11 @@ energy-balance checks.
 
 **Events** (checked after every step, reported with time, contact and detail):
 ``separation`` (a normal force < 0; the contact is released), ``slip`` (a fixed contact's
-force leaves its friction cone; it becomes sliding in the direction of the tangential
-force), ``stick`` (a sliding contact's relative velocity reverses while the fixed-contact
-force would be inside the cone; it becomes fixed, otherwise it keeps sliding the other
-way), ``left_edge`` (a contact's ξ leaves its edge), ``collision`` (a link penetrates the
+force leaves its static friction cone, :math:`|f_t| > \mu_s f_n`; it becomes sliding in the
+direction of the tangential force, carrying :math:`\mu_k f_n` from the next step on), ``stick``
+(a sliding contact's relative velocity reverses while the fixed-contact force would be inside
+the static cone, :math:`|f_t| \le \mu_s f_n`; it becomes fixed, otherwise it keeps sliding the
+other way), ``left_edge`` (a contact's ξ leaves its edge), ``collision`` (a link penetrates the
 object, coal and the URDF geometry), ``singular`` (a finger's Jacobian condition number
 exceeds the hand's threshold). Kinds in ``stop_on`` stop the simulation.
 """
@@ -54,16 +58,18 @@ import numpy as np
 import pinocchio as pin
 
 from .collision import UrdfCollisionChecker, default_tip_clearance
+from .contact import ContactMode, as_frictions, as_modes, cone_margin
 from .exceptions import InvalidParameterError
 from ._scalar import solve_small as _solve_small
 from .hand import Hand, _condition
 from .polygon import ConvexPolygon
-from .validation import as_finite_array, as_friction_coefficients, as_positive_float
+from .validation import as_finite_array, as_positive_float
 
 __all__ = ["Plant", "PlantContact", "PlantEvent", "PlantState", "PlantStep"]
 
-_MODES = ("fixed", "sliding", "separated")
-_FIXED, _SLIDING = 0, 1
+# the members as module constants for the hot paths (``ContactMode.FIXED`` is a class-attribute
+# lookup through the enum's metaclass, ~0.3 us; a global is ~20 ns); compared with ``is``
+_MODE_FIXED, _MODE_SLIDING, _MODE_SEPARATED = ContactMode.FIXED, ContactMode.SLIDING, ContactMode.SEPARATED
 _LWA = pin.LOCAL_WORLD_ALIGNED
 
 
@@ -103,15 +109,23 @@ class PlantContact:
 
     Attributes:
         edge: Edge index on the object.
-        mode: ``"fixed"``, ``"sliding"`` or ``"separated"``.
+        mode: A :class:`~regrasp.contact.ContactMode` (its string, ``"fixed"``, ``"sliding"`` or
+            ``"separated"``, is converted).
         xi: For a fixed contact, its position ξ [m] on the edge (object-fixed).
         sign: For a sliding contact, the sliding direction s = ±1 along the edge's ξ.
     """
 
     edge: int
-    mode: str
+    mode: ContactMode
     xi: float = 0.0
     sign: float = 1.0
+
+    def __post_init__(self):
+        if type(self.mode) is not ContactMode:
+            try:
+                self.mode = as_modes((self.mode,))[0]
+            except InvalidParameterError:
+                raise InvalidParameterError("mode", self.mode, "'fixed', 'sliding' or 'separated'") from None
 
 
 @dataclass(frozen=True)
@@ -159,7 +173,7 @@ class PlantStep:
             (normal, tangential) [N], at the step's start; zeros when separated.
         xi: Each contact's ξ [m] after the step.
         xi_dot: Each contact's relative tangential velocity ξ̇ [m/s] after the step.
-        modes: Contact modes during the step.
+        modes: Contact modes (:class:`~regrasp.contact.ContactMode`) during the step.
         constraint_error: Largest constraint violation [m] after the step.
         events: Events detected after the step.
     """
@@ -168,7 +182,7 @@ class PlantStep:
     forces_surface: np.ndarray
     xi: np.ndarray
     xi_dot: np.ndarray
-    modes: tuple[str, ...]
+    modes: tuple[ContactMode, ...]
     constraint_error: float
     events: tuple[PlantEvent, ...] = field(default_factory=tuple)
 
@@ -181,7 +195,9 @@ class Plant:
             controller's hand, e.g. other link masses).
         polygon: The object (geometry; inertia unless overridden).
         contacts: One :class:`PlantContact` per finger.
-        mu: Coulomb friction coefficient [-], one for all contacts or one per contact.
+        friction: Coulomb friction: a :class:`~regrasp.contact.Friction` (μ_s, μ_k) or a coefficient
+            (μ_s = μ_k) [-] for all contacts, or one per contact. A fixed contact slips when
+            :math:`|f_t| > \mu_s f_n`; a sliding one carries :math:`\mu_k f_n`.
         object_mass, object_inertia: Override the polygon's [kg], [kg m^2].
         dt: Time step [s].
         baumgarte: α [1/s] of the constraint stabilisation.
@@ -201,7 +217,7 @@ class Plant:
         polygon: ConvexPolygon,
         contacts: Sequence[PlantContact],
         *,
-        mu: float = 0.0,
+        friction=0.0,
         object_mass: float | None = None,
         object_inertia: float | None = None,
         dt: float = 1e-3,
@@ -216,7 +232,9 @@ class Plant:
         self.hand = hand
         self.polygon = polygon
         self.contacts = self._copy_contacts(contacts)
-        self.mu = as_friction_coefficients(mu, hand.m)
+        self.friction = as_frictions(friction, hand.m)
+        self._static = [f.static for f in self.friction]
+        self._kinetic = [f.kinetic for f in self.friction]
         self.mass = as_positive_float("object_mass", polygon.mass if object_mass is None else object_mass)
         self.inertia = as_positive_float("object_inertia",
                                          polygon.inertia if object_inertia is None else object_inertia)
@@ -269,8 +287,6 @@ class Plant:
     def _copy_contacts(self, contacts: Sequence[PlantContact]) -> list[PlantContact]:
         out = [PlantContact(c.edge, c.mode, float(c.xi), float(c.sign)) for c in contacts]
         for c in out:
-            if c.mode not in _MODES:
-                raise InvalidParameterError("mode", c.mode, "'fixed', 'sliding' or 'separated'")
             self.polygon.edge(c.edge)
             if c.sign not in (-1.0, 1.0):
                 raise InvalidParameterError("sign", c.sign, "+1 or -1")
@@ -313,17 +329,19 @@ class Plant:
         return tip, f.tip_jacobian(qi) @ vi
 
     def _specs(self, contacts) -> tuple[tuple, ...]:
-        """The active contacts as floats (a tuple): ``(i, _FIXED, c_x, c_y)`` (the contact point,
-        object frame) or ``(i, _SLIDING, n_x, n_y, n·ξ-origin, μ s)`` (the edge's normal)."""
-        out, mu = [], self.mu.tolist()
+        """The active contacts as floats (a tuple): ``(i, FIXED, c_x, c_y)`` (the contact point,
+        object frame) or ``(i, SLIDING, n_x, n_y, n·ξ-origin, μ_k s)`` (the edge's normal)."""
+        out, kinetic = [], self._kinetic
         for i, c in enumerate(contacts):
-            if c.mode == "separated":
-                continue
-            g = self._edge_geometry(c.edge)
-            if c.mode == "fixed":
-                out.append((i, _FIXED, g.ox + c.xi * g.tx, g.oy + c.xi * g.ty))
-            else:
-                out.append((i, _SLIDING, g.nx, g.ny, g.offset, mu[i] * c.sign))
+            mode = c.mode
+            if mode is _MODE_FIXED:
+                g = self._edge_geometry(c.edge)
+                out.append((i, _MODE_FIXED, g.ox + c.xi * g.tx, g.oy + c.xi * g.ty))
+            elif mode is _MODE_SLIDING:
+                g = self._edge_geometry(c.edge)
+                out.append((i, _MODE_SLIDING, g.nx, g.ny, g.offset, kinetic[i] * c.sign))
+            elif mode is not _MODE_SEPARATED:  # e.g. a string assigned to a contact's mode after construction
+                raise InvalidParameterError("mode", mode, "a ContactMode member (PlantContact converts strings)")
         return tuple(out)
 
     @staticmethod
@@ -334,7 +352,7 @@ class Plant:
         for spec in specs:
             i = spec[0]
             rx, ry = tips[i][0] - X[0], tips[i][1] - X[1]
-            if spec[1] == _FIXED:
+            if spec[1] is _MODE_FIXED:
                 ex, ey = rx - (c * spec[2] - s * spec[3]), ry - (s * spec[2] + c * spec[3])
                 err = math.sqrt(ex * ex + ey * ey)
             else:
@@ -345,7 +363,7 @@ class Plant:
     def constraint_error(self, st: PlantState, tips=None) -> float:
         """Largest violation [m] of the active contact constraints (``tips``: (m, 2) if known)."""
         if tips is None:
-            tips = [self._tip(st, i)[0] if c.mode != "separated" else None for i, c in enumerate(self.contacts)]
+            tips = [self._tip(st, i)[0] if c.mode is not _MODE_SEPARATED else None for i, c in enumerate(self.contacts)]
         return self._violations(self._specs(self.contacts), st.X.tolist(), tips)
 
     # ------------------------------------------------------------------ dynamics
@@ -407,7 +425,7 @@ class Plant:
             jax, jay, px, py, pvx, pvy = fingers[i][9:15]
             fax, fay = (0.0, 0.0) if free is None else free[i][:2]
             rx, ry = px - x, py - y
-            if kind == _FIXED:
+            if kind is _MODE_FIXED:
                 rcx, rcy = c * ux - s * uy, s * ux + c * uy
                 rows += ((i, 1.0, 0.0, -1.0, 0.0, rcy), (i, 0.0, 1.0, 0.0, -1.0, -rcx))
                 rhs += (-jax - w_sq * rcx - alpha2 * (pvx - vx + w * rcy) - alpha_sq * (rx - rcx) - (fax - g0),
@@ -614,14 +632,14 @@ class Plant:
 
         current = xis()
         for i, ct in enumerate(self.contacts):
-            if ct.mode == "separated":
+            if ct.mode is _MODE_SEPARATED:
                 continue
             if st.V is not V0:  # a stick before changed the velocities
                 current = xis()
             xi, xi_dot = current[i]
             if self.contact_events:
                 self._switch_mode(st, tau, i, self._surface(ct.edge, c, s, forces[i]), xi, xi_dot, out)
-                if ct.mode == "separated":
+                if ct.mode is _MODE_SEPARATED:
                     continue
             g = geometry[i]
             if not g.lo <= xi <= g.hi:
@@ -671,24 +689,26 @@ class Plant:
                 self._event(st.t, i, "collision", f"link penetrates the object by {-min(dist):.3g} m", out)
 
     def _switch_mode(self, st: PlantState, tau, i: int, force_surface, xi: float, xi_dot: float, out) -> None:
-        """Separation, slip and stick of contact i (module docstring)."""
+        """Separation, slip (the static cone) and stick (the static cone) of contact i (module docstring)."""
         c = self.contacts[i]
         fn, ft = force_surface
         tol = 1e-9
+        static = self._static[i]
         if fn < -tol:
             self._event(st.t, i, "separation", f"normal force {fn:.4g} N < 0", out)
-            c.mode = "separated"
-        elif c.mode == "fixed" and abs(ft) > self.mu[i] * fn + tol * max(1.0, abs(fn)):
-            self._event(st.t, i, "slip", f"|f_t| = {abs(ft):.4g} N > mu f_n = {self.mu[i] * fn:.4g} N", out)
-            c.mode, c.sign = "sliding", float(np.sign(ft) or 1.0)
-        elif c.mode == "sliding" and xi_dot * c.sign <= 0.0:
+            c.mode = _MODE_SEPARATED
+        elif c.mode is _MODE_FIXED and cone_margin(static, fn, ft) < -tol * max(1.0, abs(fn)):
+            self._event(st.t, i, "slip", f"|f_t| = {abs(ft):.4g} N > mu_s f_n = {static * fn:.4g} N", out)
+            c.mode, c.sign = _MODE_SLIDING, float(np.sign(ft) or 1.0)
+        elif c.mode is _MODE_SLIDING and xi_dot * c.sign <= 0.0:
             trial = [PlantContact(o.edge, o.mode, o.xi, o.sign) for o in self.contacts]
-            trial[i] = PlantContact(c.edge, "fixed", xi, c.sign)
+            trial[i] = PlantContact(c.edge, _MODE_FIXED, xi, c.sign)
             _, _, f_fixed = self.accelerations(st, np.array(tau), modes=trial)
             fn2, ft2 = self.surface_forces(st, f_fixed)[i]
-            if fn2 >= 0.0 and abs(ft2) <= self.mu[i] * fn2:
-                self._event(st.t, i, "stick", f"xi_dot = {xi_dot:.3g} m/s crossed zero; force inside the cone", out)
-                c.mode, c.xi = "fixed", xi
+            if fn2 >= 0.0 and cone_margin(static, fn2, ft2) >= 0.0:
+                self._event(st.t, i, "stick", f"xi_dot = {xi_dot:.3g} m/s crossed zero; force inside the static cone",
+                            out)
+                c.mode, c.xi = _MODE_FIXED, xi
                 st.contact_work += self._project_velocities(st)
             else:
                 c.sign = -c.sign

@@ -167,7 +167,7 @@ def write_plan_figures(plan: PlanResult, directory: str | Path) -> list[Path]:
     ]
 
 
-def plot_slide_feasibility(polygon, pose, fingers, points_in_hand, edges, mu, results, path, *,
+def plot_slide_feasibility(polygon, pose, fingers, points_in_hand, edges, friction, results, path, *,
                            gravity_in_hand=(0.0, -9.81), title: str = "") -> Path:
     """Figure 3.4: the object, the fingers and, per slide direction, the predicted contact forces
     inside their friction cones, and whether the slide is possible.
@@ -176,14 +176,17 @@ def plot_slide_feasibility(polygon, pose, fingers, points_in_hand, edges, mu, re
         polygon: The object; ``pose`` its pose (x, y, β) in the hand frame.
         fingers: The fingers (drawn through their inverse kinematics to ``points_in_hand``).
         points_in_hand: Contact points (m, 2) [m], on edges ``edges``.
-        mu: Friction coefficient per contact (cone half-angle atan μ).
+        friction: The contacts' :class:`~regrasp.contact.Friction` (one for all, a coefficient, or one
+            per contact): cone half-angle atan μ_k at each panel's sliding contact, atan μ_s elsewhere.
         results: One :class:`~regrasp.sliding.SlideFeasibility` per panel.
         path: Output PNG.
     """
     from matplotlib.patches import Polygon as PolygonPatch  # noqa: PLC0415
 
+    from .contact import ContactMode, as_frictions  # noqa: PLC0415
     from .planar import rotation  # noqa: PLC0415
 
+    friction = as_frictions(friction, len(edges))
     pose = np.asarray(pose, dtype=float)
     verts = polygon.vertices_in(pose) * _MM
     rot = rotation(pose[2])
@@ -200,7 +203,7 @@ def plot_slide_feasibility(polygon, pose, fingers, points_in_hand, edges, mu, re
             n = rot @ polygon.edge(k).inward_normal
             t = rot @ polygon.edge(k).xi_direction
             p = np.asarray(point) * _MM
-            half = np.arctan(mu[i])
+            half = np.arctan(friction[i].coefficient(ContactMode.SLIDING if i == res.contact else ContactMode.FIXED))
             for side in (1.0, -1.0):  # the cone of forces the finger can push with, around n
                 d = np.cos(half) * n + side * np.sin(half) * t
                 ax.plot([p[0], p[0] + 30 * d[0]], [p[1], p[1] + 30 * d[1]], color="#66a61e", lw=1, ls=":")

@@ -35,9 +35,9 @@ the sign of y flipped.
   step's torque (``plant.accelerations``, one KKT solve; ``plant_forces=False`` skips it).
   ``scene/contacts/forces_predicted``: the controller's predicted force
   (``ControlOutput.contact_forces``), thinner.
-* ``scene/contacts/cones``: each friction cone as two rays of ``cone_length`` mm at
-  :math:`\pm\arctan\mu` around the inward normal; green while the contact is fixed, orange
-  while it slides, grey once separated.
+* ``scene/contacts/cones``: each friction cone as two rays of ``cone_length`` mm around the inward
+  normal, at :math:`\pm\arctan\mu_s` and green while the contact is fixed, at
+  :math:`\pm\arctan\mu_k` and orange while it slides, grey (at :math:`\mu_s`) once separated.
 * ``scene/envelope/safe`` and ``scene/envelope/danger``: each drawn edge's feasible set
   (:class:`~regrasp.envelope.FingerEnvelope` ``.at`` the plant's current pose) as thick segments
   drawn just outside the edge, in the finger's colour, with the last ``danger_fraction`` of each
@@ -49,12 +49,13 @@ measured at the logged state against the desired S_d when the reference is known
 the controller's ``ControlOutput.error``; ``plots/xi/<finger>`` the contact's ξ with its desired
 value and the bounds of the feasible interval holding it (and where the danger zones start);
 ``plots/force`` normal and tangential forces (plant and predicted); ``plots/cone_margin``
-μ f_n − |f_t| (plant and predicted); ``plots/mode`` 0 fixed, 1 sliding, 2 separated.
+μ f_n − |f_t| (plant and predicted; μ_s at a fixed contact, μ_k at a sliding one);
+``plots/mode`` 0 fixed, 1 sliding, 2 separated.
 ``events``: the plant's events (slip, stick, separation, ...) as text.
 
 **Static data** (logged once): ``model/object`` (the polygon in its own frame, mm, with its edge
-numbers and centre of mass), ``model/setup`` (a Markdown table of the fingers, their edges, μ and
-modes), and the styling of every entity above.
+numbers and centre of mass), ``model/setup`` (a Markdown table of the fingers, their edges, modes
+and friction), and the styling of every entity above.
 
 **Cost.** Per logged step the recorder keeps what the step needs: Pinocchio forward kinematics
 (the joint frames and the chain), one ``FingerEnvelope.at`` per drawn edge (~20 µs each in the
@@ -92,6 +93,7 @@ import rerun.blueprint as rrb
 from rerun.components import LineStrip2DBatch
 from rerun.encodings import Vec2DBatch
 
+from .contact import ContactMode, coefficients, cone_margin
 from .control import ControlOutput
 from .envelope import EnvelopeSample, FingerEnvelope
 from .exceptions import InvalidParameterError, RegraspError
@@ -100,13 +102,14 @@ from .plant import Plant, PlantStep
 
 __all__ = ["MODE_CODES", "RolloutRecorder"]
 
-#: Contact mode → the value plotted under ``plots/mode``.
-MODE_CODES = {"fixed": 0, "sliding": 1, "separated": 2}
+#: Contact mode → the value plotted under ``plots/mode`` (a ContactMode equals its string, so either looks up).
+MODE_CODES = {ContactMode.FIXED: 0, ContactMode.SLIDING: 1, ContactMode.SEPARATED: 2}
 
 _MM = np.array([1000.0, -1000.0])  # metres (hand frame, y up) -> scene millimetres (y down)
 _FINGER_COLOURS = [(31, 119, 180), (148, 103, 189), (23, 190, 207), (140, 86, 75), (227, 119, 194),
                    (188, 189, 34), (127, 127, 127)]
-_MODE_COLOURS = {"fixed": (44, 160, 44), "sliding": (255, 127, 14), "separated": (160, 160, 160)}
+_MODE_COLOURS = {ContactMode.FIXED: (44, 160, 44), ContactMode.SLIDING: (255, 127, 14),
+                 ContactMode.SEPARATED: (160, 160, 160)}
 _DANGER = (214, 39, 40)
 _FORCE = (200, 30, 30)
 _PREDICTED = (255, 152, 150)
@@ -236,7 +239,7 @@ class _Scene:
 
     _LISTS = ("pose", "desired", "frames", "chains", "edges", "modes", "surface", "predicted", "segments")
 
-    def __init__(self, *, object_closed, fingers, keys, edges, mu, colours, force_scale, cone_length,
+    def __init__(self, *, object_closed, fingers, keys, edges, frictions, colours, force_scale, cone_length,
                  danger_fraction):
         self.object_closed = object_closed  # (nv, 2) [m], object frame
         self.fingers = fingers  # per finger: (entity path, [(joint frame 0|1, points in the joint frame (k, 3))], width)
@@ -244,7 +247,8 @@ class _Scene:
         self.normals = np.array([e.inward_normal for e in edges])
         self.xi_directions = np.array([e.xi_direction for e in edges])
         self.xi_origins = np.array([e.xi_origin for e in edges])
-        self.mu = mu
+        self.static = np.array([f.static for f in frictions])  # (m,): a fixed contact's cone
+        self.kinetic = np.array([f.kinetic for f in frictions])  # a sliding one's
         self.finger_colours = np.array([_rgba(c, 200) for c in colours], dtype=np.uint32)
         self.force_scale = force_scale
         self.cone_length = cone_length
@@ -325,14 +329,15 @@ class _Scene:
             origins = vectors = np.zeros((0, m, 2))
         yield "scene/contacts/forces_predicted", self._arrows(origins, vectors,
                                                              [0 if f is None else m for f in r["predicted"]])
-        half = np.arctan(self.mu)
-        ch, sh = np.cos(half)[:, None], np.sin(half)[:, None]
+        sliding = np.array([[mo is ContactMode.SLIDING for mo in modes] for modes in r["modes"]], dtype=bool)
+        half = np.arctan(np.where(sliding.reshape(n, m), self.kinetic, self.static))  # (n, m): μ_k sliding, else μ_s
+        ch, sh = np.cos(half)[..., None], np.sin(half)[..., None]
         perp_n = np.stack([-normals[..., 1], normals[..., 0]], axis=-1)
         ray_a = ch * normals + sh * perp_n
         ray_b = ch * normals - sh * perp_n
         L = self.cone_length / 1000.0
         cones = np.stack([tips + L * ray_a, tips, tips + L * ray_b], axis=2) * _MM  # (n, m, 3, 2)
-        colours = [_MODE_RGBA.get(mo, _MODE_RGBA["separated"]) for modes in r["modes"] for mo in modes]
+        colours = [_MODE_RGBA.get(mo, _MODE_RGBA[ContactMode.SEPARATED]) for modes in r["modes"] for mo in modes]
         yield "scene/contacts/cones", self._strips(cones.reshape(-1, 3, 2), [m] * n, colours)
 
         # envelopes: safe and danger segments just outside each drawn edge
@@ -461,7 +466,7 @@ class RolloutRecorder:
     the plots and the units).
 
     Args:
-        plant: The plant being simulated (its hand, object, contacts and μ set up the recording).
+        plant: The plant being simulated (its hand, object, contacts and friction set up the recording).
         envelope_edges: Which feasible envelopes to draw: one entry per finger, each an edge
             index, a sequence of edge indices or None (none for that finger). Default: each
             finger's current contact edge (``plant.contacts[i].edge``, followed if it changes).
@@ -474,7 +479,7 @@ class RolloutRecorder:
         decimation: Log every n-th step only (n >= 1).
         sliding: Contacts whose ξ are the reduced coordinates S[3:] (the controller's
             ``grasp.sliding``), for naming the error series. Default: the contacts in mode
-            ``"sliding"`` now.
+            ``ContactMode.SLIDING`` now.
         envelope_geometry: ``"ideal"`` (segments, ~60 µs per envelope) or ``"urdf"`` (coal,
             ~1 ms), see :class:`~regrasp.envelope.FingerEnvelope`.
         force_scale: Arrow length per newton [mm/N].
@@ -540,15 +545,14 @@ class RolloutRecorder:
         self.m = hand.m
         self.fingers = hand.fingers
         self.polygon = plant.polygon
-        self.mu = np.asarray(plant.mu, dtype=float)
-        self._mu_list = self.mu.tolist()
+        self.friction = plant.friction
         self.danger_fraction = float(danger_fraction)
         self.force_scale = float(force_scale)
         self.cone_length = float(cone_length)
         self.plant_forces = bool(plant_forces)
         self.envelope_edges = self._parse_edges(envelope_edges)
         if sliding is None:
-            sliding = [i for i, c in enumerate(plant.contacts) if c.mode == "sliding"]
+            sliding = [i for i, c in enumerate(plant.contacts) if c.mode is ContactMode.SLIDING]
         sliding = list(sliding)
         if (len(set(sliding)) != len(sliding)
                 or not all(isinstance(i, (int, np.integer)) and 0 <= i < self.m for i in sliding)):
@@ -581,7 +585,7 @@ class RolloutRecorder:
             drawn.append((f"scene/fingers/{key}", shapes, width))
         self._n_links = [len(shapes) for _, shapes, _ in drawn]
         scene = _Scene(object_closed=self._object_closed, fingers=drawn, keys=self.keys, edges=self._edges,
-                       mu=self.mu, colours=self.colours, force_scale=self.force_scale,
+                       frictions=self.friction, colours=self.colours, force_scale=self.force_scale,
                        cone_length=self.cone_length, danger_fraction=self.danger_fraction)
 
         # ---- the stream and its sinks
@@ -691,14 +695,14 @@ class RolloutRecorder:
             static=True)
         log("model/object/centre_of_mass", rr.Points2D([[0.0, 0.0]], radii=1.5, labels=["centre of mass"]),
             static=True)
-        rows = ["| finger | entity | l1, l2 [mm] | base [mm, deg] | configuration | edge | mode | μ |",
+        rows = ["| finger | entity | l1, l2 [mm] | base [mm, deg] | configuration | edge | mode | friction |",
                 "|---|---|---|---|---|---|---|---|"]
         for i, f in enumerate(self.fingers):
             c = self.plant.contacts[i]
             b = f.base_in_hand
             rows.append(f"| {f.name} | `{self.keys[i]}` | {f.link_lengths[0] * 1e3:.1f}, {f.link_lengths[1] * 1e3:.1f} "
                         f"| ({b[0] * 1e3:.1f}, {b[1] * 1e3:.1f}, {math.degrees(b[2]):.1f}) | {f.configuration.value} "
-                        f"| {c.edge} | {c.mode} | {self.mu[i]:g} |")
+                        f"| {c.edge} | {c.mode.value} | {self.friction[i]} |")
         text = "\n".join([
             "# Rollout set-up", "",
             f"Object: {n_edges}-gon, mass {self.polygon.mass:g} kg, inertia {self.polygon.inertia:.3g} kg m², "
@@ -993,7 +997,9 @@ class RolloutRecorder:
         nan_m = [nan] * self.m
         if surface is not None:
             fn, ft = surface[:, 0].tolist(), surface[:, 1].tolist()
-            margin = [mu * a - abs(b) for mu, a, b in zip(self._mu_list, fn, ft)]
+            # the coefficient of each contact's mode while these forces acted (μ_s fixed, μ_k sliding)
+            during = plant_step.modes if plant_step is not None else modes
+            margin = [cone_margin(mu, a, b) for mu, a, b in zip(coefficients(self.friction, during), fn, ft)]
         else:
             fn = ft = margin = nan_m
         if output is not None:
@@ -1050,7 +1056,7 @@ class RolloutRecorder:
         rows["plots/error"].append(err[:3] + [v * 1000.0 for v in err[3:]])
         for i in range(self.m):
             row = [nan] * 6
-            if modes[i] != "separated":
+            if modes[i] is not ContactMode.SEPARATED:
                 xi_i = xi[i]
                 row[0] = xi_i
                 if i in self.sliding and desired is not None:

@@ -22,8 +22,9 @@ for the tangential force at the sliding contacts:
 This is eq. (3.2.11) **without** the paper's extra :math:`+G R_f B_v f_\xi` in the object
 rows: the friction force acts on the object through :math:`G f` already, so that term
 counts it twice. (Power check: the contacts' net power is :math:`-f_\xi^T \dot\xi`, all of it
-friction.) Coulomb friction closes the system: :math:`f_{\xi,j} = \mu\, s_j\, n_j^T f_j` with
-:math:`s_j = \mathrm{sign}(\dot\xi_j)` and :math:`f = J^{-T}(\tau - M \ddot q - N)`.
+friction.) Coulomb friction closes the system: :math:`f_{\xi,j} = \mu_{k,j}\, s_j\, n_j^T f_j` (the
+kinetic coefficient of :class:`~regrasp.contact.Friction`) with :math:`s_j = \mathrm{sign}(\dot\xi_j)`
+and :math:`f = J^{-T}(\tau - M \ddot q - N)`.
 """
 
 from __future__ import annotations
@@ -34,10 +35,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .contact import as_frictions
 from .exceptions import InvalidParameterError
 from .grasp import Grasp
 from .hand import Hand, HandDynamics
-from .validation import as_finite_array, as_finite_vectors, as_friction_coefficients, as_positive_float
+from .validation import as_finite_array, as_finite_vectors, as_positive_float
 
 __all__ = ["ReducedModel", "ReducedState"]
 
@@ -282,34 +284,35 @@ class ReducedModel:
         out[3:] = -(st.B_v.T @ st.R_f.T @ f)
         return out
 
-    def forward_dynamics(self, st: ReducedState, tau, mu=0.0, *, signs=None,
+    def forward_dynamics(self, st: ReducedState, tau, friction=0.0, *, signs=None,
                          paper_friction_term: bool = False) -> tuple[np.ndarray, np.ndarray]:
-        r"""S̈ and the contact forces (m, 2) [N] for joint torques ``tau`` and Coulomb friction ``mu``
-        (one coefficient, or one per contact).
+        r"""S̈ and the contact forces (m, 2) [N] for joint torques ``tau`` [N m] and Coulomb friction
+        ``friction`` (a :class:`~regrasp.contact.Friction` or a coefficient [-] for all contacts, or one
+        per contact): the sliding contacts carry their kinetic coefficient μ_k.
 
         Solves :math:`(H^T M H + M_s)\ddot S + N_s = H^T\tau + [f_g; -f_\xi]` with
-        :math:`f_{\xi,j} = \mu s_j n_j^T f_j` and :math:`f = J^{-T}(\tau - M(H\ddot S + \dot H\dot S) - N)`,
+        :math:`f_{\xi,j} = \mu_{k,j} s_j n_j^T f_j` and :math:`f = J^{-T}(\tau - M(H\ddot S + \dot H\dot S) - N)`,
         which is linear in :math:`\ddot S`. ``signs`` default to sign(ξ̇) of the sliding contacts
         (which must then be non-zero). ``paper_friction_term=True`` adds the paper's
         :math:`+G R_f B_v f_\xi` to the object rows (eq. 3.2.11 as printed), to show it is wrong.
         """
         tau = as_finite_array("tau", tau, (self.hand.nq,))
-        mu = as_friction_coefficients(mu, self.grasp.m)
+        kinetic = [f.kinetic for f in as_frictions(friction, self.grasp.m)]
         p = self.grasp.p
         if signs is None:
             signs = np.sign(st.S_dot[3:])
-            if p and np.any(mu[list(self.grasp.sliding)] > 0) and np.any(signs == 0):
+            if p and any(kinetic[i] > 0 for i in self.grasp.sliding) and np.any(signs == 0):
                 raise InvalidParameterError("signs", signs, "a sliding direction: ξ̇ = 0 at a sliding contact")
         signs = as_finite_array("signs", signs, (p,))
         M, J = st.hand.mass_matrix, st.hand.jacobian
         # f(S̈) = f0 - K S̈
         K = np.linalg.solve(J.T, M @ st.H)
         f0 = np.linalg.solve(J.T, tau - M @ st.H_dot_S_dot - st.hand.nonlinear)
-        # f_xi = mu * s_j * n_j^T f_j = Sn f, row j selects sliding contact j
+        # f_xi = mu_k * s_j * n_j^T f_j = Sn f, row j selects sliding contact j
         frames = self.grasp.surface_frames(st.S[:3])
         Sn = np.zeros((p, self.hand.nq))
         for j, i in enumerate(self.grasp.sliding):
-            Sn[j, 2 * i:2 * i + 2] = mu[i] * signs[j] * frames[i][:, 0]
+            Sn[j, 2 * i:2 * i + 2] = kinetic[i] * signs[j] * frames[i][:, 0]
         lhs = self.mass_matrix(st)
         rhs = st.H.T @ tau - self.bias(st)
         rhs[:3] += self.f_g

@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .contact import ContactMode, Friction, cone_margin
 from .exceptions import InvalidParameterError, RegraspError
 from .grasp import Grasp
 from .hand import Hand
@@ -86,7 +87,7 @@ class RolloutResult:
         max_orientation_error_after_transient: max |β - β_d| over t > 0.5 s [rad].
         regrasps: Completed slides per finger.
         events: Plant events and supervisor decisions, in time order.
-        min_cone_margin: Smallest μ f_n - |f_t| of a fixed contact in the plant [N].
+        min_cone_margin: Smallest μ_s f_n - |f_t| of a fixed contact in the plant [N].
         min_envelope_margin: Smallest distance of a contact to its feasible bounds [m].
         times: Step start times [s], (k,).
         xi: Each contact's ξ at each step [m], (k, m).
@@ -172,9 +173,9 @@ class Rollout:
         else:
             xi, xi_dot, friction = last.xi, last.xi_dot, last.forces_surface[:, 1]
         modes = [c.mode for c in contacts]
-        sliding = np.array([mode == "sliding" for mode in modes])
+        sliding = np.array([mode is ContactMode.SLIDING for mode in modes])
         # a fixed contact's ξ is where it is held (the plant's projection differs by the drift)
-        xi = np.array([c.xi if mode == "fixed" else x for c, mode, x in zip(contacts, modes, xi.tolist())])
+        xi = np.array([c.xi if mode is ContactMode.FIXED else x for c, mode, x in zip(contacts, modes, xi.tolist())])
         return Measurement(st.t, st.X.copy(), st.V.copy(), xi, xi_dot, sliding, friction)
 
     def run(self, *, recorder=None, progress: Callable[[int, int], None] | None = None) -> RolloutResult:
@@ -190,7 +191,7 @@ class Rollout:
         dt = plant.dt
         total = int(round(self.duration / dt))
         log: list[RolloutEvent] = []
-        rows = _Rows(total, plant.hand.m, plant.mu)
+        rows = _Rows(total, plant.hand.m, plant.friction)
         failure: RolloutFailure | None = None
         last: PlantStep | None = None
         wall0 = time.perf_counter()
@@ -282,9 +283,9 @@ class Rollout:
 class _Rows:
     """The per-step series of a run, in buffers allocated once for the whole run."""
 
-    def __init__(self, total: int, m: int, mu):
+    def __init__(self, total: int, m: int, frictions: tuple[Friction, ...]):
         self.n = 0
-        self.mu = np.asarray(mu, dtype=float).tolist()
+        self.static = [f.static for f in frictions]  # the fixed contacts' cones
         self.times = np.empty(total)
         self.xi = np.empty((total, m))
         self.bounds = np.empty((total, m, 2))
@@ -307,11 +308,12 @@ class _Rows:
         self.object_error[k] = out.control.error[:3]  # the control law's E = S_d - S starts with X_d - X
         self.forces_surface[k] = forces
         self.envelope_margin[k] = out.margins.min()
-        # the plant's cone margins μ f_n - |f_t| at the contacts the supervisor holds fixed (a contact
-        # being primed slips on purpose)
-        cone = [mu * fn - abs(ft) for mu, (fn, ft), mode, phase
-                in zip(self.mu, forces.tolist(), step.modes, out.phases)
-                if mode == "fixed" and phase is ContactPhase.FIXED]
+        # the plant's static cone margins μ_s f_n - |f_t| at the contacts the supervisor holds fixed (a
+        # contact being primed slips on purpose)
+        fixed = ContactMode.FIXED
+        cone = [cone_margin(mu, fn, ft) for mu, (fn, ft), mode, phase
+                in zip(self.static, forces.tolist(), step.modes, out.phases)
+                if mode is fixed and phase is ContactPhase.FIXED]
         if not cone:
             self.cone_margin[k] = np.inf
         elif any(c != c for c in cone):  # NaN propagates, as numpy's min does
@@ -325,7 +327,7 @@ class _Rows:
 
 
 def build_rollout(scenario: Scenario, *, duration: float | None = None, settings: SupervisorSettings | None = None,
-                  dt: float = 1e-3, xi0=None, plant_mu=None) -> Rollout:
+                  dt: float = 1e-3, xi0=None, plant_friction=None) -> Rollout:
     """Plant + supervisor for ``scenario``, every contact fixed at the planner's initial grasp.
 
     Args:
@@ -334,8 +336,8 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, settings
         settings: Supervisor settings (default :class:`SupervisorSettings`).
         dt: Control and plant step [s].
         xi0: Initial contact positions [m] (default: the planner's ``initial_xi``).
-        plant_mu: The plant's friction coefficients (default: the scenario's, which the
-            controllers also assume).
+        plant_friction: The plant's friction, anything :class:`~regrasp.plant.Plant` takes (default:
+            the scenario's, which the controllers and the predicate also assume).
     """
     if settings is None:  # the supervisor's runtime envelopes use the scenario's planner geometry
         settings = SupervisorSettings(geometry=scenario.geometry.value)
@@ -356,13 +358,13 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, settings
     xi0 = as_finite_array("xi0", xi0, (m,))
     hand = Hand([c.finger for c in scenario.contacts], gravity_in_hand=scenario.gravity_in_hand)
     edges = [c.edge for c in scenario.contacts]
-    mu = scenario.mu
-    supervisor = RegraspSupervisor(hand, scenario.polygon, edges, traj, xi0, mu,
+    friction = scenario.friction
+    supervisor = RegraspSupervisor(hand, scenario.polygon, edges, traj, xi0, friction,
                                    tip_clearance=[c.tip_clearance for c in scenario.contacts], plan=plan,
                                    settings=settings)
     X0, V0 = traj.pose(traj.t_start), traj.velocity(traj.t_start)
-    st = ReducedModel(hand, Grasp(scenario.polygon, edges, ["fixed"] * m), xi0).state(X0, V0)
-    plant = Plant(hand, scenario.polygon, [PlantContact(e, "fixed", x) for e, x in zip(edges, xi0)],
-                  mu=mu if plant_mu is None else plant_mu, dt=dt)
+    st = ReducedModel(hand, Grasp(scenario.polygon, edges, [ContactMode.FIXED] * m), xi0).state(X0, V0)
+    plant = Plant(hand, scenario.polygon, [PlantContact(e, ContactMode.FIXED, x) for e, x in zip(edges, xi0)],
+                  friction=friction if plant_friction is None else plant_friction, dt=dt)
     plant.reset(st.q, st.q_dot, X0, V0, t=traj.t_start)
     return Rollout(plant, supervisor, float(duration), tuple(f.name for f in hand.fingers))

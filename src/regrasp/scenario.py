@@ -31,6 +31,8 @@ Unknown keys are errors (they are usually typos). Every error is a
 
     [hand]                               # optional
     gravity = [0.0, -9.81]               # [m/s^2] in the hand frame
+    mu = 0.5                             # optional: Coulomb friction of every fingertip [-] (mu_s = mu_k),
+    # or: mu_static = 0.8 and mu_kinetic = 0.4 together (0 <= mu_kinetic <= mu_static); default mu = 0.5
 
     [[fingers]]                          # one table per finger
     name = "finger1"
@@ -39,6 +41,8 @@ Unknown keys are errors (they are usually typos). Every error is a
     configuration = "left"               # "left" (-pi < theta2 < 0) or "right"
     edge = 1                             # edge k runs from vertex k to vertex k+1 (0-based, CCW order)
     tip_clearance = 0.015                # optional, [m], 'urdf' geometry only
+    mu = 0.8                             # optional: this fingertip's friction, overriding [hand]'s;
+    # or: mu_static and mu_kinetic together, as in [hand]
 
     [planner]                            # optional
     samples = 401                        # time samples over the trajectory's domain
@@ -55,6 +59,7 @@ from typing import Any
 
 import numpy as np
 
+from .contact import Friction
 from .envelope import Geometry
 from .exceptions import InvalidParameterError, RegraspError, ScenarioError
 from .finger import Finger
@@ -62,6 +67,9 @@ from .polygon import ConvexPolygon
 from .trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
 
 __all__ = ["FingerContact", "Scenario", "load_scenario"]
+
+#: The friction when neither a finger nor [hand] gives one.
+_DEFAULT_FRICTION = Friction(0.5)
 
 
 @dataclass(frozen=True)
@@ -72,13 +80,13 @@ class FingerContact:
         finger: The finger (URDF, base pose, configuration).
         edge: Index of the contact edge.
         tip_clearance: Tip clearance [m] for the ``urdf`` geometry, or None for the default.
-        mu: Coulomb friction coefficient of the fingertip on the object [-] (used by rollouts).
+        friction: Coulomb friction of the fingertip on the object (μ_s, μ_k [-]; used by rollouts).
     """
 
     finger: Finger
     edge: int
     tip_clearance: float | None = None
-    mu: float = 0.5
+    friction: Friction = _DEFAULT_FRICTION
 
 
 @dataclass(frozen=True)
@@ -96,9 +104,9 @@ class Scenario:
     geometry: Geometry = Geometry.IDEAL
 
     @property
-    def mu(self) -> np.ndarray:
-        """Each fingertip's friction coefficient [-], (m,)."""
-        return np.array([c.mu for c in self.contacts])
+    def friction(self) -> tuple[Friction, ...]:
+        """Each fingertip's friction (μ_s, μ_k [-]), in finger order."""
+        return tuple(c.friction for c in self.contacts)
 
 
 class _Reader:
@@ -222,7 +230,28 @@ def _trajectory(path: Path, table: Any) -> Trajectory:
     return traj
 
 
-def _fingers(path: Path, tables: Any, polygon: ConvexPolygon) -> tuple[FingerContact, ...]:
+def _friction(r: _Reader, default: Friction) -> Friction:
+    """A table's friction keys: ``mu`` (both coefficients), or ``mu_static`` and ``mu_kinetic``
+    together; ``default`` when it has none."""
+    has_mu, has_static, has_kinetic = r.has("mu"), r.has("mu_static"), r.has("mu_kinetic")
+    if has_mu and (has_static or has_kinetic):
+        raise r.fail("mu", "expected either 'mu' (both coefficients) or 'mu_static' and 'mu_kinetic', not both")
+    if has_static != has_kinetic:
+        given, missing = ("mu_static", "mu_kinetic") if has_static else ("mu_kinetic", "mu_static")
+        raise r.fail(given, f"expected '{given}' and '{missing}' together (or 'mu' for both)")
+    if not (has_mu or has_static):
+        return default
+    names = ("mu",) if has_mu else ("mu_static", "mu_kinetic")
+    values = [r.number(name) for name in names]
+    for name, value in zip(names, values):
+        if not value >= 0.0:
+            raise r.fail(name, f"expected a friction coefficient >= 0, got {value!r}")
+    if len(values) == 2 and values[1] > values[0]:
+        raise r.fail("mu_kinetic", f"expected a kinetic coefficient <= mu_static = {values[0]:g}, got {values[1]!r}")
+    return Friction(*values)
+
+
+def _fingers(path: Path, tables: Any, polygon: ConvexPolygon, friction: Friction) -> tuple[FingerContact, ...]:
     if not isinstance(tables, list) or not tables or not all(isinstance(t, dict) for t in tables):
         raise ScenarioError(path, "fingers", "expected one or more [[fingers]] tables")
     contacts = []
@@ -246,13 +275,11 @@ def _fingers(path: Path, tables: Any, polygon: ConvexPolygon) -> tuple[FingerCon
         clearance = r.number("tip_clearance", None)
         if clearance is not None and clearance < 0.0:
             raise r.fail("tip_clearance", f"expected a length >= 0 [m], got {clearance!r}")
-        mu = r.number("mu", 0.5)
-        if not mu >= 0.0:
-            raise r.fail("mu", f"expected a friction coefficient >= 0, got {mu!r}")
+        own = _friction(r, friction)
         finger = _wrap(r, "urdf", lambda: Finger.from_urdf(
             urdf, base_in_hand=base, configuration=configuration, name=name))
         r.finish()
-        contacts.append(FingerContact(finger, edge, clearance, float(mu)))
+        contacts.append(FingerContact(finger, edge, clearance, own))
     return tuple(contacts)
 
 
@@ -270,11 +297,14 @@ def load_scenario(path: str | Path) -> Scenario:
     description = top.string("description", "")
     polygon = _object(path, top.get("object"))
     trajectory = _trajectory(path, top.get("trajectory"))
-    contacts = _fingers(path, top.get("fingers"), polygon)
-
-    hand = _Reader(path, top.get("hand", {}), "hand.")
+    hand_table = top.get("hand", {})
+    if not isinstance(hand_table, dict):
+        raise ScenarioError(path, "hand", "expected a table [hand]")
+    hand = _Reader(path, hand_table, "hand.")
     gravity = hand.array("gravity", (2,), [0.0, -9.81])
+    friction = _friction(hand, _DEFAULT_FRICTION)
     hand.finish()
+    contacts = _fingers(path, top.get("fingers"), polygon, friction)
 
     planner_table = top.get("planner", {})
     if not isinstance(planner_table, dict):

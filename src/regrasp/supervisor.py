@@ -14,13 +14,14 @@ At every control step the supervisor
    looks for a slide of another contact that makes it possible and does that first
    (``enabling``), or logs why and tries the next contact in danger, or waits;
 3. runs a slide in three phases: **priming** (the fixed-contact law with the internal force moved
-   so the contact sits just past the edge of its friction cone, in the sliding direction, until
-   it is sensed slipping or for at most ``prime_time``), **sliding** (Proposition 3, which
+   so the contact sits just past the edge of its static friction cone, :math:`\mu_s` +
+   ``prime_overshoot``, in the sliding direction, until it is sensed slipping or for at most
+   ``prime_time``), **sliding** (Proposition 3, which
    predicts the friction from the commanded motion and, for more than two fingers, chooses the
    slider's normal force with the internal force; ξ follows a second-order filter towards the
    target, :math:`\ddot\xi_r = \omega_n^2 (\xi^* - \xi_r) - 2\zeta\omega_n\dot\xi_r`), and
-   **settling** (the fixed-contact law with the contact just inside its cone in the sliding
-   direction, ``settle_undershoot``, until the plant's contact sticks);
+   **settling** (the fixed-contact law with the contact just inside its kinetic cone in the
+   sliding direction, :math:`\mu_k` - ``settle_undershoot``, until the plant's contact sticks);
 4. starts at most one slide at a time, so p ≤ 1 and 2m ≥ 3 + p holds for every m ≥ 2.
 
 The supervisor reads only what a hand could sense: the object pose and twist, each contact's
@@ -38,6 +39,7 @@ from enum import Enum
 
 import numpy as np
 
+from .contact import as_frictions
 from .control import (
     ComputedTorqueController,
     ControlOutput,
@@ -57,7 +59,7 @@ from .polygon import ConvexPolygon
 from .reduced import ReducedModel
 from .sliding import sliding_feasibility
 from .trajectory import Trajectory
-from .validation import as_finite_array, as_friction_coefficients, as_positive_float
+from .validation import as_finite_array, as_positive_float
 
 __all__ = [
     "ContactPhase",
@@ -96,18 +98,18 @@ class SupervisorSettings:
         zeta: Damping ratio of the slide filter [-].
         prime_time: Longest duration of the cone-edge transition before a slide [s]; it ends
             earlier when the contact is sensed slipping.
-        prime_overshoot: The transition asks for |f_t| = (μ + this) f_n at the contact [-], just
-            past the cone's edge, so that the contact starts to slip by itself (gently: the
-            tangential force exceeds the kinetic friction by ``prime_overshoot`` f_n) before the
+        prime_overshoot: The transition asks for |f_t| = (μ_s + this) f_n at the contact [-], just
+            past the static cone's edge, so that the contact starts to slip by itself (gently: the
+            tangential force exceeds the static friction by ``prime_overshoot`` f_n) before the
             sliding law takes over. Switching to the sliding law while the contact is still stuck
             makes the plant redistribute the forces for one step and can slip another contact.
         settle_undershoot: A slide that ends with the contact still sliding settles with the
-            fixed-contact law asking for (μ - this) f_n of friction in the sliding direction [-],
-            just inside the cone: the plant's kinetic friction exceeds it by this much f_n, so the
-            contact slows down gently and sticks. The plain fixed-contact law would predict static
-            friction of either sign there, which a sliding contact cannot give; the plant would
-            redistribute the forces for a step, enough to slip another contact when the slider
-            carries much friction (the palm under the object).
+            fixed-contact law asking for (μ_k - this) f_n of friction in the sliding direction [-]
+            (this at most μ_k / 2), just inside the kinetic cone: the plant's kinetic friction
+            exceeds it by this much f_n, so the contact slows down gently and sticks. The plain
+            fixed-contact law would predict static friction of either sign there, which a sliding
+            contact cannot give; the plant would redistribute the forces for a step, enough to
+            slip another contact when the slider carries much friction (the palm under the object).
         arrive_tolerance: A slide ends when |ξ - ξ*| is below this [m] ...
         arrive_speed: ... and |ξ̇| below this [m/s].
         max_slide_time: A slide that has not arrived after this long ends where it is [s].
@@ -296,7 +298,8 @@ class RegraspSupervisor:
         edges: The contact edge of each finger.
         trajectory: The desired object trajectory X_d(t) in the hand frame.
         xi: Initial contact positions ξ [m], one per finger (all contacts start fixed).
-        mu: Friction coefficient(s) the controllers and the predicate assume.
+        friction: The friction the controllers and the predicate assume: a
+            :class:`~regrasp.contact.Friction` or a coefficient [-] for all contacts, or one per contact.
         object_mass, object_inertia: [kg], [kg m²]; default: the polygon's.
         tip_clearance: Per-finger tip clearance [m] for the ``urdf`` geometry (None: default).
         plan: The planner's result for ``trajectory`` (:func:`~regrasp.planner.plan`), or None.
@@ -308,7 +311,7 @@ class RegraspSupervisor:
         settings: :class:`SupervisorSettings`.
     """
 
-    def __init__(self, hand: Hand, polygon: ConvexPolygon, edges, trajectory: Trajectory, xi, mu=0.5, *,
+    def __init__(self, hand: Hand, polygon: ConvexPolygon, edges, trajectory: Trajectory, xi, friction=0.5, *,
                  object_mass: float | None = None, object_inertia: float | None = None,
                  tip_clearance=None, plan: PlanResult | None = None,
                  settings: SupervisorSettings = SupervisorSettings()):
@@ -321,7 +324,7 @@ class RegraspSupervisor:
         self.edges = edges
         self.trajectory = trajectory
         self.settings = settings
-        self.mu = as_friction_coefficients(mu, m)
+        self.friction = as_frictions(friction, m)
         self.object_mass = as_positive_float("object_mass", polygon.mass if object_mass is None else object_mass)
         self.object_inertia = as_positive_float(
             "object_inertia", polygon.inertia if object_inertia is None else object_inertia)
@@ -367,24 +370,18 @@ class RegraspSupervisor:
         return ReducedModel(self.hand, self.grasp.with_modes(modes), self.xi, object_mass=self.object_mass,
                             object_inertia=self.object_inertia)
 
-    def _fixed_controller(self, cone_edge: ConeEdge | None = None, overshoot: float | None = None
-                          ) -> ComputedTorqueController:
-        """The fixed-contact law; with ``cone_edge``, that contact's force asks for (μ + overshoot) f_n
-        of friction (default ``prime_overshoot``: just past the cone's edge, so that it starts to
-        slip; negative: just inside, so that a sliding contact slows down and sticks)."""
+    def _fixed_controller(self, cone_edge: ConeEdge | None = None) -> ComputedTorqueController:
+        """The fixed-contact law; with ``cone_edge``, that contact's force on that edge (its coefficient:
+        μ_s + ``prime_overshoot`` to prime a slide, μ_k - ``settle_undershoot`` to settle one)."""
         model = self._model(["fixed"] * self.hand.m)
-        mu = self.mu
-        if cone_edge is not None:
-            mu = mu.copy()
-            mu[cone_edge.contact] += self.settings.prime_overshoot if overshoot is None else overshoot
-        return FixedContactController(model, self._gains(3), mu, internal_force=self.settings.internal_force,
+        return FixedContactController(model, self._gains(3), self.friction, internal_force=self.settings.internal_force,
                                       cone_edge=cone_edge)
 
     def _sliding_controller(self, i: int) -> ComputedTorqueController:
         modes = ["sliding" if j == i else "fixed" for j in range(self.hand.m)]
         # Proposition 3 predicts the friction from the commanded motion; with m > 2 it chooses the
         # slider's normal force together with the internal force (its class docstring)
-        return Proposition3Controller(self._model(modes), self._gains(4), self.mu, direction=self._direction,
+        return Proposition3Controller(self._model(modes), self._gains(4), self.friction, direction=self._direction,
                                       internal_force=self.settings.internal_force)
 
     # ------------------------------------------------------------------ logging
@@ -551,13 +548,14 @@ class RegraspSupervisor:
             fraction = k / (n - 1) if n > 1 else 0.0
             xi[i] = start + fraction * (target - start)
             desired = self.trajectory.sample(min(t + fraction * duration, self.trajectory.t_end))
-            mu = self.mu.copy()
-            if k == 0:
-                mu[i] += s.prime_overshoot  # the priming asks for that much friction
+            # where it starts, the priming asks for μ_s + overshoot (it must break away); on the way
+            # the slider carries μ_k
+            edge_mu = self.friction[i].static + s.prime_overshoot if k == 0 else None
             verdict = sliding_feasibility(
-                self.grasp, desired.pose, xi, desired.acceleration, i, direction, mu, object_mass=self.object_mass,
-                object_inertia=self.object_inertia, gravity_in_hand=self.hand.gravity_in_hand,
-                settings=s.feasibility, solver=self._feasibility)
+                self.grasp, desired.pose, xi, desired.acceleration, i, direction, self.friction,
+                object_mass=self.object_mass, object_inertia=self.object_inertia,
+                gravity_in_hand=self.hand.gravity_in_hand, settings=s.feasibility, solver=self._feasibility,
+                edge_mu=edge_mu)
             if not verdict.possible:
                 break
         return verdict, float(xi[i])
@@ -589,13 +587,14 @@ class RegraspSupervisor:
 
     def _start_priming(self, meas: Measurement, out: list, i: int, direction: float, target: float, interval,
                        until, verdict, why: str) -> None:
-        """Prime contact i's slide: the fixed law with i just past its cone edge in ``direction``."""
+        """Prime contact i's slide: the fixed law with i just past its static cone edge in ``direction``."""
         lo, hi = interval
         self._active, self._direction, self._target = i, direction, target
         self._phase_start = meas.t
         self.phases[i] = ContactPhase.PRIMING
         self.xi = meas.xi.copy()
-        self._controller = self._fixed_controller(ConeEdge(i, direction))
+        self._controller = self._fixed_controller(
+            ConeEdge(i, direction, self.friction[i].static + self.settings.prime_overshoot))
         self._log(out, meas.t, i, "prime", f"to slide {'+' if direction > 0 else '-'}xi from "
                   f"{meas.xi[i] * 1e3:.2f} mm to {target * 1e3:.2f} mm{why} (feasible [{lo * 1e3:.2f}, "
                   f"{hi * 1e3:.2f}] mm" + (f", planned feasible until t = {until:.3f} s" if until is not None else "")
@@ -610,10 +609,11 @@ class RegraspSupervisor:
         if meas.sliding[i]:
             self.phases[i] = ContactPhase.SETTLING
             moving = float(meas.xi_dot[i])
-            # (never below half of μ: a contact with μ under the undershoot still gets a cone)
-            undershoot = min(self.settings.settle_undershoot, 0.5 * float(self.mu[i]))
-            self._controller = self._fixed_controller(ConeEdge(i, math.copysign(1.0, moving) if moving else self._direction),
-                                                      -undershoot)
+            # (never below half of μ_k: a contact with μ_k under the undershoot still gets a cone)
+            kinetic = self.friction[i].kinetic
+            undershoot = min(self.settings.settle_undershoot, 0.5 * kinetic)
+            self._controller = self._fixed_controller(
+                ConeEdge(i, math.copysign(1.0, moving) if moving else self._direction, kinetic - undershoot))
         else:
             self._controller = self._fixed_controller()
             self._finish(meas, out)

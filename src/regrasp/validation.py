@@ -43,14 +43,6 @@ def as_positive_float(name: str, value, *, allow_zero: bool = False) -> float:
     return out
 
 
-def as_friction_coefficients(mu, m: int) -> np.ndarray:
-    """Coulomb coefficients [-] per contact: one number for all ``m`` contacts, or one each; >= 0."""
-    arr = np.array(mu, dtype=float) if np.ndim(mu) else np.full(m, float(mu))
-    if arr.shape != (m,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
-        raise InvalidParameterError("mu", mu, f"a friction coefficient >= 0, or one per contact ({m})")
-    return arr
-
-
 def as_finite_vectors(names: tuple[str, ...], values: tuple, n: int) -> np.ndarray:
     """The ``values`` as the rows of one (len(values), n) float array, all checked at once (hot paths).
 
