@@ -55,6 +55,8 @@ from .recording import RolloutRecorder
 from .reduced import ReducedModel, ReducedState
 from .rollout import Rollout, RolloutEvent, RolloutFailure, RolloutResult, build_rollout
 from .scenario import FingerContact, Scenario, load_scenario
+from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide
+from .schedule_planner import RegraspSettings, plan_regrasps
 from .sliding import SlideFeasibility, sliding_feasibility
 from .supervisor import (
     ContactPhase,
@@ -103,6 +105,7 @@ __all__ = [
     "InvalidParameterError",
     "LinkShape",
     "Measurement",
+    "NoScheduleError",
     "PlanResult",
     "Plant",
     "PlantContact",
@@ -116,6 +119,8 @@ __all__ = [
     "ReducedModel",
     "ReducedState",
     "RegraspError",
+    "RegraspSchedule",
+    "RegraspSettings",
     "RegraspSupervisor",
     "Rollout",
     "RolloutEvent",
@@ -124,7 +129,9 @@ __all__ = [
     "RolloutResult",
     "Scenario",
     "ScenarioError",
+    "ScheduleLimit",
     "SingularFingerError",
+    "Slide",
     "SlideFeasibility",
     "SlidingContactCountError",
     "SupervisorEvent",
@@ -145,6 +152,7 @@ __all__ = [
     "load_scenario",
     "measure_reduced_state",
     "plan",
+    "plan_regrasps",
     "plan_scenario",
     "planar_2r_urdf",
     "reachable_on_line",

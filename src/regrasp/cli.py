@@ -1,9 +1,11 @@
 """The ``regrasp`` command line.
 
-``regrasp plan SCENARIO [--json] [--plot DIR] [--samples N] [--geometry ideal|urdf]``
+``regrasp plan SCENARIO [--json] [--plot DIR] [--samples N] [--geometry ideal|urdf]
+[--regrasp [--envelope-margin M] [--cone-margin N]]``
 
-Exit status: 0 when the trajectory is feasible, 1 when it is not (the result is still
-printed), 2 on bad input (a typed error, printed as one line on stderr).
+Exit status: 0 when the trajectory is feasible (and, with ``--regrasp``, a regrasp schedule
+exists), 1 when it is not (the result is still printed, with the reason), 2 on bad input (a typed
+error, printed as one line on stderr).
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import argparse
 import json
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -92,6 +95,38 @@ def _summary(plan, scenario, figures) -> str:
     return "\n".join(lines)
 
 
+def _schedule_summary(schedule, error) -> str:
+    """The ``--regrasp`` lines of the summary."""
+    mm = 1000.0
+    if error is not None:
+        lines = [f"  regrasp schedule: NONE ({error.limit.value}) - {error.reason}"]
+        if error.rule:
+            lines.append(f"    {error.rule}")
+        lines.append(f"    the latest time any admissible state survives: t = {error.latest_time:.3f} s")
+        return "\n".join(lines)
+    per = " per period" if schedule.periodic else ""
+    bound = schedule.slides_lower_bound
+    lines = [f"  regrasp schedule: {'periodic' if schedule.periodic else 'not periodic'}, t in "
+             f"[{schedule.t_start:.3f}, {schedule.t_end:.3f}] s, {len(schedule.slides)} slides{per}"
+             + (f" (no schedule has fewer than {bound})" if bound is not None else "")
+             + f", planned in {schedule.planning_seconds:.2f} s"]
+    for i, name in enumerate(schedule.names):
+        ours = [s for s in schedule.slides if s.contact == i]
+        if not ours:
+            lines.append(f"    {name}: no slide (fixed at xi = {schedule.xi_start[i] * mm:.1f} mm)")
+            continue
+        parts = [f"{'+' if s.direction > 0 else '-'}xi {s.start_xi * mm:.1f} -> {s.end_xi * mm:.1f} mm in "
+                 f"[{s.start:.3f}, {s.end:.3f}] s" for s in ours]
+        lines.append(f"    {name}: {len(ours)} slide{'s' if len(ours) != 1 else ''}: " + "; ".join(parts))
+    t, who = schedule.min_envelope_margin_at
+    lines.append(f"    smallest envelope margin {schedule.min_envelope_margin * mm:.2f} mm ({who}, t = {t:.3f} s; "
+                 f"required {schedule.required_envelope_margin * mm:.2f} mm)")
+    t, who = schedule.min_cone_margin_at
+    lines.append(f"    smallest cone margin {schedule.min_cone_margin:.3f} N ({who}, t = {t:.3f} s; "
+                 f"required {schedule.required_cone_margin:.3f} N)")
+    return "\n".join(lines)
+
+
 def _cmd_plan(args) -> int:
     from .planner import plan_scenario
     from .scenario import load_scenario
@@ -99,19 +134,48 @@ def _cmd_plan(args) -> int:
     scenario = load_scenario(args.scenario)
     progress = _ProgressBar(f"planning {scenario.name}") if not args.json else None
     result = plan_scenario(scenario, samples=args.samples, geometry=args.geometry, progress=progress)
+    schedule = error = None
+    if args.regrasp:
+        from .schedule import NoScheduleError
+        from .schedule_planner import RegraspSettings, plan_regrasps
+
+        options = {k: v for k, v in (("envelope_margin", args.envelope_margin), ("cone_margin", args.cone_margin),
+                                     ("geometry", args.geometry)) if v is not None}
+        try:
+            schedule = plan_regrasps(scenario, RegraspSettings(**options),
+                                     progress=_ProgressBar("planning regrasps") if not args.json else None)
+        except NoScheduleError as exc:
+            error = exc
     figures = []
     if args.plot:
-        from .plotting import write_plan_figures
+        from .plotting import plot_schedule, write_plan_figures
 
         figures = write_plan_figures(result, args.plot)
+        if schedule is not None:
+            figures.append(plot_schedule(result, schedule, Path(args.plot) / "regrasp.png"))
     if args.json:
         doc = result.to_json_dict()
+        if args.regrasp:
+            doc["schedule"] = schedule.to_json_dict() if schedule is not None else error.to_json_dict()
         doc["figures"] = [str(p) for p in figures]
         json.dump(doc, sys.stdout)
         sys.stdout.write("\n")
     else:
-        print(_summary(result, scenario, figures))
-    return 0 if result.feasible else 1
+        text = _summary(result, scenario, figures)
+        if args.regrasp:
+            text += "\n\n" + _schedule_summary(schedule, error)
+        print(text)
+    return 0 if result.feasible and error is None else 1
+
+
+def _nonnegative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (value >= 0.0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return value
 
 
 def _samples(text: str) -> int:
@@ -135,6 +199,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="DIR", help="write d.png, reachable.png and feasible.png into DIR")
     p.add_argument("--samples", type=_samples, help="number of time samples (default: the scenario's)")
     p.add_argument("--geometry", choices=("ideal", "urdf"), help="link collision model (default: the scenario's)")
+    p.add_argument("--regrasp", action="store_true",
+                   help="also plan the regrasp schedule: every contact's slides over the trajectory (paper §4); "
+                        "with --json a 'schedule' object, with --plot regrasp.png (paper Fig. 4.3)")
+    p.add_argument("--envelope-margin", type=_nonnegative, metavar="M",
+                   help="with --regrasp: the envelope margin [m] every contact keeps (default 0.001)")
+    p.add_argument("--cone-margin", type=_nonnegative, metavar="N",
+                   help="with --regrasp: the cone margin [N] every fixed contact keeps (default 0.1)")
     p.set_defaults(func=_cmd_plan)
     return parser
 

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize
 
+from .contact import cone_margin
 from .exceptions import InvalidParameterError
 from .polygon import ConvexPolygon
 
@@ -300,4 +301,4 @@ def force_system(geometry: ForceGeometry, beta: float, acceleration, xi, ratios:
     x = (second if second.status == 0 else first).x[:d]
     lam, tau = _forces(x, m, ratios, fixed)
     mu = np.array([static_mu[i] if ratios[i] is None else abs(ratios[i]) for i in range(m)])
-    return ForceSystem(True, lam, tau, mu * lam - np.abs(tau))
+    return ForceSystem(True, lam, tau, cone_margin(mu, lam, tau))

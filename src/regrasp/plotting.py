@@ -5,6 +5,8 @@
 * ``reachable.png`` (Fig. 2.10): the reachable set on the edge's line versus time.
 * ``feasible.png`` (Fig. 2.14): the feasible set inside the reachable set versus time,
   with the edge's ends (ξ_lower, ξ_upper) and the suggested initial contact.
+* ``regrasp.png`` (Fig. 4.3, :func:`plot_schedule`): per finger its feasible band, the danger
+  zones within the required margin of its bounds, the scheduled contact and its slides.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ from matplotlib.patches import Patch  # noqa: E402
 
 from .planner import FingerPlan, PlanResult  # noqa: E402
 
-__all__ = ["plot_conditions", "plot_feasible", "plot_reachable", "plot_slide_feasibility", "write_plan_figures"]
+__all__ = ["plot_conditions", "plot_feasible", "plot_reachable", "plot_schedule", "plot_slide_feasibility",
+           "write_plan_figures"]
 
 _CONDITION_COLORS = {"I": "#e41a1c", "II": "#ff7f00", "III": "#4daf4a", "IV": "#377eb8"}
 _MM = 1000.0  # plot lengths in millimetres
@@ -148,10 +151,11 @@ def plot_feasible(plan: PlanResult, path: str | Path) -> Path:
     return _save(fig, path)
 
 
-def _save(fig, path) -> Path:
+def _save(fig, path, layout: bool = True) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.tight_layout()
+    if layout:
+        fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
@@ -232,3 +236,53 @@ def plot_slide_feasibility(polygon, pose, fingers, points_in_hand, edges, fricti
     if title:
         fig.suptitle(title, fontsize=10)
     return _save(fig, path)
+
+
+def plot_schedule(plan: PlanResult, schedule, path: str | Path) -> Path:
+    """Paper Figure 4.3 for a planned schedule: per finger its feasible band over time, the zones
+    within the required envelope margin of its bounds (the danger zones the schedule keeps out of),
+    the scheduled contact ξ_d(t) and its slides (shaded, with their direction)."""
+    times = plan.times
+    fig, axes = _figure(len(plan.fingers))
+    t_grid = np.linspace(times[0], times[-1], 2000)
+    xi_d = schedule.at(t_grid).xi
+    margin = schedule.required_envelope_margin
+    period = schedule.period
+    repeats = [0.0] if period is None else period * np.arange(int(np.ceil((times[-1] - schedule.t_start) / period)) + 1)
+    for i, (ax, finger) in enumerate(zip(axes, plan.fingers)):
+        edge_lo, edge_hi = finger.samples[0].edge_range
+        pad = 0.08 * (edge_hi - edge_lo)
+        grid = np.linspace(edge_lo - pad, edge_hi + pad, 600)
+        feasible = [s.feasible for s in finger.samples]
+        safe = [tuple((lo + margin, hi - margin) for lo, hi in f if hi - lo > 2 * margin) for f in feasible]
+        img = _membership(times, feasible, grid).astype(float) + _membership(times, safe, grid)
+        cmap = matplotlib.colors.ListedColormap(["white", "#fc9272", "#c6dbef"])
+        ax.imshow(img, origin="lower", aspect="auto", cmap=cmap, vmin=0, vmax=2, interpolation="nearest",
+                  extent=(times[0], times[-1], grid[0] * _MM, grid[-1] * _MM))
+        for y in (edge_lo, edge_hi):
+            ax.axhline(y * _MM, color="#d95f02", ls="--", lw=1)
+        ours = [s for s in schedule.slides if s.contact == i]
+        for offset in repeats:
+            for s in ours:
+                start, end = s.start + offset, s.end + offset
+                if start > times[-1]:
+                    continue
+                ax.axvspan(start, end, color="#969696", alpha=0.25, lw=0)
+                ax.annotate("", xy=(end, s.end_xi * _MM), xytext=(start, s.start_xi * _MM),
+                            arrowprops=dict(arrowstyle="->", color="#a63603", lw=1.2))
+        ax.plot(t_grid, xi_d[:, i] * _MM, color="k", lw=1.8)
+        per = f"{len(ours)} slide{'s' if len(ours) != 1 else ''}" + (" per period" if period else "")
+        ax.set_title(f"{finger.name}: edge {finger.edge}, {per}")
+        ax.set_ylabel("ξ [mm]")
+        ax.set_ylim(grid[0] * _MM, grid[-1] * _MM)
+    handles = [Patch(color="#c6dbef", label="feasible, with the margin"),
+               Patch(color="#fc9272", label=f"danger zone (within {margin * _MM:g} mm of a bound)"),
+               Patch(color="#969696", alpha=0.25, label="slide (arrow: from, to)"),
+               matplotlib.lines.Line2D([], [], color="k", lw=1.8, label="scheduled contact ξ_d(t)"),
+               matplotlib.lines.Line2D([], [], color="#d95f02", ls="--", lw=1, label="edge ends")]
+    axes[-1].set_xlabel("t [s]")
+    fig.suptitle(f"{plan.scenario or 'plan'}: regrasp schedule, {len(schedule.slides)} slides"
+                 + (f" per period of {period:.3g} s" if period else "") + " (paper Fig. 4.3)")
+    fig.tight_layout(rect=(0, 0.045, 1, 1))
+    fig.legend(handles=handles, loc="lower center", fontsize=8, ncol=3, frameon=False)
+    return _save(fig, path, layout=False)
