@@ -15,6 +15,9 @@ Items and their floors:
   and with ``ideal`` ones; floor: one envelope sample per finger (``FingerEnvelope.at``); and with the
   ``urdf`` envelopes followed from step to step (``track_envelopes``, ``EnvelopeTracker``), whose floor
   is the coal distance calls the tracked steps make (bare ``coal.ComputeDistance`` calls);
+* the regrasp schedule of the three-finger scenario (``plan_regrasps``, default settings): the
+  median wall time of whole plans (after one warm-up plan that loads numba's compiled kernels;
+  three timed plans, one with ``--quick``), target ≤ 10 s;
 * the rollout of paper trajectory 2 with the palm finger (``paper_trajectory_2_three_fingers.toml``,
   two periods at 1 kHz, or until it fails): real-time factor = simulated time / wall time, with
   recording off and on (a ``RolloutRecorder`` writing an .rrd to a temporary directory).
@@ -33,7 +36,8 @@ import pinocchio as pin
 
 from common import ROOT, median_us, parse_args, sliding_hold
 
-from regrasp import FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario
+from regrasp import (FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario,
+                     plan_regrasps)
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
 from regrasp.supervisor import SupervisorSettings
 
@@ -88,6 +92,20 @@ def rollout_realtime(quick: bool) -> dict:
     return {"recording_off": off.realtime_factor, "recording_on": on.realtime_factor,
             "simulated_s": simulated, "requested_s": off.duration,
             "outcome": "success" if off.success else f"failed at {off.failure.time:.3f} s: {off.failure.reason}"}
+
+
+def regrasp_plan_seconds(quick: bool) -> dict:
+    """Wall time of whole plans of the three-finger scenario's regrasp schedule (after a warm-up)."""
+    sc = load_scenario(THREE)
+    plan_regrasps(sc)  # warm-up: numba loads (or, on a fresh checkout, compiles) the lattice kernels
+    seconds, schedule = [], None
+    for _ in range(1 if quick else 3):
+        t0 = time.perf_counter()
+        schedule = plan_regrasps(sc)
+        seconds.append(time.perf_counter() - t0)
+    return {"median_s": float(np.median(seconds)), "runs_s": seconds, "slides": len(schedule.slides),
+            "slides_lower_bound": schedule.slides_lower_bound, "periodic": schedule.periodic,
+            "min_envelope_margin_m": schedule.min_envelope_margin, "min_cone_margin_n": schedule.min_cone_margin}
 
 
 def batch_us(fn, batch: int = 1000, repeats: int = 7) -> float:
@@ -172,12 +190,13 @@ def main() -> None:
     med, floor = supervisor_step_us("urdf", n, track=True)
     results["supervisor_step_urdf_tracked"] = {"median_us": med, "floor_us": floor}
     results["rollout_realtime_factor"] = rollout_realtime(args.quick)
+    results["regrasp_plan"] = regrasp_plan_seconds(args.quick)
     if args.json:
         print(json.dumps(results))
         return
     print(f"{'item':28s} {'median [us]':>12s} {'floor [us]':>11s} {'ratio':>7s}")
     for key, value in results.items():
-        if key == "rollout_realtime_factor":
+        if key in ("rollout_realtime_factor", "regrasp_plan"):
             continue
         med, floor = value["median_us"], value["floor_us"]
         ratio = f"{med / floor:6.1f}x" if floor else "     -"
@@ -186,6 +205,9 @@ def main() -> None:
     rt = results["rollout_realtime_factor"]
     print(f"rollout real-time factor      {rt['recording_off']:6.2f}x recording off, {rt['recording_on']:6.2f}x on "
           f"({rt['simulated_s']:.3f} of {rt['requested_s']:.3f} s simulated; {rt['outcome']})")
+    rp = results["regrasp_plan"]
+    print(f"regrasp schedule, three fingers  {rp['median_s']:6.2f} s median of {len(rp['runs_s'])} plans "
+          f"({rp['slides']} slides per period, fewest possible {rp['slides_lower_bound']}; target <= 10 s)")
     print(f"(Pinocchio floor of one 2-finger dynamics evaluation: {floor_dyn:.1f} us; "
           f"persistent OSQP solve of the 2-finger QP: {osqp_floor:.1f} us; supervisor floors: one "
           f"envelope sample per finger; tracked: its coal calls)")

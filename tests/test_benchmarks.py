@@ -47,3 +47,5 @@ def test_benchmark_table_quick_smoke():
     assert set(rollout) >= {"recording_off", "recording_on"}
     assert rollout["recording_off"] > 0 and rollout["recording_on"] > 0
     assert 0 < rollout["simulated_s"] <= rollout["requested_s"] + 1e-9
+    plan = doc["regrasp_plan"]
+    assert plan["median_s"] > 0 and plan["periodic"] is True and plan["slides"] >= plan["slides_lower_bound"] > 0

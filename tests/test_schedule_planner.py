@@ -173,10 +173,9 @@ def test_slides_too_slow_for_the_envelope_are_named():
     assert info.value.limit is ScheduleLimit.SPEED
 
 
-def test_a_given_start_is_kept_and_static_friction_above_kinetic_is_used():
+def test_a_given_start_is_kept_and_static_friction_above_kinetic_is_used(three_fingers):
+    _, settings, first = three_fingers
     scenario = _scenario("paper_trajectory_2_three_fingers", friction=Friction(0.6, 0.5))
-    settings = RegraspSettings()
-    first = plan_regrasps(scenario, settings)
     again = plan_regrasps(scenario, settings, xi0=first.xi_start)
     np.testing.assert_allclose(again.xi_start, first.xi_start)
     assert again.periodic

@@ -77,8 +77,19 @@ def _rule(problem, slider: int, direction: int, when: float) -> str | None:
     what = "with gravity (down)" if with_gravity else "against gravity (up)"
     bounds = (f"w mu_k = {rng.low * mm:.1f} mm < Delta <= (w/2)(mu_s + mu_k) = {rng.high * mm:.1f} mm" if with_gravity
               else f"{rng.low * mm:.1f} mm < Delta <= (w/2)(mu_s - mu_k) = {rng.high * mm:.1f} mm")
-    verdict = ("an empty range: no position allows it" if rng.empty else
-               "so only a slider that far above the holder can do it")
+    up = -g_eff / np.linalg.norm(g_eff)
+    heights = []
+    for j in (slider, holder):
+        edge = problem.scenario.polygon.edge(problem.scenario.contacts[j].edge)
+        heights.append([float((rot @ edge.point(x)) @ up) for x in edge.xi_range])
+    reach = (min(heights[0]) - max(heights[1]), max(heights[0]) - min(heights[1]))  # Δ the edges allow
+    if rng.empty:
+        verdict = "an empty range: no position allows it"
+    elif rng.low >= reach[1] or rng.high < reach[0]:
+        verdict = (f"but the edges allow only {reach[0] * mm:.1f} mm <= Delta <= {reach[1] * mm:.1f} mm: "
+                   "no position allows it")
+    else:
+        verdict = "so only a slider that far above the holder can do it"
     lower = " (the lower contact can never slide down)" if with_gravity else ""
     return (f"two-finger slide rule: {name} must slide {what}, which for two fingers on parallel edges "
             f"w = {width * mm:.1f} mm apart needs {bounds}, Delta the slider's height above the holder "
@@ -103,20 +114,15 @@ def _along_gravity(problem, when: float) -> str:
             f"the weight instead of carrying it, so friction at the other contacts must carry both)")
 
 
-def diagnose(problem, free) -> NoScheduleError:
-    """The :class:`NoScheduleError` for a dynamic program ``free`` that did not reach the last layer."""
-    from .schedule_planner import _schedule  # (the planner imports this module lazily)
-
+def diagnose(problem, free, partial=None) -> NoScheduleError:
+    """The :class:`NoScheduleError` for a dynamic program ``free`` that did not reach the last layer
+    (``problem``: the planner's :class:`~regrasp.schedule_planner.Problem`; ``partial``: the best
+    schedule up to its last layer, attached to the error)."""
     lat = problem.lattice
     names = problem.names
     times = problem.times
     last = free.last_layer
     latest = float(times[max(last, 0)])
-    partial = None
-    if last >= 0:
-        _, mu, p = free.best()
-        cells, moves = path(lat, free, last, mu, p)
-        partial = _schedule(problem, cells, moves, 0.0, None, None)
     em = problem.settings.envelope_margin * 1e3
     for k in range(0, min(last + 2, lat.layers)):
         empty = [i for i in range(len(names)) if not lat.env_ok[k, i, :len(problem.grids[i])].any()]
@@ -149,26 +155,59 @@ def diagnose(problem, free) -> NoScheduleError:
         return NoScheduleError(latest, ScheduleLimit.SPEED, who,
                                f"after t = {latest:.3f} s {' and '.join(who)} cannot follow the feasible set "
                                f"at slides of at most {speed:.0f} mm/s", partial=partial)
-    # forces: the slide the envelopes need next, from the relaxed program's path
+    # forces: the slides the envelopes need next (the relaxed program's path), and among them one that
+    # no admissible position allows at all
     N = relaxed.last_layer
     _, mu, p = relaxed.best()
     cells, moves = path(relaxed_lat, relaxed, N, mu, p)
-    needed = None
-    for k in range(last + 1, len(moves)):
-        for i in range(len(names)):
-            if moves[k, i] != 0:
-                needed = (i, int(moves[k, i]), float(times[k]))
-                break
-        if needed:
-            break
-    if needed is None:
+    needed = []
+    for i in range(len(names)):
+        k = last + 1
+        while k < len(moves):
+            d = int(moves[k, i])
+            if d == 0:
+                k += 1
+                continue
+            first = k
+            while k + 1 < len(moves) and moves[k + 1, i] == d:
+                k += 1
+            needed.append((first, i, d, k))
+            k += 1
+    if not needed:
         return NoScheduleError(latest, ScheduleLimit.FORCES, names,
                                f"after t = {latest:.3f} s no force system holds the object with the required "
                                f"margins at any admissible position", partial=partial)
-    i, d, when = needed
+    needed.sort()
+    blocked = [n for n in needed if _never_allowed(problem, n[1], n[2], n[0], n[3])]
+    first, i, d, end = (blocked or needed)[0]
     sign = "+" if d > 0 else "-"
+    when = float(times[end])
+    how = ("no admissible position allows that slide with the required margins" if blocked else
+           "no force system allows it together with the other contacts' slides")
     rule = _rule(problem, i, d, when)
     return NoScheduleError(latest, ScheduleLimit.FORCES, (names[i],),
                            f"after t = {latest:.3f} s the envelopes need {names[i]} to slide {sign}xi "
-                           f"(by t = {when:.3f} s), and no force system allows it with the required margins"
+                           f"(in [{times[max(first - 1, 0)]:.3f}, {when:.3f}] s), and {how}"
                            + _along_gravity(problem, when), rule=rule, partial=partial)
+
+
+def _never_allowed(problem, i: int, d: int, k0: int, k1: int) -> bool:
+    """Whether no envelope-admissible positions at layers k0..k1 have a force system with contact i
+    sliding ``d`` and the others fixed (the lattice's force tables)."""
+    lat = problem.lattice
+    m = len(problem.names)
+    move = [d if j == i else 0 for j in range(m)]
+    mu = [tuple(r) for r in lat.combos.tolist()].index(tuple(move))
+    others = [j for j in range(m) if j != lat.axis]
+    for k in range(k0, k1 + 1):
+        masks = [lat.env_ok[k, j, :len(problem.grids[j])] for j in others]
+        ok_other = np.ones(1, dtype=bool)
+        for mask in masks:
+            ok_other = np.outer(ok_other, mask).reshape(-1)
+        axis_cells = problem.grids[lat.axis][lat.env_ok[k, lat.axis, :len(problem.grids[lat.axis])]]
+        if not axis_cells.size or not ok_other.any():
+            continue
+        lo, hi = lat.lo[k, ok_other, mu], lat.hi[k, ok_other, mu]
+        if np.any((axis_cells[None, :] >= lo[:, None] - 1e-8) & (axis_cells[None, :] <= hi[:, None] + 1e-8)):
+            return False
+    return True

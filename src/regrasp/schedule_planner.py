@@ -30,9 +30,11 @@ moving contact and step (less sliding). Larger required margins cost slides: pla
 see the trade-off.
 
 **Periodic trajectories** get a periodic schedule over one period (the same contacts at its end as
-at its start), found as the cheapest of the best ``period_candidates`` end states of a free-start
-program, each re-planned to end where it starts. ``slides_lower_bound`` is the free program's slide
-count: a periodic schedule with as many slides is optimal.
+at its start). A free-start program over one period gives a lower bound on the slides; a second
+period, started from the first's end values, gives the best two-period path, whose middle state is
+in the steady regime; the program then runs from that state with the end held to it (and from up to
+``period_candidates`` such states). ``slides_lower_bound`` = max(free, ⌈two periods / 2⌉): a
+periodic schedule with as many slides is optimal.
 
 When no schedule exists, :class:`~regrasp.schedule.NoScheduleError` says until when one survives
 and which constraint ran out (:mod:`regrasp.schedule_diagnosis`).
@@ -53,6 +55,7 @@ from .exceptions import InvalidParameterError
 from .force_polytope import ForceGeometry, ForceLimits, force_system, force_vertices, xi_intervals
 from .scenario import Scenario
 from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide, first_minimum, slides_at
+from .schedule_diagnosis import diagnose
 from .schedule_lattice import Lattice, cells_of, flat_index, motion_combos, path, run
 from .validation import as_finite_array, as_positive_float
 
@@ -76,7 +79,7 @@ class RegraspSettings:
         xi_resolution: Cell size of the contact grid [m].
         max_sliders: Most contacts sliding at once (None: min(m - 1, 2m - 3)).
         comfort_margin: Envelope margin [m] above which a contact costs nothing (the objective's
-            third term; None: ``envelope_margin`` + 2 mm).
+            third term; None: ``envelope_margin`` + 4 mm).
         envelope_substeps: Envelope sub-samples per time step in the lattice's windows.
         verify_substeps: Samples per time step of the planner's own verification.
         periodic: Plan a periodic schedule (None: when the trajectory is periodic and its domain
@@ -108,7 +111,7 @@ class RegraspSettings:
         for name in ("envelope_margin", "cone_margin"):
             as_positive_float(name, getattr(self, name), allow_zero=True)
         if self.comfort_margin is None:
-            object.__setattr__(self, "comfort_margin", self.envelope_margin + 2e-3)
+            object.__setattr__(self, "comfort_margin", self.envelope_margin + 4e-3)
         as_positive_float("comfort_margin", self.comfort_margin)
         ForceLimits(self.f_min, self.f_max, self.cone_margin)
         if self.envelope_margin < 0.5 * self.xi_resolution:
@@ -476,28 +479,49 @@ def _merge(a: dict, b: dict) -> dict:
     return out
 
 
-def _solve(problem: Problem, bans: dict) -> tuple:
-    """(cells, moves, lower bound on the slides, the free run) of the best schedule, or raise."""
+def _periodic_from(problem: Problem, start, bans: dict):
+    """The cheapest periodic path through ``start`` (global cells): (value, cells, moves), or None."""
+    lat = problem.lattice
+    N = lat.layers - 1
+    periodic = run(lat, start=start, bans=bans, end=start)
+    value = periodic.value(start) if periodic.last_layer == N else math.inf
+    if not math.isfinite(value):
+        return None
+    return (value, *path(lat, periodic, N, 0, flat_index(start, periodic.boxes[N])))
+
+
+def _slide_count(moves: np.ndarray) -> int:
+    """The slides a lattice path starts (a contact moving after resting)."""
+    return int(sum(1 for k in range(1, len(moves)) for d, e in zip(moves[k], moves[k - 1]) if d and not e))
+
+
+def _solve(problem: Problem, bans: dict, hint=None) -> tuple:
+    """(cells, moves, lower bound on the slides or None) of the best schedule, or raise; ``hint``: the
+    start of the last periodic schedule, tried first when re-planning around ``bans``."""
     lat = problem.lattice
     N = lat.layers - 1
     K = lat.slide_cost
-    free = run(lat, start=problem.start_cells, bans=bans, end=problem.start_cells if problem.periodic else None)
+    if hint is not None and problem.start_cells is None:
+        found = _periodic_from(problem, hint, bans)
+        if found is not None:
+            return found[1], found[2], None
+    given = problem.start_cells
+    free = run(lat, start=given, bans=bans, end=given if problem.periodic else None)
     if free.last_layer < N:
-        from .schedule_diagnosis import diagnose
-
-        raise diagnose(problem, free)
-    if problem.periodic and problem.start_cells is not None:
-        value = free.value(problem.start_cells)
-        if not math.isfinite(value):
+        partial = None
+        if free.last_layer >= 0:
+            _, mu, p = free.best()
+            partial = _schedule(problem, *path(lat, free, free.last_layer, mu, p), 0.0, None, None)
+        raise diagnose(problem, free, partial)
+    if problem.periodic and given is not None:
+        if not math.isfinite(free.value(given)):
             raise NoScheduleError(float(problem.times[-1]), ScheduleLimit.PERIODIC, problem.names,
                                   "no schedule from the given start positions ends the period where it starts")
-        cells, moves = path(lat, free, N, 0, flat_index(problem.start_cells, free.boxes[N]))
-        return cells, moves, int(value // K), free
+        return (*path(lat, free, N, 0, flat_index(given, free.boxes[N])), None)
     value, mu, p = free.best()
-    lower = int(value // K)
+    lower = None if given is not None else int(value // K)
     if not problem.periodic:
-        cells, moves = path(lat, free, N, mu, p)
-        return cells, moves, lower, free
+        return (*path(lat, free, N, mu, p), lower)
     # a second period started from the first's end values: its best path's start (the middle of the
     # best two-period path) is in the steady regime, a good start for a periodic schedule
     second = run(lat, bans=bans, init=free)
@@ -506,29 +530,25 @@ def _solve(problem: Problem, bans: dict) -> tuple:
         two, mu2, p2 = second.best()
         lower = max(lower, math.ceil(int(two // K) / 2))
         cells2, moves2 = path(lat, second, N, mu2, p2)
-        if np.array_equal(cells2[0], cells2[-1]):  # the best two-period path repeats its second period
-            slides = sum(1 for k in range(1, len(moves2)) for d, e in zip(moves2[k], moves2[k - 1]) if d and not e)
-            if slides <= lower:
-                return cells2, moves2, lower, free
-        candidates.append(cells2[0])
-        candidates.append(cells2[-1])
+        if np.array_equal(cells2[0], cells2[-1]) and _slide_count(moves2) <= lower:
+            return cells2, moves2, lower  # the best two-period path repeats its second period
+        candidates += [cells2[0], cells2[-1]]
     candidates.append(cells_of(p, free.boxes[N]))
     best, tried = None, set()
     for start in candidates[:problem.settings.period_candidates]:
         if tuple(start) in tried:
             continue
         tried.add(tuple(start))
-        periodic = run(lat, start=start, bans=bans, end=start)
-        value = periodic.value(start) if periodic.last_layer == N else math.inf
-        if math.isfinite(value) and (best is None or value < best[0]):
-            best = (value, path(lat, periodic, N, 0, flat_index(start, periodic.boxes[N])))
-            if int(value // K) <= lower:
+        found = _periodic_from(problem, start, bans)
+        if found is not None and (best is None or found[0] < best[0]):
+            best = found
+            if int(found[0] // K) <= lower:
                 break  # as few slides as any schedule: optimal
     if best is None:
         raise NoScheduleError(float(problem.times[-1]), ScheduleLimit.PERIODIC, problem.names,
                               f"no schedule ends a period where it starts (tried {len(tried)} start states; "
                               f"a non-periodic one with {lower} slide(s) exists: settings.periodic = False)")
-    return best[1][0], best[1][1], lower, free
+    return best[1], best[2], lower
 
 
 def plan_regrasps(scenario: Scenario, settings: RegraspSettings = RegraspSettings(), *, start_time=None, xi0=None,
@@ -556,8 +576,11 @@ def plan_regrasps(scenario: Scenario, settings: RegraspSettings = RegraspSetting
     if progress is not None:
         progress(1, total)
     bans: dict = {}
+    hint = lower = None
     for attempt in range(settings.max_repairs + 1):
-        cells, moves, lower, _ = _solve(problem, bans)
+        cells, moves, bound = _solve(problem, bans, hint)
+        lower = bound if attempt == 0 else lower
+        hint = cells[0] if problem.periodic else None
         if progress is not None:
             progress(2 + attempt, total)
         draft = _schedule(problem, cells, moves, 0.0, lower, None, forces=False)
