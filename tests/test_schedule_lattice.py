@@ -54,7 +54,6 @@ def _inside(lo, hi, k, other, column, x):
 
 def _state_cost(lat, k, cells, mu):
     """Secondary cost of entering state (cells, mu) at layer k, or None when not admissible there."""
-    m = len(cells)
     if not all(lat.env_ok[k, i, c] for i, c in enumerate(cells)):
         return None
     if not _inside(lat.lo, lat.hi, k, _other(lat, cells), mu, lat.axis_grid[cells[lat.axis]]):

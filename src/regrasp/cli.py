@@ -153,6 +153,8 @@ def _cmd_plan(args) -> int:
         figures = write_plan_figures(result, args.plot)
         if schedule is not None:
             figures.append(plot_schedule(result, schedule, Path(args.plot) / "regrasp.png"))
+        elif error is not None and error.partial is not None:
+            figures.append(plot_schedule(result, error.partial, Path(args.plot) / "regrasp.png", failure=error))
     if args.json:
         doc = result.to_json_dict()
         if args.regrasp:

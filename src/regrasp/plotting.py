@@ -238,14 +238,18 @@ def plot_slide_feasibility(polygon, pose, fingers, points_in_hand, edges, fricti
     return _save(fig, path)
 
 
-def plot_schedule(plan: PlanResult, schedule, path: str | Path) -> Path:
+def plot_schedule(plan: PlanResult, schedule, path: str | Path, *, failure=None) -> Path:
     """Paper Figure 4.3 for a planned schedule: per finger its feasible band over time, the zones
     within the required envelope margin of its bounds (the danger zones the schedule keeps out of),
-    the scheduled contact ξ_d(t) and its slides (shaded, with their direction)."""
+    the scheduled contact ξ_d(t) and its slides (shaded, with their direction). With ``failure``
+    (a :class:`~regrasp.schedule.NoScheduleError` whose ``partial`` is ``schedule``), the schedule
+    is drawn up to the latest time any admissible state survives, which is marked with the reason."""
     times = plan.times
     fig, axes = _figure(len(plan.fingers))
     t_grid = np.linspace(times[0], times[-1], 2000)
     xi_d = schedule.at(t_grid).xi
+    if schedule.period is None:  # a schedule that does not repeat says nothing past its horizon
+        xi_d[(t_grid < schedule.t_start) | (t_grid > schedule.t_end)] = np.nan
     margin = schedule.required_envelope_margin
     period = schedule.period
     repeats = [0.0] if period is None else period * np.arange(int(np.ceil((times[-1] - schedule.t_start) / period)) + 1)
@@ -271,6 +275,11 @@ def plot_schedule(plan: PlanResult, schedule, path: str | Path) -> Path:
                 ax.annotate("", xy=(end, s.end_xi * _MM), xytext=(start, s.start_xi * _MM),
                             arrowprops=dict(arrowstyle="->", color="#a63603", lw=1.2))
         ax.plot(t_grid, xi_d[:, i] * _MM, color="k", lw=1.8)
+        if failure is not None:
+            ax.axvline(failure.latest_time, color="#cb181d", lw=1.5)
+            if failure.contacts == (finger.name,) or finger.name in failure.contacts:
+                ax.text(failure.latest_time, grid[-1] * _MM, f" no schedule after t = {failure.latest_time:.2f} s "
+                        f"({failure.limit.value})", va="top", ha="left", fontsize=8, color="#cb181d")
         per = f"{len(ours)} slide{'s' if len(ours) != 1 else ''}" + (" per period" if period else "")
         ax.set_title(f"{finger.name}: edge {finger.edge}, {per}")
         ax.set_ylabel("ξ [mm]")
@@ -281,8 +290,13 @@ def plot_schedule(plan: PlanResult, schedule, path: str | Path) -> Path:
                matplotlib.lines.Line2D([], [], color="k", lw=1.8, label="scheduled contact ξ_d(t)"),
                matplotlib.lines.Line2D([], [], color="#d95f02", ls="--", lw=1, label="edge ends")]
     axes[-1].set_xlabel("t [s]")
-    fig.suptitle(f"{plan.scenario or 'plan'}: regrasp schedule, {len(schedule.slides)} slides"
+    if failure is None:
+        title = (f"{plan.scenario or 'plan'}: regrasp schedule, {len(schedule.slides)} slides"
                  + (f" per period of {period:.3g} s" if period else "") + " (paper Fig. 4.3)")
+    else:
+        title = (f"{plan.scenario or 'plan'}: no regrasp schedule ({failure.limit.value}); the best one "
+                 f"up to t = {failure.latest_time:.2f} s")
+    fig.suptitle(title)
     fig.tight_layout(rect=(0, 0.045, 1, 1))
     fig.legend(handles=handles, loc="lower center", fontsize=8, ncol=3, frameon=False)
     return _save(fig, path, layout=False)

@@ -21,7 +21,7 @@ import dataclasses
 import numpy as np
 
 from .schedule import NoScheduleError, ScheduleLimit
-from .schedule_lattice import path, run
+from .schedule_lattice import move_runs, path, run
 from .slide_rule import two_finger_slide_range
 
 __all__ = ["diagnose"]
@@ -160,19 +160,7 @@ def diagnose(problem, free, partial=None) -> NoScheduleError:
     N = relaxed.last_layer
     _, mu, p = relaxed.best()
     cells, moves = path(relaxed_lat, relaxed, N, mu, p)
-    needed = []
-    for i in range(len(names)):
-        k = last + 1
-        while k < len(moves):
-            d = int(moves[k, i])
-            if d == 0:
-                k += 1
-                continue
-            first = k
-            while k + 1 < len(moves) and moves[k + 1, i] == d:
-                k += 1
-            needed.append((first, i, d, k))
-            k += 1
+    needed = move_runs(moves, first=last + 1)
     if not needed:
         return NoScheduleError(latest, ScheduleLimit.FORCES, names,
                                f"after t = {latest:.3f} s no force system holds the object with the required "

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-__all__ = ["Lattice", "LatticeRun", "motion_combos", "run"]
+__all__ = ["Lattice", "LatticeRun", "cells_of", "flat_index", "motion_combos", "move_runs", "path", "run"]
 
 _INF = math.inf
 #: Slack [m] of the interval tests: the tables are float32 (ξ to ~1e-9 m)
@@ -312,12 +312,14 @@ def _intersect(a, b) -> tuple[np.ndarray, np.ndarray]:
     return lo, np.maximum(hi - lo, 0)
 
 
-def run(lat: Lattice, start=None, bans=None, end=None, init: LatticeRun | None = None) -> LatticeRun:
+def run(lat: Lattice, start=None, bans=None, end=None, init: LatticeRun | None = None, *,
+        keep_backs: bool = True) -> LatticeRun:
     """Sweep the layers. ``start``: global cells of the contacts at layer 0 (at rest), or None for
     every admissible rest state; ``bans``: {layer: [(move vector, global cells), ...]} states to
     exclude; ``end``: global cells the path must reach at the last layer (states that cannot are
     pruned), or None; ``init``: a finished run of a periodic lattice whose final values (at rest)
-    start this one (a second period), or None."""
+    start this one (a second period), or None; ``keep_backs``: False when no path will be traced
+    back (a run's back pointers take about 100 MB for three fingers)."""
     N = lat.layers - 1
     M = len(lat.combos)
     use_break = lat.break_lo is not None
@@ -360,7 +362,7 @@ def run(lat: Lattice, start=None, bans=None, end=None, init: LatticeRun | None =
                          lat.pair_bits, lat.pair_union, np.float32(lat.slide_cost), np.float32(lat.move_cost), lat.moving, lat.axis,
                          lat.axis_grid, lat.other_strides, bool(lat.rest_only[k]))
         _apply_bans(V, new_box, (bans or {}).get(k, ()))
-        backs.append(back)
+        backs.append(back if keep_backs else None)
         boxes.append(new_box)
         if np.isfinite(V).any():
             last, final = k, V
@@ -372,6 +374,26 @@ def _apply_bans(V, box, banned) -> None:
         p = flat_index(cells, box)
         if p >= 0:
             V[p, mu] = np.inf
+
+
+def move_runs(moves: np.ndarray, first: int = 1) -> list[tuple[int, int, int, int]]:
+    """The runs of equal nonzero moves of each contact in a path's moves (k, m), from layer ``first``:
+    (first layer, contact, move, last layer) each, in contact then time order. A run is one slide:
+    the contact moves over the intervals ending at those layers."""
+    out = []
+    for i in range(moves.shape[1]):
+        k = first
+        while k < len(moves):
+            d = int(moves[k, i])
+            if d == 0:
+                k += 1
+                continue
+            start = k
+            while k + 1 < len(moves) and moves[k + 1, i] == d:
+                k += 1
+            out.append((start, i, d, k))
+            k += 1
+    return out
 
 
 def path(lat: Lattice, result: LatticeRun, k: int, mu: int, p: int) -> tuple[np.ndarray, np.ndarray]:
