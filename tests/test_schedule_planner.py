@@ -190,3 +190,16 @@ def test_settings_are_validated():
             RegraspSettings(**bad)
     with pytest.raises(InvalidParameterError):
         plan_regrasps("examples/scenarios/paper_trajectory_2.toml")
+
+
+def test_start_positions_outside_the_envelope_are_named():
+    scenario = _scenario("paper_trajectory_2_three_fingers")
+    with pytest.raises(NoScheduleError) as info:
+        plan_regrasps(scenario, xi0=[0.019, 0.012, 0.0])  # finger1's set at t = 0 is [-20, -5] mm
+    err = info.value
+    assert err.limit is ScheduleLimit.ENVELOPE and err.contacts == ("finger1",) and err.latest_time == 0.0
+    assert "24.00 mm outside" in str(err)
+    with pytest.raises(InvalidParameterError):
+        plan_regrasps(scenario, xi0=[0.019, 0.012])
+    with pytest.raises(InvalidParameterError):
+        plan_regrasps(scenario, xi0=[0.5, 0.0, 0.0])  # off the edge

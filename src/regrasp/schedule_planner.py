@@ -130,16 +130,15 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
         violations.append((float(times[k]), "envelope", int(i)))
     limits = ForceLimits(settings.f_min, settings.f_max, settings.cone_margin)
     mu_s = [f.static for f in problem.friction]
-    checks = [(k, tuple(at.direction[k]), None) for k in range(len(times))]
     starts = []
     for s in schedule.slides:  # break-away: the slider on its static edge as it starts
         t = np.array([s.start])
         st = schedule.at(t + 1e-9)
         starts.append((s, float(s.start), st.direction[0], schedule.at(t).xi[0], traj.sample(
             np.clip(t, traj.t_start, traj.t_end))))
-    groups: dict[tuple, list] = {}
-    for k, direction, _ in checks:
-        groups.setdefault(direction, []).append(k)
+    groups: dict[tuple, list] = {}  # the sample times by mode
+    for k in range(len(times)):
+        groups.setdefault(tuple(at.direction[k]), []).append(k)
     for direction, ks in groups.items():
         ks = np.array(ks)
         fv = force_vertices(problem.geometry, sample.pose[ks, 2], sample.acceleration[ks],
@@ -193,6 +192,23 @@ def _periodic_from(problem: Problem, start, bans: dict):
     return (value, *path(lat, periodic, N, 0, flat_index(start, periodic.boxes[N])))
 
 
+def _bad_start(problem: Problem) -> NoScheduleError:
+    """Why the given start positions are not admissible at the first layer."""
+    t0 = float(problem.times[0])
+    start = [float(problem.grids[i][c]) for i, c in enumerate(problem.start_cells)]
+    low = [(i, x, problem.sub_samples[i][0].margin(x)) for i, x in enumerate(start)
+           if not problem.lattice.env_ok[0, i, problem.start_cells[i]]]
+    if low:
+        where = [f"{problem.names[i]} at xi = {x * 1e3:.2f} mm is " + (f"{-m * 1e3:.2f} mm outside its feasible set"
+                 if m < 0 else f"only {m * 1e3:.2f} mm inside its feasible set") for i, x, m in low]
+        return NoScheduleError(t0, ScheduleLimit.ENVELOPE, tuple(problem.names[i] for i, _, _ in low),
+                               f"at t = {t0:.3f} s {'; '.join(where)} (the envelope margin is "
+                               f"{problem.settings.envelope_margin * 1e3:.2f} mm)", partial=None)
+    return NoScheduleError(t0, ScheduleLimit.FORCES, problem.names,
+                           f"no force system holds the object at rest at the start positions "
+                           f"({', '.join(f'{x * 1e3:.1f}' for x in start)} mm) with the required margins", partial=None)
+
+
 def _solve(problem: Problem, bans: dict, hint=None) -> tuple:
     """(cells, moves, lower bound on the slides or None) of the best schedule, or raise; ``hint``: the
     start of the last periodic schedule, tried first when re-planning around ``bans``."""
@@ -207,6 +223,8 @@ def _solve(problem: Problem, bans: dict, hint=None) -> tuple:
     # (a periodic plan from a free start traces no path back through the free run)
     keep = not problem.periodic or given is not None
     free = run(lat, start=given, bans=bans, end=given if problem.periodic else None, keep_backs=keep)
+    if free.last_layer < 0 and given is not None:
+        raise _bad_start(problem)
     if free.last_layer < N:
         if not keep:  # the partial schedule traces back through it after all
             free = run(lat, start=given, bans=bans, keep_backs=True)
