@@ -39,7 +39,7 @@ from enum import Enum
 
 import numpy as np
 
-from .contact import as_frictions
+from .contact import ContactMode, as_frictions
 from .control import (
     ComputedTorqueController,
     ControlOutput,
@@ -335,7 +335,7 @@ class RegraspSupervisor:
         # the runtime envelopes: tracked from step to step, or evaluated anew (FingerEnvelope.at)
         self.trackers = ([EnvelopeTracker(env) for env in self.envelopes]
                          if settings.track_envelopes and Geometry(settings.geometry) is Geometry.URDF else None)
-        self.grasp = Grasp(polygon, edges, ["fixed"] * m)
+        self.grasp = Grasp(polygon, edges, [ContactMode.FIXED] * m)
         if plan is not None and len(plan.fingers) != m:
             raise InvalidParameterError("plan", len(plan.fingers), f"a plan with one finger per finger ({m})")
         self.plan = plan
@@ -373,12 +373,12 @@ class RegraspSupervisor:
     def _fixed_controller(self, cone_edge: ConeEdge | None = None) -> ComputedTorqueController:
         """The fixed-contact law; with ``cone_edge``, that contact's force on that edge (its coefficient:
         μ_s + ``prime_overshoot`` to prime a slide, μ_k - ``settle_undershoot`` to settle one)."""
-        model = self._model(["fixed"] * self.hand.m)
+        model = self._model([ContactMode.FIXED] * self.hand.m)
         return FixedContactController(model, self._gains(3), self.friction, internal_force=self.settings.internal_force,
                                       cone_edge=cone_edge)
 
     def _sliding_controller(self, i: int) -> ComputedTorqueController:
-        modes = ["sliding" if j == i else "fixed" for j in range(self.hand.m)]
+        modes = [ContactMode.SLIDING if j == i else ContactMode.FIXED for j in range(self.hand.m)]
         # Proposition 3 predicts the friction from the commanded motion; with m > 2 it chooses the
         # slider's normal force together with the internal force (its class docstring)
         return Proposition3Controller(self._model(modes), self._gains(4), self.friction, direction=self._direction,
