@@ -80,8 +80,8 @@ def _transition_ok(lat, k, prev_cells, prev_mu, cells, mu):
     u = index[union]
     if u not in (mu, prev_mu) and not _inside(lat.lo, lat.hi, k - 1, _other(lat, prev_cells), u, x_old):
         return False
-    if np.count_nonzero(d) >= 2 and not _inside(lat.mid_lo, lat.mid_hi, k, _other(lat, cells), mu, 0.5 * (x_old + x_new)):
-        return False
+    if np.count_nonzero(d) >= 2 and not _inside(lat.mid_lo, lat.mid_hi, k, _other(lat, cells), mu, x_new):
+        return False  # (the middle's table is indexed by the new cells)
     if lat.break_lo is not None:  # a starting contact breaks away, the others in the union move
         for i, (di, ei) in enumerate(zip(d, e)):
             slot = lat.breakaway_slot[u, i]

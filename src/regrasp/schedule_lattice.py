@@ -90,7 +90,8 @@ class Lattice:
         lo, hi: Feasible ξ_axis interval per layer, cell of the other contacts and move vector,
             (N + 1, n_others, M) [m] (the moving contacts on their kinetic edges).
         mid_lo, mid_hi: The same at the middle of the interval ending at each layer, with the
-            sliders half a cell back, for move vectors of two or more sliders (±inf for the others).
+            sliders half a cell back, for move vectors of two or more sliders (±inf for the others):
+            indexed by the layer's own cells (others and axis), the bounds shifted accordingly.
         break_lo, break_hi: The same with one starting contact on its static edge, (N + 1, n_others,
             slots), or None when no contact's μ_s exceeds its μ_k: the intersection of the intervals at
             the layer and at the real start, half a ramp earlier, with the other sliders that far back.
@@ -196,8 +197,8 @@ def _layer(V_old, lo_old, n_old, lo_new, n_new, env_new, prox_new, tlo_new, thi_
             if not (tlo_old[other_old, mu] - _TOL <= x_old <= thi_old[other_old, mu] + _TOL):
                 continue
             if moving[mu] >= 2.0:  # two sliders: their feasible set need not hold the segment between
-                x_mid = 0.5 * (x_old + x_new)
-                if not (mlo_new[other, mu] - _TOL <= x_mid <= mhi_new[other, mu] + _TOL):
+                # (the table holds the middle's positions under the new layer's cells)
+                if not (mlo_new[other, mu] - _TOL <= x_new <= mhi_new[other, mu] + _TOL):
                     continue
             best, arg = np.inf, -1
             for r in range(pair_ptr[mu], pair_ptr[mu + 1]):
