@@ -160,3 +160,13 @@ def test_the_period_of_the_paper_trajectories():
     problem = build_problem(sc, RegraspSettings(periodic=False), t_end=1.0)
     assert not problem.periodic and problem.times[-1] == pytest.approx(1.0)
     assert problem.dt >= RegraspSettings().time_step - 1e-12  # never faster than the speed limit
+
+
+def test_a_lattice_too_large_for_memory_is_refused_up_front():
+    from regrasp.exceptions import InvalidParameterError
+
+    sc = load_scenario(SCENARIO)
+    four = dataclasses.replace(sc, contacts=sc.contacts + (dataclasses.replace(sc.contacts[2], edge=0),))
+    with pytest.raises(InvalidParameterError) as info:
+        build_problem(four, RegraspSettings())
+    assert "GiB" in str(info.value) and "xi_resolution" in str(info.value)

@@ -25,6 +25,10 @@ from .validation import as_finite_array, as_positive_float
 
 __all__ = ["Problem", "RegraspSettings", "build_problem", "slide_ratios", "trajectory_period"]
 
+#: The largest force tables a problem may build [bytes] (four float32 tables per layer, cell of the
+#: other contacts and move vector: about 80 MiB for the three-finger paper scenario)
+_TABLE_BUDGET = 2 * 2**30
+
 
 @dataclass(frozen=True)
 class RegraspSettings:
@@ -213,6 +217,14 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time=N
     friction = tuple(c.friction for c in contacts)
     p_max = min(m - 1, 2 * m - 3) if settings.max_sliders is None else min(settings.max_sliders, m - 1, 2 * m - 3)
     combos = motion_combos(m, p_max)
+    sizes = sorted(len(g) for g in grids)
+    table_bytes = 4 * 4 * (n_steps + 1) * int(np.prod(sizes[:-1])) * len(combos)  # lo, hi, mid lo, mid hi
+    if table_bytes > _TABLE_BUDGET:
+        raise InvalidParameterError(
+            "scenario", scenario.name,
+            f"a lattice whose force tables fit in {_TABLE_BUDGET / 2**30:.0f} GiB: {m} contacts with "
+            f"{' x '.join(map(str, sizes))} cells and {len(combos)} move vectors over {n_steps + 1} layers need "
+            f"{table_bytes / 2**30:.1f} GiB (coarsen xi_resolution, or lower max_sliders)")
     ramp = settings.ramp
     speed = h / dt
     envelope_buffer = speed * ramp / 8.0 + 1e-5
