@@ -52,7 +52,8 @@ class RegraspSettings:
             covers a period).
         geometry: Envelope geometry, ``"ideal"`` or ``"urdf"`` (None: the scenario's).
         max_repairs: Re-plans after a failed verification before giving up.
-        period_candidates: End states of the free program tried as a periodic schedule's start.
+        period_candidates: Start states tried for a periodic schedule, in order: the middle and the end of
+            the best two-period path, then the free program's best end state.
     """
 
     envelope_margin: float = 1e-3
