@@ -40,7 +40,6 @@ import numpy as np
 
 __all__ = ["Lattice", "LatticeRun", "cells_of", "flat_index", "motion_combos", "move_runs", "path", "run"]
 
-_INF = math.inf
 #: Slack [m] of the interval tests: the tables are float32 (ξ to ~1e-9 m)
 _TOL = 1e-8
 
