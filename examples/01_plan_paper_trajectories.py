@@ -15,7 +15,7 @@ HERE = Path(__file__).resolve().parent
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--plot", metavar="DIR", help="also write the figures of each plan into DIR/<scenario>/")
     args = parser.parse_args()
     for name in ("paper_trajectory_1", "paper_trajectory_2"):

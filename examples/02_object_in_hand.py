@@ -10,6 +10,7 @@ until it leaves it. Prints the plant's event log, the contact forces and the max
 drift.
 """
 
+import argparse
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +21,7 @@ HERE = Path(__file__).resolve().parent
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
     sc = load_scenario(HERE / "scenarios" / "paper_trajectory_2.toml")
     hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
     pose = np.array([0.0, 0.12, 0.0])  # object centre and orientation in the hand frame

@@ -19,6 +19,7 @@ Prints the slide range, the largest tracking errors, the smallest friction-cone 
 holding finger, the plant's event log (empty) and the control step's median time.
 """
 
+import argparse
 from pathlib import Path
 
 import numpy as np
@@ -78,6 +79,7 @@ def make_reference(lo, hi):
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
     sc = load_scenario(HERE / "scenarios" / "paper_trajectory_2.toml")
     hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
     grasp = Grasp(sc.polygon, [1, 3], ["sliding", "fixed"])

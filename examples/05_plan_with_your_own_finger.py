@@ -1,11 +1,12 @@
 """Use the planner as a library: your own finger URDF, a hexagonal object and a waypoint path.
 
-Run: python examples/02_custom_finger_and_object.py
+Run: python examples/05_plan_with_your_own_finger.py
 Builds everything in code (no scenario file): two copies of the shipped long-distal finger,
 a regular hexagon, and a C2 spline through waypoints; then prints each finger's envelope at a
 few times and whether one fixed grasp survives the whole motion.
 """
 
+import argparse
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
     urdf = ROOT / "urdf" / "planar_2r_finger_long_distal.urdf"
     left = Finger.from_urdf(urdf, base_in_hand=(-0.045, 0.0, np.pi / 2), configuration="left", name="left")
     right = left.with_placement(base_in_hand=(0.045, 0.0, np.pi / 2), configuration="right", name="right")

@@ -22,7 +22,7 @@ HERE = Path(__file__).resolve().parent
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default=".", help="directory for figure_3_4.png (default: here)")
     args = parser.parse_args()
     sc = load_scenario(HERE / "scenarios" / "paper_trajectory_2.toml")

@@ -37,7 +37,7 @@ def load_example_03():
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--rrd", type=Path, default=Path("rollout.rrd"), help="output file (default: ./rollout.rrd)")
     parser.add_argument("--duration", type=float, default=1.0, help="simulated time [s] (default 1; example 03: 3)")
     parser.add_argument("--decimation", type=int, default=1, help="log every n-th control step (default 1)")

@@ -20,7 +20,7 @@ HERE = Path(__file__).resolve().parent
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenario", default=str(HERE / "scenarios" / "paper_trajectory_2_three_fingers.toml"),
                         help="scenario file (default: paper trajectory 2 with the palm finger)")
     parser.add_argument("--envelope-margins", type=float, nargs="+", default=[1.0, 2.0, 3.0], metavar="MM",

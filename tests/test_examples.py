@@ -1,5 +1,7 @@
-"""Every numbered example runs headless, terminates and prints something (CI smoke test)."""
+"""Every numbered example runs headless, terminates and prints something (CI smoke test); each answers
+--help without doing its work, and its docstring says how to run it."""
 
+import ast
 import os
 import subprocess
 import sys
@@ -20,3 +22,20 @@ def test_example_runs(path, tmp_path):
                           cwd=tmp_path, env={**os.environ, "MPLBACKEND": "Agg"}, check=False)
     assert proc.returncode == 0, proc.stderr
     assert len(proc.stdout.splitlines()) >= 3
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.name for p in EXAMPLES])
+def test_example_help(path, tmp_path):
+    proc = subprocess.run([sys.executable, str(path), "--help"], capture_output=True, text=True, timeout=60,
+                          cwd=tmp_path, env={**os.environ, "MPLBACKEND": "Agg"}, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("usage:")
+    assert path.name in proc.stdout
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.name for p in EXAMPLES])
+def test_example_docstring_names_its_file(path):
+    doc = ast.get_docstring(ast.parse(path.read_text(encoding="utf-8")))
+    assert doc is not None
+    assert f"Run: python examples/{path.name}" in doc
