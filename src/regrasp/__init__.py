@@ -22,6 +22,7 @@ from .envelope import (
     condition_of,
     reachable_on_line,
 )
+from .events import Event, EventKind, Failure, FailureKind
 from .exceptions import (
     FingerModelError,
     InvalidParameterError,
@@ -34,6 +35,7 @@ from .exceptions import (
     UnknownEdgeError,
     UnreachableError,
 )
+from .executor import SlideOrder
 from .finger import Configuration, Finger, LinkShape
 from .finger_urdf import planar_2r_urdf
 from .grasp import Grasp
@@ -53,16 +55,18 @@ from .plant import Plant, PlantContact, PlantEvent, PlantState, PlantStep
 from .polygon import ConvexPolygon, Edge
 from .recording import RolloutRecorder
 from .reduced import ReducedModel, ReducedState
-from .rollout import Rollout, RolloutEvent, RolloutFailure, RolloutResult, build_rollout
+from .policies import NoRegraspPolicy, ScheduledPolicy, ScheduledSettings
+from .policy_paper import PaperPolicy
+from .rollout import Rollout, RolloutResult, build_rollout
 from .scenario import FingerContact, Scenario, load_scenario
 from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide
 from .schedule_planner import RegraspSettings, plan_regrasps
 from .sliding import SlideFeasibility, sliding_feasibility
+from .simulation import StepRecord, simulate
 from .supervisor import (
     ContactPhase,
     Measurement,
     RegraspSupervisor,
-    SupervisorEvent,
     SupervisorOutput,
     SupervisorSettings,
 )
@@ -84,6 +88,10 @@ __all__ = [
     "EdgeLine",
     "EllipseTrajectory",
     "EnvelopeSample",
+    "Event",
+    "EventKind",
+    "Failure",
+    "FailureKind",
     "Finger",
     "FingerContact",
     "FingerEnvelope",
@@ -105,7 +113,9 @@ __all__ = [
     "InvalidParameterError",
     "LinkShape",
     "Measurement",
+    "NoRegraspPolicy",
     "NoScheduleError",
+    "PaperPolicy",
     "PlanResult",
     "Plant",
     "PlantContact",
@@ -123,18 +133,19 @@ __all__ = [
     "RegraspSettings",
     "RegraspSupervisor",
     "Rollout",
-    "RolloutEvent",
-    "RolloutFailure",
     "RolloutRecorder",
     "RolloutResult",
     "Scenario",
     "ScenarioError",
     "ScheduleLimit",
+    "ScheduledPolicy",
+    "ScheduledSettings",
     "SingularFingerError",
     "Slide",
     "SlideFeasibility",
+    "SlideOrder",
     "SlidingContactCountError",
-    "SupervisorEvent",
+    "StepRecord",
     "SupervisorOutput",
     "SupervisorSettings",
     "Trajectory",
@@ -158,6 +169,7 @@ __all__ = [
     "reachable_on_line",
     "run_closed_loop",
     "segment_hits_polygon",
+    "simulate",
     "sliding_feasibility",
     "solve_internal_force_qp",
 ]

@@ -14,10 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .contact import coefficients, cone_margin
 from .control import ComputedTorqueController, ControlOutput, Proposition2Controller
 from .plant import Plant, PlantEvent
 from .reduced import ReducedModel
+from .simulation import Command, StepRecord, sense_projected, simulate
+from .trajectory import TrajectorySample
 
 __all__ = ["ClosedLoopLog", "measure_reduced_state", "run_closed_loop"]
 
@@ -78,6 +79,57 @@ class ClosedLoopLog:
     max_constraint_error: float
     stopped: bool
 
+    @classmethod
+    def from_records(cls, records, plant: Plant, n_forces: int, n: int) -> "ClosedLoopLog":
+        """The log of a run's :class:`~regrasp.simulation.StepRecord` s (``n_forces`` = 2m, ``n`` = 3 + p)."""
+        def rows(get, shape):
+            return np.array([get(r) for r in records]) if records else np.zeros((0, *shape))
+
+        return cls(
+            times=np.array([r.t for r in records]),
+            S=rows(lambda r: r.command.S_desired - r.command.control.error, (n,)),
+            S_desired=rows(lambda r: r.command.S_desired, (n,)),
+            errors=rows(lambda r: r.command.control.error, (n,)),
+            plant_forces=rows(lambda r: r.plant.forces_surface, (n_forces // 2, 2)),
+            predicted_forces=rows(lambda r: r.command.control.contact_forces_surface, (n_forces // 2, 2)),
+            cone_margins=rows(lambda r: r.cone_margins, (n_forces // 2,)),
+            internal_forces=rows(lambda r: r.command.control.internal.f_c if r.command.control.internal is not None
+                                 else np.zeros(n_forces), (n_forces,)),
+            control_seconds=np.array([r.command.control.seconds for r in records]),
+            events=tuple(plant.events),
+            max_constraint_error=plant.max_constraint_error,
+            stopped=plant.stopped,
+        )
+
+
+class _ControllerDriver:
+    """The simulation loop's driver around one control law and its reference."""
+
+    def __init__(self, controller: ComputedTorqueController, reference: Reference, friction0, friction_noise: float,
+                 rng: np.random.Generator):
+        self.controller = controller
+        self.reference = reference
+        self.sliding = list(controller.model.grasp.sliding)
+        self.friction = friction0
+        self.noise = friction_noise
+        self.rng = rng
+
+    def step(self, meas, dt: float) -> Command:
+        sliding = self.sliding
+        S = np.concatenate([meas.X, meas.xi[sliding]])
+        S_dot = np.concatenate([meas.V, meas.xi_dot[sliding]])
+        S_d, S_d_dot, S_d_ddot = self.reference(meas.t)
+        kwargs = {}
+        if isinstance(self.controller, Proposition2Controller):
+            friction = self.friction if self.friction is not None else meas.friction[sliding]
+            self.friction = None  # later steps read the last plant step's friction
+            kwargs["friction"] = friction + (self.noise * self.rng.standard_normal(len(sliding)) if self.noise else 0.0)
+        out = self.controller(S, S_dot, S_d, S_d_dot, S_d_ddot, **kwargs)
+        S_d = np.asarray(S_d, dtype=float)
+        desired = TrajectorySample(float(meas.t), S_d[:3], np.asarray(S_d_dot, dtype=float)[:3],
+                                   np.asarray(S_d_ddot, dtype=float)[:3])
+        return Command(out.tau, out, self.controller.law, desired, S_d)
+
 
 def run_closed_loop(
     plant: Plant,
@@ -89,7 +141,8 @@ def run_closed_loop(
     rng: np.random.Generator | None = None,
     on_step: Callable[[float, ControlOutput], None] | None = None,
 ) -> ClosedLoopLog:
-    """Run ``controller`` on ``plant`` for ``duration`` [s] (or until the plant stops).
+    """Run ``controller`` on ``plant`` for ``duration`` [s] (or until the plant stops), with the one
+    simulation loop (:func:`~regrasp.simulation.simulate`, the sensor :func:`~regrasp.simulation.sense_projected`).
 
     Args:
         reference: t -> (S_d, Ṡ_d, S̈_d).
@@ -97,46 +150,22 @@ def run_closed_loop(
             (Proposition 2).
         rng: Random generator for that noise.
         on_step: Called after each control step with (t, output).
+
+    Raises:
+        RegraspError: the control law failed (e.g. its internal-force QP is infeasible): the
+            controller's own error.
     """
     model = controller.model
     sliding = list(model.grasp.sliding)
     rng = rng if rng is not None else np.random.default_rng(0)
-    rows = []
-    friction = np.zeros(len(sliding))
+    friction0 = None
     if isinstance(controller, Proposition2Controller) and sliding:
-        friction = _initial_friction_reading(plant, controller, reference, sliding)
-    steps = int(round(duration / plant.dt))
-    for _ in range(steps):
-        if plant.stopped:
-            break
-        t = plant.state.t
-        S, S_dot = measure_reduced_state(plant, model)
-        S_d, S_d_dot, S_d_ddot = reference(t)
-        kwargs = {}
-        if isinstance(controller, Proposition2Controller):
-            kwargs["friction"] = friction + (friction_noise * rng.standard_normal(len(sliding)) if friction_noise else 0.0)
-        out = controller(S, S_dot, S_d, S_d_dot, S_d_ddot, **kwargs)
-        step = plant.step(out.tau)
-        friction = step.forces_surface[sliding, 1].copy()
-        margins = cone_margin(np.array(coefficients(plant.friction, step.modes)), step.forces_surface[:, 0],
-                              step.forces_surface[:, 1])
-        rows.append((t, S, np.asarray(S_d, dtype=float), out.error, step.forces_surface, out.contact_forces_surface,
-                     margins, out.internal.f_c if out.internal is not None else np.zeros(2 * model.grasp.m),
-                     out.seconds))
-        if on_step is not None:
-            on_step(t, out)
-    cols = list(zip(*rows)) if rows else [[] for _ in range(9)]
-    return ClosedLoopLog(
-        times=np.array(cols[0]),
-        S=np.array(cols[1]),
-        S_desired=np.array(cols[2]),
-        errors=np.array(cols[3]),
-        plant_forces=np.array(cols[4]),
-        predicted_forces=np.array(cols[5]),
-        cone_margins=np.array(cols[6]),
-        internal_forces=np.array(cols[7]),
-        control_seconds=np.array(cols[8]),
-        events=tuple(plant.events),
-        max_constraint_error=plant.max_constraint_error,
-        stopped=plant.stopped,
-    )
+        friction0 = _initial_friction_reading(plant, controller, reference, sliding)
+    driver = _ControllerDriver(controller, reference, friction0, friction_noise, rng)
+    records: list[StepRecord] = []
+    consumers = [records.append]
+    if on_step is not None:  # after the plant's step, as the recorder's hook expects
+        consumers.append(lambda record: on_step(record.t, record.command.control))
+    simulate(plant, driver, int(round(duration / plant.dt)), consumers=consumers, sensor=sense_projected,
+             control_failures=False)
+    return ClosedLoopLog.from_records(records, plant, 2 * model.grasp.m, model.n)

@@ -49,7 +49,7 @@ exceeds the hand's threshold). Kinds in ``stop_on`` stop the simulation.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -60,6 +60,7 @@ import pinocchio as pin
 from .collision import UrdfCollisionChecker, default_tip_clearance
 from .contact import ContactMode, as_frictions, as_modes, cone_margin
 from .exceptions import InvalidParameterError
+from .events import EventKind
 from ._scalar import solve_small as _solve_small
 from .hand import Hand, _condition
 from .polygon import ConvexPolygon
@@ -135,14 +136,19 @@ class PlantEvent:
     Attributes:
         time: [s].
         contact: Finger name.
-        kind: ``separation``, ``slip``, ``stick``, ``left_edge``, ``collision`` or ``singular``.
+        kind: :class:`~regrasp.events.EventKind` ``SEPARATION``, ``SLIP``, ``STICK``, ``LEFT_EDGE``,
+            ``COLLISION`` or ``SINGULAR`` (equal to its string value, ``"slip"``...).
         detail: Human-readable numbers.
+        values: The numbers by name: ``link`` (0 proximal, 1 distal) and ``depth`` [m] for a
+            collision, ``normal_force`` [N] for a separation, ``xi`` [m] for a stick or a contact off
+            its edge, ``tangential_force`` and ``normal_force`` [N] for a slip.
     """
 
     time: float
     contact: str
-    kind: str
+    kind: EventKind
     detail: str
+    values: Mapping[str, float] = field(default_factory=dict)
 
 
 @dataclass
@@ -610,8 +616,8 @@ class Plant:
         return PlantStep(new, surface, np.array([x[0] for x in xis]), np.array([x[1] for x in xis]), modes, err,
                          tuple(events))
 
-    def _event(self, t, i, kind, detail, out):
-        ev = PlantEvent(t, self.hand.fingers[i].name, kind, detail)
+    def _event(self, t, i, kind, detail, out, **values):
+        ev = PlantEvent(t, self.hand.fingers[i].name, EventKind(kind), detail, values)
         out.append(ev)
         self.events.append(ev)
         if kind in self.stop_on:
@@ -643,7 +649,7 @@ class Plant:
                     continue
             g = geometry[i]
             if not g.lo <= xi <= g.hi:
-                self._event(st.t, i, "left_edge", f"xi = {xi:.5g} m outside [{g.lo:.5g}, {g.hi:.5g}]", out)
+                self._event(st.t, i, "left_edge", f"xi = {xi:.5g} m outside [{g.lo:.5g}, {g.hi:.5g}]", out, xi=xi)
         for i, f in enumerate(fingers):
             cond = _condition(*f[5:9])
             if not cond <= self.hand.singular_threshold:
@@ -686,7 +692,9 @@ class Plant:
                 nearest[shape.link] = min(nearest[shape.link], d)
             self._certificates[i] = (*posture, *(d * (1.0 - 1e-3) - 1e-5 for d in nearest))
             if dist and min(dist) < 0.0:
-                self._event(st.t, i, "collision", f"link penetrates the object by {-min(dist):.3g} m", out)
+                link = min(range(2), key=lambda k: nearest[k])
+                self._event(st.t, i, "collision", f"link {link + 1} penetrates the object by {-min(dist):.3g} m",
+                            out, link=link, depth=-min(dist))
 
     def _switch_mode(self, st: PlantState, tau, i: int, force_surface, xi: float, xi_dot: float, out) -> None:
         """Separation, slip (the static cone) and stick (the static cone) of contact i (module docstring)."""
@@ -695,10 +703,11 @@ class Plant:
         tol = 1e-9
         static = self._static[i]
         if fn < -tol:
-            self._event(st.t, i, "separation", f"normal force {fn:.4g} N < 0", out)
+            self._event(st.t, i, "separation", f"normal force {fn:.4g} N < 0", out, normal_force=fn)
             c.mode = _MODE_SEPARATED
         elif c.mode is _MODE_FIXED and cone_margin(static, fn, ft) < -tol * max(1.0, abs(fn)):
-            self._event(st.t, i, "slip", f"|f_t| = {abs(ft):.4g} N > mu_s f_n = {static * fn:.4g} N", out)
+            self._event(st.t, i, "slip", f"|f_t| = {abs(ft):.4g} N > mu_s f_n = {static * fn:.4g} N", out,
+                        normal_force=fn, tangential_force=ft)
             c.mode, c.sign = _MODE_SLIDING, float(np.sign(ft) or 1.0)
         elif c.mode is _MODE_SLIDING and xi_dot * c.sign <= 0.0:
             trial = [PlantContact(o.edge, o.mode, o.xi, o.sign) for o in self.contacts]
@@ -707,7 +716,7 @@ class Plant:
             fn2, ft2 = self.surface_forces(st, f_fixed)[i]
             if fn2 >= 0.0 and cone_margin(static, fn2, ft2) >= 0.0:
                 self._event(st.t, i, "stick", f"xi_dot = {xi_dot:.3g} m/s crossed zero; force inside the static cone",
-                            out)
+                            out, xi=xi)
                 c.mode, c.xi = _MODE_FIXED, xi
                 st.contact_work += self._project_velocities(st)
             else:

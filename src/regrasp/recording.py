@@ -76,6 +76,7 @@ outright (SIGKILL, ``os._exit``) cannot finalise its file.
 
 from __future__ import annotations
 
+from dataclasses import replace
 import math
 import re
 import time as _time
@@ -857,6 +858,22 @@ class RolloutRecorder:
         self.steps_logged += 1
         self._writer.end_row(step, t)  # may send a block (timed separately)
         return True
+
+    def log_initial(self, plant: Plant, desired_pose) -> bool:
+        """Log the plant's state before the first step (step 0)."""
+        return self.log_step(plant, None, desired_pose=desired_pose)
+
+    def log_record(self, record) -> bool:
+        """Log one :class:`~regrasp.simulation.StepRecord` of the simulation loop (the state after its step)."""
+        control = record.command.control
+        # the recorder's error series are the object's (the sliding set changes with each slide)
+        control = replace(control, error=control.error[:3])
+        return self.log_step(self.plant, control, desired_pose=record.command.desired.pose, plant_step=record.plant)
+
+    def log_failure(self, failure, plant: Plant) -> None:
+        """Log a rollout's failure."""
+        self._writer.log_now("events", self._next_step, float(plant.state.t),
+                             rr.TextLog(f"FAILURE ({failure.kind.value}): {failure.reason}", level="ERROR"))
 
     def hook(self, plant: Plant, reference: Callable | None = None, *,
              log_initial: bool = True) -> Callable[[float, ControlOutput], None]:

@@ -171,7 +171,8 @@ class RegraspSchedule:
         """Number of slides of each contact over the horizon."""
         return {name: sum(1 for s in self.slides if s.contact == i) for i, name in enumerate(self.names)}
 
-    def _local_time(self, t: np.ndarray) -> np.ndarray:
+    def local_time(self, t: np.ndarray) -> np.ndarray:
+        """Times ``t`` [s] mapped into the horizon: modulo the period when periodic, else clipped to it."""
         if self.periodic:
             return self.t_start + np.mod(t - self.t_start, self.t_end - self.t_start)
         return np.clip(t, self.t_start, self.t_end)
@@ -182,7 +183,7 @@ class RegraspSchedule:
         arr = np.asarray(t, dtype=float)
         if arr.ndim > 1 or not np.all(np.isfinite(arr)):
             raise InvalidParameterError("t", t, "a finite time [s] or a 1-D array of them")
-        out = slides_at(self.xi_start, self.slides, self._local_time(np.atleast_1d(arr)))
+        out = slides_at(self.xi_start, self.slides, self.local_time(np.atleast_1d(arr)))
         if arr.ndim == 0:
             return ScheduleSample(out.xi[0], out.xi_dot[0], out.xi_ddot[0], out.direction[0])
         return out

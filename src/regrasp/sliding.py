@@ -25,6 +25,7 @@ the predicate allows a slide in one direction and not in the other.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 
@@ -40,7 +41,18 @@ from .internal_force import (
 )
 from .validation import as_finite_array, as_finite_float
 
-__all__ = ["SlideFeasibility", "sliding_feasibility"]
+__all__ = ["SlideFeasibility", "SlideObstacle", "sliding_feasibility"]
+
+
+class SlideObstacle(str, Enum):
+    """What makes a slide impossible (:attr:`SlideFeasibility.obstacle`)."""
+
+    SINGULAR = "singular"        #: no finite contact forces produce the motion with that slide
+    NO_SQUEEZE = "no_squeeze"    #: the QP found no internal force
+    PULL = "pull"                #: a contact would have to pull
+    WEAK_PUSH = "weak_push"      #: a contact would push less than f_min
+    TOO_STRONG = "too_strong"    #: a contact would push more than f_max
+    FIXED_SLIP = "fixed_slip"    #: a fixed contact would leave its static cone
 
 
 @dataclass(frozen=True)
@@ -57,6 +69,7 @@ class SlideFeasibility:
         cone_margins: μ f_n - |f_t| per contact [N]: μ_s at the fixed contacts, μ_k at the sliding one
             (0 there by construction, unless ``edge_mu`` put it on another edge).
         reason: Why it is impossible, or None.
+        obstacle: The same as a :class:`SlideObstacle`, or None.
     """
 
     possible: bool
@@ -66,6 +79,7 @@ class SlideFeasibility:
     normal_forces: np.ndarray
     cone_margins: np.ndarray
     reason: str | None
+    obstacle: SlideObstacle | None = None
 
 
 def sliding_feasibility(
@@ -142,8 +156,9 @@ def sliding_feasibility(
         surface = np.einsum("mji,mj->mi", frames, particular.reshape(m, 2))
         return SlideFeasibility(False, contact, float(direction), surface, surface[:, 0].copy(),
                                 cone_margin(mu, surface[:, 0], surface[:, 1]),
-                                "no finite contact forces produce this motion with that slide (singular geometry)")
-    reason = None
+                                "no finite contact forces produce this motion with that slide (singular geometry)",
+                                SlideObstacle.SINGULAR)
+    reason = obstacle = None
     try:
         if solver is None:
             result = solve_internal_force_qp(build_internal_force_qp(system.T, particular, frames, modes, frictions,
@@ -152,27 +167,28 @@ def sliding_feasibility(
             result = solver.solve(system.T, particular, frames, modes, frictions)
         forces = result.forces
         possible = result.feasible
-        if not possible:
-            reason = "the contact forces this motion requires leave a cone or pull"
     except InternalForceInfeasibleError as exc:
         forces = particular.reshape(m, 2)
         possible = False
-        reason = f"no squeeze makes it possible ({exc.status})"
+        reason, obstacle = f"no squeeze makes it possible ({exc.status})", SlideObstacle.NO_SQUEEZE
     surface = np.einsum("mji,mj->mi", frames, forces)
-    if not possible and reason and "squeeze" not in reason:
+    if not possible and obstacle is None:
         worst = int(np.argmin(surface[:, 0]))
         strongest = int(np.argmax(surface[:, 0]))
         if surface[worst, 0] < 0.0:
-            reason = f"contact {worst} would pull (normal force {surface[worst, 0]:.3g} N)"
+            reason, obstacle = f"contact {worst} would pull (normal force {surface[worst, 0]:.3g} N)", SlideObstacle.PULL
         elif surface[worst, 0] < settings.f_min:
             reason = f"contact {worst} would push only {surface[worst, 0]:.3g} N < f_min = {settings.f_min:.3g} N"
+            obstacle = SlideObstacle.WEAK_PUSH
         elif surface[strongest, 0] > settings.f_max:
             reason = f"contact {strongest} would need {surface[strongest, 0]:.3g} N > f_max = {settings.f_max:.3g} N"
+            obstacle = SlideObstacle.TOO_STRONG
         else:
+            obstacle = SlideObstacle.FIXED_SLIP
             margins = cone_margin(mu - settings.margin, surface[:, 0], surface[:, 1])
             worst = int(np.argmin(np.where(np.arange(m) != contact, margins, np.inf)))
             reason = f"fixed contact {worst} would slip (cone margin {margins[worst]:.3g} N with margin {settings.margin})"
     margins = cone_margin(mu, surface[:, 0], surface[:, 1])
     return SlideFeasibility(bool(possible), contact, float(direction), surface, surface[:, 0].copy(), margins,
-                            reason)
+                            reason, obstacle)
 

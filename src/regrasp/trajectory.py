@@ -13,6 +13,7 @@ slack are clamped onto the domain.
 
 from __future__ import annotations
 
+import math
 import numbers
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
@@ -332,3 +333,48 @@ class WaypointTrajectory(Trajectory):
 
 
 __all__ = ["Trajectory", "TrajectorySample", "EllipseTrajectory", "WaypointTrajectory"]
+
+
+class RepeatedTrajectory(Trajectory):
+    """A periodic trajectory repeated past its domain: X(t) = base(t_start + (t - t_start) mod P).
+
+    Args:
+        base: A periodic trajectory (an ellipse, or waypoints with a ``"periodic"`` boundary).
+        t_end: End of the extended domain [s] (> the base's ``t_start``).
+    """
+
+    def __init__(self, base: Trajectory, t_end: float):
+        if not isinstance(base, Trajectory):
+            raise InvalidParameterError("base", base, "a Trajectory")
+        period = getattr(base, "period", None)
+        if period is None and getattr(base, "boundary", None) == "periodic":
+            period = base.t_end - base.t_start
+        if period is None or not math.isfinite(period) or period <= 0:
+            raise InvalidParameterError("base", base, "a periodic trajectory (an ellipse with omega != 0, or "
+                                        "waypoints with a periodic boundary)")
+        t1 = as_finite_float("t_end", t_end)
+        _check_domain(base.t_start, t1)
+        self.base = base
+        self._period = float(period)
+        self._t_end = t1
+
+    @property
+    def t_start(self) -> float:
+        return self.base.t_start
+
+    @property
+    def t_end(self) -> float:
+        return self._t_end
+
+    @property
+    def period(self) -> float:
+        """The base's period [s]."""
+        return self._period
+
+    def _evaluate(self, t: np.ndarray, order: int) -> np.ndarray:
+        t0 = self.base.t_start
+        local = t0 + np.mod(t - t0, self._period)
+        return self.base._evaluate(np.clip(local, t0, self.base.t_end), order)
+
+    def __repr__(self) -> str:
+        return f"RepeatedTrajectory({self.base!r}, t_end={self._t_end!r})"

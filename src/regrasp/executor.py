@@ -1,0 +1,351 @@
+r"""The slide executor: runs the slides a policy orders, phase by phase, and computes the torques.
+
+A :class:`SlideOrder` names a contact, a direction, a target ξ* and how ξ_d moves: along a given
+reference :math:`(\xi_d, \dot\xi_d, \ddot\xi_d)(t)` (a schedule's slide profile), or, without one,
+along a second-order filter towards the target,
+:math:`\ddot\xi_r = \omega_n^2 (\xi^* - \xi_r) - 2\zeta\omega_n\dot\xi_r`. Each ordered contact goes
+through three phases (``docs/derivations.md`` §4, "lessons"):
+
+1. **priming**: the fixed-contact law with the contact's force put just past the edge of its static
+   cone, :math:`\mu_s` + ``prime_overshoot``, in the sliding direction, until the contact is sensed
+   slipping (or for at most ``prime_time``). Switching to the sliding law while the contact is
+   still stuck makes the plant redistribute the forces for a step and can slip another contact;
+2. **sliding**: the sliding law (:class:`~regrasp.control.Proposition3Controller`, every slider on
+   its kinetic cone edge, p ≥ 1) tracking ξ_d, until the contact is at the target and slow
+   (*arrived*), sticks before it (*stuck*), or runs out of ``max_slide_time`` (*timed out*);
+3. **settling**: a contact that ends its slide still sliding gets the fixed law with its force just
+   inside its kinetic cone in the sliding direction, :math:`\mu_k` - ``settle_undershoot``, until the
+   plant's contact sticks: it slows down gently.
+
+Contacts being primed or settled are fixed in the model with a cone edge each; the sliders are
+sliding in the model; all of them share one control law per step. When no internal force keeps
+the slides within their cones (the QP is infeasible), the slides are aborted: the contacts settle
+or are held with the fixed law. The executor decides nothing about *which* slides to run: that is
+the policy's (:mod:`regrasp.policies`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from .contact import ContactMode, Friction
+from .control import ComputedTorqueController, ControlOutput, FixedContactController, Gains, Proposition3Controller
+from .events import Event, EventKind
+from .exceptions import InvalidParameterError
+from .grasp import Grasp
+from .hand import Hand
+from .internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
+from .reduced import ReducedModel
+from .validation import as_positive_float
+
+__all__ = ["ContactPhase", "ExecutorSettings", "SlideEnd", "SlideExecutor", "SlideOrder"]
+
+Reference = Callable[[float], tuple[float, float, float]]
+
+
+class ContactPhase(str, Enum):
+    """What the supervisor is doing with a contact."""
+
+    FIXED = "fixed"
+    PRIMING = "priming"
+    SLIDING = "sliding"
+    SETTLING = "settling"
+
+
+#: The phases in which a contact slips on purpose.
+SLIPPING_PHASES = frozenset({ContactPhase.PRIMING, ContactPhase.SLIDING, ContactPhase.SETTLING})
+
+
+@dataclass(frozen=True)
+class ExecutorSettings:
+    """Tuning of :class:`SlideExecutor` (see the module docstring).
+
+    Attributes:
+        omega_n: Natural frequency of the slide filter [rad/s] (orders without a reference).
+        zeta: Damping ratio of the slide filter [-].
+        prime_time: Longest priming [s].
+        prime_overshoot: Priming asks for |f_t| = (μ_s + this) f_n [-].
+        settle_undershoot: Settling asks for (μ_k - this) f_n [-] (at most μ_k / 2).
+        arrive_tolerance: A slide has arrived when |ξ - ξ*| is below this [m] ...
+        arrive_speed: ... and |ξ̇| below this [m/s].
+        max_slide_time: A slide that has not arrived after this long ends where it is [s].
+        control_omega: Bandwidth of the computed-torque laws [rad/s] (critically damped).
+        internal_force: The controllers' internal-force QP settings; its ``target_cone_margin`` [N]
+            is the margin the fixed contacts are kept inside their cones by (the paper's "γ large").
+    """
+
+    omega_n: float = 20.0
+    zeta: float = 1.0
+    prime_time: float = 0.02
+    prime_overshoot: float = 0.05
+    settle_undershoot: float = 0.05
+    arrive_tolerance: float = 5e-4
+    arrive_speed: float = 5e-3
+    max_slide_time: float = 1.5
+    control_omega: float = 20.0
+    internal_force: InternalForceSettings = field(default_factory=lambda: InternalForceSettings(f_min=0.2))
+
+    def __post_init__(self):
+        for name in ("omega_n", "zeta", "prime_time", "prime_overshoot", "settle_undershoot", "arrive_tolerance",
+                     "arrive_speed", "max_slide_time", "control_omega"):
+            as_positive_float(name, getattr(self, name))
+        if not isinstance(self.internal_force, InternalForceSettings):
+            raise InvalidParameterError("internal_force", self.internal_force, "an InternalForceSettings")
+
+
+@dataclass(frozen=True)
+class SlideOrder:
+    """A slide a policy asks for.
+
+    Attributes:
+        contact: The contact's index.
+        direction: +1 (along the edge's ξ) or -1.
+        target: ξ* [m].
+        reference: t [s] -> (ξ_d [m], ξ̇_d [m/s], ξ̈_d [m/s²]) for the sliding phase, or None (the filter).
+        planned_start, planned_end: When the slide is planned to start and end [s] (None: unplanned).
+        why: Why the slide is ordered, in words.
+    """
+
+    contact: int
+    direction: int
+    target: float
+    reference: Reference | None = None
+    planned_start: float | None = None
+    planned_end: float | None = None
+    why: str = ""
+
+    def __post_init__(self):
+        if self.direction not in (-1, 1):
+            raise InvalidParameterError("direction", self.direction, "+1 or -1")
+        if not math.isfinite(self.target):
+            raise InvalidParameterError("target", self.target, "a finite position [m]")
+
+
+@dataclass(frozen=True)
+class SlideEnd:
+    """How an ordered slide ended.
+
+    Attributes:
+        order: The order.
+        kind: ``ARRIVED``, ``STUCK``, ``TIMED_OUT`` or ``SLIDE_ABORTED`` (:class:`~regrasp.events.EventKind`).
+        time: When its sliding phase ended [s].
+        xi: Where the contact was then [m].
+    """
+
+    order: SlideOrder
+    kind: EventKind
+    time: float
+    xi: float
+
+
+@dataclass
+class _Active:
+    order: SlideOrder
+    phase_start: float
+    slipped: bool = False
+    aborted: bool = False
+    settle_sign: float = 0.0
+    filter: list = field(default_factory=lambda: [0.0, 0.0])
+
+
+class SlideExecutor:
+    """Runs slides on a hand (module docstring).
+
+    Args:
+        hand: The fingers (finger i touches contact i).
+        grasp: The contacts (edges; the modes are the executor's).
+        xi: Initial contact positions [m], all fixed.
+        friction: What the controllers assume: one :class:`~regrasp.contact.Friction` per contact.
+        object_mass, object_inertia: What the controllers assume [kg], [kg m²].
+        settings: :class:`ExecutorSettings`.
+    """
+
+    def __init__(self, hand: Hand, grasp: Grasp, xi, friction: tuple[Friction, ...], *, object_mass: float,
+                 object_inertia: float, settings: ExecutorSettings = ExecutorSettings()):
+        self.hand = hand
+        self.grasp = grasp
+        self.friction = tuple(friction)
+        self.object_mass = object_mass
+        self.object_inertia = object_inertia
+        self.settings = settings
+        self.names = tuple(f.name for f in hand.fingers)
+        self.xi = np.array(xi, dtype=float)
+        self.phases = [ContactPhase.FIXED] * hand.m
+        self.regrasps = [0] * hand.m
+        self._active: dict[int, _Active] = {}
+        self._controller: ComputedTorqueController | None = None
+        self._key = None
+
+    # ------------------------------------------------------------------ state
+    @property
+    def active(self) -> tuple[int, ...]:
+        """The contacts with a slide under way (priming, sliding or settling)."""
+        return tuple(sorted(self._active))
+
+    def order_of(self, i: int) -> SlideOrder | None:
+        a = self._active.get(i)
+        return None if a is None else a.order
+
+    def _event(self, out: list, t: float, i: int, kind: EventKind, detail: str, **values) -> None:
+        out.append(Event(float(t), self.names[i], kind, detail, values=values))
+
+    # ------------------------------------------------------------------ orders
+    def start(self, order: SlideOrder, meas, out: list) -> None:
+        """Prime ``order``'s contact (it must be fixed)."""
+        i = order.contact
+        if self.phases[i] is not ContactPhase.FIXED:
+            raise InvalidParameterError("order", order, f"a slide of a fixed contact ({self.names[i]} is "
+                                        f"{self.phases[i].value})")
+        self._active[i] = _Active(order, float(meas.t))
+        self.phases[i] = ContactPhase.PRIMING
+        self.xi = meas.xi.copy()
+        self._event(out, meas.t, i, EventKind.PRIME, f"to slide {'+' if order.direction > 0 else '-'}xi from "
+                    f"{meas.xi[i] * 1e3:.2f} mm to {order.target * 1e3:.2f} mm" + (f" ({order.why})" if order.why else ""),
+                    xi=float(meas.xi[i]), target=order.target, direction=order.direction)
+
+    def advance(self, meas, out: list) -> list[SlideEnd]:
+        """Move every slide's phase on; the slides whose sliding phase ended at this step."""
+        s = self.settings
+        ends = []
+        for i in list(self._active):
+            a = self._active[i]
+            phase = self.phases[i]
+            t, xi, xi_dot, sliding = float(meas.t), float(meas.xi[i]), float(meas.xi_dot[i]), bool(meas.sliding[i])
+            target = a.order.target
+            if phase is ContactPhase.PRIMING and (sliding or t - a.phase_start >= s.prime_time - 1e-12):
+                self.phases[i] = ContactPhase.SLIDING
+                a.phase_start, a.slipped, a.filter = t, sliding, [xi, xi_dot]
+                self.xi = meas.xi.copy()
+                self._event(out, t, i, EventKind.SLIDE, f"sliding law, target {target * 1e3:.2f} mm"
+                            + ("" if sliding else " (not yet slipping)"), xi=xi, target=target)
+            elif phase is ContactPhase.SLIDING:
+                a.slipped = a.slipped or sliding  # the plant reports the slip one step after the law starts
+                near = abs(xi - target) < s.arrive_tolerance
+                if near and abs(xi_dot) < s.arrive_speed and (a.order.reference is None or not sliding
+                                                              or a.order.planned_end is None
+                                                              or t >= a.order.planned_end):
+                    ends.append(self._end(meas, out, i, EventKind.ARRIVED, f"xi = {xi * 1e3:.2f} mm after "
+                                          f"{t - a.phase_start:.3f} s"))
+                elif a.slipped and not sliding:
+                    ends.append(self._end(meas, out, i, EventKind.STUCK, f"stuck at {xi * 1e3:.2f} mm (target "
+                                          f"{target * 1e3:.2f} mm)"))
+                elif t - a.phase_start > s.max_slide_time:
+                    ends.append(self._end(meas, out, i, EventKind.TIMED_OUT, f"stopped after max_slide_time at "
+                                          f"{xi * 1e3:.2f} mm (target {target * 1e3:.2f} mm)"))
+            elif phase is ContactPhase.SETTLING and not sliding:
+                self._finish(meas, out, i)
+        return ends
+
+    def _end(self, meas, out: list, i: int, kind: EventKind, detail: str) -> SlideEnd:
+        """End contact i's sliding phase where it is: settle if it still slides, else fix it."""
+        a = self._active[i]
+        t, xi = float(meas.t), float(meas.xi[i])
+        self._event(out, t, i, kind, detail, xi=xi, target=a.order.target,
+                    **({} if a.order.planned_end is None else {"planned_end": a.order.planned_end}))
+        self.xi = meas.xi.copy()
+        if meas.sliding[i]:
+            self.phases[i] = ContactPhase.SETTLING
+            moving = float(meas.xi_dot[i])
+            a.settle_sign = math.copysign(1.0, moving) if moving else float(a.order.direction)
+        else:
+            self._finish(meas, out, i)
+        return SlideEnd(a.order, kind, t, xi)
+
+    def _finish(self, meas, out: list, i: int) -> None:
+        a = self._active.pop(i)
+        self.phases[i] = ContactPhase.FIXED
+        self.xi = meas.xi.copy()
+        if not a.aborted:  # an aborted slide that settles is not a regrasp
+            self.regrasps[i] += 1
+        self._event(out, meas.t, i, EventKind.SETTLED, f"fixed at {meas.xi[i] * 1e3:.2f} mm", xi=float(meas.xi[i]))
+
+    def abort(self, meas, out: list, reason: str) -> list[SlideEnd]:
+        """Abort every slide being primed or slid (the QP found no forces for them)."""
+        ends = []
+        for i in list(self._active):
+            if self.phases[i] not in (ContactPhase.PRIMING, ContactPhase.SLIDING):
+                continue
+            a = self._active[i]
+            a.aborted = True
+            ends.append(self._end(meas, out, i, EventKind.SLIDE_ABORTED, reason))
+        return ends
+
+    # ------------------------------------------------------------------ control
+    def _gains(self, n: int) -> Gains:
+        return Gains.critically_damped(self.settings.control_omega, n)
+
+    def _law(self) -> ComputedTorqueController:
+        """The control law of the current phases (cached while they and the held positions stay)."""
+        s = self.settings
+        edges = []
+        for i, a in sorted(self._active.items()):
+            if self.phases[i] is ContactPhase.PRIMING:
+                edges.append(ConeEdge(i, a.order.direction, self.friction[i].static + s.prime_overshoot))
+            elif self.phases[i] is ContactPhase.SETTLING:
+                kinetic = self.friction[i].kinetic
+                edges.append(ConeEdge(i, a.settle_sign, kinetic - min(s.settle_undershoot, 0.5 * kinetic)))
+        sliders = [i for i in range(self.hand.m) if self.phases[i] is ContactPhase.SLIDING]
+        key = (tuple(self.phases), tuple(edges), self.xi.tobytes())
+        if key == self._key:
+            return self._controller
+        modes = [ContactMode.SLIDING if i in sliders else ContactMode.FIXED for i in range(self.hand.m)]
+        model = ReducedModel(self.hand, self.grasp.with_modes(modes), self.xi, object_mass=self.object_mass,
+                             object_inertia=self.object_inertia)
+        cone_edge = None if not edges else (edges[0] if len(edges) == 1 else tuple(edges))
+        if sliders:
+            directions = [self._active[i].order.direction for i in sliders]
+            law = Proposition3Controller(model, self._gains(3 + len(sliders)), self.friction,
+                                         direction=directions if len(directions) > 1 else directions[0],
+                                         internal_force=s.internal_force, cone_edge=cone_edge)
+        else:
+            law = FixedContactController(model, self._gains(3), self.friction, internal_force=s.internal_force,
+                                         cone_edge=cone_edge)
+        self._controller, self._key = law, key
+        return law
+
+    def _slider_reference(self, i: int, t: float, dt: float) -> tuple[float, float, float]:
+        a = self._active[i]
+        if a.order.reference is not None:
+            return a.order.reference(t)
+        w, z = self.settings.omega_n, self.settings.zeta
+        x, v = a.filter
+        acc = w * w * (a.order.target - x) - 2.0 * z * w * v
+        v = v + acc * dt
+        x = x + v * dt
+        a.filter = [x, v]
+        return x, v, w * w * (a.order.target - x) - 2.0 * z * w * v
+
+    def command(self, meas, desired, dt: float, out: list) -> tuple[ControlOutput, str, np.ndarray, list[SlideEnd]]:
+        """(the law's output, the law's name, ξ_d per contact (NaN where not sliding), slides aborted at
+        this step) for the measurement ``meas`` and the desired object state ``desired``
+        (a :class:`~regrasp.trajectory.TrajectorySample`)."""
+        m = self.hand.m
+        law = self._law()
+        reference = np.full(m, np.nan)
+        sliders = [i for i in range(m) if self.phases[i] is ContactPhase.SLIDING]
+        refs = [self._slider_reference(i, float(meas.t), dt) for i in sliders]
+        for i, r in zip(sliders, refs):
+            reference[i] = r[0]
+        S = np.concatenate([meas.X, meas.xi[sliders]])
+        S_dot = np.concatenate([meas.V, meas.xi_dot[sliders]])
+        S_d = np.concatenate([desired.pose, [r[0] for r in refs]])
+        S_d_dot = np.concatenate([desired.velocity, [r[1] for r in refs]])
+        S_d_ddot = np.concatenate([desired.acceleration, [r[2] for r in refs]])
+        try:
+            return law(S, S_dot, S_d, S_d_dot, S_d_ddot), _name(law), reference, []
+        except InternalForceInfeasibleError as exc:
+            if not any(self.phases[i] in (ContactPhase.PRIMING, ContactPhase.SLIDING) for i in self._active):
+                raise
+            ends = self.abort(meas, out, f"no internal force keeps the slide in its cones ({exc.status})")
+        law = self._law()
+        return law(meas.X, meas.V, desired.pose, desired.velocity, desired.acceleration), _name(law), \
+            np.full(m, np.nan), ends
+
+
+def _name(law: ComputedTorqueController) -> str:
+    return law.law + (" (cone edge)" if law.cone_edge is not None else "")

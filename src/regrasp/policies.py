@@ -1,0 +1,232 @@
+r"""Regrasp policies: who decides which contact slides, where and when.
+
+A policy *proposes*; the executor (:class:`~regrasp.executor.SlideExecutor`) runs; the envelope
+monitor (:class:`~regrasp.monitor.EnvelopeMonitor`) watches. Every policy has
+
+* ``propose(meas, reading, phases, out) -> list[SlideOrder]``: the slides to start now, given the
+  measurement, the monitor's reading and each contact's phase (decisions it logs go to ``out``);
+* ``notify(ends, meas, out)``: how the slides it ordered ended;
+* ``planned_xi(t) -> (m,)``: where it plans each contact to be at time t [m] (NaN: no plan).
+
+:class:`ScheduledPolicy` follows a :class:`~regrasp.schedule.RegraspSchedule` planned ahead
+(:func:`~regrasp.schedule_planner.plan_regrasps`): it primes each slide ``prime_lead`` before the
+schedule starts it and hands the executor the slide's profile as ξ_d(t). It **re-plans** from the
+measured state over the rest of the run (``replan(t, xi)``, logged with the reason) when a slide ends
+more than ``time_tolerance`` early or late or more than ``xi_tolerance`` from its planned end, or
+when a contact's runtime envelope margin falls below ``margin_fraction`` of the planned one. A
+re-plan waits until no slide is under way; a failed re-plan is logged and the old schedule kept.
+:class:`~regrasp.policy_paper.PaperPolicy` is the paper's danger-zone heuristic;
+:class:`NoRegraspPolicy` never slides.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from .events import Event, EventKind
+from .exceptions import InvalidParameterError, RegraspError
+from .executor import ContactPhase, SlideEnd, SlideOrder
+from .monitor import EnvelopeReading
+from .schedule import RegraspSchedule, Slide
+
+__all__ = ["NoRegraspPolicy", "Policy", "ScheduledPolicy", "ScheduledSettings"]
+
+
+class Policy(Protocol):
+    """What the supervisor asks of a policy (module docstring)."""
+
+    name: str
+
+    def propose(self, meas, reading: EnvelopeReading, phases, out: list) -> list[SlideOrder]: ...
+
+    def notify(self, ends: list[SlideEnd], meas, out: list) -> None: ...
+
+    def planned_xi(self, t: float) -> np.ndarray: ...
+
+
+class NoRegraspPolicy:
+    """Never slides: every contact stays where it is (for comparison runs)."""
+
+    name = "none"
+
+    def __init__(self, m: int):
+        self.m = int(m)
+
+    def propose(self, meas, reading, phases, out) -> list[SlideOrder]:
+        return []
+
+    def notify(self, ends, meas, out) -> None:
+        pass
+
+    def planned_xi(self, t: float) -> np.ndarray:
+        return np.full(self.m, np.nan)
+
+
+@dataclass(frozen=True)
+class ScheduledSettings:
+    """Tuning of :class:`ScheduledPolicy`.
+
+    Attributes:
+        prime_lead: Start priming this long before the schedule starts a slide [s] (the executor's
+            ``prime_time`` is the longest priming).
+        time_tolerance: A slide that ends (arrives, sticks, times out) more than this [s] from its
+            planned end triggers a re-plan ...
+        xi_tolerance: ... and so does one that ends more than this [m] from its planned end position.
+        margin_fraction: A runtime envelope margin below this fraction of the planned one (at the
+            nearest planned sample) triggers a re-plan [-].
+        replan_cooldown: After a re-plan (or a failed one), no margin-triggered re-plan for this long [s].
+        max_replans: At most this many re-plans in a run.
+    """
+
+    prime_lead: float = 0.01
+    time_tolerance: float = 0.05
+    xi_tolerance: float = 1e-3
+    margin_fraction: float = 0.5
+    replan_cooldown: float = 0.1
+    max_replans: int = 10
+
+    def __post_init__(self):
+        for name in ("prime_lead", "time_tolerance", "xi_tolerance", "replan_cooldown"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+                raise InvalidParameterError(name, value, "a finite number >= 0")
+        if not 0.0 <= self.margin_fraction < 1.0:
+            raise InvalidParameterError("margin_fraction", self.margin_fraction, "a fraction in [0, 1)")
+        if isinstance(self.max_replans, bool) or int(self.max_replans) != self.max_replans or self.max_replans < 0:
+            raise InvalidParameterError("max_replans", self.max_replans, "an integer >= 0")
+
+
+def _profile(slide: Slide, offset: float) -> Callable[[float], tuple[float, float, float]]:
+    """t [s] -> (ξ, ξ̇, ξ̈) of ``slide`` shifted by ``offset`` [s]."""
+    def at(t: float) -> tuple[float, float, float]:
+        x, v, a = slide.profile(np.array([t - offset]))
+        return float(x[0]), float(v[0]), float(a[0])
+    return at
+
+
+class ScheduledPolicy:
+    """Follows a regrasp schedule and re-plans it when reality drifts (module docstring).
+
+    Args:
+        schedule: The schedule (a periodic one repeats).
+        names: Finger names, contact order.
+        replan: (t [s], measured ξ (m,) [m]) -> a new schedule from there over the rest of the run, or
+            None (never re-plan). It may raise :class:`~regrasp.exceptions.RegraspError` (logged).
+        settings: :class:`ScheduledSettings`.
+    """
+
+    name = "scheduled"
+
+    def __init__(self, schedule: RegraspSchedule, names, *, replan=None, settings: ScheduledSettings = ScheduledSettings()):
+        if not isinstance(schedule, RegraspSchedule):
+            raise InvalidParameterError("schedule", schedule, "a RegraspSchedule (regrasp.plan_regrasps)")
+        self.names = tuple(names)
+        if schedule.m != len(self.names):
+            raise InvalidParameterError("schedule", schedule.names, f"a schedule of {len(self.names)} contacts")
+        self.settings = settings
+        self.replan_function = replan
+        self.schedules: list[tuple[float, RegraspSchedule]] = []  # (from when, schedule), the last in force
+        self.replans = 0
+        self._pending: str | None = None     # why a re-plan is due (done once no slide is under way)
+        self._cooldown_until = -math.inf
+        self._use(schedule, schedule.t_start)
+
+    @property
+    def schedule(self) -> RegraspSchedule:
+        """The schedule in force."""
+        return self.schedules[-1][1]
+
+    def _use(self, schedule: RegraspSchedule, since: float) -> None:
+        self.schedules.append((float(since), schedule))
+        self._issued: set[tuple[int, int]] = set()  # (period, slide index)
+        self._since = float(since)
+
+    def _event(self, out: list, t: float, i: int | None, kind: EventKind, detail: str, **values) -> None:
+        out.append(Event(float(t), "" if i is None else self.names[i], kind, detail, values=values))
+
+    def planned_xi(self, t: float) -> np.ndarray:
+        return self.schedule.at(float(t)).xi
+
+    def _occurrences(self, t: float):
+        """(period k, slide index, slide, offset [s]) of the schedule's slides around time t."""
+        sch = self.schedule
+        if not sch.periodic:
+            for n, s in enumerate(sch.slides):
+                yield 0, n, s, 0.0
+            return
+        period = sch.t_end - sch.t_start
+        k0 = math.floor((t - sch.t_start) / period)
+        for k in (k0, k0 + 1):
+            for n, s in enumerate(sch.slides):
+                yield k, n, s, k * period
+
+    def _planned_margin(self, t: float) -> np.ndarray:
+        sch = self.schedule
+        local = float(sch.local_time(np.array([t]))[0])
+        k = int(np.clip(np.searchsorted(sch.times, local), 0, len(sch.times) - 1))
+        return sch.envelope_margin[k]
+
+    def propose(self, meas, reading: EnvelopeReading, phases, out: list) -> list[SlideOrder]:
+        t = float(meas.t)
+        s = self.settings
+        idle = all(p is ContactPhase.FIXED for p in phases)
+        if self._pending is None and t >= self._cooldown_until and self.replan_function is not None:
+            planned = self._planned_margin(t)
+            for i in range(len(self.names)):
+                if reading.margins[i] < s.margin_fraction * planned[i]:
+                    self._pending = (f"{self.names[i]}'s envelope margin {reading.margins[i] * 1e3:.2f} mm is below "
+                                     f"{s.margin_fraction:g} x the planned {planned[i] * 1e3:.2f} mm")
+                    break
+        if self._pending is not None and idle:
+            self._replan(meas, out)
+        orders = []
+        for k, n, slide, offset in self._occurrences(t):
+            start = slide.start + offset
+            if (k, n) in self._issued or start < self._since - 1e-9 or t < start - s.prime_lead - 1e-9:
+                continue
+            if start + slide.duration <= t:  # (missed entirely: only after a re-plan's start)
+                self._issued.add((k, n))
+                continue
+            i = slide.contact
+            if phases[i] is not ContactPhase.FIXED:
+                continue  # its previous slide has not settled: the order waits (and will be late)
+            self._issued.add((k, n))
+            orders.append(SlideOrder(i, int(slide.direction), float(slide.end_xi), _profile(slide, offset), start,
+                                     slide.end + offset, why=f"scheduled {start:.3f}-{slide.end + offset:.3f} s"))
+        return orders
+
+    def notify(self, ends: list[SlideEnd], meas, out: list) -> None:
+        s = self.settings
+        for end in ends:
+            order = end.order
+            if order.planned_end is None or self._pending is not None:
+                continue
+            late = end.time - order.planned_end
+            off = end.xi - order.target
+            if abs(late) > s.time_tolerance or abs(off) > s.xi_tolerance:
+                name = self.names[order.contact]
+                self._pending = (f"{name}'s slide ended {end.kind.value} at t = {end.time:.3f} s, xi = "
+                                 f"{end.xi * 1e3:.2f} mm (planned {order.planned_end:.3f} s, {order.target * 1e3:.2f} mm)")
+
+    def _replan(self, meas, out: list) -> None:
+        t = float(meas.t)
+        why, self._pending = self._pending, None
+        self._cooldown_until = t + self.settings.replan_cooldown
+        if self.replans >= self.settings.max_replans:
+            self._event(out, t, None, EventKind.REPLAN_FAILED, f"{why}; no re-plan: max_replans = "
+                        f"{self.settings.max_replans} reached")
+            return
+        self.replans += 1
+        try:
+            schedule = self.replan_function(t, meas.xi.copy())
+        except RegraspError as exc:
+            self._event(out, t, None, EventKind.REPLAN_FAILED, f"{why}; re-plan failed: {exc}; keeping the schedule")
+            return
+        self._use(schedule, t)
+        self._event(out, t, None, EventKind.REPLAN, f"{why}; re-planned from t = {t:.3f} s: {len(schedule.slides)} "
+                    f"slide(s) to t = {schedule.t_end:.3f} s", slides=len(schedule.slides), until=schedule.t_end)

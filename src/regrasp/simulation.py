@@ -1,0 +1,196 @@
+r"""One simulation loop and one per-step record, for every consumer.
+
+:func:`simulate` runs a *driver* (a supervisor, or one control law with its reference) on the
+plant at the plant's step (zero-order hold): at each step it senses a :class:`Measurement`
+(:func:`sense`, what a hand could read), asks the driver for a :class:`Command`, steps the plant,
+and hands one frozen :class:`StepRecord` to each consumer: the rollout's result
+(:class:`~regrasp.rollout.RolloutResult`), the closed-loop log
+(:class:`~regrasp.closed_loop.ClosedLoopLog`) and the recorder
+(:meth:`~regrasp.recording.RolloutRecorder.log_record`) all read the same records and recompute nothing.
+
+The loop stops at the end, when ``check`` returns a :class:`~regrasp.events.Failure` for a record,
+when the driver's control law fails (:class:`~regrasp.exceptions.RegraspError` or a singular
+model: a ``CONTROL`` failure, never an exception out of the loop), or, with ``interruptible``, on
+Ctrl-C (an ``INTERRUPTED`` failure: the records so far are intact).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from .contact import ContactMode, coefficients, cone_margin
+from .control import ControlOutput
+from .events import Event, EventSource, Failure, FailureKind
+from .exceptions import RegraspError
+from .plant import Plant, PlantStep
+from .supervisor import Measurement, SupervisorOutput
+from .trajectory import TrajectorySample
+
+__all__ = ["Command", "Driver", "SimulationOutcome", "StepRecord", "sense", "sense_projected", "simulate"]
+
+
+@dataclass(frozen=True)
+class Command:
+    """A driver's answer for one step.
+
+    Attributes:
+        tau: Joint torques [N m], (2m,).
+        control: The control law's output.
+        law: The law's name.
+        desired: The desired object state at the step's start.
+        S_desired: The law's desired reduced coordinates S_d = (x, y, β, ξ of each slider), (3 + p,).
+        supervision: The supervisor's output, or None (a bare control law).
+    """
+
+    tau: np.ndarray
+    control: ControlOutput
+    law: str
+    desired: TrajectorySample
+    S_desired: np.ndarray
+    supervision: SupervisorOutput | None = None
+
+
+class Driver(Protocol):
+    def step(self, meas: Measurement, dt: float) -> Command: ...
+
+
+@dataclass(frozen=True)
+class StepRecord:
+    """One control step: what was sensed, decided and commanded, and what the plant did.
+
+    Attributes:
+        index: Step number (0 first).
+        t: The step's start time [s].
+        measurement: What the driver sensed at ``t``.
+        command: What the driver answered.
+        plant: The plant's step: the state after it, the contact forces at its start, the modes
+            during it, the events after it.
+        cone_margins: The plant's μ f_n - |f_t| per contact [N], with the coefficient of each contact's
+            mode during the step (μ_s fixed, μ_k sliding, 0 separated), (m,).
+        events: The supervisor's decisions and the plant's events of this step, in that order.
+        plant_seconds: Wall time of the plant step [s].
+    """
+
+    index: int
+    t: float
+    measurement: Measurement
+    command: Command
+    plant: PlantStep
+    cone_margins: np.ndarray
+    events: tuple[Event, ...]
+    plant_seconds: float
+
+    @property
+    def object_error(self) -> np.ndarray:
+        """X_d - X at the step's start, (3,) [m, m, rad]."""
+        return self.command.desired.pose - self.measurement.X
+
+    @property
+    def supervision(self) -> SupervisorOutput | None:
+        return self.command.supervision
+
+
+@dataclass(frozen=True)
+class SimulationOutcome:
+    """How :func:`simulate` ended: ``steps`` run, ``failure`` (None: ran to the end), ``wall_seconds``."""
+
+    steps: int
+    failure: Failure | None
+    wall_seconds: float
+
+
+def _modes_sliding(plant: Plant) -> np.ndarray:
+    return np.array([c.mode is ContactMode.SLIDING for c in plant.contacts])
+
+
+def sense(plant: Plant, last: PlantStep | None) -> Measurement:
+    """What a hand's sensors read now: the object pose and twist, each contact's ξ and ξ̇ (a fixed
+    contact's ξ is where it is held), a slip sensor and the tangential forces of the last step."""
+    st = plant.state
+    contacts = plant.contacts
+    if last is None:
+        xi = np.array([plant.contact_xi(st, i) for i in range(plant.hand.m)])
+        xi, xi_dot, friction = xi[:, 0], xi[:, 1], np.zeros(plant.hand.m)
+    else:
+        xi, xi_dot, friction = last.xi, last.xi_dot, last.forces_surface[:, 1]
+    modes = [c.mode for c in contacts]
+    xi = np.array([c.xi if mode is ContactMode.FIXED else x for c, mode, x in zip(contacts, modes, xi.tolist())])
+    return Measurement(st.t, st.X.copy(), st.V.copy(), xi, xi_dot, _modes_sliding(plant), friction)
+
+
+def sense_projected(plant: Plant, last: PlantStep | None) -> Measurement:
+    """Like :func:`sense`, with every ξ, ξ̇ the tip's projection on its edge at the current state
+    (``Plant.contact_xi``; a fixed contact's drifts by the constraint error)."""
+    st = plant.state
+    xi = np.array([plant.contact_xi(st, i) for i in range(plant.hand.m)])
+    friction = np.zeros(plant.hand.m) if last is None else last.forces_surface[:, 1]
+    return Measurement(st.t, st.X.copy(), st.V.copy(), xi[:, 0].copy(), xi[:, 1].copy(), _modes_sliding(plant),
+                       friction)
+
+
+def simulate(plant: Plant, driver: Driver, steps: int, *,
+             consumers: Sequence[Callable[[StepRecord], None]] = (),
+             check: Callable[[StepRecord], Failure | None] | None = None,
+             sensor: Callable[[Plant, PlantStep | None], Measurement] = sense,
+             progress: Callable[[int, int], None] | None = None,
+             interruptible: bool = False, control_failures: bool = True) -> SimulationOutcome:
+    """Run ``driver`` on ``plant`` for ``steps`` steps (module docstring).
+
+    Args:
+        consumers: Each is called with every :class:`StepRecord`, in order.
+        check: Called with every record after the consumers; a Failure stops the loop.
+        sensor: Measurement model: :func:`sense` or :func:`sense_projected`.
+        progress: Called as ``progress(done, steps)`` every 50 steps and at the end.
+        interruptible: Turn Ctrl-C into an ``INTERRUPTED`` failure instead of raising it.
+        control_failures: Turn the driver's errors into a ``CONTROL`` failure (else they propagate).
+    """
+    dt = plant.dt
+    mus = None
+    last: PlantStep | None = None
+    failure: Failure | None = None
+    done = 0
+    wall0 = time.perf_counter()
+    try:
+        for k in range(steps):
+            if plant.stopped:
+                break
+            meas = sensor(plant, last)
+            try:
+                command = driver.step(meas, dt)
+            except (RegraspError, np.linalg.LinAlgError) as exc:
+                if not control_failures:
+                    raise
+                failure = Failure(float(meas.t), FailureKind.CONTROL, f"control failed: {exc}")
+                break
+            t0 = time.perf_counter()
+            step = plant.step(command.tau)
+            plant_seconds = time.perf_counter() - t0
+            last = step
+            if mus is None:
+                mus = plant.friction
+            forces = step.forces_surface
+            margins = cone_margin(np.array(coefficients(mus, step.modes)), forces[:, 0], forces[:, 1])
+            events = (() if command.supervision is None else command.supervision.events) + tuple(
+                Event(e.time, e.contact, e.kind, e.detail, EventSource.PLANT, e.values) for e in step.events)
+            record = StepRecord(k, float(meas.t), meas, command, step, margins, events, plant_seconds)
+            for consume in consumers:
+                consume(record)
+            done = k + 1
+            if progress is not None and done % 50 == 0:
+                progress(done, steps)
+            if check is not None:
+                failure = check(record)
+                if failure is not None:
+                    break
+    except KeyboardInterrupt:
+        if not interruptible:
+            raise
+        failure = Failure(float(plant.state.t), FailureKind.INTERRUPTED, "interrupted (Ctrl-C)")
+    if progress is not None:
+        progress(done, steps)
+    return SimulationOutcome(done, failure, time.perf_counter() - wall0)
