@@ -863,12 +863,13 @@ class RolloutRecorder:
         """Log the plant's state before the first step (step 0)."""
         return self.log_step(plant, None, desired_pose=desired_pose)
 
-    def log_record(self, record) -> bool:
-        """Log one :class:`~regrasp.simulation.StepRecord` of the simulation loop (the state after its step)."""
+    def log_record(self, record, desired_pose) -> bool:
+        """Log one :class:`~regrasp.simulation.StepRecord` of the simulation loop (the state after its step,
+        against ``desired_pose`` then)."""
         control = record.command.control
         # the recorder's error series are the object's (the sliding set changes with each slide)
         control = replace(control, error=control.error[:3])
-        return self.log_step(self.plant, control, desired_pose=record.command.desired.pose, plant_step=record.plant)
+        return self.log_step(self.plant, control, desired_pose=desired_pose, plant_step=record.plant)
 
     def log_failure(self, failure, plant: Plant) -> None:
         """Log a rollout's failure."""

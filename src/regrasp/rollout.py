@@ -117,7 +117,8 @@ class Rollout:
         consumers = [rows.add]
         if recorder is not None:
             recorder.log_initial(plant, self.supervisor.trajectory.pose(plant.state.t))
-            consumers.append(recorder.log_record)
+            trajectory = self.supervisor.trajectory
+            consumers.append(lambda record: recorder.log_record(record, trajectory.pose(record.plant.state.t)))
         outcome = simulate(plant, _SupervisorDriver(self.supervisor), total, consumers=consumers, check=self.check,
                            progress=progress, interruptible=interruptible)
         if recorder is not None and outcome.failure is not None:
