@@ -16,14 +16,14 @@ SCENARIOS = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
 @pytest.fixture(scope="module")
 def three_fingers_run():
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
-    rollout = build_rollout(sc, duration=0.6)
+    rollout = build_rollout(sc, duration=0.6, policy="paper")
     return sc, rollout, rollout.run()
 
 
 @pytest.fixture(scope="module")
 def two_fingers_run():
     sc = load_scenario(SCENARIOS / "paper_trajectory_2.toml")
-    rollout = build_rollout(sc)
+    rollout = build_rollout(sc, policy="paper")
     return sc, rollout, rollout.run()
 
 
@@ -85,11 +85,13 @@ def test_the_summary_is_json_with_the_documented_keys(two_fingers_run):
     assert result.realtime_factor > 0.0
 
 
-@pytest.mark.parametrize("duration", [-1.0, 0.0, np.nan, 10.0])
-def test_bad_durations_are_rejected(duration):
+@pytest.mark.parametrize("kwargs", [dict(duration=-1.0), dict(duration=0.0), dict(duration=np.nan), dict(periods=0),
+                                    dict(periods=1.5), dict(periods=2, duration=1.0), dict(policy="greedy"),
+                                    dict(plant_mass_scale=0.0), dict(plant_mu_scale=np.inf)])
+def test_bad_durations_and_options_are_rejected(kwargs):
     sc = load_scenario(SCENARIOS / "paper_trajectory_2.toml")
     with pytest.raises(InvalidParameterError):
-        build_rollout(sc, duration=duration, xi0=[-0.01, 0.01])
+        build_rollout(sc, xi0=[-0.01, 0.01], **{"policy": "paper", **kwargs})
 
 
 def test_a_fingertips_friction_comes_from_the_scenario(tmp_path):
@@ -101,10 +103,17 @@ def test_a_fingertips_friction_comes_from_the_scenario(tmp_path):
     good.write_text(text.replace("edge = 3\n", "edge = 3\nmu_static = 0.8\nmu_kinetic = 0.6\n"))
     sc = load_scenario(good)
     assert sc.friction == (Friction(0.5), Friction(0.8, 0.6))  # 0.5 when unset
-    rollout = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01])
-    assert rollout.plant.friction == rollout.supervisor.friction == sc.friction
-    other = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01], plant_friction=Friction(0.9, 0.3))
-    assert other.plant.friction == (Friction(0.9, 0.3),) * 2 and other.supervisor.friction == sc.friction
+    rollout = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01], policy="paper")
+    assert rollout.plant.friction == rollout.supervisor.context.friction == sc.friction
+    other = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01], plant_friction=Friction(0.9, 0.3), policy="paper")
+    assert other.plant.friction == (Friction(0.9, 0.3),) * 2 and other.supervisor.context.friction == sc.friction
+    scaled = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01], plant_mu_scale=1.1, plant_mass_scale=0.9,
+                           policy="paper")
+    assert np.allclose([(f.static, f.kinetic) for f in scaled.plant.friction], [(0.55, 0.55), (0.88, 0.66)],
+                       rtol=1e-15, atol=0.0)
+    assert scaled.plant.mass == pytest.approx(0.9 * sc.polygon.mass)
+    assert scaled.plant.inertia == pytest.approx(0.9 * sc.polygon.inertia)
+    assert scaled.supervisor.context.object_mass == sc.polygon.mass  # the controllers keep the model
     bad = tmp_path / "bad.toml"
     bad.write_text(text.replace("edge = 1\n", "edge = 1\nmu = -0.2\n"))
     with pytest.raises(ScenarioError) as info:

@@ -66,7 +66,7 @@ def test_a_contact_in_the_middle_of_a_wide_envelope_is_left_alone(two_fingers):
 
 def test_the_danger_zone_is_a_tenth_of_the_interval(two_fingers):
     # finger 1's feasible set at t = 0 is [-20, -5] mm (ideal geometry): 1.5 mm danger zones
-    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).monitor.envelopes[0].at(two_fingers.trajectory.pose(0.0))
     ((lo, hi),) = sample.feasible
     for xi, expected in ((hi - 0.05 * (hi - lo), True), (hi - 0.15 * (hi - lo), False),
                          (lo + 0.05 * (hi - lo), True), (0.5 * (lo + hi), False)):
@@ -79,7 +79,7 @@ def test_the_danger_zone_is_a_tenth_of_the_interval(two_fingers):
 
 def test_two_equal_friction_fingers_refuse_to_slide_with_gravity_and_say_why(two_fingers):
     # finger 1 near the top of its interval must slide down (with gravity): impossible (Remark 3.3)
-    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).monitor.envelopes[0].at(two_fingers.trajectory.pose(0.0))
     ((lo, hi),) = sample.feasible
     xi = [hi - 0.02 * (hi - lo), 0.012]
     sup = make_supervisor(two_fingers, xi)
@@ -95,7 +95,7 @@ def test_two_equal_friction_fingers_refuse_to_slide_with_gravity_and_say_why(two
 
 def test_a_possible_slide_is_primed_on_the_cone_edge_towards_the_target(two_fingers):
     # finger 1 near the bottom of [-20, -5] mm slides up (against gravity): possible
-    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).monitor.envelopes[0].at(two_fingers.trajectory.pose(0.0))
     ((lo, hi),) = sample.feasible
     xi = [lo + 0.02 * (hi - lo), 0.012]
     sup = make_supervisor(two_fingers, xi, path_checks=1)  # asked where it starts only
@@ -105,7 +105,7 @@ def test_a_possible_slide_is_primed_on_the_cone_edge_towards_the_target(two_fing
     assert out.law == "fixed contacts (cone edge)"
     f_n, f_t = out.control.contact_forces_surface[0]
     overshoot = sup.settings.prime_overshoot
-    assert f_t == pytest.approx((sup.friction[0].static + overshoot) * f_n, rel=1e-6)  # + direction: up the edge
+    assert f_t == pytest.approx((sup.context.friction[0].static + overshoot) * f_n, rel=1e-6)  # + direction: up the edge
 
 
 @pytest.mark.parametrize("kinetic,settle", [(0.4, 0.35), (0.06, 0.03)])
@@ -116,11 +116,11 @@ def test_priming_breaks_away_past_mu_s_and_settling_stays_inside_mu_k(two_finger
     μ_k f_n slows it), and μ_k / 2 for a μ_k = 0.06 below twice the undershoot. The controllers report
     the static cone margin at the fixed contact (negative while priming, by the overshoot)."""
     friction = [Friction(0.8, kinetic)] * 2
-    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).monitor.envelopes[0].at(two_fingers.trajectory.pose(0.0))
     ((lo, hi),) = sample.feasible
     xi = [lo + 0.02 * (hi - lo), 0.012]
     sup = make_supervisor(two_fingers, xi, path_checks=1, friction=friction)
-    assert sup.friction == tuple(friction)
+    assert sup.context.friction == tuple(friction)
     out = sup.step(measurement(two_fingers, 0.0, xi), 1e-3)
     assert out.phases[0] is ContactPhase.PRIMING and out.law == "fixed contacts (cone edge)"
     f_n, f_t = out.control.contact_forces_surface[0]
@@ -147,7 +147,7 @@ def test_a_slide_is_refused_when_the_holder_cannot_take_the_breakaway(two_finger
     it away past (0.8 + 0.05) f_n: finger 2 (μ = 0.5) cannot hold the moment of that much friction,
     so the predicate, asked at μ_s + prime_overshoot where the slide starts, refuses it; a slider with
     μ_s = 0.15 (the same μ_k) primes."""
-    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).monitor.envelopes[0].at(two_fingers.trajectory.pose(0.0))
     ((lo, hi),) = sample.feasible
     xi = [lo + 0.02 * (hi - lo), 0.012]
     sticky = make_supervisor(two_fingers, xi, path_checks=1, friction=[Friction(0.8, 0.1), Friction(0.5)])
@@ -163,7 +163,7 @@ def test_a_slide_is_asked_about_along_its_path(two_fingers):
     """The same slide, asked at its start, middle and target: at the target (ξ = -12.5 mm) finger 2
     would need more friction than the predicate's margin allows (checked here directly with
     sliding_feasibility), so it is rejected there, and said so."""
-    sample = make_supervisor(two_fingers, [0.0, 0.0]).envelopes[0].at(two_fingers.trajectory.pose(0.0))
+    sample = make_supervisor(two_fingers, [0.0, 0.0]).monitor.envelopes[0].at(two_fingers.trajectory.pose(0.0))
     ((lo, hi),) = sample.feasible
     xi = [lo + 0.02 * (hi - lo), 0.012]
     sup = make_supervisor(two_fingers, xi)
@@ -174,14 +174,14 @@ def test_a_slide_is_asked_about_along_its_path(two_fingers):
     assert "fixed contact 1 would slip" in rejected.detail and "-12.50 mm on the way" in rejected.detail
     target = 0.5 * (lo + hi)
     desired = two_fingers.trajectory.sample(min(6.0 / sup.settings.omega_n, two_fingers.trajectory.t_end))
-    at_target = sliding_feasibility(sup.grasp, desired.pose, [target, 0.012], desired.acceleration, 0, 1.0, sup.friction,
-                                    object_mass=sup.object_mass, object_inertia=sup.object_inertia,
+    at_target = sliding_feasibility(sup.context.grasp, desired.pose, [target, 0.012], desired.acceleration, 0, 1.0, sup.context.friction,
+                                    object_mass=sup.context.object_mass, object_inertia=sup.context.object_inertia,
                                     gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility)
-    at_start = sliding_feasibility(sup.grasp, two_fingers.trajectory.pose(0.0), xi,
-                                   two_fingers.trajectory.sample(0.0).acceleration, 0, 1.0, sup.friction,
-                                   object_mass=sup.object_mass, object_inertia=sup.object_inertia,
+    at_start = sliding_feasibility(sup.context.grasp, two_fingers.trajectory.pose(0.0), xi,
+                                   two_fingers.trajectory.sample(0.0).acceleration, 0, 1.0, sup.context.friction,
+                                   object_mass=sup.context.object_mass, object_inertia=sup.context.object_inertia,
                                    gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility,
-                                   edge_mu=sup.friction[0].static + sup.settings.prime_overshoot)
+                                   edge_mu=sup.context.friction[0].static + sup.settings.prime_overshoot)
     assert at_start.possible and not at_target.possible
 
 
@@ -218,14 +218,16 @@ def test_a_rejected_slide_gets_another_contact_to_enable_it():
     (prime,) = [e for e in out.events if e.kind == "prime"]
     assert prime.contact == "palm" and "to let finger1 slide -xi" in prime.detail
     assert out.phases[2] is ContactPhase.PRIMING and out.phases[0] is ContactPhase.FIXED
-    palm_target, finger1_target = out.targets[2], sup._slide_target(0, t, xi[0], tuple(out.bounds[0]))[0]
+    (plo, phi), _ = sup.policy._kept_feasible(0, t, tuple(out.bounds[0]))  # what the policy aims finger1 at
+    palm_target, finger1_target = out.targets[2], 0.5 * (plo + phi)
     assert palm_target > xi[2] + 1e-3  # +ξ on the bottom edge: towards finger 1's side
 
     def possible(where, when, palm):
         desired = sc.trajectory.sample(when)
-        return sliding_feasibility(sup.grasp, desired.pose, [where, xi[1], palm], desired.acceleration, 0, -1.0,
-                                   sup.friction, object_mass=sup.object_mass, object_inertia=sup.object_inertia,
-                                   gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility).possible
+        c = sup.context
+        return sliding_feasibility(c.grasp, desired.pose, [where, xi[1], palm], desired.acceleration, 0, -1.0,
+                                   c.friction, object_mass=c.object_mass, object_inertia=c.object_inertia,
+                                   gravity_in_hand=c.hand.gravity_in_hand, settings=sup.settings.feasibility).possible
 
     duration = 6.0 / sup.settings.omega_n
     path = [(xi[0] + f * (finger1_target - xi[0]), t + duration + f * duration) for f in (0.5, 1.0)]
@@ -239,7 +241,7 @@ def test_a_slide_that_ends_sliding_settles_just_inside_the_cone_and_sticks():
     within a few periods, without slipping any other contact."""
     from regrasp import build_rollout
 
-    rollout = build_rollout(load_scenario(THREE), duration=0.3)
+    rollout = build_rollout(load_scenario(THREE), duration=0.3, policy="paper")
     result = rollout.run()
     assert result.success, result.failure
     kinds = [(e.contact, e.kind) for e in result.events]
@@ -261,15 +263,15 @@ def test_tracked_runtime_envelopes_match_fresh_ones():
     xi = [-0.0125, 0.0125, 0.0]
     tracked = make_supervisor(sc, xi, geometry="urdf", regrasp=False, track_envelopes=True)
     fresh = make_supervisor(sc, xi, geometry="urdf", regrasp=False)
-    assert fresh.trackers is None and len(tracked.trackers) == 3
-    assert make_supervisor(sc, xi, track_envelopes=True).trackers is None  # ideal: nothing to track
+    assert fresh.monitor.trackers is None and len(tracked.monitor.trackers) == 3
+    assert make_supervisor(sc, xi, track_envelopes=True).monitor.trackers is None  # ideal: nothing to track
     for k in range(150):
         meas = measurement(sc, 1e-3 * k, xi)
-        a, b = tracked._envelope_state(meas), fresh._envelope_state(meas)
-        for i, env in enumerate(fresh.envelopes):
+        a, b = tracked.monitor.read(meas.t, meas.X, meas.xi), fresh.monitor.read(meas.t, meas.X, meas.xi)
+        for i, env in enumerate(fresh.monitor.envelopes):
             tol = env.urdf_tolerance * env.edge.length
-            sa, sb = tracked._samples[i], fresh._samples[i]
+            sa, sb = a.samples[i], b.samples[i]
             assert len(sa.feasible) == len(sb.feasible)
             assert np.allclose(sa.feasible, sb.feasible, rtol=0.0, atol=tol)
-            assert abs(a[0][i] - b[0][i]) <= tol
-    assert sum(t.counts["tracked"] for t in tracked.trackers) > 0.9 * 3 * 150
+            assert abs(a.margins[i] - b.margins[i]) <= tol
+    assert sum(t.counts["tracked"] for t in tracked.monitor.trackers) > 0.9 * 3 * 150

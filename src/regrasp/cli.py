@@ -1,4 +1,5 @@
-"""The ``regrasp`` command line.
+"""The ``regrasp`` command line: ``regrasp plan`` (the planner) and ``regrasp simulate`` (a rollout,
+:mod:`regrasp.cli_simulate`).
 
 ``regrasp plan SCENARIO [--json] [--plot DIR] [--samples N] [--geometry ideal|urdf]
 [--regrasp [--envelope-margin M] [--cone-margin N]]``
@@ -209,6 +210,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--cone-margin", type=_nonnegative, metavar="N",
                    help="with --regrasp: the cone margin [N] every fixed contact keeps (default 0.1)")
     p.set_defaults(func=_cmd_plan)
+    from .cli_simulate import add_parser
+
+    add_parser(sub, _ProgressBar, _nonnegative)
     return parser
 
 

@@ -91,7 +91,7 @@ def plot_conditions(plan: PlanResult, path: str | Path) -> Path:
         ax.set_ylim(min(d.min(), -l1) - 0.45 * l1, max(d.max(), l1) + 0.35 * l1)
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(f"{plan.scenario or 'plan'}: line distance d(t) and conditions I-IV (paper Fig. 2.9)")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _envelope_axes(ax, plan: PlanResult, finger: FingerPlan, feasible: bool):
@@ -137,7 +137,7 @@ def plot_reachable(plan: PlanResult, path: str | Path) -> Path:
         _envelope_axes(ax, plan, finger, feasible=False)
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(f"{plan.scenario or 'plan'}: reachable contacts on the edge's line (paper Fig. 2.10)")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_feasible(plan: PlanResult, path: str | Path) -> Path:
@@ -148,10 +148,11 @@ def plot_feasible(plan: PlanResult, path: str | Path) -> Path:
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(f"{plan.scenario or 'plan'}: feasible contacts inside the reachable set "
                  f"({plan.geometry.value} geometry, paper Fig. 2.14)")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
-def _save(fig, path, layout: bool = True) -> Path:
+def save_figure(fig, path, layout: bool = True) -> Path:
+    """Write ``fig`` to ``path`` (its directory made if missing) and close it."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     if layout:
@@ -235,7 +236,7 @@ def plot_slide_feasibility(polygon, pose, fingers, points_in_hand, edges, fricti
         ax.set_ylim(lo[1], hi[1])
     if title:
         fig.suptitle(title, fontsize=10)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_schedule(plan: PlanResult, schedule, path: str | Path, *, failure=None) -> Path:
@@ -299,4 +300,4 @@ def plot_schedule(plan: PlanResult, schedule, path: str | Path, *, failure=None)
     fig.suptitle(title)
     fig.tight_layout(rect=(0, 0.045, 1, 1))
     fig.legend(handles=handles, loc="lower center", fontsize=8, ncol=3, frameon=False)
-    return _save(fig, path, layout=False)
+    return save_figure(fig, path, layout=False)

@@ -48,6 +48,8 @@ class RolloutResult:
         planned_xi: Where the policy's plan puts each contact [m] (NaN without a plan), (k, m).
         phases: Each contact's supervisor phase per step, (k, m) strings.
         object_error: X_d - X per step, (k, 3).
+        poses: The plant's object pose after each step (x, y, β) [m, rad], (k, 3).
+        joint_positions: The plant's joint angles after each step [rad], (k, 2m).
         forces_surface: The plant's contact forces (normal, tangential) [N], (k, m, 2).
         supervisor_seconds, control_seconds, plant_seconds: Wall time per step [s], (k,).
         wall_seconds: Wall time of the whole run [s].
@@ -77,6 +79,8 @@ class RolloutResult:
     planned_xi: np.ndarray
     phases: np.ndarray
     object_error: np.ndarray
+    poses: np.ndarray
+    joint_positions: np.ndarray
     forces_surface: np.ndarray
     supervisor_seconds: np.ndarray
     control_seconds: np.ndarray
@@ -158,6 +162,8 @@ class RolloutRows:
         self.planned_xi = np.empty((total, m))
         self.phases = np.empty((total, m), dtype=object)
         self.object_error = np.empty((total, 3))
+        self.poses = np.empty((total, 3))
+        self.joint_positions = np.empty((total, 2 * m))
         self.forces_surface = np.empty((total, m, 2))
         self.envelope_margin = np.empty((total, m))
         self.cone_margin = np.empty((total, m))
@@ -176,6 +182,8 @@ class RolloutRows:
         self.planned_xi[k] = out.planned_xi
         self.phases[k] = [p.value for p in out.phases]
         self.object_error[k] = record.object_error
+        self.poses[k] = record.plant.state.X
+        self.joint_positions[k] = record.plant.state.q
         self.forces_surface[k] = forces
         self.envelope_margin[k] = out.margins
         # the plant's static cone margins μ_s f_n - |f_t| at the contacts the supervisor holds fixed (a
@@ -216,7 +224,8 @@ class RolloutRows:
             regrasps=regrasps, events=tuple(events), min_cone_margin=cone, min_cone_margin_at=cone_at,
             min_envelope_margin=env, min_envelope_margin_at=env_at, times=times, xi=self.xi[:n].copy(),
             bounds=self.bounds[:n].copy(), planned_xi=self.planned_xi[:n].copy(), phases=self.phases[:n].copy(),
-            object_error=err, forces_surface=self.forces_surface[:n].copy(),
+            object_error=err, poses=self.poses[:n].copy(), joint_positions=self.joint_positions[:n].copy(),
+            forces_surface=self.forces_surface[:n].copy(),
             supervisor_seconds=self.supervisor_seconds[:n].copy(), control_seconds=self.control_seconds[:n].copy(),
             plant_seconds=self.plant_seconds[:n].copy(), wall_seconds=outcome.wall_seconds, names=tuple(names),
             policy=policy, replans=replans, schedule=schedule, rrd=rrd)

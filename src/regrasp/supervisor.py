@@ -36,7 +36,7 @@ from .hand import Hand
 from .internal_force import InternalForceSettings
 from .monitor import EnvelopeMonitor
 from .planner import PlanResult
-from .policies import NoRegraspPolicy, Policy
+from .policies import Policy
 from .policy_paper import PaperPolicy
 from .polygon import ConvexPolygon
 from .trajectory import Trajectory
@@ -263,8 +263,8 @@ class RegraspSupervisor:
             paper's policy looks ahead on it.
         settings: :class:`SupervisorSettings`.
         policy: A policy (:mod:`regrasp.policies`), or a callable ``context -> policy``; default: the
-            paper's heuristic (:class:`~regrasp.policy_paper.PaperPolicy`), or no regrasp when
-            ``settings.regrasp`` is False.
+            paper's heuristic (:class:`~regrasp.policy_paper.PaperPolicy`; with ``settings.regrasp``
+            False it reports danger and never slides).
     """
 
     def __init__(self, hand: Hand, polygon: ConvexPolygon, edges, trajectory: Trajectory, xi, friction=0.5, *,
@@ -294,8 +294,8 @@ class RegraspSupervisor:
         self.monitor = EnvelopeMonitor(envelopes, every=settings.envelope_every, track=settings.track_envelopes)
         self.executor = SlideExecutor(hand, grasp, as_finite_array("xi", xi, (m,)), friction, object_mass=mass,
                                       object_inertia=inertia, settings=settings.executor_settings())
-        if policy is None:
-            policy = PaperPolicy(self.context, settings) if settings.regrasp else NoRegraspPolicy(m)
+        if policy is None:  # (with regrasp False it still reports danger, and never slides)
+            policy = PaperPolicy(self.context, settings)
         elif callable(policy) and not hasattr(policy, "propose"):
             policy = policy(self.context)
         if not all(hasattr(policy, a) for a in ("propose", "notify", "planned_xi")):
