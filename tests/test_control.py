@@ -29,7 +29,7 @@ SC = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
 FINGER3 = Finger.from_urdf(ROOT / "urdf" / "planar_2r_finger.urdf", base_in_hand=(0.04, -0.02, np.pi / 2),
                            configuration="left", name="finger3")
 OMEGA = 20.0  # closed-loop bandwidth [rad/s]: K_s = ω², K_v = 2ω
-E0 = np.array([0.002, -0.001, 0.02, 0.001])  # initial error: x, y [m], β [rad], ξ [m]
+E0 = np.array([0.002, -0.001, 0.02, 0.001, -0.001])  # initial error: x, y [m], β [rad], ξ [m] (one per slider)
 
 # (law, m, modes, xi of every contact, friction per contact, sliding speed [m/s]); the "_kinetic" cases have
 # μ_s > μ_k: the plant slides at μ_k, which Proposition 3 must predict
@@ -47,6 +47,12 @@ CASES = {
                       -0.01),
     "prop3_up_kinetic": (Proposition3Controller, 2, ["sliding", "fixed"], [-0.0075, -0.0075], SLOW, 0.01),
     "prop3_m3_kinetic": (Proposition3Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], SLOW3, 0.01),
+    # p = 2: both side fingers slide down the object (finger 1's ξ points up, finger 2's down: a speed per
+    # slider), the bottom finger holds
+    "prop3_p2": (Proposition3Controller, 3, ["sliding", "sliding", "fixed"], [0.0, 0.0, 0.0], [0.3, 0.3, 0.6],
+                 (-0.01, 0.01)),
+    "prop3_p2_kinetic": (Proposition3Controller, 3, ["sliding", "sliding", "fixed"], [0.0, 0.0, 0.0],
+                         [Friction(0.6, 0.3), Friction(0.6, 0.3), Friction(0.8, 0.5)], (-0.01, 0.01)),
 }
 
 
@@ -59,7 +65,7 @@ def run(name, duration=0.4, dt=1e-3, friction_noise=0.0):
     model = ReducedModel(hand, grasp, xi=np.array(xi, dtype=float))
     n = model.n
     start = np.concatenate([[0.0, 0.12, 0.0], np.array(xi)[list(grasp.sliding)]])
-    velocity = np.concatenate([np.zeros(3), np.full(grasp.p, speed)])
+    velocity = np.concatenate([np.zeros(3), np.broadcast_to(speed, (grasp.p,))])
 
     def reference(t):
         return start + velocity * t, velocity, np.zeros(n)
@@ -69,7 +75,10 @@ def run(name, duration=0.4, dt=1e-3, friction_noise=0.0):
     xi_plant = np.array(xi, dtype=float)
     for j, i in enumerate(grasp.sliding):
         xi_plant[i] = S0[3 + j]
-    contacts = [PlantContact(e, mode, x, float(np.sign(speed) or 1.0)) for e, mode, x in zip(edges, modes, xi_plant)]
+    signs = [float(np.sign(speed) or 1.0)] * m if np.ndim(speed) == 0 else [1.0] * m
+    for j, i in enumerate(grasp.sliding):
+        signs[i] = float(np.sign(velocity[3 + j]) or 1.0)
+    contacts = [PlantContact(e, mode, x, sign) for e, mode, x, sign in zip(edges, modes, xi_plant, signs)]
     plant = Plant(hand, SC.polygon, contacts, friction=mu, dt=dt)
     plant.reset(st.q, st.q_dot, S0[:3], velocity[:3])
     controller = law(model, Gains.critically_damped(OMEGA, n), friction=mu)
@@ -238,3 +247,96 @@ def test_proposition3_puts_the_slider_on_its_kinetic_edge_and_reports_each_modes
         np.testing.assert_allclose(out.cone_margins, expected, rtol=0, atol=1e-12)
         if m > 2:
             assert np.all(np.abs(f_t[1:]) <= (static[1:] - settings.margin) * f_n[1:] + 1e-6)
+
+
+# ---------------------------------------------------------------------------- several sliders, several cone edges
+@pytest.mark.parametrize("name", ["prop3_p2", "prop3_p2_kinetic"])
+def test_proposition3_with_two_sliders_follows_the_ode_with_both_on_their_kinetic_edges(name):
+    """m = 3, p = 2 (both side fingers slide down the object, the bottom finger holds; the null space
+    of the law's equations is one-dimensional): the error follows the ODE within ω·dt, first order in
+    dt; on the plant both sliders keep sliding the asked way with |f_t| = μ_k f_n (friction on the
+    object along s_j t_j), the holder stays inside its static cone, and the plant's forces are the
+    predicted ones."""
+    friction, speed = CASES[name][4:]
+    log, deviation, fixed = run(name)
+    assert log.events == ()
+    assert deviation <= 1.5 * OMEGA * 1e-3
+    assert np.abs(log.errors[-1]).max() <= 1.5 * OMEGA * 1e-3 * np.abs(E0).max()
+    kinetic = np.array([Friction(f).kinetic if not isinstance(f, Friction) else f.kinetic for f in friction])
+    f_n, f_t = log.plant_forces[:, :, 0], log.plant_forces[:, :, 1]
+    for column, (i, v) in enumerate(zip((0, 1), speed), start=3):
+        assert np.all(np.sign(np.diff(log.S[:, column])) == np.sign(v))  # keeps sliding, the asked way
+        np.testing.assert_allclose(f_t[:, i], np.sign(v) * kinetic[i] * f_n[:, i], rtol=0, atol=1e-9)
+    assert log.cone_margins[:, fixed].min() > 0.0
+    assert f_n.min() > 0.0
+    assert np.abs(log.plant_forces - log.predicted_forces).max() < 1e-6
+    _, coarse, _ = run(name, duration=0.2, dt=1e-3)
+    _, fine, _ = run(name, duration=0.2, dt=5e-4)
+    assert 1.6 < coarse / fine < 2.4  # exact law: only the sampling error, first order in dt
+
+
+def test_proposition3_sliding_directions_per_slider():
+    model, _, mu, _ = model_of("prop3_p2")
+    gains = Gains.critically_damped(OMEGA, 5)
+    law = Proposition3Controller(model, gains, friction=mu, direction=(-1, 1))
+    assert law.directions == (-1.0, 1.0)
+    # slider 1 keeps its measured sign, slider 2 reverses within the sample under the commanded ξ̈
+    assert law.sliding_directions((-0.01, 0.0005), (0.0, -1.0)) == (-1.0, -1.0)
+    assert law.directions == (-1.0, -1.0)
+    with pytest.raises(InvalidParameterError, match="sliding_directions"):
+        law.sliding_direction(0.01, 0.0)
+    for direction in ((1, 1, 1), (1, 0), 0.5):
+        with pytest.raises(InvalidParameterError, match="direction"):
+            Proposition3Controller(model, gains, friction=mu, direction=direction)
+    assert Proposition3Controller(model, gains, friction=mu, direction=-1).directions == (-1.0, -1.0)
+
+
+def test_proposition3_checks_two_m_at_least_three_plus_p():
+    """2m >= 3 + p: m = 3 with all three sliding is the square case (f unique, only checked); the law
+    refuses a grasp with too many sliders (Grasp itself refuses to build one, Remark 3.2)."""
+    from types import SimpleNamespace
+
+    from regrasp.exceptions import SlidingContactCountError
+
+    hand = Hand([c.finger for c in SC.contacts] + [FINGER3], gravity_in_hand=(0.0, -9.81))
+    all_sliding = ReducedModel(hand, Grasp(SC.polygon, [1, 3, 2], ["sliding"] * 3), xi=[0.0, 0.0, 0.0])
+    law = Proposition3Controller(all_sliding, Gains.critically_damped(OMEGA, 6), friction=0.3, direction=(-1, 1, 1))
+    S = np.array([0.0, 0.12, 0.0, 0.0, 0.0, 0.0])
+    S_dot = np.array([0.0, 0.0, 0.0, -0.01, 0.01, 0.01])
+    out = law(S, S_dot, S, S_dot, np.zeros(6))
+    assert out.internal.null_space_dim == 0
+    f_n, f_t = out.contact_forces_surface.T
+    np.testing.assert_allclose(f_t, [-0.3 * f_n[0], 0.3 * f_n[1], 0.3 * f_n[2]], rtol=0, atol=1e-9)
+    with pytest.raises(SlidingContactCountError):
+        Grasp(SC.polygon, [1, 3], ["sliding", "sliding"])
+    too_many = SimpleNamespace(grasp=SimpleNamespace(m=2, p=2, modes=("sliding", "sliding")))
+    with pytest.raises(InvalidParameterError, match="2m >= 3 \\+ p"):
+        Proposition3Controller(too_many, Gains.critically_damped(OMEGA, 5))
+
+
+def test_priming_two_contacts_at_once_slips_both_on_the_plant():
+    """Fixed-contact law with two cone edges at μ_s + 0.05 (the supervisor's priming, for two contacts
+    at once): on the plant both side contacts slip within a few steps, each in its asked direction,
+    and the bottom contact keeps sticking."""
+    hand = Hand([c.finger for c in SC.contacts] + [FINGER3], gravity_in_hand=(0.0, -9.81))
+    edges, xi = [1, 3, 2], [0.0, 0.0, 0.0]
+    friction = [Friction(0.5, 0.3), Friction(0.5, 0.3), Friction(0.8, 0.5)]
+    model = ReducedModel(hand, Grasp(SC.polygon, edges, ["fixed"] * 3), xi=xi)
+    S0 = np.array([0.0, 0.12, 0.0])
+    for signs in ((-1.0, 1.0), (1.0, -1.0)):  # both down the object, both up
+        primes = (ConeEdge(0, signs[0], 0.55), ConeEdge(1, signs[1], 0.55))
+        controller = FixedContactController(model, Gains.critically_damped(OMEGA, 3), friction=friction,
+                                            internal_force=InternalForceSettings(f_min=0.2), cone_edge=primes)
+        assert controller.cone_edge == primes
+        st = model.state(S0, np.zeros(3))
+        plant = Plant(hand, SC.polygon, [PlantContact(e, "fixed", x) for e, x in zip(edges, xi)], friction=friction,
+                      dt=1e-3)
+        plant.reset(st.q, st.q_dot, S0, np.zeros(3))
+        log = run_closed_loop(plant, controller, lambda t: (S0, np.zeros(3), np.zeros(3)), 0.005)
+        slips = {ev.contact: ev for ev in log.events if ev.kind == "slip"}
+        assert set(slips) == {"finger1", "finger2"}, log.events
+        assert all(ev.time <= 0.003 for ev in slips.values())
+        assert [e.kind for e in log.events if e.contact == "finger3"] == []
+        for i in (0, 1):
+            assert plant.contacts[i].mode == "sliding" and plant.contacts[i].sign == signs[i]
+        assert plant.contacts[2].mode == "fixed"

@@ -18,8 +18,9 @@ null-space term, which is the paper's form. The laws differ only in :math:`\hat 
 * :class:`FixedContactController`: p = 0 (the paper's reference [5]); no sliding contact.
 * :class:`Proposition1Controller`: :math:`\hat f_\xi = 0` (3.3.1).
 * :class:`Proposition2Controller`: :math:`\hat f_\xi` measured (3.3.8).
-* :class:`Proposition3Controller`: m = 2, p = 1, :math:`\hat f_\xi = P (M_o a_X - f_g)` (3.4.9,
-  3.4.11), with P for the commanded sliding direction.
+* :class:`Proposition3Controller`: :math:`\hat f_\xi` predicted from the commanded motion with every
+  slider on its kinetic cone edge; for m = 2, p = 1 the paper's :math:`P (M_o a_X - f_g)` (3.4.9,
+  3.4.11), with P for the commanded sliding direction; any p >= 1 with 2m >= 3 + p otherwise.
 
 Two corrections to the printed laws (``docs/derivations.md``): the gravity term enters as
 :math:`-(H^T)^+[f_g; 0]`, where (3.3.1) and (3.3.8) print :math:`+`; and (3.3.8)/(3.4.11) drop
@@ -47,7 +48,7 @@ from scipy.linalg import lapack
 from ._scalar import solve_small
 from .contact import as_frictions, coefficients, cone_margin
 from .exceptions import InvalidParameterError
-from .internal_force import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver
+from .internal_force import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver, as_cone_edges
 from .reduced import ReducedModel, ReducedState
 from .validation import as_finite_array, as_finite_vectors
 
@@ -117,14 +118,15 @@ class ComputedTorqueController:
             coefficient [-] for all contacts, or one per contact.
         internal_force: QP margins, or None to apply no internal force.
         cone_edge: Put this contact on a cone edge, with the coefficient the
-            :class:`~regrasp.internal_force.ConeEdge` carries (the transition before a slide).
+            :class:`~regrasp.internal_force.ConeEdge` carries (the transition before a slide); or a tuple
+            of them, on distinct contacts (several transitions at once). Kept as given in ``cone_edge``.
     """
 
     law = "computed torque"
 
     def __init__(self, model: ReducedModel, gains: Gains, friction=0.5, *,
                  internal_force: InternalForceSettings | None = InternalForceSettings(),
-                 cone_edge: ConeEdge | None = None):
+                 cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None):
         n = model.n
         kv = as_finite_array("gains.kv", gains.kv, (n,))
         ks = as_finite_array("gains.ks", gains.ks, (n,))
@@ -135,6 +137,7 @@ class ComputedTorqueController:
         self.friction = as_frictions(friction, model.grasp.m)
         self.internal_force = internal_force
         self.cone_edge = cone_edge
+        self._cone_edges = as_cone_edges(cone_edge, model.grasp.m)  # what the QP gets (validated)
         self._qp = InternalForceSolver(internal_force) if internal_force is not None else None
         self._modes = model.grasp.modes
         # the cone margins' coefficients: μ_s where fixed, μ_k where sliding
@@ -189,7 +192,7 @@ class ComputedTorqueController:
         internal = None
         if self._qp is not None:
             internal = self._qp._solve(np.array(terms.a_rows), motion_forces, terms.frames, self._modes, self.friction,
-                                      self.cone_edge, time.perf_counter())
+                                      self._cone_edges, time.perf_counter())
             f_c = internal.f_c.tolist()
             for i, (a, b, c, d) in enumerate(terms.jacobians):  # τ + J^T f_c
                 f0, f1 = f_c[2 * i], f_c[2 * i + 1]
@@ -261,62 +264,90 @@ class Proposition2Controller(ComputedTorqueController):
 
 
 class Proposition3Controller(ComputedTorqueController):
-    r"""Proposition 3 (3.4.11, corrected), and its generalisation to m > 2 fingers; p = 1.
+    r"""Proposition 3 (3.4.11, corrected), and its generalisation to m >= 2 fingers and p >= 1 sliders.
 
-    The friction at the sliding contact j is not measured but predicted from the commanded motion.
-    The contact forces f that move the object as commanded with contact j on the edge of its
-    kinetic friction cone in the sliding direction s solve
+    The friction at the sliding contacts is not measured but predicted from the commanded motion.
+    The contact forces f that move the object as commanded with every slider j on the edge of its
+    kinetic friction cone in its sliding direction :math:`s_j` solve the 3 + p equations
 
-    .. math:: G f = M_o a_X - f_g, \qquad (t_j - s \mu_{k,j} n_j)^T f_j = 0.
+    .. math:: G f = M_o a_X - f_g, \qquad (t_j - s_j \mu_{k,j} n_j)^T f_j = 0\ \ (j \text{ sliding})
 
-    * m = 2: these are four equations in four unknowns; f is unique and
+    in 2m unknowns (2m >= 3 + p, Remark 3.2).
+
+    * m = 2, p = 1: four equations in four unknowns; f is unique and
       :math:`\hat f_\xi = t_j^T f_j = P (M_o a_X - f_g)` with the paper's P (3.4.9).
-    * m > 2: f has 2m - 4 degrees of freedom. The internal-force QP (:mod:`regrasp.internal_force`)
-      picks the least-squeeze f, :math:`f = f_p + N_c y` with :math:`f_p` the least-norm solution
-      and :math:`N_c` a basis of the null space of the same equations, so that every contact
-      pushes and every fixed contact stays in its static cone while j stays on its cone edge; then
-      :math:`\hat f_\xi = t_j^T f_j` and :math:`\tau = M(H a + \dot H \dot S) + N + J^T f`. Because
+    * otherwise f has 2m - 3 - p degrees of freedom. The internal-force QP (:mod:`regrasp.internal_force`)
+      picks f, :math:`f = f_p + N_c y` with :math:`f_p` the least-norm solution and :math:`N_c` a basis
+      of the null space of the same equations (columns 3 .. 3 + p of its matrix: one edge column per
+      slider), so that every contact pushes and every fixed contact stays in its static cone while the
+      sliders stay on their cone edges (2m = 3 + p: f is unique, and only checked); then
+      :math:`\hat f_\xi = (t_j^T f_j)_j` and :math:`\tau = M(H a + \dot H \dot S) + N + J^T f`. Because
       :math:`H^T J^T = A^T`, this τ satisfies the reduced equation with that :math:`\hat f_\xi`,
-      so the error obeys the same ODE. Unlike Proposition 2 with the slider held on its cone edge,
-      which pins the slider's normal force to the measured friction over μ, the slider's normal
-      force is chosen together with the other contacts' (``docs/derivations.md``, §4). The
+      so the error obeys the same ODE. Unlike Proposition 2 with a slider held on its cone edge,
+      which pins the slider's normal force to the measured friction over μ, the sliders' normal
+      forces are chosen together with the other contacts' (``docs/derivations.md``, §4). The
       ``internal`` result's ``f_c`` is then relative to :math:`f_p`.
 
-    The sliding direction s: the direction the contact will slide in during the next sample, the
-    sign of the measured ξ̇, unless ξ̇ crosses zero within ``sample_time`` under the commanded ξ̈
-    (a reversal), in which case the sign of the commanded ξ̈. Using the desired ξ̇ instead would
-    predict the wrong friction for a step or two at every reversal, and the contact would stick
-    there. ``direction`` sets s until the first such decision (+1 by default).
+    The sliding direction :math:`s_j` of each slider: the direction the contact will slide in during
+    the next sample, the sign of its measured ξ̇, unless ξ̇ crosses zero within ``sample_time`` under the
+    commanded ξ̈ (a reversal), in which case the sign of the commanded ξ̈. Using the desired ξ̇ instead
+    would predict the wrong friction for a step or two at every reversal, and the contact would stick
+    there. ``direction`` sets the :math:`s_j` until the first such decision: ±1 for every slider
+    (+1 by default) or one sign per slider.
     """
 
     law = "Proposition 3"
 
     def __init__(self, model: ReducedModel, gains: Gains, friction=0.5, *, sample_time: float = 1e-3,
-                 direction: float = 1.0, **kwargs):
-        if model.grasp.m < 2 or model.grasp.p != 1:
-            raise InvalidParameterError("model", model.grasp.modes, "m >= 2 fingers with p = 1 sliding contact")
+                 direction=1.0, **kwargs):
+        m, p = model.grasp.m, model.grasp.p
+        if m < 2 or p < 1 or 2 * m < 3 + p:
+            raise InvalidParameterError("model", model.grasp.modes,
+                                        "m >= 2 fingers with p >= 1 sliding contacts (p = 1 for m = 2), 2m >= 3 + p")
         super().__init__(model, gains, friction, **kwargs)
         if not np.isfinite(sample_time) or sample_time <= 0:
             raise InvalidParameterError("sample_time", sample_time, "a control period > 0 [s]")
-        if direction not in (-1, 1, -1.0, 1.0):
-            raise InvalidParameterError("direction", direction, "+1 or -1")
-        if self.cone_edge is not None:
-            raise InvalidParameterError("cone_edge", self.cone_edge, "None: the sliding contact is on its cone edge")
+        directions = [direction] * p if np.ndim(direction) == 0 else list(direction)
+        if len(directions) != p or not all(d in (-1, 1, -1.0, 1.0) for d in directions):
+            raise InvalidParameterError("direction", direction, f"+1 or -1, or one of them per slider ({p})")
+        if self._cone_edges:
+            raise InvalidParameterError("cone_edge", self.cone_edge, "None: the sliding contacts are on their cone edges")
         self.sample_time = float(sample_time)
-        self._direction = float(direction)
-        self._slider = model.grasp.sliding[0]
+        self._directions = [float(d) for d in directions]
+        self._sliders = model.grasp.sliding
+
+    @property
+    def directions(self) -> tuple[float, ...]:
+        """The sliders' current sliding directions s_j = ±1 (in the grasp's order of sliding contacts)."""
+        return tuple(self._directions)
+
+    @property
+    def _direction(self) -> float:
+        """The first slider's direction (p = 1)."""
+        return self._directions[0]
 
     def sliding_direction(self, xi_dot: float, xi_ddot_command: float) -> float:
-        """±1: the sign of ξ̇ over the next sample (see the class docstring)."""
-        after = xi_dot + xi_ddot_command * self.sample_time
-        if xi_dot * after <= 0.0 and xi_ddot_command != 0.0:
-            self._direction = float(np.sign(xi_ddot_command))
-        elif xi_dot != 0.0:
-            self._direction = float(np.sign(xi_dot))
-        return self._direction
+        """±1: the sign of ξ̇ over the next sample (see the class docstring); p = 1 only."""
+        if len(self._directions) != 1:
+            raise InvalidParameterError("xi_dot", xi_dot, f"one rate per slider ({len(self._directions)}): "
+                                        "use sliding_directions")
+        return self.sliding_directions((xi_dot,), (xi_ddot_command,))[0]
+
+    def sliding_directions(self, xi_dots, xi_ddot_commands) -> tuple[float, ...]:
+        """±1 per slider: the sign of its ξ̇ over the next sample (see the class docstring), from the
+        measured ξ̇ [m/s] and the commanded ξ̈ [m/s²] of each slider."""
+        if len(xi_dots) != len(self._directions) or len(xi_ddot_commands) != len(self._directions):
+            raise InvalidParameterError("xi_dots", xi_dots, f"one rate per slider ({len(self._directions)})")
+        for j, (xi_dot, xi_ddot_command) in enumerate(zip(xi_dots, xi_ddot_commands)):
+            after = xi_dot + xi_ddot_command * self.sample_time
+            if xi_dot * after <= 0.0 and xi_ddot_command != 0.0:
+                self._directions[j] = float(np.sign(xi_ddot_command))
+            elif xi_dot != 0.0:
+                self._directions[j] = float(np.sign(xi_dot))
+        return tuple(self._directions)
 
     def friction_estimate(self, st, command, friction) -> np.ndarray:
-        """m = 2: :math:`P (M_o a_X - f_g)` (3.4.9, the slider's μ_k); m > 2: see :meth:`_torque`."""
+        """m = 2: :math:`P (M_o a_X - f_g)` (3.4.9, the slider's μ_k); otherwise see :meth:`_torque`."""
         direction = self.sliding_direction(float(st.S_dot[3]), float(command[3]))
         P = self.model.grasp.friction_map(st.S[:3], st.xi, [direction], self.friction)
         return P @ (self.model.M_o @ command[:3] - self.model.f_g)
@@ -324,20 +355,24 @@ class Proposition3Controller(ComputedTorqueController):
     def _torque(self, terms, args, command_array, friction):
         if self.model.grasp.m == 2:
             return super()._torque(terms, args, command_array, friction)
-        direction = self.sliding_direction(float(args[1][3]), float(command_array[3]))
+        directions = self.sliding_directions(args[1][3:].tolist(), command_array[3:].tolist())
         st = self.model._state_from(args[0], args[1], terms)
-        tau, f_hat, forces, internal = self._distributed_torque(st, terms, command_array, direction)
+        tau, f_hat, forces, internal = self._distributed_torque(st, terms, command_array, directions)
         return tau.tolist(), f_hat, forces, forces.reshape(-1).tolist(), internal
 
-    def _distributed_torque(self, st, terms, command, direction: float):
-        """The m > 2 law of the class docstring (valid for m = 2 too: then f is unique)."""
-        model, j = self.model, self._slider
-        nx, ny, tx, ty = terms.frames[j]
-        edge = np.array(terms.a_rows)  # [G^T | e_j (t_j - s μ_k,j n_j)]: its columns' transposes are the equations
-        edge[:, 3] = 0.0
-        kinetic = self.friction[j].kinetic
-        edge[2 * j:2 * j + 2, 3] = (tx - direction * kinetic * nx, ty - direction * kinetic * ny)
-        rhs = np.append(model.M_o.dot(command[:3]) - model.f_g, 0.0)
+    def _distributed_torque(self, st, terms, command, directions):
+        """The law of the class docstring for m > 2 (valid for m = 2 too: then f is unique);
+        ``directions``: one sign per slider (a number for p = 1)."""
+        model = self.model
+        if np.ndim(directions) == 0:
+            directions = (directions,)
+        edge = np.array(terms.a_rows)  # [G^T | e_j (t_j - s_j μ_k,j n_j)]: its columns' transposes are the equations
+        edge[:, 3:] = 0.0
+        for col, (j, direction) in enumerate(zip(self._sliders, directions), start=3):
+            nx, ny, tx, ty = terms.frames[j]
+            kinetic = self.friction[j].kinetic
+            edge[2 * j:2 * j + 2, col] = (tx - direction * kinetic * nx, ty - direction * kinetic * ny)
+        rhs = np.concatenate([model.M_o.dot(command[:3]) - model.f_g, np.zeros(len(self._sliders))])
         _, _, x, info = lapack.dgesv(edge.T.dot(edge), rhs)
         if info != 0:
             raise np.linalg.LinAlgError("Singular matrix")
@@ -351,5 +386,6 @@ class Proposition3Controller(ComputedTorqueController):
             forces = particular.reshape(model.grasp.m, 2)
         q_ddot = st.H.dot(command) + st.H_dot_S_dot
         tau = st.hand.mass_matrix.dot(q_ddot) + st.hand.nonlinear + st.hand.jacobian.T.dot(forces.reshape(-1))
-        f_hat = np.array([tx * forces[j, 0] + ty * forces[j, 1]])
+        f_hat = np.array([terms.frames[j][2] * forces[j, 0] + terms.frames[j][3] * forces[j, 1]
+                          for j in self._sliders])
         return tau, f_hat, forces, internal
