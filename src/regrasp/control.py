@@ -47,7 +47,7 @@ from scipy.linalg import lapack
 
 from ._scalar import solve_small
 from .contact import as_frictions, coefficients, cone_margin
-from .exceptions import InvalidParameterError
+from .exceptions import InvalidParameterError, SingularModelError
 from .internal_force import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver, as_cone_edges
 from .reduced import ReducedModel, ReducedState
 from .validation import as_finite_array, as_finite_vectors
@@ -231,7 +231,7 @@ def _computed_torque(model: ReducedModel, terms, command: np.ndarray, f_hat: lis
         return H.dot(solve_small(normal.tolist(), rhs)).tolist(), wrench
     _, _, x, info = lapack.dgesv(normal, rhs)  # (np.linalg.solve's LAPACK routine without its overhead)
     if info != 0:
-        raise np.linalg.LinAlgError("Singular matrix")
+        raise SingularModelError("the control law's force equations are singular (a singular grasp or finger)")
     return H.dot(x).tolist(), wrench
 
 
@@ -293,13 +293,15 @@ class Proposition3Controller(ComputedTorqueController):
     commanded ξ̈ (a reversal), in which case the sign of the commanded ξ̈. Using the desired ξ̇ instead
     would predict the wrong friction for a step or two at every reversal, and the contact would stick
     there. ``direction`` sets the :math:`s_j` until the first such decision: ±1 for every slider
-    (+1 by default) or one sign per slider.
+    (+1 by default) or one sign per slider. With ``reversible=False`` the :math:`s_j` stay as given: a
+    planned slide from rest to rest in one direction decelerates to a stop without reversing, and a
+    predicted reversal there would put the slider's friction on the wrong cone edge.
     """
 
     law = "Proposition 3"
 
     def __init__(self, model: ReducedModel, gains: Gains, friction=0.5, *, sample_time: float = 1e-3,
-                 direction=1.0, **kwargs):
+                 direction=1.0, reversible: bool = True, **kwargs):
         m, p = model.grasp.m, model.grasp.p
         if m < 2 or p < 1 or 2 * m < 3 + p:
             raise InvalidParameterError("model", model.grasp.modes,
@@ -310,9 +312,13 @@ class Proposition3Controller(ComputedTorqueController):
         directions = [direction] * p if np.ndim(direction) == 0 else list(direction)
         if len(directions) != p or not all(d in (-1, 1, -1.0, 1.0) for d in directions):
             raise InvalidParameterError("direction", direction, f"+1 or -1, or one of them per slider ({p})")
-        if self._cone_edges:
-            raise InvalidParameterError("cone_edge", self.cone_edge, "None: the sliding contacts are on their cone edges")
+        if self._cone_edges and (m == 2 or any(e.contact in model.grasp.sliding for e in self._cone_edges)):
+            raise InvalidParameterError("cone_edge", self.cone_edge, "cone edges only on fixed contacts, with m > 2 "
+                                        "(the sliding contacts are on their kinetic edges already)")
+        if not isinstance(reversible, bool):
+            raise InvalidParameterError("reversible", reversible, "True or False")
         self.sample_time = float(sample_time)
+        self.reversible = reversible
         self._directions = [float(d) for d in directions]
         self._sliders = model.grasp.sliding
 
@@ -338,6 +344,8 @@ class Proposition3Controller(ComputedTorqueController):
         measured ξ̇ [m/s] and the commanded ξ̈ [m/s²] of each slider."""
         if len(xi_dots) != len(self._directions) or len(xi_ddot_commands) != len(self._directions):
             raise InvalidParameterError("xi_dots", xi_dots, f"one rate per slider ({len(self._directions)})")
+        if not self.reversible:
+            return tuple(self._directions)
         for j, (xi_dot, xi_ddot_command) in enumerate(zip(xi_dots, xi_ddot_commands)):
             after = xi_dot + xi_ddot_command * self.sample_time
             if xi_dot * after <= 0.0 and xi_ddot_command != 0.0:
@@ -375,12 +383,12 @@ class Proposition3Controller(ComputedTorqueController):
         rhs = np.concatenate([model.M_o.dot(command[:3]) - model.f_g, np.zeros(len(self._sliders))])
         _, _, x, info = lapack.dgesv(edge.T.dot(edge), rhs)
         if info != 0:
-            raise np.linalg.LinAlgError("Singular matrix")
+            raise SingularModelError("the control law's force equations are singular (a singular grasp or finger)")
         particular = edge.dot(x)  # least-norm f_p
         internal = None
         if self._qp is not None:
-            internal = self._qp._solve(edge, particular.tolist(), terms.frames, self._modes, self.friction, None,
-                                      time.perf_counter())
+            internal = self._qp._solve(edge, particular.tolist(), terms.frames, self._modes, self.friction,
+                                      self._cone_edges or None, time.perf_counter())
             forces = internal.forces
         else:
             forces = particular.reshape(model.grasp.m, 2)

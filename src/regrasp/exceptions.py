@@ -10,6 +10,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 
 class RegraspError(Exception):
     """Base class of every error raised by regrasp."""
@@ -151,3 +153,7 @@ class SingularFingerError(RegraspError):
             f"finger '{finger}' is singular at q = {list(map(float, q))}: its tip Jacobian has condition "
             f"number {condition:.3g} > {threshold:.3g} (stretched or folded)"
         )
+
+
+class SingularModelError(RegraspError, np.linalg.LinAlgError):
+    """A control law's equations are singular (a singular grasp or finger posture): no torque."""

@@ -50,7 +50,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import osqp
@@ -331,6 +331,9 @@ class InternalForceSolver:
         self._rows: dict[tuple, _Rows] = {}
         self._rows_settings = settings
         self._last_contacts = None  # (modes, friction) as last passed (tuples), and validated
+        self._plain: InternalForceSolver | None = None  # the least-squeeze fallback of a target margin
+        #: how often a target-margin problem fell back to the least squeeze (its QP did not converge)
+        self.fallbacks = 0
 
     def _rows_for(self, m: int, modes, friction, cone_edge) -> _Rows:
         """The rows of these modes, frictions and cone edges (cached: the key holds all three; a list of
@@ -425,6 +428,13 @@ class InternalForceSolver:
                 return InternalForceResult(f_c, np.array(forces).reshape(m, 2), k, True, status,
                                            time.perf_counter() - start, margin)
             status = f"{status} (solution violates the constraints)"
+        if rows.target > 0.0:
+            # the margin is a preference: where its QP does not converge, the least squeeze that keeps the
+            # constraints (the same feasible set) is the answer
+            if self._plain is None:
+                self._plain = InternalForceSolver(replace(self.settings, target_cone_margin=0.0))
+            self.fallbacks += 1
+            return self._plain._solve(constraint_matrix, motion_forces, frames, modes, friction, cone_edge, start)
         surface_frames = np.array([((n_x, t_x), (n_y, t_y)) for n_x, n_y, t_x, t_y in frames])
         qp = build_internal_force_qp(constraint_matrix, np.array(f_m), surface_frames, modes, friction, self.settings,
                                      cone_edge)

@@ -83,7 +83,7 @@ class ScheduledSettings:
         max_replans: At most this many re-plans in a run.
     """
 
-    prime_lead: float = 0.01
+    prime_lead: float = 0.0
     time_tolerance: float = 0.05
     xi_tolerance: float = 1e-3
     margin_fraction: float = 0.5
@@ -204,7 +204,7 @@ class ScheduledPolicy:
         s = self.settings
         for end in ends:
             order = end.order
-            if order.planned_end is None or self._pending is not None:
+            if order.planned_end is None or self._pending is not None or self.replan_function is None:
                 continue
             late = end.time - order.planned_end
             off = end.xi - order.target

@@ -75,6 +75,8 @@ class SupervisorSettings:
             tangential force exceeds the static friction by ``prime_overshoot`` f_n) before the
             sliding law takes over. Switching to the sliding law while the contact is still stuck
             makes the plant redistribute the forces for one step and can slip another contact.
+        prime_overshoot_max: The priming's overshoot grows to this over ``prime_time`` [-] (at least
+            ``prime_overshoot``; see :class:`~regrasp.executor.ExecutorSettings`).
         settle_undershoot: A slide that ends with the contact still sliding settles with the
             fixed-contact law asking for (μ_k - this) f_n of friction in the sliding direction [-]
             (this at most μ_k / 2), just inside the kinetic cone: the plant's kinetic friction
@@ -87,6 +89,9 @@ class SupervisorSettings:
         max_slide_time: A slide that has not arrived after this long ends where it is [s].
         recheck_time: After the predicate rejects a slide, ask again after this long [s].
         control_omega: Bandwidth of the computed-torque laws [rad/s] (critically damped).
+        slide_omega: The same on the sliders' ξ [rad/s] (:class:`~regrasp.executor.ExecutorSettings`).
+        integral: Integral action, K_i = ``integral`` · ω³ on every coordinate (0: none; see
+            :class:`~regrasp.executor.ExecutorSettings`).
         envelope_every: Evaluate the runtime envelopes every k-th step (1: every step).
         track_envelopes: Follow each runtime envelope's ``urdf`` collision cuts from the last
             evaluation (:class:`~regrasp.envelope_tracker.EnvelopeTracker`; it falls back to the full
@@ -123,12 +128,15 @@ class SupervisorSettings:
     zeta: float = 1.0
     prime_time: float = 0.02
     prime_overshoot: float = 0.05
+    prime_overshoot_max: float = 0.05
     settle_undershoot: float = 0.05
     arrive_tolerance: float = 5e-4
     arrive_speed: float = 5e-3
     max_slide_time: float = 1.5
     recheck_time: float = 0.01
     control_omega: float = 20.0
+    slide_omega: float = 20.0
+    integral: float = 0.0
     envelope_every: int = 1
     track_envelopes: bool = False
     geometry: str = "ideal"
@@ -166,9 +174,12 @@ class SupervisorSettings:
     def executor_settings(self) -> ExecutorSettings:
         """The executor's part of these settings."""
         return ExecutorSettings(omega_n=self.omega_n, zeta=self.zeta, prime_time=self.prime_time,
-                                prime_overshoot=self.prime_overshoot, settle_undershoot=self.settle_undershoot,
+                                prime_overshoot=self.prime_overshoot,
+                                prime_overshoot_max=max(self.prime_overshoot, self.prime_overshoot_max),
+                                settle_undershoot=self.settle_undershoot,
                                 arrive_tolerance=self.arrive_tolerance, arrive_speed=self.arrive_speed,
                                 max_slide_time=self.max_slide_time, control_omega=self.control_omega,
+                                slide_omega=self.slide_omega, integral=self.integral,
                                 internal_force=self.internal_force)
 
 
