@@ -20,7 +20,8 @@ from regrasp import Friction, Grasp, Hand, Plant, PlantContact, PlantEvent, Redu
 from regrasp.closed_loop import run_closed_loop
 from regrasp.control import Gains, Proposition3Controller
 from regrasp.exceptions import InvalidParameterError, RegraspError, UnknownEdgeError
-from regrasp.recording import RolloutRecorder
+from regrasp.events import Failure, FailureKind
+from regrasp.recording import PHASE_CODES, RolloutRecorder
 
 pytestmark = pytest.mark.filterwarnings("error::rerun.error_utils.RerunWarning")
 
@@ -34,7 +35,8 @@ LO, HI, T_LEG = -0.007, 0.016, 1.5  # example 03's slide range [m] and leg durat
 SCENE = ["scene/object", "scene/desired", "scene/fingers/finger1", "scene/fingers/finger2", "scene/joints",
          "scene/contacts/forces", "scene/contacts/forces_predicted", "scene/contacts/cones",
          "scene/envelope/safe", "scene/envelope/danger"]
-PLOTS = ["plots/error", "plots/xi/finger1", "plots/xi/finger2", "plots/force", "plots/cone_margin", "plots/mode"]
+PLOTS = ["plots/error", "plots/xi/finger1", "plots/xi/finger2", "plots/force", "plots/cone_margin", "plots/mode",
+         "plots/phase/finger1", "plots/phase/finger2"]
 STATIC = ["model/object/outline", "model/object/edges", "model/setup"]
 
 
@@ -126,6 +128,7 @@ def test_recorded_rollout_verifies_and_reads_back(tmp_path):
     assert abs(xi1[0] - log.S[-1, 3] * 1e3) < 0.05 and abs(xi1[0] - xi1[1]) < 0.1
     assert xi1[2] <= xi1[4] < xi1[0] < xi1[5] <= xi1[3]
     assert np.isnan(last["plots/xi/finger2"][1])  # the holding finger has no desired ξ
+    assert np.isnan(xi1[6]) and np.isnan(last["plots/phase/finger1"]).all()  # no schedule, no supervisor
     fn1, fn2, ft1, ft2 = last["plots/force"][:4]
     assert fn1 > 0 and fn2 > 0 and abs(abs(ft1) - MU[0] * fn1) < 1e-6  # Coulomb at the sliding contact
     assert np.abs(last["plots/error"]).max() < 0.5  # mm and deg
@@ -246,7 +249,8 @@ def test_bad_input_raises_typed_errors(tmp_path):
     path = tmp_path / "x.rrd"
     bad = [dict(danger_fraction=0.5), dict(danger_fraction=-0.1), dict(decimation=0), dict(decimation=1.5),
            dict(envelope_edges=[1]), dict(sliding=[2]), dict(force_scale=0.0), dict(envelope_geometry="mesh"),
-           dict(flush_every=0), dict(envelope_tolerance=-1.0)]
+           dict(flush_every=0), dict(envelope_tolerance=-1.0), dict(connect="localhost:9876"), dict(connect=9876),
+           dict(connect="rerun+http://127.0.0.1:9876/proxy", spawn=True)]
     for kwargs in bad:
         with pytest.raises(InvalidParameterError):
             RolloutRecorder(plant, rrd_path=path, **kwargs)
@@ -339,3 +343,226 @@ def test_cones_and_margins_use_each_contacts_coefficient_of_its_mode(tmp_path):
             batch = chunk.to_record_batch()
             text = str(batch.column("TextDocument:text").to_pylist())
     assert "| sliding | mu_s = 0.3, mu_k = 0.05 |" in text and "| fixed | mu_s = 0.8, mu_k = 0.6 |" in text
+
+
+# ------------------------------------------------------------------------- supervised rollouts
+THREE = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml")
+
+
+def record_rollout(path: Path, *, policy="paper", duration=0.3, **kwargs):
+    """A rollout of the three-finger scenario recorded to ``path``; returns it, its result and its records."""
+    from regrasp.rollout import build_rollout
+
+    rollout = build_rollout(THREE, duration=duration, policy=policy)
+    records = []
+    with RolloutRecorder(rollout.plant, rrd_path=path, **kwargs) as rec:
+        log_record = rec.log_record
+
+        def keep(record, desired_pose):
+            records.append(record)
+            return log_record(record, desired_pose)
+
+        rec.log_record = keep
+        result = rollout.run(recorder=rec)
+    verify(path)
+    return rollout, result, records, rec
+
+
+def per_step_entities(names):
+    keys = list(names)
+    return (["scene/object", "scene/desired", "scene/joints", "scene/contacts/forces",
+             "scene/contacts/forces_predicted", "scene/contacts/cones", "scene/envelope/safe", "scene/envelope/danger",
+             "plots/error", "plots/force", "plots/cone_margin", "plots/mode"]
+            + [f"scene/fingers/{k}" for k in keys] + [f"plots/xi/{k}" for k in keys]
+            + [f"plots/phase/{k}" for k in keys])
+
+
+def nan_equal(a, b, atol=1e-9):
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return a.shape == b.shape and bool((np.isnan(a) == np.isnan(b)).all()) and np.allclose(
+        a[~np.isnan(a)], b[~np.isnan(b)], rtol=0.0, atol=atol)
+
+
+def test_a_supervised_rollout_is_logged_from_its_records(tmp_path, monkeypatch):
+    """Each step's row holds its record's values: the state after the step, the plant's forces and
+    margins, the supervisor's phases, band, danger zones and ξ_d; the decisions and the plant's
+    events are in ``events``; no envelope is evaluated by the recorder after the initial state."""
+    path = tmp_path / "supervised.rrd"
+    calls = []
+    original = RolloutRecorder._record_rows
+
+    def no_envelopes(self, record, desired):  # the record path evaluates no envelope of its own
+        monkeypatch.setattr(self, "_envelope", lambda *a: calls.append(a))
+        return original(self, record, desired)
+
+    monkeypatch.setattr(RolloutRecorder, "_record_rows", no_envelopes)
+    rollout, result, records, rec = record_rollout(path)
+    n = result.steps
+    assert n == 300 and result.success and len(records) == n and not calls
+    rows, static, _, _ = read(path)
+    names = rollout.names
+    for entity in per_step_entities(names):
+        assert rows[entity]["step"] == list(range(n + 1)), entity
+    assert rows["plots/mode"]["time"][1:] == [round(r.plant.state.t * 1e9) for r in records]
+    assert "scene/failure" not in rows
+
+    # the per-finger panels (Figure 4.3): ξ, ξ_d of the law, band, danger zones, the schedule's ξ_d
+    f = rec.danger_fraction
+    for i, key in enumerate(names):
+        xi = np.array(rows[f"plots/xi/{key}"]["Scalars:scalars"], dtype=float)[1:] / 1e3  # [m]
+        sup = [r.supervision for r in records]
+        bounds = np.array([s.bounds[i] for s in sup])
+        assert nan_equal(xi[:, 0], [r.plant.xi[i] for r in records])
+        assert nan_equal(xi[:, 1], [s.reference_xi[i] for s in sup])
+        assert nan_equal(xi[:, 2:4], bounds)
+        width = bounds[:, 1] - bounds[:, 0]
+        assert nan_equal(xi[:, 4], bounds[:, 0] + f * width) and nan_equal(xi[:, 5], bounds[:, 1] - f * width)
+        assert np.isnan(xi[:, 6]).all()  # the paper's policy has no schedule
+        phase = np.array(rows[f"plots/phase/{key}"]["Scalars:scalars"], dtype=float)[:, 0]
+        assert np.isnan(phase[0])  # the initial state: no supervisor yet
+        expected = [PHASE_CODES[s.phases[i]] for s in sup]
+        assert list(phase[1:]) == expected  # so they change where the supervisor's phases change
+    finger1 = np.array(rows["plots/phase/finger1"]["Scalars:scalars"], dtype=float)[1:, 0]
+    assert {0.0, 1.0, 2.0, 3.0} <= set(finger1)  # finger 1 primes, slides, settles and holds again
+    assert finger1[0] == 1.0 and finger1[1] == 2.0  # priming during step 0, sliding from step 1
+
+    # forces, margins and envelopes are the record's
+    m = len(names)
+    force = np.array(rows["plots/force"]["Scalars:scalars"], dtype=float)[1:]
+    assert np.array_equal(force[:, :m], [r.plant.forces_surface[:, 0] for r in records])
+    assert np.array_equal(force[:, 2 * m:3 * m], [r.command.control.contact_forces_surface[:, 0] for r in records])
+    margin = np.array(rows["plots/cone_margin"]["Scalars:scalars"], dtype=float)[1:]
+    assert np.array_equal(margin[:, :m], [r.cone_margins for r in records])
+    safe = rows["scene/envelope/safe"]["LineStrips2D:strips"][1:]
+    assert [len(s) for s in safe] == [sum(len(e.feasible) for e in r.supervision.envelopes) for r in records]
+
+    # the events: every record's, with its source and level; decisions at the step they were taken at
+    texts = [t[0] for t in rows["events"]["TextLog:text"]]
+    levels = [v[0] for v in rows["events"]["TextLog:level"]]
+    assert len(texts) == sum(len(r.events) for r in records)
+    prime = texts.index(next(t for t in texts if "supervisor finger1: prime" in t))
+    slide = texts.index(next(t for t in texts if "supervisor finger1: slide" in t))
+    slip = texts.index(next(t for t in texts if "plant finger1: slip" in t))
+    assert rows["events"]["step"][prime] == 0 and rows["events"]["step"][slide] == 1  # at t = 0 and 1 ms
+    assert rows["events"]["step"][slip] == 1 and levels[slip] == "WARN" and levels[prime] == levels[slide] == "INFO"
+    assert any("supervisor finger1: settled" in t for t in texts)
+    assert any("supervisor finger2: prime" in t for t in texts)
+
+    # each finger has its own ξ view in the blueprint, the phases one
+    origins = blueprint_origins(path)
+    assert {f"plots/xi/{k}" for k in names} | {"plots/phase", "events", "scene"} <= origins
+    assert "plots/xi" not in origins
+
+
+def blueprint_origins(path: Path) -> set[str]:
+    reader = RrdReader(path)
+    origins = set()
+    for chunk in reader.stream(store=reader.blueprints()[0]).to_chunks():
+        batch = chunk.to_record_batch()
+        if "ViewBlueprint:space_origin" in batch.schema.names:
+            origins.update(v[0] for v in batch.column("ViewBlueprint:space_origin").to_pylist())
+    return origins
+
+
+def test_a_decimated_supervised_rollout_has_one_row_per_k_steps_and_every_event(tmp_path):
+    path = tmp_path / "decimated.rrd"
+    rollout, result, records, rec = record_rollout(path, duration=0.1, decimation=10)
+    rows, *_ = read(path)
+    for entity in per_step_entities(rollout.names):
+        assert rows[entity]["step"] == list(range(0, result.steps + 1, 10)), entity
+    assert rec.steps_logged == result.steps // 10 + 1
+    assert len(rows["events"]["step"]) == sum(len(r.events) for r in records) > 0  # decimated away or not
+    phase = np.array(rows["plots/phase/finger1"]["Scalars:scalars"], dtype=float)[1:, 0]
+    assert list(phase) == [PHASE_CODES[records[k - 1].supervision.phases[0]] for k in range(10, result.steps + 1, 10)]
+
+
+def test_a_schedules_xi_d_is_plotted(tmp_path):
+    """The schedule's ξ_d (``planned_xi``) is the panel's seventh series (records made up from a real run's)."""
+    from dataclasses import replace
+
+    _, _, records, _ = record_rollout(tmp_path / "source.rrd", duration=0.005)
+    from regrasp.rollout import build_rollout
+
+    rollout = build_rollout(THREE, duration=0.005, policy="paper")
+    path = tmp_path / "planned.rrd"
+    planned = [np.array([-0.005 - 0.001 * k, np.nan, 0.002 * k]) for k in range(len(records))]
+    with RolloutRecorder(rollout.plant, rrd_path=path) as rec:
+        rec.log_initial(rollout.plant, rollout.supervisor.trajectory.pose(0.0))
+        for record, xi_d in zip(records, planned):
+            sup = replace(record.supervision, planned_xi=xi_d)
+            record = replace(record, command=replace(record.command, supervision=sup))
+            assert rec.log_record(record, record.command.desired.pose)
+    verify(path)
+    rows, *_ = read(path)
+    for i, key in enumerate(rollout.names):
+        logged = np.array(rows[f"plots/xi/{key}"]["Scalars:scalars"], dtype=float)[1:, 6] / 1e3
+        assert nan_equal(logged, [p[i] for p in planned])
+
+
+def test_a_collision_is_marked_on_the_colliding_link(tmp_path):
+    """Without regrasps, finger 1's distal link hits the object (~1.29 s): the failure's ERROR
+    line and the link's outline in red, labelled with the reason, at the failure's time."""
+    path = tmp_path / "collision.rrd"
+    rollout, result, _, _ = record_rollout(path, policy="none", duration=1.5, decimation=50)
+    failure = result.failure
+    assert failure is not None and failure.kind is FailureKind.COLLISION and failure.contact == "finger1"
+    link = next(e for e in reversed(rollout.plant.events) if e.kind == "collision").values["link"]
+    assert link == 1  # the distal link
+    rows, *_ = read(path)
+    marks = rows["scene/failure"]
+    assert marks["time"] == [round(failure.time * 1e9)] and marks["step"] == [result.steps]
+    assert failure.reason in marks["LineStrips2D:labels"][0][0]
+    (outline,) = marks["LineStrips2D:strips"][0]  # one link, one closed outline [mm, y flipped]
+    pts = np.array(outline) * [1e-3, -1e-3]
+    finger = rollout.plant.hand.fingers[0]
+    _, elbow, tip = finger.joint_positions_in_hand(rollout.plant.state.q[:2])
+    u = (tip - elbow) / np.linalg.norm(tip - elbow)
+    along = (pts - elbow) @ u
+    across = np.abs((pts - elbow) @ [-u[1], u[0]])
+    assert along.min() > -0.01 and along.max() < np.linalg.norm(tip - elbow) + 0.01 and across.max() < 0.01
+    error = [t[0] for t, lv in zip(rows["events"]["TextLog:text"], rows["events"]["TextLog:level"]) if lv == ["ERROR"]]
+    assert error == [f"FAILURE (collision): {failure.reason}"]
+    assert rows["plots/mode"]["step"][-1] == result.steps // 50 * 50
+
+
+def test_a_contact_failure_is_a_circle_at_its_tip(tmp_path):
+    from regrasp.rollout import build_rollout
+
+    rollout = build_rollout(THREE, duration=0.005, policy="paper")
+    path = tmp_path / "separation.rrd"
+    with RolloutRecorder(rollout.plant, rrd_path=path) as rec:
+        result = rollout.run(recorder=rec)
+        t = rollout.plant.state.t
+        rec.log_failure(Failure(t, FailureKind.SEPARATION, "separation of finger2: made up", "finger2"))
+        rec.log_failure(Failure(t, FailureKind.INTERRUPTED, "interrupted (Ctrl-C)"))  # text only
+    verify(path)
+    rows, *_ = read(path)
+    marks = rows["scene/failure"]
+    assert marks["step"] == [result.steps] and marks["time"] == [round(t * 1e9)]
+    (circle,) = marks["LineStrips2D:strips"][0]
+    tip = rollout.plant.hand.fingers[1].joint_positions_in_hand(rollout.plant.state.q[2:4])[2]
+    radius = np.linalg.norm(np.array(circle) * [1e-3, -1e-3] - tip, axis=1)
+    assert np.allclose(radius, 0.004, atol=1e-6)
+    errors = [t[0] for t, lv in zip(rows["events"]["TextLog:text"], rows["events"]["TextLog:level"]) if lv == ["ERROR"]]
+    assert errors == ["FAILURE (separation): separation of finger2: made up", "FAILURE (interrupted): interrupted (Ctrl-C)"]
+
+
+def test_connect_streams_to_a_running_server(tmp_path):
+    import socket
+
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    server = rr.RecordingStream("regrasp_test_server", make_default=False, make_thread_default=False)
+    url = server.serve_grpc(grpc_port=port)
+    plant, controller = setup()
+    path = tmp_path / "connected.rrd"
+    with RolloutRecorder(plant, rrd_path=path, connect=url) as rec:  # the viewer and the file
+        run_closed_loop(plant, controller, reference, 0.01, on_step=rec.hook(plant, reference))
+    assert rec.connect == url
+    verify(path)
+    assert read(path)[0]["plots/mode"]["step"] == list(range(11))
+    plant, controller = setup()
+    with RolloutRecorder(plant, connect=url) as rec:  # the viewer only
+        run_closed_loop(plant, controller, reference, 0.01, on_step=rec.hook(plant, reference))
+    assert rec.steps_logged == 11 and rec.rrd_path is None

@@ -1,21 +1,41 @@
-r"""Record closed-loop rollouts to rerun: an ``.rrd`` file, a live viewer, or both.
+r"""Record rollouts to rerun: an ``.rrd`` file, a live viewer (spawned or connected to), or both.
 
-A :class:`RolloutRecorder` turns each control step of :func:`~regrasp.closed_loop.run_closed_loop`
-into a rerun recording a reviewer can scrub through: the hand and the object on the left, the
-time series on the right (the blueprint is stored in the file). It uses its own
+A :class:`RolloutRecorder` turns each control step of a supervised rollout
+(:meth:`Rollout.run(recorder=...) <regrasp.rollout.Rollout.run>`, one
+:class:`~regrasp.simulation.StepRecord` per step) or of :func:`~regrasp.closed_loop.run_closed_loop`
+into a rerun recording a reviewer can scrub through: the hand and the object with the events
+log on the left, each finger's ξ panel (the paper's Figure 4.3, live) and the phases in the
+middle, the other time series on the right (the blueprint is stored in the file). It uses its own
 ``rerun.RecordingStream`` (never rerun's global or thread-local recording), so several recorders
 can run side by side, and it needs no viewer: ``rrd_path`` alone writes a file headless.
 
 ::
 
+    with RolloutRecorder(rollout.plant, rrd_path="rollout.rrd", decimation=10) as rec:
+        rollout.run(recorder=rec)
+    # or, a bare control law:
     with RolloutRecorder(plant, rrd_path="rollout.rrd") as rec:
         run_closed_loop(plant, controller, reference, 1.0, on_step=rec.hook(plant, reference))
     # then: rerun rollout.rrd
 
 **Timelines.** ``time`` (a duration: the plant's time [s] of the logged state) and ``step``
-(a sequence). With :meth:`RolloutRecorder.hook`, step 0 is the state when the hook was made and
-step k the state after the k-th control step; ``decimation = n`` logs only the steps that are
-multiples of n (events are logged at every step regardless).
+(a sequence). Step 0 is the state before the first control step (:meth:`~RolloutRecorder.log_initial`,
+or when the hook was made) and step k the state after the k-th control step (record k - 1);
+``decimation = n`` logs only the steps that are multiples of n, one row of every per-step entity
+each (events and the failure are logged whatever the decimation).
+
+**Two sources.** :meth:`~RolloutRecorder.log_record` with a supervised record logs from the record
+alone: the state after the step (``record.plant.state``, ξ = ``record.plant.xi``), the plant's
+forces at the step's start (``record.plant.forces_surface``) and their cone margins
+(``record.cone_margins``), the controller's prediction (``record.command.control``) and the
+supervisor's view at the step's start (``record.supervision``: phases, envelopes, the interval
+holding each ξ, ξ_d): each row is "the step that led here", what the supervisor saw and did at
+its start and where the plant ended. Nothing is recomputed (no envelope evaluation, no KKT
+solve); only the drawing needs the fingers' forward kinematics and the contacts' modes now
+(``plant.contacts``). Without a supervisor (:meth:`~RolloutRecorder.hook`,
+:meth:`~RolloutRecorder.log_step`, a record with ``supervision`` None) the recorder measures
+the plant as before: ξ from the tips, envelopes with :class:`~regrasp.envelope.FingerEnvelope`,
+forces from the ``PlantStep`` or one KKT solve; the phase series are then NaN.
 
 **Scene** (entities under ``scene/``, the hand frame, in **millimetres**). Rerun's 2-D view draws
 y *downwards* (image convention), so the recorder logs every point as (1000 x, -1000 y): the
@@ -38,33 +58,55 @@ the sign of y flipped.
 * ``scene/contacts/cones``: each friction cone as two rays of ``cone_length`` mm around the inward
   normal, at :math:`\pm\arctan\mu_s` and green while the contact is fixed, at
   :math:`\pm\arctan\mu_k` and orange while it slides, grey (at :math:`\mu_s`) once separated.
-* ``scene/envelope/safe`` and ``scene/envelope/danger``: each drawn edge's feasible set
-  (:class:`~regrasp.envelope.FingerEnvelope` ``.at`` the plant's current pose) as thick segments
-  drawn just outside the edge, in the finger's colour, with the last ``danger_fraction`` of each
-  interval's width at both ends in red.
+* ``scene/envelope/safe`` and ``scene/envelope/danger``: each drawn edge's feasible set as thick
+  segments drawn just outside the edge, in the finger's colour, with the last ``danger_fraction``
+  of each interval's width at both ends in red: the supervisor's samples (``SupervisorOutput.envelopes``,
+  each contact's own edge) for a supervised record, else :class:`~regrasp.envelope.FingerEnvelope`
+  ``.at`` the plant's current pose (the ``envelope_edges``).
+* ``scene/failure`` (logged once, by :meth:`~RolloutRecorder.log_failure`, at the failure's time
+  and the last step): the failure marked in red, labelled with its reason: a collision's link
+  outline (the colliding link of the plant's last ``collision`` event of that finger, both links
+  if unknown), a circle around the tip of the contact any other contact failure names
+  (separation, unplanned slip, left envelope or edge, singular), the object's outline for a
+  failure of no one contact (the control law's); nothing for an interruption.
 
 **Plots** (under ``plots/``; each entity holds several series, named by static
-``rr.SeriesLines``): ``plots/error`` the tracking error (x, y [mm], β [deg], each reduced ξ [mm]),
-measured at the logged state against the desired S_d when the reference is known, otherwise
-the controller's ``ControlOutput.error``; ``plots/xi/<finger>`` the contact's ξ with its desired
-value and the bounds of the feasible interval holding it (and where the danger zones start);
-``plots/force`` normal and tangential forces (plant and predicted); ``plots/cone_margin``
-μ f_n − |f_t| (plant and predicted; μ_s at a fixed contact, μ_k at a sliding one);
-``plots/mode`` 0 fixed, 1 sliding, 2 separated.
-``events``: the plant's events (slip, stick, separation, ...) as text.
+``rr.SeriesLines``; NaN where a value is absent): ``plots/error`` the tracking error (x, y [mm],
+β [deg], each reduced ξ [mm]), measured at the logged state against the desired S_d when the
+reference is known, otherwise the controller's ``ControlOutput.error``;
+``plots/xi/<finger>`` (one view per finger, Figure 4.3) seven series [mm]: 0 the actual ξ,
+1 the control law's ξ_d (the sliding law's ``reference_xi``, or the closed loop's S_d), 2-3 the
+feasible interval holding ξ (lo, hi; the supervisor's ``bounds``), 4-5 where the danger zones
+start (lo + f w, hi − f w with f = ``danger_fraction``, w = hi − lo), 6 the schedule's ξ_d
+(``planned_xi``); a separated contact's are all NaN; ``plots/force`` normal and tangential
+forces (plant and predicted); ``plots/cone_margin`` μ f_n − |f_t| (plant and predicted; μ_s at a
+fixed contact, μ_k at a sliding one); ``plots/mode`` 0 fixed, 1 sliding, 2 separated;
+``plots/phase/<finger>`` the supervisor's phase of the contact during the step (:data:`PHASE_CODES`:
+0 fixed, 1 priming, 2 sliding, 3 settling; NaN without a supervisor).
+
+**Events** (``events``, a text log, at each event's own time; the supervisor's decisions at the
+step whose state they were taken at, the plant's at the step after which they were detected):
+``t = … s  <source> <finger>: <kind> (<detail>)``, level WARN for the kinds in
+:data:`WARN_KINDS` (slip, separation, collision, a contact off its edge or singular, left envelope,
+slide rejected or aborted, re-plan failed), INFO otherwise; a failure is one ERROR line
+``FAILURE (<kind>) <finger>: <reason>``.
 
 **Static data** (logged once): ``model/object`` (the polygon in its own frame, mm, with its edge
 numbers and centre of mass), ``model/setup`` (a Markdown table of the fingers, their edges, modes
 and friction), and the styling of every entity above.
 
 **Cost.** Per logged step the recorder keeps what the step needs: Pinocchio forward kinematics
-(the joint frames and the chain), one ``FingerEnvelope.at`` per drawn edge (~20 µs each in the
-``ideal`` geometry) and the plotted numbers. Every ``flush_every`` logged steps (default 500) and
+(the joint frames and the chain), without a supervisor one ``FingerEnvelope.at`` per drawn edge
+(~20 µs each in the ``ideal`` geometry; a supervised record brings its own), and the plotted
+numbers. Every ``flush_every`` logged steps (default 500) and
 on :meth:`~RolloutRecorder.close` it turns the buffered steps into each entity's rows with numpy
 operations over the whole block (outlines, arrows, cones, envelope segments) and sends them with
 one ``send_columns`` per entity, so a live viewer sees the data in blocks of that many steps. The
 recorded values are the same whatever ``flush_every`` is. :attr:`RolloutRecorder.seconds_per_step`
-reports the measured mean cost (about 0.1 ms on the three-finger rollout).
+reports the measured mean cost (about 0.1-0.2 ms on the three-finger rollout). **Size.** A 1 s
+three-finger rollout (``policy="paper"``, 1000 steps) writes 1.7 MB at decimation 1, 0.39 MB at
+10 and 0.27 MB at 100: about 1.4 kB per logged step on top of about 0.25 MB per file (each
+entity's chunk schemas, static and per block sent).
 
 **Robustness.** :meth:`~RolloutRecorder.close` sends what is buffered, flushes and finalises the
 file (footer included), and is idempotent; the context manager calls it also when the block
@@ -97,14 +139,24 @@ from rerun.encodings import Vec2DBatch
 from .contact import ContactMode, coefficients, cone_margin
 from .control import ControlOutput
 from .envelope import EnvelopeSample, FingerEnvelope
+from .events import EventKind, EventSource, FailureKind
 from .exceptions import InvalidParameterError, RegraspError
+from .executor import ContactPhase
 from .planar import wrap_angle
 from .plant import Plant, PlantStep
 
-__all__ = ["MODE_CODES", "RolloutRecorder"]
+__all__ = ["MODE_CODES", "PHASE_CODES", "WARN_KINDS", "RolloutRecorder"]
 
 #: Contact mode → the value plotted under ``plots/mode`` (a ContactMode equals its string, so either looks up).
 MODE_CODES = {ContactMode.FIXED: 0, ContactMode.SLIDING: 1, ContactMode.SEPARATED: 2}
+#: Supervisor phase → the value plotted under ``plots/phase/<finger>``.
+PHASE_CODES = {ContactPhase.FIXED: 0, ContactPhase.PRIMING: 1, ContactPhase.SLIDING: 2, ContactPhase.SETTLING: 3}
+#: The event kinds logged at level WARN (the others at INFO).
+WARN_KINDS = frozenset({EventKind.SLIP, EventKind.SEPARATION, EventKind.COLLISION, EventKind.LEFT_EDGE,
+                        EventKind.SINGULAR, EventKind.LEFT_ENVELOPE, EventKind.SLIDE_REJECTED,
+                        EventKind.SLIDE_ABORTED, EventKind.REPLAN_FAILED})
+#: Where ``connect`` may point: a rerun gRPC URL such as ``rerun+http://127.0.0.1:9876/proxy``.
+_GRPC_URL = re.compile(r"^rerun(\+https?)?://[^/\s]+(/\S*)?$")
 
 _MM = np.array([1000.0, -1000.0])  # metres (hand frame, y up) -> scene millimetres (y down)
 _FINGER_COLOURS = [(31, 119, 180), (148, 103, 189), (23, 190, 207), (140, 86, 75), (227, 119, 194),
@@ -255,7 +307,8 @@ class _Scene:
         self.cone_length = cone_length
         self.danger_fraction = danger_fraction
         self.scalar_paths = (["plots/error"] + [f"plots/xi/{k}" for k in keys]
-                             + ["plots/force", "plots/cone_margin", "plots/mode"])
+                             + ["plots/force", "plots/cone_margin", "plots/mode"]
+                             + [f"plots/phase/{k}" for k in keys])
         self.rows: dict[str, list] = {name: [] for name in self._LISTS + tuple(self.scalar_paths)}
 
     def truncate(self, n: int) -> None:
@@ -473,6 +526,8 @@ class RolloutRecorder:
             finger's current contact edge (``plant.contacts[i].edge``, followed if it changes).
         rrd_path: Write the recording to this ``.rrd`` file (its directory must exist).
         spawn: Start a rerun viewer and stream to it (with ``rrd_path``: both).
+        connect: Stream to a running viewer (or ``rerun --serve-grpc`` server) at this gRPC URL,
+            e.g. ``"rerun+http://127.0.0.1:9876/proxy"`` (with ``rrd_path``: both; not with ``spawn``).
         application_id: Rerun application id.
         recording_name: Name shown in the viewer (default: the file's stem, or "rollout").
         danger_fraction: Width of each danger zone as a fraction of its feasible interval, in
@@ -496,8 +551,9 @@ class RolloutRecorder:
             data in blocks of this many steps).
 
     Raises:
-        InvalidParameterError: no sink (neither ``rrd_path`` nor ``spawn``), a missing
-            directory, or a parameter out of its domain.
+        InvalidParameterError: no sink (none of ``rrd_path``, ``spawn``, ``connect``), a missing
+            directory, ``spawn`` with ``connect``, a ``connect`` that is no rerun gRPC URL, or a
+            parameter out of its domain.
         UnknownEdgeError: an edge in ``envelope_edges`` that the object does not have.
     """
 
@@ -508,6 +564,7 @@ class RolloutRecorder:
         envelope_edges: Sequence[int | Sequence[int] | None] | None = None,
         rrd_path: str | Path | None = None,
         spawn: bool = False,
+        connect: str | None = None,
         application_id: str = "regrasp",
         recording_name: str | None = None,
         danger_fraction: float = 0.1,
@@ -523,8 +580,14 @@ class RolloutRecorder:
         # ---- validation first: a bad argument leaves nothing behind (no stream, no file)
         if not isinstance(plant, Plant):
             raise InvalidParameterError("plant", plant, "a regrasp.Plant")
-        if rrd_path is None and not spawn:
-            raise InvalidParameterError("rrd_path", None, "a sink: an .rrd path, spawn=True, or both")
+        if connect is not None:
+            if not isinstance(connect, str) or not _GRPC_URL.match(connect):
+                raise InvalidParameterError("connect", connect,
+                                            "a rerun gRPC URL such as 'rerun+http://127.0.0.1:9876/proxy'")
+            if spawn:
+                raise InvalidParameterError("connect", connect, "either spawn=True or connect, not both")
+        if rrd_path is None and not spawn and connect is None:
+            raise InvalidParameterError("rrd_path", None, "a sink: an .rrd path, spawn=True or connect, or both")
         path = None
         if rrd_path is not None:
             path = Path(rrd_path)
@@ -591,6 +654,7 @@ class RolloutRecorder:
 
         # ---- the stream and its sinks
         self.rrd_path = path
+        self.connect = connect
         self.steps_logged = 0
         self.compute_seconds = 0.0
         self._next_step = 0
@@ -603,13 +667,16 @@ class RolloutRecorder:
         try:
             stream.set_log_time_enabled(False)  # the simulation's own time is what matters
             blueprint = self._blueprint()
-            if path is not None and not spawn:
+            if not spawn and connect is None:
                 stream.save(str(path), default_blueprint=blueprint)
+            elif path is None and connect is not None:
+                stream.connect_grpc(connect, default_blueprint=blueprint)
             elif path is None:
                 stream.spawn(default_blueprint=blueprint)
             else:
-                rr.spawn(connect=False)
-                stream.set_sinks(rr.GrpcSink(), rr.FileSink(str(path)), default_blueprint=blueprint)
+                if spawn:
+                    rr.spawn(connect=False)
+                stream.set_sinks(rr.GrpcSink(connect), rr.FileSink(str(path)), default_blueprint=blueprint)
             name = recording_name if recording_name is not None else (path.stem if path is not None else "rollout")
             stream.send_recording_name(str(name))
             self._log_static()
@@ -666,19 +733,24 @@ class RolloutRecorder:
         left = rrb.Vertical(
             rrb.Tabs(scene, rrb.Spatial2DView(origin="model/object", name="object frame [mm]"),
                      rrb.TextDocumentView(origin="model/setup", name="set-up")),
-            rrb.TextLogView(origin="events", name="plant events"),
-            row_shares=[5, 1],
+            rrb.TextLogView(origin="events", name="events: supervisor decisions and plant events"),
+            row_shares=[3, 1],
+        )
+        middle = rrb.Vertical(
+            *[rrb.TimeSeriesView(origin=f"plots/xi/{key}", name=f"{f.name}: ξ, feasible band, danger zones, ξ_d [mm]")
+              for f, key in zip(self.fingers, self.keys)],
+            rrb.TimeSeriesView(origin="plots/phase", name="phase: 0 fixed, 1 priming, 2 sliding, 3 settling",
+                               axis_y=rrb.ScalarAxis(range=(-0.2, 3.2))),
         )
         right = rrb.Vertical(
             rrb.TimeSeriesView(origin="plots/error", name="tracking error: x, y, ξ [mm], β [deg]"),
-            rrb.TimeSeriesView(origin="plots/xi", name="contact ξ and its feasible interval [mm]"),
             rrb.TimeSeriesView(origin="plots/force", name="contact forces [N]"),
             rrb.TimeSeriesView(origin="plots/cone_margin", name="friction-cone margin μ f_n − |f_t| [N]"),
             rrb.TimeSeriesView(origin="plots/mode", name="contact mode: 0 fixed, 1 sliding, 2 separated",
                                axis_y=rrb.ScalarAxis(range=(-0.2, 2.2))),
         )
         return rrb.Blueprint(
-            rrb.Horizontal(left, right, column_shares=[3, 2]),
+            rrb.Horizontal(left, middle, right, column_shares=[3, 2, 2]),
             rrb.BlueprintPanel(state="collapsed"),
             rrb.SelectionPanel(state="collapsed"),
             rrb.TimePanel(state="expanded", timeline="time"),
@@ -759,11 +831,14 @@ class RolloutRecorder:
         for i, f in enumerate(self.fingers):
             c = self.colours[i]
             log(f"plots/xi/{self.keys[i]}", rr.SeriesLines(
-                names=[f"ξ {f.name}", f"ξ desired {f.name}", f"feasible lo {f.name}", f"feasible hi {f.name}",
-                       f"lo + {pct:g} % (danger) {f.name}", f"hi − {pct:g} % (danger) {f.name}"],
-                colors=_colours([_rgba(c), _rgba(c, 110), _rgba(_OBJECT), _rgba(_OBJECT), _rgba(_DANGER, 160),
-                                 _rgba(_DANGER, 160)]),
-                widths=[2.0, 1.0, 1.5, 1.5, 1.0, 1.0]), static=True)
+                names=[f"ξ {f.name}", f"ξ_d control law {f.name}", f"feasible lo {f.name}", f"feasible hi {f.name}",
+                       f"lo + {pct:g} % (danger) {f.name}", f"hi − {pct:g} % (danger) {f.name}",
+                       f"ξ_d schedule {f.name}"],
+                colors=_colours([_rgba(c), _rgba(_darker(c, 0.5), 200), _rgba(_OBJECT), _rgba(_OBJECT),
+                                 _rgba(_DANGER, 160), _rgba(_DANGER, 160), _rgba(c, 110)]),
+                widths=[2.0, 1.0, 1.5, 1.5, 1.0, 1.0, 3.0]), static=True)
+            log(f"plots/phase/{self.keys[i]}", rr.SeriesLines(names=[f.name], colors=_colours([_rgba(c)])),
+                static=True)
         force_names = ([f"f_n {n}" for n in names] + [f"f_t {n}" for n in names]
                        + [f"f_n {n} (predicted)" for n in names] + [f"f_t {n} (predicted)" for n in names])
         force_colours = ([_rgba(c) for c in self.colours] + [_rgba(_darker(c, 0.5)) for c in self.colours]
@@ -798,7 +873,8 @@ class RolloutRecorder:
         desired_pose=None,
         plant_step: PlantStep | None = None,
     ) -> bool:
-        r"""Log the plant's current state (and the step's control output) at one step.
+        r"""Log the plant's current state (and the step's control output) at one step, measuring the
+        plant (ξ from the tips, envelopes evaluated here): the path without a supervisor.
 
         Args:
             plant: The plant (the recorder's, or one with the same hand and object).
@@ -821,60 +897,75 @@ class RolloutRecorder:
             InvalidParameterError: the recorder is closed, the plant has no state or another
                 hand, or an array has the wrong shape.
         """
-        if self._closed:
-            raise InvalidParameterError("recorder", "closed", "an open RolloutRecorder (log before close())")
+        self._check_open()
         if plant is not self.plant and (not isinstance(plant, Plant) or plant.hand.m != self.m
                                         or plant.polygon.n_vertices != self.polygon.n_vertices):
             raise InvalidParameterError("plant", plant, f"a plant with the recorder's {self.m} fingers and object")
         st = plant.state
         if st is None:
             raise InvalidParameterError("plant.state", None, "a state: call plant.reset() first")
-        if step is None:
-            step = self._next_step
-        elif isinstance(step, bool) or not isinstance(step, (int, np.integer)) or step < 0:
-            raise InvalidParameterError("step", step, "an integer >= 0")
-        step = int(step)
-        self._next_step = step + 1
-        t = float(st.t if time is None else time)
-        if not math.isfinite(t):
-            raise InvalidParameterError("time", time, "a finite time [s]")
+        step = self._step(step)
+        t = self._time(st.t if time is None else time)
         start = _time.perf_counter()
-        self._log_events(plant, step)
+        self._log_plant_events(plant, step)
         if step % self.decimation:
             return False
-        desired = None if desired_pose is None else np.asarray(desired_pose, dtype=float).reshape(-1)
-        if desired is not None and (desired.size < 3 or not np.isfinite(desired).all()):
-            raise InvalidParameterError("desired_pose", desired_pose, "(x, y, beta) or S_d = (x, y, beta, xi...)")
+        desired = self._desired(desired_pose)
         if output is not None and np.asarray(output.error).shape != (self._n_errors,):
             raise InvalidParameterError("output.error", np.shape(output.error),
                                         f"{self._n_errors} entries (3 + one per sliding contact {self.sliding}; "
                                         "pass sliding= to the recorder)")
-        try:
-            self._log_rows(plant, output, desired, plant_step)
-        except BaseException:
-            self._writer.rollback()  # the steps logged so far stay intact
-            raise
-        self.compute_seconds += _time.perf_counter() - start
-        self.steps_logged += 1
-        self._writer.end_row(step, t)  # may send a block (timed separately)
-        return True
+        return self._row(step, t, start, lambda: self._log_rows(plant, output, desired, plant_step))
 
     def log_initial(self, plant: Plant, desired_pose) -> bool:
         """Log the plant's state before the first step (step 0)."""
-        return self.log_step(plant, None, desired_pose=desired_pose)
+        return self.log_step(plant, None, step=0, desired_pose=desired_pose)
 
     def log_record(self, record, desired_pose) -> bool:
-        """Log one :class:`~regrasp.simulation.StepRecord` of the simulation loop (the state after its step,
-        against ``desired_pose`` then)."""
-        control = record.command.control
-        # the recorder's error series are the object's (the sliding set changes with each slide)
-        control = replace(control, error=control.error[:3])
-        return self.log_step(self.plant, control, desired_pose=desired_pose, plant_step=record.plant)
+        """Log one :class:`~regrasp.simulation.StepRecord` of the simulation loop: the state after its
+        step, as step ``record.index + 1``, against ``desired_pose`` (the desired pose then).
 
-    def log_failure(self, failure, plant: Plant) -> None:
-        """Log a rollout's failure."""
-        self._writer.log_now("events", self._next_step, float(plant.state.t),
-                             rr.TextLog(f"FAILURE ({failure.kind.value}): {failure.reason}", level="ERROR"))
+        A supervised record (``record.supervision`` not None) is logged from the record alone
+        (module docstring, "Two sources"); its events (the supervisor's decisions and the plant's
+        events) go to ``events`` whatever the decimation. A record without a supervisor is logged
+        like :meth:`log_step` with its ``PlantStep``.
+
+        Returns:
+            Whether the step was logged (False when ``decimation`` skips it).
+        """
+        sup = record.supervision
+        if sup is None:
+            control = record.command.control
+            # the recorder's error series are the object's (the sliding set changes with each slide)
+            control = replace(control, error=self._object_error(control.error))
+            return self.log_step(self.plant, control, step=record.index + 1, desired_pose=desired_pose,
+                                 plant_step=record.plant)
+        self._check_open()
+        step = self._step(record.index + 1)
+        t = self._time(record.plant.state.t)
+        start = _time.perf_counter()
+        for ev in record.events:  # decisions at the step's start (the previous state), plant events after it
+            self._log_event(ev, max(step - 1, 0) if ev.source is EventSource.SUPERVISOR else step)
+        self._events_seen = (self.plant.events, len(self.plant.events))  # the plant's are in the record
+        if step % self.decimation:
+            return False
+        desired = self._desired(desired_pose)
+        return self._row(step, t, start, lambda: self._record_rows(record, desired))
+
+    def log_failure(self, failure, plant: Plant | None = None) -> None:
+        """Log a rollout's :class:`~regrasp.events.Failure`: an ERROR line in ``events`` and the
+        failure marked in the scene (``scene/failure``, module docstring) at the failure's time and
+        the last step, drawn at ``plant``'s state (default: the recorder's plant)."""
+        self._check_open()
+        plant = self.plant if plant is None else plant
+        step = max(self._next_step - 1, 0)
+        t = self._time(failure.time)
+        kind = FailureKind(failure.kind)
+        self._writer.log_now("events", step, t,
+                             rr.TextLog(f"FAILURE ({kind.value}): {failure.reason}", level="ERROR"))
+        marker = self._failure_marker(kind, failure, plant)
+        if marker is not None:
+            self._writer.log_now("scene/failure", step, t, marker)
 
     def hook(self, plant: Plant, reference: Callable | None = None, *,
              log_initial: bool = True) -> Callable[[float, ControlOutput], None]:
@@ -940,22 +1031,176 @@ class RolloutRecorder:
         return f"RolloutRecorder({self.rrd_path or 'viewer'}, {self.steps_logged} steps logged, {state})"
 
     # ------------------------------------------------------------------ per step
-    def _log_events(self, plant: Plant, step: int) -> None:
+    def _check_open(self) -> None:
+        if self._closed:
+            raise InvalidParameterError("recorder", "closed", "an open RolloutRecorder (log before close())")
+
+    def _step(self, step) -> int:
+        if step is None:
+            step = self._next_step
+        elif isinstance(step, bool) or not isinstance(step, (int, np.integer)) or step < 0:
+            raise InvalidParameterError("step", step, "an integer >= 0")
+        step = int(step)
+        self._next_step = step + 1
+        return step
+
+    @staticmethod
+    def _time(t) -> float:
+        t = float(t)
+        if not math.isfinite(t):
+            raise InvalidParameterError("time", t, "a finite time [s]")
+        return t
+
+    @staticmethod
+    def _desired(desired_pose):
+        desired = None if desired_pose is None else np.asarray(desired_pose, dtype=float).reshape(-1)
+        if desired is not None and (desired.size < 3 or not np.isfinite(desired).all()):
+            raise InvalidParameterError("desired_pose", desired_pose, "(x, y, beta) or S_d = (x, y, beta, xi...)")
+        return desired
+
+    def _object_error(self, error) -> np.ndarray:
+        """A control law's error cut to the object's entries and padded to the recorder's series."""
+        out = np.full(self._n_errors, np.nan)
+        out[:3] = np.asarray(error, dtype=float)[:3]
+        return out
+
+    def _row(self, step: int, t: float, start: float, fill: Callable[[], None]) -> bool:
+        try:
+            fill()
+        except BaseException:
+            self._writer.rollback()  # the steps logged so far stay intact
+            raise
+        self.compute_seconds += _time.perf_counter() - start
+        self.steps_logged += 1
+        self._writer.end_row(step, t)  # may send a block (timed separately)
+        return True
+
+    def _log_event(self, ev, step: int) -> None:
+        """One event (an :class:`~regrasp.events.Event` or a :class:`~regrasp.plant.PlantEvent`) as a text line."""
+        source = getattr(ev, "source", EventSource.PLANT)
+        source = getattr(source, "value", source)
+        try:
+            kind = EventKind(ev.kind)
+        except ValueError:  # a kind the enum does not know: say it, loudly
+            kind, level = str(ev.kind), "WARN"
+        else:
+            level = "WARN" if kind in WARN_KINDS else "INFO"
+        kind = getattr(kind, "value", kind)
+        self._writer.log_now("events", step, float(ev.time),
+                             rr.TextLog(f"t = {ev.time:.4f} s  {source} {ev.contact or '-'}: {kind} ({ev.detail})",
+                                        level=level))
+
+    def _log_plant_events(self, plant: Plant, step: int) -> None:
         events = plant.events
         seen_list, seen = self._events_seen
         if seen_list is not events:  # plant.reset() starts a new list
             seen = 0
         for ev in events[seen:]:
-            level = "INFO" if ev.kind == "stick" else "WARN"
-            self._writer.log_now("events", step, float(ev.time),
-                                 rr.TextLog(f"t = {ev.time:.4f} s  {ev.contact}: {ev.kind} ({ev.detail})",
-                                            level=level))
+            self._log_event(ev, step)
         self._events_seen = (events, len(events))
 
     def _edges_drawn(self, plant: Plant, i: int):
         if self.envelope_edges is None:
             return (plant.contacts[i].edge,)
         return self.envelope_edges[i]
+
+    def _kinematics(self, q) -> tuple[list[np.ndarray], np.ndarray]:
+        """The fingers' joint frames (joints 1 and 2 of each, 4x4, hand frame) and chains (m, 3, 2) at ``q``."""
+        chains = np.empty((self.m, 3, 2))
+        frames = []
+        for i, (model, data, tip_placement) in enumerate(self._kin):
+            pin.forwardKinematics(model, data, q[2 * i:2 * i + 2])
+            oMi = data.oMi
+            H1, H2 = oMi[1].homogeneous, oMi[2].homogeneous
+            frames.append(H1)
+            frames.append(H2)
+            chains[i, 0] = H1[:2, 3]
+            chains[i, 1] = H2[:2, 3]
+            chains[i, 2] = (oMi[2] * tip_placement).translation[:2]
+        return frames, chains
+
+    def _append_pose(self, rows, X, q, desired) -> np.ndarray:
+        """The object's and the desired pose's rows and the fingers'; returns the tips (m, 2) [m]."""
+        x, y, beta = np.asarray(X, dtype=float).tolist()
+        rows["pose"].append((math.cos(beta), math.sin(beta), x, y))
+        if desired is not None:
+            rows["desired"].append((math.cos(desired[2]), math.sin(desired[2]), desired[0], desired[1]))
+        else:
+            rows["desired"].append(None)
+        frames, chains = self._kinematics(q)
+        rows["frames"].append(frames)
+        rows["chains"].append(chains)
+        return chains[:, 2]
+
+    @staticmethod
+    def _segments(edges, feasible_of) -> list:
+        """(finger, edge, slot, lo, hi) of each drawn interval: the slot-th envelope along its edge."""
+        segments = []
+        slot: dict[int, int] = {}
+        for i, edge in edges:
+            k = slot.get(edge, 0)
+            slot[edge] = k + 1
+            for lo, hi in feasible_of(i, edge):
+                segments.append((i, edge, k, lo, hi))
+        return segments
+
+    def _append_series(self, rows, X, xi, modes, desired, output_error, forces, predicted, bands, law_xi,
+                       planned_xi, phases) -> None:
+        """The plotted rows (x, y, ξ in mm, β in degrees). ``bands`` (m, 2) is the feasible interval
+        holding each ξ [m] (NaN: none); ``law_xi``, ``planned_xi`` per contact [m] (NaN: none);
+        ``phases`` the phase codes (NaN: no supervisor)."""
+        nan = math.nan
+        x, y, beta = np.asarray(X, dtype=float).tolist()
+        if desired is not None:
+            d = desired.tolist()
+            err = [d[0] - x, d[1] - y, wrap_angle(d[2] - beta)] + [nan] * (self._n_errors - 3)
+            for j, i in enumerate(self.sliding):
+                if 3 + j < len(d):
+                    err[3 + j] = d[3 + j] - xi[i]
+        elif output_error is not None:
+            err = np.asarray(output_error, dtype=float).tolist()
+        else:
+            err = [nan] * self._n_errors
+        err[0] *= 1000.0
+        err[1] *= 1000.0
+        err[2] = math.degrees(err[2])
+        rows["plots/error"].append(err[:3] + [v * 1000.0 for v in err[3:]])
+        f = self.danger_fraction
+        for i in range(self.m):
+            row = [nan] * 7
+            if modes[i] is not ContactMode.SEPARATED:
+                lo, hi = bands[i]
+                w = f * (hi - lo)
+                row = [xi[i], law_xi[i], lo, hi, lo + w, hi - w, planned_xi[i]]
+            rows[f"plots/xi/{self.keys[i]}"].append([v * 1000.0 for v in row])
+            rows[f"plots/phase/{self.keys[i]}"].append([phases[i]])
+        rows["plots/force"].append(forces)
+        rows["plots/cone_margin"].append(predicted)
+        rows["plots/mode"].append([float(MODE_CODES.get(mo, 2)) for mo in modes])
+
+    def _record_rows(self, record, desired) -> None:
+        """A supervised record's rows, from the record alone (module docstring)."""
+        rows = self._writer.scene.rows
+        ps, sup, control = record.plant, record.supervision, record.command.control
+        st = ps.state
+        self._append_pose(rows, st.X, st.q, desired)
+        contacts = self.plant.contacts
+        modes = [c.mode for c in contacts]
+        edges = [c.edge for c in contacts]
+        rows["edges"].append(edges)
+        rows["modes"].append(modes)
+        surface = np.array(ps.forces_surface, dtype=float)
+        rows["surface"].append(surface)
+        rows["predicted"].append(np.array(control.contact_forces, dtype=float))
+        pred = np.asarray(control.contact_forces_surface, dtype=float)
+        rows["segments"].append(self._segments(enumerate(edges), lambda i, _edge: sup.envelopes[i].feasible))
+        phases = [float(PHASE_CODES.get(ph, math.nan)) for ph in sup.phases]
+        self._append_series(
+            rows, st.X, np.asarray(ps.xi, dtype=float).tolist(), modes, desired, self._object_error(control.error),
+            surface[:, 0].tolist() + surface[:, 1].tolist() + pred[:, 0].tolist() + pred[:, 1].tolist(),
+            np.asarray(record.cone_margins, dtype=float).tolist() + np.asarray(control.cone_margins, dtype=float).tolist(),
+            np.asarray(sup.bounds, dtype=float).tolist(), np.asarray(sup.reference_xi, dtype=float).tolist(),
+            np.asarray(sup.planned_xi, dtype=float).tolist(), phases)
 
     def _log_rows(self, plant: Plant, output: ControlOutput | None, desired, plant_step: PlantStep | None) -> None:
         # the step's numbers are computed here; the drawn geometry per block of steps in _Scene.columns
@@ -966,28 +1211,7 @@ class RolloutRecorder:
         c_, s_ = math.cos(beta), math.sin(beta)
         R = np.array([[c_, -s_], [s_, c_]])
         origin = X[:2]
-        rows["pose"].append((c_, s_, x, y))
-        if desired is not None:
-            rows["desired"].append((math.cos(desired[2]), math.sin(desired[2]), desired[0], desired[1]))
-        else:
-            rows["desired"].append(None)
-
-        # fingers: the joint frames (Pinocchio) and the joint chain
-        chains = np.empty((self.m, 3, 2))
-        frames = []
-        q = st.q
-        for i, (model, data, tip_placement) in enumerate(self._kin):
-            pin.forwardKinematics(model, data, q[2 * i:2 * i + 2])
-            oMi = data.oMi
-            H1, H2 = oMi[1].homogeneous, oMi[2].homogeneous
-            frames.append(H1)
-            frames.append(H2)
-            chains[i, 0] = H1[:2, 3]
-            chains[i, 1] = H2[:2, 3]
-            chains[i, 2] = (oMi[2] * tip_placement).translation[:2]
-        rows["frames"].append(frames)
-        rows["chains"].append(chains)
-        tips = chains[:, 2]
+        tips = self._append_pose(rows, X, st.q, desired)
 
         # contacts: ξ, forces
         contacts = plant.contacts
@@ -1047,47 +1271,49 @@ class RolloutRecorder:
                 self._samples[(i, edge)] = ((x, y, beta), found)
             return found
 
-        segments = []  # (finger, edge, slot, lo, hi): the slot-th envelope drawn along the edge
-        slot: dict[int, int] = {}
+        drawn = [(i, edge) for i in range(self.m) for edge in self._edges_drawn(plant, i)]
+        rows["segments"].append(self._segments(drawn, lambda i, edge: sample(i, edge).feasible))
+        bands = []
         for i in range(self.m):
-            for edge in self._edges_drawn(plant, i):
-                k = slot.get(edge, 0)
-                slot[edge] = k + 1
-                for lo, hi in sample(i, edge).feasible:
-                    segments.append((i, edge, k, lo, hi))
-        rows["segments"].append(segments)
-
-        # time series (x, y, ξ in mm, β in degrees)
-        if desired is not None:
-            d = desired.tolist()
-            err = [d[0] - x, d[1] - y, wrap_angle(d[2] - beta)] + [nan] * (self._n_errors - 3)
-            for j, i in enumerate(self.sliding):
-                if 3 + j < len(d):
-                    err[3 + j] = d[3 + j] - xi[i]
-        elif output is not None:
-            err = np.asarray(output.error, dtype=float).tolist()
-        else:
-            err = [nan] * self._n_errors
-        err[0] *= 1000.0
-        err[1] *= 1000.0
-        err[2] = math.degrees(err[2])
-        rows["plots/error"].append(err[:3] + [v * 1000.0 for v in err[3:]])
-        for i in range(self.m):
-            row = [nan] * 6
+            band = (nan, nan)
             if modes[i] is not ContactMode.SEPARATED:
-                xi_i = xi[i]
-                row[0] = xi_i
-                if i in self.sliding and desired is not None:
-                    j = self.sliding.index(i)
-                    if 3 + j < desired.size:
-                        row[1] = float(desired[3 + j])
                 feasible = sample(i, contacts[i].edge).feasible
                 if feasible:
-                    lo, hi = min(feasible, key=lambda iv: 0.0 if iv[0] <= xi_i <= iv[1]
-                                 else min(abs(xi_i - iv[0]), abs(xi_i - iv[1])))
-                    wdt = self.danger_fraction * (hi - lo)
-                    row[2:] = (lo, hi, lo + wdt, hi - wdt)
-            rows[f"plots/xi/{self.keys[i]}"].append([v * 1000.0 for v in row])
-        rows["plots/force"].append(fn + ft + pfn + pft)
-        rows["plots/cone_margin"].append(margin + pmargin)
-        rows["plots/mode"].append([float(MODE_CODES.get(mo, 2)) for mo in modes])
+                    band = min(feasible, key=lambda iv: 0.0 if iv[0] <= xi[i] <= iv[1]
+                               else min(abs(xi[i] - iv[0]), abs(xi[i] - iv[1])))
+            bands.append(band)
+        law_xi = [nan] * self.m
+        if desired is not None:
+            for j, i in enumerate(self.sliding):
+                if 3 + j < desired.size:
+                    law_xi[i] = float(desired[3 + j])
+        self._append_series(rows, X, xi, modes, desired, None if output is None else output.error,
+                            fn + ft + pfn + pft, margin + pmargin, bands, law_xi, nan_m, nan_m)
+
+    def _failure_marker(self, kind: FailureKind, failure, plant: Plant):
+        """The red outline marking ``failure`` at ``plant``'s state (module docstring), or None."""
+        if kind is FailureKind.INTERRUPTED or plant.state is None:
+            return None
+        st = plant.state
+        names = [f.name for f in self.fingers]
+        i = names.index(failure.contact) if failure.contact in names else None
+        if i is None:  # no one contact: the object
+            X = st.X
+            c_, s_ = math.cos(X[2]), math.sin(X[2])
+            strips = [self._object_closed @ np.array([[c_, s_], [-s_, c_]]) + X[:2]]
+        else:
+            frames, chains = self._kinematics(st.q)
+            if kind is FailureKind.COLLISION:
+                link = None
+                for ev in reversed(plant.events):
+                    if ev.contact == failure.contact and ev.kind == EventKind.COLLISION and "link" in ev.values:
+                        link = int(ev.values["link"])
+                        break
+                shapes = [(j, pts) for j, pts in self._writer.scene.fingers[i][1] if link is None or j == link]
+                strips = [(pts @ frames[2 * i + j][:3, :3].T + frames[2 * i + j][:3, 3])[:, :2] for j, pts in shapes]
+                if not strips:  # a finger without collision shapes: its chain
+                    strips = [chains[i]]
+            else:
+                strips = [chains[i, 2] + np.vstack([_circle(0.004), _circle(0.004)[:1]])]
+        return rr.LineStrips2D([s * _MM for s in strips], radii=1.2, colors=_colours([_rgba(_DANGER)]),
+                               labels=[f"{kind.value}: {failure.reason}"], show_labels=True, draw_order=40.0)
