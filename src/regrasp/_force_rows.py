@@ -26,7 +26,7 @@ _OSQP_INFTY = 1e30  # OSQP's infinity (osqp.OSQP().constant("OSQP_INFTY"))
 #: W δ = 1e4 N, more than the squeeze's marginal cost ‖f_c‖ ‖∂f_c/∂s‖ of any squeeze below ~100 N, so s
 #: reaches min(target, best margin) to the solver's tolerance (with δ = 0 it would fall short by that
 #: cost over W, 1e-3 N at a 20 N squeeze with W = 1e4)
-MARGIN_WEIGHT = 1e4
+MARGIN_WEIGHT = 1e2
 MARGIN_AIM = 1.0
 
 

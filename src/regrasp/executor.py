@@ -76,6 +76,16 @@ class ExecutorSettings:
         arrive_tolerance: A slide has arrived when |ξ - ξ*| is below this [m] ...
         arrive_speed: ... and |ξ̇| below this [m/s].
         max_slide_time: A slide that has not arrived after this long ends where it is [s].
+        friction_filter_time: Estimate each slider's kinetic friction ratio |f_t| / f_n from the sensed
+            contact forces (:class:`~regrasp.supervisor.Measurement` ``normal_force``) with a first-order
+            filter of this time constant [s], and let the laws use it instead of the model's μ_k (None:
+            the model's). The plant's μ_k may differ from the model's; a slider that carries more friction
+            than its law predicts stops and sticks, one that carries less overshoots.
+        friction_min_force: The estimate uses only steps with f_n above this [N].
+        friction_resolution: The laws get the estimate rounded to this [-] (a new law per change).
+        control_period: The control period the filter assumes [s].
+        max_reprimes: A planned slide (an order with a reference) that sticks before its planned end is
+            primed again, at most this many times; then it ends where it stuck.
         control_omega: Bandwidth of the computed-torque laws on the object's coordinates [rad/s]
             (critically damped: K_v = 2ω, K_s = ω²).
         slide_omega: The same on the sliders' ξ [rad/s]. A slider's effective inertia along its edge is
@@ -98,6 +108,11 @@ class ExecutorSettings:
     arrive_tolerance: float = 5e-4
     arrive_speed: float = 5e-3
     max_slide_time: float = 1.5
+    max_reprimes: int = 5
+    friction_filter_time: float | None = None
+    friction_min_force: float = 0.05
+    friction_resolution: float = 0.0025
+    control_period: float = 1e-3
     control_omega: float = 20.0
     slide_omega: float = 20.0
     integral: float = 0.0
@@ -108,6 +123,8 @@ class ExecutorSettings:
                      "arrive_speed", "max_slide_time", "control_omega", "slide_omega"):
             as_positive_float(name, getattr(self, name))
         as_positive_float("integral", self.integral, allow_zero=True)
+        if isinstance(self.max_reprimes, bool) or int(self.max_reprimes) != self.max_reprimes or self.max_reprimes < 0:
+            raise InvalidParameterError("max_reprimes", self.max_reprimes, "an integer >= 0")
         if not self.prime_overshoot_max >= self.prime_overshoot:
             raise InvalidParameterError("prime_overshoot_max", self.prime_overshoot_max,
                                         f"at least prime_overshoot = {self.prime_overshoot}")
@@ -168,6 +185,8 @@ class _Active:
     phase_start: float
     slipped: bool = False
     aborted: bool = False
+    reprimes: int = 0
+    mu_hat: float = math.nan  # the slider's kinetic friction ratio, estimated while it slides
     settle_sign: float = 0.0
     filter: list = field(default_factory=lambda: [0.0, 0.0])
 
@@ -247,6 +266,7 @@ class SlideExecutor:
                             + ("" if sliding else " (not yet slipping)"), xi=xi, target=target)
             elif phase is ContactPhase.SLIDING:
                 a.slipped = a.slipped or sliding  # the plant reports the slip one step after the law starts
+                self._estimate_friction(a, i, meas)
                 near = abs(xi - target) < s.arrive_tolerance
                 if near and abs(xi_dot) < s.arrive_speed and (a.order.reference is None or not sliding
                                                               or a.order.planned_end is None
@@ -254,6 +274,18 @@ class SlideExecutor:
                     ends.append(self._end(meas, out, i, EventKind.ARRIVED, f"xi = {xi * 1e3:.2f} mm after "
                                           f"{t - a.phase_start:.3f} s"))
                 elif a.slipped and not sliding:
+                    if (a.order.reference is not None and a.reprimes < s.max_reprimes
+                            and (a.order.planned_end is None or t < a.order.planned_end)):
+                        # a planned slide goes on: break the contact away again (more friction than the
+                        # model's stopped it) and keep tracking the plan
+                        a.reprimes += 1
+                        self.phases[i] = ContactPhase.PRIMING
+                        a.phase_start, a.slipped = t, False
+                        self.xi = meas.xi.copy()
+                        self._event(out, t, i, EventKind.STUCK, f"stuck at {xi * 1e3:.2f} mm on the way: priming "
+                                    f"again ({a.reprimes} of {s.max_reprimes})", xi=xi, target=target,
+                                    reprime=a.reprimes)
+                        continue
                     ends.append(self._end(meas, out, i, EventKind.STUCK, f"stuck at {xi * 1e3:.2f} mm (target "
                                           f"{target * 1e3:.2f} mm)"))
                 elif t - a.phase_start > s.max_slide_time:
@@ -262,6 +294,30 @@ class SlideExecutor:
             elif phase is ContactPhase.SETTLING and not sliding:
                 self._finish(meas, out, i)
         return ends
+
+    def _estimate_friction(self, a: _Active, i: int, meas) -> None:
+        """Update the slider's kinetic friction ratio from the sensed forces (``friction_filter_time``)."""
+        s = self.settings
+        if s.friction_filter_time is None or meas.normal_force is None or not meas.sliding[i]:
+            return
+        fn, ft = float(meas.normal_force[i]), float(meas.friction[i])
+        if not fn > s.friction_min_force:
+            return
+        ratio = abs(ft) / fn
+        if math.isnan(a.mu_hat):
+            a.mu_hat = ratio
+        else:
+            a.mu_hat += min(1.0, s.control_period / s.friction_filter_time) * (ratio - a.mu_hat)
+
+    def _kinetic(self, i: int) -> float:
+        """The kinetic friction ratio the laws use for contact i: the estimate while it slides, rounded to
+        ``friction_resolution``, else the model's."""
+        a = self._active.get(i)
+        mu = self.friction[i].kinetic
+        if a is None or math.isnan(a.mu_hat):
+            return mu
+        r = self.settings.friction_resolution
+        return max(0.0, round(a.mu_hat / r) * r)
 
     def _end(self, meas, out: list, i: int, kind: EventKind, detail: str) -> SlideEnd:
         """End contact i's sliding phase where it is: settle if it still slides, else fix it."""
@@ -313,10 +369,12 @@ class SlideExecutor:
                 overshoot = s.prime_overshoot + ramp * (s.prime_overshoot_max - s.prime_overshoot)
                 edges.append(ConeEdge(i, a.order.direction, self.friction[i].static + overshoot))
             elif self.phases[i] is ContactPhase.SETTLING:
-                kinetic = self.friction[i].kinetic
+                kinetic = self._kinetic(i)
                 edges.append(ConeEdge(i, a.settle_sign, kinetic - min(s.settle_undershoot, 0.5 * kinetic)))
         sliders = [i for i in range(self.hand.m) if self.phases[i] is ContactPhase.SLIDING]
-        key = (tuple(self.phases), tuple(edges), self.xi.tobytes())
+        friction = tuple(Friction(max(f.static, k), k) if k != f.kinetic else f
+                         for f, k in zip(self.friction, (self._kinetic(i) for i in range(self.hand.m))))
+        key = (tuple(self.phases), tuple(edges), self.xi.tobytes(), friction)
         if key == self._key:
             return self._controller
         modes = [ContactMode.SLIDING if i in sliders else ContactMode.FIXED for i in range(self.hand.m)]
@@ -327,11 +385,11 @@ class SlideExecutor:
             directions = [self._active[i].order.direction for i in sliders]
             # a planned slide (a reference from rest to rest) never reverses; a filtered one may overshoot
             planned = all(self._active[i].order.reference is not None for i in sliders)
-            law = Proposition3Controller(model, self._gains(3 + len(sliders)), self.friction,
+            law = Proposition3Controller(model, self._gains(3 + len(sliders)), friction,
                                          direction=directions if len(directions) > 1 else directions[0],
                                          reversible=not planned, internal_force=s.internal_force, cone_edge=cone_edge)
         else:
-            law = FixedContactController(model, self._gains(3), self.friction, internal_force=s.internal_force,
+            law = FixedContactController(model, self._gains(3), friction, internal_force=s.internal_force,
                                          cone_edge=cone_edge)
         self._controller, self._key = law, key
         return law

@@ -110,17 +110,17 @@ def _modes_sliding(plant: Plant) -> np.ndarray:
 
 def sense(plant: Plant, last: PlantStep | None) -> Measurement:
     """What a hand's sensors read now: the object pose and twist, each contact's ξ and ξ̇ (a fixed
-    contact's ξ is where it is held), a slip sensor and the tangential forces of the last step."""
+    contact's ξ is where it is held), a slip sensor and the contact forces of the last step."""
     st = plant.state
     contacts = plant.contacts
     if last is None:
         xi = np.array([plant.contact_xi(st, i) for i in range(plant.hand.m)])
-        xi, xi_dot, friction = xi[:, 0], xi[:, 1], np.zeros(plant.hand.m)
+        xi, xi_dot, friction, normal = xi[:, 0], xi[:, 1], np.zeros(plant.hand.m), None
     else:
-        xi, xi_dot, friction = last.xi, last.xi_dot, last.forces_surface[:, 1]
+        xi, xi_dot, friction, normal = last.xi, last.xi_dot, last.forces_surface[:, 1], last.forces_surface[:, 0]
     modes = [c.mode for c in contacts]
     xi = np.array([c.xi if mode is ContactMode.FIXED else x for c, mode, x in zip(contacts, modes, xi.tolist())])
-    return Measurement(st.t, st.X.copy(), st.V.copy(), xi, xi_dot, _modes_sliding(plant), friction)
+    return Measurement(st.t, st.X.copy(), st.V.copy(), xi, xi_dot, _modes_sliding(plant), friction, normal)
 
 
 def sense_projected(plant: Plant, last: PlantStep | None) -> Measurement:
@@ -129,8 +129,9 @@ def sense_projected(plant: Plant, last: PlantStep | None) -> Measurement:
     st = plant.state
     xi = np.array([plant.contact_xi(st, i) for i in range(plant.hand.m)])
     friction = np.zeros(plant.hand.m) if last is None else last.forces_surface[:, 1]
+    normal = None if last is None else last.forces_surface[:, 0]
     return Measurement(st.t, st.X.copy(), st.V.copy(), xi[:, 0].copy(), xi[:, 1].copy(), _modes_sliding(plant),
-                       friction)
+                       friction, normal)
 
 
 def simulate(plant: Plant, driver: Driver, steps: int, *,

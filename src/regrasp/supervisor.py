@@ -90,6 +90,8 @@ class SupervisorSettings:
         recheck_time: After the predicate rejects a slide, ask again after this long [s].
         control_omega: Bandwidth of the computed-torque laws [rad/s] (critically damped).
         slide_omega: The same on the sliders' ξ [rad/s] (:class:`~regrasp.executor.ExecutorSettings`).
+        friction_filter_time: Estimate sliders' kinetic friction from the sensed forces with this time
+            constant [s] (None: the model's μ_k; :class:`~regrasp.executor.ExecutorSettings`).
         integral: Integral action, K_i = ``integral`` · ω³ on every coordinate (0: none; see
             :class:`~regrasp.executor.ExecutorSettings`).
         envelope_every: Evaluate the runtime envelopes every k-th step (1: every step).
@@ -137,6 +139,7 @@ class SupervisorSettings:
     control_omega: float = 20.0
     slide_omega: float = 20.0
     integral: float = 0.0
+    friction_filter_time: float | None = None
     envelope_every: int = 1
     track_envelopes: bool = False
     geometry: str = "ideal"
@@ -180,6 +183,7 @@ class SupervisorSettings:
                                 arrive_tolerance=self.arrive_tolerance, arrive_speed=self.arrive_speed,
                                 max_slide_time=self.max_slide_time, control_omega=self.control_omega,
                                 slide_omega=self.slide_omega, integral=self.integral,
+                                friction_filter_time=self.friction_filter_time,
                                 internal_force=self.internal_force)
 
 
@@ -193,7 +197,9 @@ class Measurement:
         xi, xi_dot: Each contact's position along its edge and its rate [m], [m/s].
         sliding: Whether each contact is sliding (a slip sensor), (m,) bool.
         friction: Tangential contact force on the object at each contact [N], (m,) (a force
-            sensor; the supervisor's laws do not read it, Proposition 2 would).
+            sensor, during the last step).
+        normal_force: Normal contact force at each contact [N], (m,), the same sensor; None: not
+            sensed. The executor estimates a slider's kinetic friction ratio from the two.
     """
 
     t: float
@@ -203,6 +209,7 @@ class Measurement:
     xi_dot: np.ndarray
     sliding: np.ndarray
     friction: np.ndarray
+    normal_force: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
