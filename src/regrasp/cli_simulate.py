@@ -13,7 +13,9 @@ and a complete recording.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -124,6 +126,27 @@ def _no_schedule_text(error, scenario) -> str:
     return "\n".join(lines)
 
 
+@contextlib.contextmanager
+def _c_stdout_silenced():
+    """Route file descriptor 1 to /dev/null (OSQP's C library prints "Polishing not needed" on stdout
+    even with verbose=False), so that stdout carries only the summary or the JSON document."""
+    sys.stdout.flush()
+    try:
+        saved = os.dup(1)
+    except OSError:  # no file descriptor 1 (an embedded interpreter): nothing to protect
+        yield
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 1)
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(devnull)
+
+
 def _cmd_simulate(args, progress_bar) -> int:
     from .exceptions import InvalidParameterError
     from .rollout import build_rollout
@@ -131,7 +154,6 @@ def _cmd_simulate(args, progress_bar) -> int:
     from .schedule import NoScheduleError, ScheduleLimit
     from .schedule_planner import RegraspSettings
     from .supervisor import SupervisorSettings
-    from .internal_force import InternalForceSettings
 
     path = args.scenario if args.scenario is not None else DEFAULT_SCENARIO
     if args.scenario is None and not DEFAULT_SCENARIO.is_file():
@@ -143,24 +165,32 @@ def _cmd_simulate(args, progress_bar) -> int:
     if args.envelope_margin is not None:
         options["envelope_margin"] = args.envelope_margin
     regrasp_settings = RegraspSettings(**options)
-    settings = SupervisorSettings(geometry=scenario.geometry.value,
-                                  internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=cone))
+    settings = SupervisorSettings.robust(scenario.geometry.value, cone)
     quiet = args.json
     common = dict(periods=args.periods, duration=args.duration, settings=settings, regrasp_settings=regrasp_settings,
                   plant_mass_scale=args.plant_mass_scale, plant_mu_scale=args.plant_mu_scale)
+    with _c_stdout_silenced():
+        code, output = _simulate(args, scenario, common, progress_bar)
+    sys.stdout.write(output + "\n")
+    return code
+
+
+def _simulate(args, scenario, common, progress_bar) -> tuple[int, str]:
+    """Run the rollout: (exit status, what to print on stdout)."""
+    from .rollout import build_rollout
+    from .schedule import NoScheduleError, ScheduleLimit
+
+    quiet = args.json
     try:
         rollout = build_rollout(scenario, policy=args.policy, **common,
                                 plan_progress=None if quiet else progress_bar("planning regrasps"))
     except NoScheduleError as exc:
         if exc.limit is not ScheduleLimit.ENVELOPE or exc.partial is None:
             if args.json:
-                json.dump({"success": False, "policy": args.policy, "schedule": exc.to_json_dict(),
-                           "failure": {"time": exc.latest_time, "kind": FailureKind.NO_SCHEDULE.value,
-                                       "reason": str(exc), "contact": ", ".join(exc.contacts)}}, sys.stdout)
-                sys.stdout.write("\n")
-            else:
-                print(_no_schedule_text(exc, scenario))
-            return 1
+                return 1, json.dumps({"success": False, "policy": args.policy, "schedule": exc.to_json_dict(),
+                                      "failure": {"time": exc.latest_time, "kind": FailureKind.NO_SCHEDULE.value,
+                                                  "reason": str(exc), "contact": ", ".join(exc.contacts)}})
+            return 1, _no_schedule_text(exc, scenario)
         # the envelope empties: run the best schedule up to then, and fail where the physics says so
         if not quiet:
             print(f"no schedule beyond t = {exc.latest_time:.3f} s ({exc.reason}); running the partial schedule",
@@ -170,8 +200,8 @@ def _cmd_simulate(args, progress_bar) -> int:
     if args.rrd is not None or args.spawn or args.connect:
         from .recording import RolloutRecorder
 
-        recorder = RolloutRecorder(rollout.plant, rrd_path=args.rrd, spawn=args.spawn,
-                                   **({"connect": args.connect} if args.connect else {}), decimation=args.decimate, envelope_geometry=scenario.geometry.value,
+        recorder = RolloutRecorder(rollout.plant, rrd_path=args.rrd, spawn=args.spawn, connect=args.connect,
+                                   decimation=args.decimate, envelope_geometry=scenario.geometry.value,
                                    recording_name=f"{scenario.name} ({args.policy})")
     try:
         result = rollout.run(recorder=recorder, progress=None if quiet else progress_bar("simulating"))
@@ -183,16 +213,13 @@ def _cmd_simulate(args, progress_bar) -> int:
         from .rollout_plots import plot_rollout
 
         figures.append(str(plot_rollout(result, Path(args.plot) / "regrasp_rollout.png")))
+    code = 0 if result.success else 1
     if args.json:
         doc = result.to_json_dict()
         doc["figures"] = figures
-        json.dump(doc, sys.stdout)
-        sys.stdout.write("\n")
-    else:
-        print(_format_summary(result, scenario))
-        for f in figures:
-            print(f"  figure: {f}")
-    if result.failure is not None and result.failure.kind is FailureKind.INTERRUPTED and not args.json:
-        print("  (interrupted: the result and the recording cover the run so far)")
-    return 0 if result.success else 1
+        return code, json.dumps(doc)
+    lines = [_format_summary(result, scenario)] + [f"  figure: {f}" for f in figures]
+    if result.failure is not None and result.failure.kind is FailureKind.INTERRUPTED:
+        lines.append("  (interrupted: the result and the recording cover the run so far)")
+    return code, "\n".join(lines)
 

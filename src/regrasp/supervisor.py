@@ -174,6 +174,19 @@ class SupervisorSettings:
             raise InvalidParameterError("geometry", self.geometry, "'ideal' or 'urdf'") from None
 
 
+    @classmethod
+    def robust(cls, geometry: str = "ideal", cone_margin: float = 0.2, **overrides) -> "SupervisorSettings":
+        """Settings for a hand whose plant differs from the model (``docs/derivations.md``, §4 executed):
+        the fixed contacts kept ``cone_margin`` [N] inside their cones where the forces allow, the sliders'
+        ξ at 60 rad/s, integral action (0.3 ω³), a priming whose overshoot grows from 0.05 to 0.25 over
+        40 ms, and the sliders' kinetic friction estimated from the sensed forces (10 ms). With these the
+        scheduled three-finger rollout survives 0.9x and 1.1x of the object's mass and of μ."""
+        values = dict(geometry=geometry, slide_omega=60.0, integral=0.3, prime_time=0.04, prime_overshoot_max=0.25,
+                      friction_filter_time=0.01,
+                      internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=cone_margin))
+        values.update(overrides)
+        return cls(**values)
+
     def executor_settings(self) -> ExecutorSettings:
         """The executor's part of these settings."""
         return ExecutorSettings(omega_n=self.omega_n, zeta=self.zeta, prime_time=self.prime_time,
