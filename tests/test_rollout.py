@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from regrasp import ContactMode, FingerEnvelope, Friction, load_scenario
+from regrasp.events import EventKind, EventSource, FailureKind
 from regrasp.exceptions import InvalidParameterError, ScenarioError
 from regrasp.rollout import build_rollout
 
@@ -119,3 +120,90 @@ def test_a_fingertips_friction_comes_from_the_scenario(tmp_path):
     with pytest.raises(ScenarioError) as info:
         load_scenario(bad)
     assert info.value.key == "fingers[0].mu"
+
+
+# ---------------------------------------------------------------- the scheduled policy (paper §4, planned ahead)
+@pytest.fixture(scope="module")
+def three_fingers_schedule():
+    from regrasp import RegraspSettings, plan_regrasps
+    from regrasp.rollout import DEFAULT_CONE_MARGIN
+
+    sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
+    return sc, plan_regrasps(sc, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
+
+
+def only_planned_slips(result):
+    """Every plant event is a slip of a contact the supervisor had just primed, or a stick."""
+    primed = set()
+    for e in result.events:
+        if e.kind is EventKind.PRIME:
+            primed.add(e.contact)
+        if e.source is EventSource.PLANT:
+            assert e.kind in (EventKind.SLIP, EventKind.STICK), e
+            if e.kind is EventKind.SLIP:
+                assert e.contact in primed, e
+                primed.discard(e.contact)
+
+
+def test_the_scheduled_three_finger_rollout_runs_three_periods_as_planned(three_fingers_schedule):
+    """Figure 4.3's criteria: success over three periods, the object within 1e-3 of its width after
+    0.5 s, every side finger regrasped at least once a period, the plant's contacts slipping only where
+    the schedule slides them, every fixed contact inside its static cone, no re-plan."""
+    sc, schedule = three_fingers_schedule
+    result = build_rollout(sc, periods=3, schedule=schedule).run()
+    assert result.success, result.failure
+    assert result.steps == round(3 * np.pi / 1e-3)
+    assert result.max_object_error_after_transient < 1e-3 * result.object_width
+    assert result.regrasps["finger1"] >= 3 and result.regrasps["finger2"] >= 3 and result.regrasps["palm"] == 0
+    assert sum(result.regrasps.values()) == 3 * len(schedule.slides)  # every planned slide, each period
+    only_planned_slips(result)
+    assert result.min_cone_margin > 0.0 and result.min_envelope_margin > 0.5 * schedule.required_envelope_margin
+    assert result.replans == 0
+    # the contacts followed the plan: within 1 mm of the schedule's ξ_d at every step
+    assert np.abs(result.xi - result.planned_xi).max() < 1e-3
+
+
+@pytest.mark.parametrize("mass_scale, mu_scale", [(0.9, 1.0), (1.1, 1.0), (1.0, 0.9), (1.0, 1.1)])
+def test_the_scheduled_rollout_survives_a_plant_ten_percent_off_the_model(three_fingers_schedule, mass_scale,
+                                                                          mu_scale):
+    """The plant's object mass (and inertia) or its friction 10 % off what the controllers assume, two
+    periods: the robust settings (margins kept by the internal force, integral action, the sliders'
+    friction estimated from the sensed forces) carry the schedule through."""
+    sc, schedule = three_fingers_schedule
+    rollout = build_rollout(sc, periods=2, schedule=schedule, plant_mass_scale=mass_scale, plant_mu_scale=mu_scale)
+    assert rollout.plant.mass == pytest.approx(mass_scale * sc.polygon.mass)
+    assert rollout.supervisor.context.object_mass == sc.polygon.mass
+    result = rollout.run()
+    assert result.success, result.failure
+    assert result.regrasps["finger1"] >= 2 and result.regrasps["finger2"] >= 2
+    only_planned_slips(result)
+
+
+def test_without_regrasps_the_three_finger_rollout_fails_and_says_when_and_why(three_fingers_schedule):
+    sc, schedule = three_fingers_schedule
+    result = build_rollout(sc, periods=1, policy="none", xi0=schedule.xi_start).run()
+    assert not result.success and result.failure.kind in (FailureKind.COLLISION, FailureKind.LEFT_ENVELOPE)
+    assert result.failure.contact in ("finger1", "finger2") and 0.5 < result.failure.time < 2.0
+    assert result.regrasps == {"finger1": 0, "finger2": 0, "palm": 0}
+
+
+def test_the_two_finger_scenario_has_no_schedule_and_the_planner_says_why():
+    from regrasp.schedule import NoScheduleError, ScheduleLimit
+
+    sc = load_scenario(SCENARIOS / "paper_trajectory_2.toml")
+    with pytest.raises(NoScheduleError) as info:
+        build_rollout(sc)
+    assert info.value.limit is ScheduleLimit.FORCES and "finger1" in info.value.contacts
+
+
+def test_trajectory_1_runs_its_partial_schedule_until_the_envelope_empties():
+    from regrasp.schedule import NoScheduleError, ScheduleLimit
+
+    sc = load_scenario(SCENARIOS / "paper_trajectory_1.toml")
+    with pytest.raises(NoScheduleError) as info:
+        build_rollout(sc)
+    error = info.value
+    assert error.limit is ScheduleLimit.ENVELOPE and error.partial is not None
+    result = build_rollout(sc, schedule=error.partial).run()
+    assert not result.success and result.failure.kind is FailureKind.LEFT_ENVELOPE
+    assert result.failure.contact == "finger2" and error.latest_time < result.failure.time < 0.11

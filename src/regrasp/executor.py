@@ -282,9 +282,11 @@ class SlideExecutor:
                         self.phases[i] = ContactPhase.PRIMING
                         a.phase_start, a.slipped = t, False
                         self.xi = meas.xi.copy()
-                        self._event(out, t, i, EventKind.STUCK, f"stuck at {xi * 1e3:.2f} mm on the way: priming "
-                                    f"again ({a.reprimes} of {s.max_reprimes})", xi=xi, target=target,
-                                    reprime=a.reprimes)
+                        self._event(out, t, i, EventKind.STUCK, f"stuck at {xi * 1e3:.2f} mm on the way (target "
+                                    f"{target * 1e3:.2f} mm)", xi=xi, target=target, reprime=a.reprimes)
+                        self._event(out, t, i, EventKind.PRIME, f"again ({a.reprimes} of {s.max_reprimes}) to slide "
+                                    f"{'+' if a.order.direction > 0 else '-'}xi to {target * 1e3:.2f} mm", xi=xi,
+                                    target=target, direction=a.order.direction, reprime=a.reprimes)
                         continue
                     ends.append(self._end(meas, out, i, EventKind.STUCK, f"stuck at {xi * 1e3:.2f} mm (target "
                                           f"{target * 1e3:.2f} mm)"))

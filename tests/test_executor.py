@@ -1,0 +1,129 @@
+"""The slide executor on synthetic measurements: its phases, its laws and its cone edges.
+
+The measurements are made up by the test (no plant): the executor's decisions and the forces its
+laws predict are checked against what the phases ask for.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from regrasp import Hand, load_scenario
+from regrasp.contact import ContactMode
+from regrasp.events import EventKind
+from regrasp.exceptions import InvalidParameterError
+from regrasp.executor import ContactPhase, ExecutorSettings, SlideExecutor, SlideOrder
+from regrasp.grasp import Grasp
+from regrasp.internal_force import InternalForceSettings
+from regrasp.supervisor import Measurement
+
+from test_rollout import SCENARIOS
+
+SC = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
+XI = np.array([-0.014, 0.014, -0.001])
+
+
+def executor(friction=None, **settings) -> SlideExecutor:
+    hand = Hand([c.finger for c in SC.contacts], gravity_in_hand=SC.gravity_in_hand)
+    grasp = Grasp(SC.polygon, [c.edge for c in SC.contacts], [ContactMode.FIXED] * 3)
+    return SlideExecutor(hand, grasp, XI, SC.friction if friction is None else friction, object_mass=SC.polygon.mass,
+                         object_inertia=SC.polygon.inertia, settings=ExecutorSettings(**settings))
+
+
+def meas(t, xi=XI, xi_dot=(0.0, 0.0, 0.0), sliding=(False, False, False), normal=None, tangential=(0.0, 0.0, 0.0)):
+    pose = SC.trajectory.pose(t)
+    return Measurement(t, pose, SC.trajectory.velocity(t), np.array(xi, float), np.array(xi_dot, float),
+                       np.array(sliding), np.array(tangential, float), None if normal is None else np.array(normal))
+
+
+def command(ex, t, m, out):
+    return ex.command(m, SC.trajectory.sample(t), 1e-3, out)
+
+
+def test_two_slides_prime_on_their_cone_edges_then_slide_on_their_kinetic_edges():
+    ex = executor()
+    out = []
+    t = 0.8
+    for i, d in ((0, 1), (1, -1)):
+        ex.start(SlideOrder(i, d, 0.0, reference=lambda t, i=i: (XI[i], 0.0, 0.0)), meas(t), out)
+    assert [e.kind for e in out] == [EventKind.PRIME, EventKind.PRIME]
+    control, law, reference, aborted = command(ex, t, meas(t), out)
+    assert law == "fixed contacts (cone edge)" and not aborted and np.isnan(reference).all()
+    (fn1, ft1), (fn2, ft2) = control.contact_forces_surface[:2]
+    assert ft1 == pytest.approx(0.55 * fn1, rel=1e-9) and ft2 == pytest.approx(-0.55 * fn2, rel=1e-9)
+    # both sensed slipping: both slide, Proposition 3 with p = 2
+    m = meas(t + 1e-3, xi_dot=(0.001, -0.001, 0.0), sliding=(True, True, False))
+    ex.advance(m, out)
+    assert ex.phases[:2] == [ContactPhase.SLIDING, ContactPhase.SLIDING]
+    control, law, reference, _ = command(ex, t + 1e-3, m, out)
+    assert law == "Proposition 3" and reference[:2].tolist() == XI[:2].tolist() and math.isnan(reference[2])
+    (fn1, ft1), (fn2, ft2), (fn3, ft3) = control.contact_forces_surface
+    assert ft1 == pytest.approx(0.5 * fn1, rel=1e-9) and ft2 == pytest.approx(-0.5 * fn2, rel=1e-9)
+    assert abs(ft3) < 0.5 * fn3  # the palm inside its cone
+
+
+def test_a_slide_arrives_settles_inside_its_kinetic_cone_and_counts_once_fixed():
+    ex = executor()
+    out = []
+    ex.start(SlideOrder(0, 1, -0.010), meas(0.0), out)  # a filtered slide (no reference)
+    ex.advance(meas(0.001, sliding=(True, False, False), xi_dot=(0.001, 0, 0)), out)
+    assert ex.phases[0] is ContactPhase.SLIDING
+    arrived = meas(0.2, xi=(-0.0101, XI[1], XI[2]), xi_dot=(0.001, 0, 0), sliding=(True, False, False))
+    (end,) = ex.advance(arrived, out)
+    assert end.kind is EventKind.ARRIVED and ex.phases[0] is ContactPhase.SETTLING and ex.regrasps[0] == 0
+    control, law, _, _ = command(ex, 0.2, arrived, out)
+    fn, ft = control.contact_forces_surface[0]
+    assert law == "fixed contacts (cone edge)" and ft == pytest.approx(0.45 * fn, rel=1e-9)  # μ_k - 0.05
+    ex.advance(meas(0.201, xi=(-0.0101, XI[1], XI[2])), out)
+    assert ex.phases[0] is ContactPhase.FIXED and ex.regrasps[0] == 1 and out[-1].kind is EventKind.SETTLED
+
+
+def test_a_planned_slide_that_sticks_on_the_way_is_primed_again():
+    ex = executor(max_reprimes=1)
+    out = []
+    order = SlideOrder(0, 1, 0.010, reference=lambda t: (-0.014 + 0.05 * t, 0.05, 0.0), planned_start=0.0,
+                       planned_end=0.5)
+    ex.start(order, meas(0.0), out)
+    ex.advance(meas(0.001, sliding=(True, False, False), xi_dot=(0.01, 0, 0)), out)
+    assert ex.advance(meas(0.1, xi=(-0.012, XI[1], XI[2])), out) == []  # stuck: primed again
+    stuck, prime = out[-2:]
+    assert ex.phases[0] is ContactPhase.PRIMING and stuck.kind is EventKind.STUCK and prime.kind is EventKind.PRIME
+    assert stuck.values["reprime"] == prime.values["reprime"] == 1
+    ex.advance(meas(0.101, sliding=(True, False, False), xi_dot=(0.01, 0, 0)), out)
+    (end,) = ex.advance(meas(0.2, xi=(-0.009, XI[1], XI[2])), out)  # stuck again: the last re-prime is used
+    assert end.kind is EventKind.STUCK and ex.phases[0] is ContactPhase.FIXED
+
+
+def test_the_sliders_kinetic_friction_is_estimated_from_the_sensed_forces():
+    ex = executor(friction_filter_time=0.01)
+    out = []
+    ex.start(SlideOrder(0, 1, 0.0, reference=lambda t: (-0.014, 0.0, 0.0)), meas(0.0), out)
+    for k in range(1, 60):  # the plant's μ_k is 0.6 (the model's: 0.5)
+        m = meas(k * 1e-3, sliding=(True, False, False), xi_dot=(0.01, 0, 0), normal=(1.0, 1.0, 1.0),
+                 tangential=(0.6, 0.0, 0.0))
+        ex.advance(m, out)
+    control, law, _, _ = command(ex, 0.06, m, out)
+    fn, ft = control.contact_forces_surface[0]
+    assert law == "Proposition 3" and ft == pytest.approx(0.6 * fn, rel=1e-9)  # on the estimated kinetic edge
+
+
+def test_an_infeasible_slide_is_aborted_and_the_contact_held():
+    # a priming that asks finger 1 for |f_t| = 3.5 f_n: no squeeze balances that with the others in their cones
+    ex = executor(prime_overshoot=3.0, prime_overshoot_max=3.0, internal_force=InternalForceSettings(f_min=0.2, f_max=5.0))
+    out = []
+    ex.start(SlideOrder(0, 1, 0.0), meas(0.8), out)
+    control, law, _, aborted = command(ex, 0.8, meas(0.8), out)
+    (end,) = aborted
+    assert end.kind is EventKind.SLIDE_ABORTED and law == "fixed contacts" and ex.phases[0] is ContactPhase.FIXED
+    assert np.isfinite(control.tau).all() and ex.regrasps[0] == 0
+
+
+def test_orders_and_settings_are_checked():
+    ex = executor()
+    ex.start(SlideOrder(0, 1, 0.0), meas(0.0), [])
+    with pytest.raises(InvalidParameterError):
+        ex.start(SlideOrder(0, 1, 0.0), meas(0.0), [])  # not fixed
+    for bad in (dict(integral=2.0), dict(prime_overshoot_max=0.01), dict(max_reprimes=-1), dict(slide_omega=0.0)):
+        with pytest.raises(InvalidParameterError):
+            ExecutorSettings(**bad)
