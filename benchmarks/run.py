@@ -39,6 +39,7 @@ from common import ROOT, median_us, parse_args, sliding_hold
 from regrasp import (FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario,
                      plan_regrasps)
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.simulation import sense
 from regrasp.supervisor import SupervisorSettings
 
 THREE = ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
@@ -52,26 +53,26 @@ def supervisor_step_us(geometry: str, n: int, track: bool = False) -> tuple[floa
     the tracked steps made, each at the cost of one bare ``coal.ComputeDistance`` call."""
     sc = load_scenario(THREE)
     settings = SupervisorSettings(geometry=geometry, regrasp=False, track_envelopes=track)
-    rollout = build_rollout(sc, duration=0.01, settings=settings, xi0=[-0.0125, 0.0125, 0.0])
+    rollout = build_rollout(sc, duration=0.01, settings=settings, xi0=[-0.0125, 0.0125, 0.0], policy="paper")
     sup, plant = rollout.supervisor, rollout.plant
-    meas = rollout.measure(None)
+    meas = sense(plant, None)
     times = []
     for _ in range(n + 1):
         times.append(sup.step(meas, plant.dt).supervisor_seconds)
     if not track:
-        floor = sum(median_us(lambda env=env: env.at(meas.X, meas.t), n) for env in sup.envelopes)
+        floor = sum(median_us(lambda env=env: env.at(meas.X, meas.t), n) for env in sup.monitor.envelopes)
         return float(np.median(times[1:]) * 1e6), floor
     calls = [0]
-    for env in sup.envelopes:  # count the coal calls of a few more steps
+    for env in sup.monitor.envelopes:  # count the coal calls of a few more steps
         def counted(*args, inner=env.checker._link_distance):
             calls[0] += 1
             return inner(*args)
         env.checker._link_distance = counted
     for _ in range(n):
         sup.step(meas, plant.dt)
-    for env in sup.envelopes:
+    for env in sup.monitor.envelopes:
         del env.checker._link_distance
-    checker = sup.envelopes[0].checker
+    checker = sup.monitor.envelopes[0].checker
     distance, placement, _ = checker._links[1][5][0]
     tf = checker._object_in_link(1, 0.0, 0.0, 1.0, 0.0)
     request, result = checker._request, checker._result
@@ -80,18 +81,21 @@ def supervisor_step_us(geometry: str, n: int, track: bool = False) -> tuple[floa
 
 
 def rollout_realtime(quick: bool) -> dict:
-    """Real-time factors of the three-finger rollout of paper trajectory 2, recording off and on."""
+    """Real-time factors of the three-finger rollout of paper trajectory 2 (the scheduled policy, one
+    schedule planned for both), recording off and on."""
     sc = load_scenario(THREE)
     duration = 0.2 if quick else None
-    off = build_rollout(sc, duration=duration).run()
+    first = build_rollout(sc, duration=duration)
+    off = first.run()
     with tempfile.TemporaryDirectory() as tmp:
-        rollout = build_rollout(sc, duration=duration)
+        rollout = build_rollout(sc, duration=duration, schedule=first.schedule)
         with RolloutRecorder(rollout.plant, rrd_path=Path(tmp) / "bench.rrd") as recorder:
             on = rollout.run(recorder=recorder)
     simulated = off.steps * rollout.plant.dt
     return {"recording_off": off.realtime_factor, "recording_on": on.realtime_factor,
             "simulated_s": simulated, "requested_s": off.duration,
-            "outcome": "success" if off.success else f"failed at {off.failure.time:.3f} s: {off.failure.reason}"}
+            "outcome": "success" if off.success else f"failed at {off.failure.time:.3f} s: {off.failure.reason}",
+            "slides": sum(off.regrasps.values())}
 
 
 def regrasp_plan_seconds(quick: bool) -> dict:

@@ -105,3 +105,71 @@ def test_plan_regrasp_bad_margin_exits_2(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["plan", T3, "--regrasp", "--cone-margin", "-1"])
     assert exc.value.code == 2
+
+
+# ---------------------------------------------------------------- regrasp simulate
+def simulate(*args, cwd, timeout=600):
+    return subprocess.run([sys.executable, "-m", "regrasp.cli", "simulate", *args], capture_output=True, text=True,
+                          cwd=cwd, timeout=timeout, check=False)
+
+
+def verify_rrd(path):
+    proc = subprocess.run(["rerun", "rrd", "verify", str(path)], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+
+
+def test_simulate_json_and_recording_of_the_default_scenario(tmp_path):
+    """The default scenario (three fingers, scheduled): one JSON document on stdout and nothing else
+    (OSQP's C-level prints are kept off it), the rollout's keys, the schedule's summary, a verified .rrd."""
+    proc = simulate("--duration", "0.9", "--json", "--rrd", "out.rrd", "--decimate", "5", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["success"] is True and doc["policy"] == "scheduled" and doc["steps"] == 900
+    assert {"failure", "max_object_error_after_transient", "regrasps", "events", "min_cone_margin",
+            "min_envelope_margin", "replans", "plant_events", "realtime_factor", "rrd"} <= set(doc)
+    assert doc["schedule"]["periodic"] is True and len(doc["schedule"]["slides"]) == 4
+    assert any(e["kind"] == "prime" and e["source"] == "supervisor" for e in doc["events"])  # the slides at 0.815 s
+    verify_rrd(tmp_path / "out.rrd")
+
+
+def test_simulate_says_at_once_that_two_fingers_have_no_schedule_and_why(tmp_path):
+    proc = simulate(T2, cwd=tmp_path)
+    assert proc.returncode == 1, proc.stderr
+    assert "NO SCHEDULE (forces)" in proc.stdout and "lower contact can never slide down" in proc.stdout
+    proc = simulate(T2, "--json", cwd=tmp_path)
+    doc = json.loads(proc.stdout)
+    assert proc.returncode == 1 and doc["success"] is False and doc["failure"]["kind"] == "no_schedule"
+
+
+def test_simulate_without_regrasps_fails_with_when_and_why(tmp_path):
+    proc = simulate("--policy", "none", "--duration", "1.5", "--plot", "figs", cwd=tmp_path)
+    assert proc.returncode == 1, proc.stderr
+    assert "FAILURE at t = 1.29" in proc.stdout and "collision of finger1" in proc.stdout
+    assert (tmp_path / "figs" / "regrasp_rollout.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args", [["--periods", "0"], ["--periods", "2", "--duration", "1"], ["--policy", "greedy"],
+                                  ["--plant-mass-scale", "-1"], ["--decimate", "0"], [str(ROOT / "nowhere.toml")],
+                                  ["--spawn", "--connect", "rerun+http://127.0.0.1:9876/proxy"]])
+def test_simulate_bad_input_exits_2_with_one_line(tmp_path, args):
+    proc = simulate(*args, cwd=tmp_path)
+    assert proc.returncode == 2, (proc.stdout, proc.stderr)
+    # one error line (argparse's follows its usage lines), no traceback, nothing on stdout
+    last = proc.stderr.strip().splitlines()[-1]
+    assert last.startswith(("regrasp: error:", "regrasp simulate: error:")) and "Traceback" not in proc.stderr
+    assert proc.stdout == ""
+
+
+def test_ctrl_c_ends_a_simulation_with_a_partial_result_and_a_complete_recording(tmp_path):
+    import signal
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli", "simulate", "--policy", "paper", "--duration", "6",
+                             "--rrd", "run.rrd"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    time.sleep(6.0)  # imports, the plan and about a second of the run
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 1, err
+    assert "interrupted" in out and "FAILURE" in out and "Traceback" not in err
+    verify_rrd(tmp_path / "run.rrd")
