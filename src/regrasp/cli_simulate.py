@@ -149,9 +149,8 @@ def _c_stdout_silenced():
 
 def _cmd_simulate(args, progress_bar) -> int:
     from .exceptions import InvalidParameterError
-    from .rollout import build_rollout
+    from .rollout import DEFAULT_CONE_MARGIN
     from .scenario import load_scenario
-    from .schedule import NoScheduleError, ScheduleLimit
     from .schedule_planner import RegraspSettings
     from .supervisor import SupervisorSettings
 
@@ -160,13 +159,12 @@ def _cmd_simulate(args, progress_bar) -> int:
         raise InvalidParameterError("scenario", None, f"a scenario file (the default {DEFAULT_SCENARIO} is not "
                                     "here: regrasp is not installed from its source tree)")
     scenario = load_scenario(path)
-    cone = 0.2 if args.cone_margin is None else args.cone_margin
+    cone = DEFAULT_CONE_MARGIN if args.cone_margin is None else args.cone_margin
     options = {"cone_margin": cone}
     if args.envelope_margin is not None:
         options["envelope_margin"] = args.envelope_margin
     regrasp_settings = RegraspSettings(**options)
     settings = SupervisorSettings.robust(scenario.geometry.value, cone)
-    quiet = args.json
     common = dict(periods=args.periods, duration=args.duration, settings=settings, regrasp_settings=regrasp_settings,
                   plant_mass_scale=args.plant_mass_scale, plant_mu_scale=args.plant_mu_scale)
     with _c_stdout_silenced():

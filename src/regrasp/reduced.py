@@ -243,7 +243,7 @@ class ReducedModel:
 
     def _state_from(self, S: np.ndarray, S_dot: np.ndarray, terms: "_Terms") -> ReducedState:
         """The :class:`ReducedState` of :meth:`_terms` at (S, Ṡ)."""
-        m, nq = self.grasp.m, self.hand.nq
+        nq = self.hand.nq
         A = np.array(terms.a_rows)
         R_f = self._identity.copy()
         for i in self.grasp.sliding:
