@@ -28,9 +28,7 @@ the policy's (:mod:`regrasp.policies`).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
-from enum import Enum
 
 import numpy as np
 
@@ -38,29 +36,15 @@ from .contact import ContactMode, Friction
 from .control import ComputedTorqueController, ControlOutput, FixedContactController, Gains, Proposition3Controller
 from .events import Event, EventKind
 from .exceptions import InvalidParameterError
+from .slides import SLIPPING_PHASES, ContactPhase, Reference, SlideEnd, SlideOrder
 from .grasp import Grasp
 from .hand import Hand
 from .internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
 from .reduced import ReducedModel
 from .validation import as_positive_float
 
-__all__ = ["ContactPhase", "ExecutorSettings", "SlideEnd", "SlideExecutor", "SlideOrder"]
-
-Reference = Callable[[float], tuple[float, float, float]]
-
-
-class ContactPhase(str, Enum):
-    """What the supervisor is doing with a contact."""
-
-    FIXED = "fixed"
-    PRIMING = "priming"
-    SLIDING = "sliding"
-    SETTLING = "settling"
-
-
-#: The phases in which a contact slips on purpose.
-SLIPPING_PHASES = frozenset({ContactPhase.PRIMING, ContactPhase.SLIDING, ContactPhase.SETTLING})
-
+__all__ = ["SLIPPING_PHASES", "ContactPhase", "ExecutorSettings", "Reference", "SlideEnd", "SlideExecutor",
+           "SlideOrder"]
 
 @dataclass(frozen=True)
 class ExecutorSettings:
@@ -123,6 +107,10 @@ class ExecutorSettings:
                      "arrive_speed", "max_slide_time", "control_omega", "slide_omega"):
             as_positive_float(name, getattr(self, name))
         as_positive_float("integral", self.integral, allow_zero=True)
+        if self.friction_filter_time is not None:
+            as_positive_float("friction_filter_time", self.friction_filter_time)
+        for name in ("friction_min_force", "friction_resolution", "control_period"):
+            as_positive_float(name, getattr(self, name))
         if isinstance(self.max_reprimes, bool) or int(self.max_reprimes) != self.max_reprimes or self.max_reprimes < 0:
             raise InvalidParameterError("max_reprimes", self.max_reprimes, "an integer >= 0")
         if not self.prime_overshoot_max >= self.prime_overshoot:
@@ -132,51 +120,6 @@ class ExecutorSettings:
             raise InvalidParameterError("integral", self.integral, "a gain fraction in [0, 2) (stability)")
         if not isinstance(self.internal_force, InternalForceSettings):
             raise InvalidParameterError("internal_force", self.internal_force, "an InternalForceSettings")
-
-
-@dataclass(frozen=True)
-class SlideOrder:
-    """A slide a policy asks for.
-
-    Attributes:
-        contact: The contact's index.
-        direction: +1 (along the edge's ξ) or -1.
-        target: ξ* [m].
-        reference: t [s] -> (ξ_d [m], ξ̇_d [m/s], ξ̈_d [m/s²]) for the sliding phase, or None (the filter).
-        planned_start, planned_end: When the slide is planned to start and end [s] (None: unplanned).
-        why: Why the slide is ordered, in words.
-    """
-
-    contact: int
-    direction: int
-    target: float
-    reference: Reference | None = None
-    planned_start: float | None = None
-    planned_end: float | None = None
-    why: str = ""
-
-    def __post_init__(self):
-        if self.direction not in (-1, 1):
-            raise InvalidParameterError("direction", self.direction, "+1 or -1")
-        if not math.isfinite(self.target):
-            raise InvalidParameterError("target", self.target, "a finite position [m]")
-
-
-@dataclass(frozen=True)
-class SlideEnd:
-    """How an ordered slide ended.
-
-    Attributes:
-        order: The order.
-        kind: ``ARRIVED``, ``STUCK``, ``TIMED_OUT`` or ``SLIDE_ABORTED`` (:class:`~regrasp.events.EventKind`).
-        time: When its sliding phase ended [s].
-        xi: Where the contact was then [m].
-    """
-
-    order: SlideOrder
-    kind: EventKind
-    time: float
-    xi: float
 
 
 @dataclass
