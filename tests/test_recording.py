@@ -276,8 +276,10 @@ def test_a_buffered_rollout_recording_holds_each_steps_values_at_its_time(tmp_pa
 
     sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml")
     recorded = {}
+    schedule = None  # planned once, for the three runs
     for flush_every in (1, 7, 500):  # one step per send (per-step logging), odd blocks, one block
-        rollout = build_rollout(sc, duration=0.03)
+        rollout = build_rollout(sc, duration=0.03, schedule=schedule)
+        schedule = rollout.schedule
         path = tmp_path / f"flush_{flush_every}.rrd"
         with RolloutRecorder(rollout.plant, rrd_path=path, flush_every=flush_every) as rec:
             result = rollout.run(recorder=rec)

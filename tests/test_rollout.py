@@ -207,3 +207,14 @@ def test_trajectory_1_runs_its_partial_schedule_until_the_envelope_empties():
     result = build_rollout(sc, schedule=error.partial).run()
     assert not result.success and result.failure.kind is FailureKind.LEFT_ENVELOPE
     assert result.failure.contact == "finger2" and error.latest_time < result.failure.time < 0.11
+
+
+def test_the_gravity_up_scenario_runs_a_period_as_planned():
+    """Figure 4.4's set-up (gravity up, a third finger on top): the same criteria as Figure 4.3, one period."""
+    sc = load_scenario(SCENARIOS / "paper_trajectory_2_gravity_up.toml")
+    result = build_rollout(sc, periods=1).run()
+    assert result.success, result.failure
+    assert result.max_object_error_after_transient < 1e-3 * result.object_width
+    assert result.regrasps["finger1"] >= 1 and result.regrasps["finger2"] >= 1
+    only_planned_slips(result)
+    assert result.min_cone_margin > 0.0 and result.replans == 0
