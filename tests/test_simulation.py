@@ -48,6 +48,10 @@ def test_each_step_gives_one_record_in_order_with_the_plants_step(rollout):
         assert np.array_equal(b.measurement.X, a.plant.state.X)
     last = records[-1]
     assert np.array_equal(last.object_error, last.command.desired.pose - last.measurement.X)
+    # the law's S_d is its E plus the measured S (all contacts fixed: S = X), and the desired pose up to
+    # the integral action's shift of the reference
+    assert np.allclose(last.command.S_desired - last.command.control.error, last.measurement.X, rtol=0, atol=1e-15)
+    assert np.abs(last.command.S_desired - last.command.desired.pose).max() < 1e-6
     mu = [f.static for f in rollout.plant.friction]
     fn, ft = last.plant.forces_surface.T
     assert np.allclose(last.cone_margins, np.array(mu) * fn - np.abs(ft), rtol=0, atol=1e-12)

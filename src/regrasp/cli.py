@@ -1,5 +1,6 @@
-"""The ``regrasp`` command line: ``regrasp plan`` (the planner) and ``regrasp simulate`` (a rollout,
-:mod:`regrasp.cli_simulate`).
+"""The regrasp command line: regrasp plan (the planner) and regrasp simulate (a rollout on the plant).
+
+``regrasp simulate`` is in :mod:`regrasp.cli_simulate`.
 
 ``regrasp plan SCENARIO [--json] [--plot DIR] [--samples N] [--geometry ideal|urdf]
 [--regrasp [--envelope-margin M] [--cone-margin N]]``

@@ -57,7 +57,7 @@ def add_parser(sub, progress_bar, nonnegative) -> None:
     p.add_argument("--rrd", metavar="FILE", type=Path, help="write a rerun recording to FILE")
     p.add_argument("--decimate", type=_positive(int), default=10, metavar="K",
                    help="record every K-th step (events at every step); default 10, a 10 ms row at 1 kHz, about "
-                        "0.4 MB per simulated second; 1 records every step (about 1.5 MB per second)")
+                        "0.17 MB per simulated second; 1 records every step (about 1.5 MB per second)")
     view = p.add_mutually_exclusive_group()
     view.add_argument("--spawn", action="store_true", help="stream to a rerun viewer it starts")
     view.add_argument("--connect", metavar="ADDR", help="stream to a running rerun viewer at this gRPC address")

@@ -28,7 +28,7 @@ import numpy as np
 from .contact import ContactMode, Friction
 from .events import PLANT_FAILURES, EventKind, EventSource, Failure, FailureKind
 from .exceptions import InvalidParameterError
-from .executor import SLIPPING_PHASES
+from .executor import SLIPPING_PHASES, ContactPhase
 from .grasp import Grasp
 from .hand import Hand
 from .plant import Plant, PlantContact
@@ -65,7 +65,11 @@ class _SupervisorDriver:
     def step(self, meas: Measurement, dt: float) -> Command:
         out = self.supervisor.step(meas, dt)
         desired = self.supervisor.trajectory.sample(float(meas.t))
-        return Command(out.tau, out.control, out.law, desired, out.control.error + 0.0, out)
+        sliders = [i for i, p in enumerate(out.phases) if p is ContactPhase.SLIDING]
+        S = np.concatenate([meas.X, meas.xi[sliders]])
+        if len(S) != len(out.control.error):  # (a slide aborted at this step: the fixed law ran)
+            S = meas.X
+        return Command(out.tau, out.control, out.law, desired, S + out.control.error, out)
 
 
 @dataclass
