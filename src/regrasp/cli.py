@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -134,6 +135,8 @@ def _cmd_plan(args) -> int:
     from .scenario import load_scenario
 
     scenario = load_scenario(args.scenario)
+    if args.plot:  # before the work, not after it
+        output_directory("--plot", args.plot)
     progress = _ProgressBar(f"planning {scenario.name}") if not args.json else None
     result = plan_scenario(scenario, samples=args.samples, geometry=args.geometry, progress=progress)
     schedule = error = None
@@ -183,17 +186,40 @@ def _nonnegative(text: str) -> float:
 
 
 def _samples(text: str) -> int:
+    from .validation import MAX_SAMPLES
+
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 2, got {text!r}") from None
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 2, got {value}")
+        raise argparse.ArgumentTypeError(f"expected an integer in [2, {MAX_SAMPLES}], got {text!r}") from None
+    if not 2 <= value <= MAX_SAMPLES:
+        raise argparse.ArgumentTypeError(f"expected an integer in [2, {MAX_SAMPLES}], got {value}")
     return value
 
 
+def output_directory(option: str, path) -> Path:
+    """``path`` as a directory figures can be written into (made if missing), or an
+    :class:`~regrasp.exceptions.InvalidParameterError` naming ``option``."""
+    from .exceptions import InvalidParameterError
+
+    directory = Path(path)
+    try:
+        if directory.exists() and not directory.is_dir():
+            raise InvalidParameterError(option, str(path), "a directory (it is a file)")
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InvalidParameterError(option, str(path), f"a directory that can be made ({exc.strerror or exc})") \
+            from None
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise InvalidParameterError(option, str(path), "a writable directory")
+    return directory
+
+
 def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
+
     parser = argparse.ArgumentParser(prog="regrasp", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--version", action="version", version=f"regrasp {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("plan", help="feasibility and contact envelope of an object trajectory (paper §2)",
                        description="Check a trajectory's feasibility and compute each finger's feasible-contact "
@@ -224,6 +250,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except RegraspError as exc:
         print(f"regrasp: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # (simulate ends its run itself and prints the partial result)
+        print("regrasp: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover

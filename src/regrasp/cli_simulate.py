@@ -160,6 +160,10 @@ def _cmd_simulate(args, progress_bar) -> int:
         raise InvalidParameterError("scenario", None, f"a scenario file (the default {DEFAULT_SCENARIO} is not "
                                     "here: regrasp is not installed from its source tree)")
     scenario = load_scenario(path)
+    if args.plot:
+        from .cli import output_directory
+
+        output_directory("--plot", args.plot)
     cone = DEFAULT_CONE_MARGIN if args.cone_margin is None else args.cone_margin
     options = {"cone_margin": cone}
     if args.envelope_margin is not None:

@@ -22,14 +22,25 @@ class InvalidParameterError(RegraspError, ValueError):
 
     Attributes:
         name: Name of the parameter.
-        value: The rejected value.
+        value: The rejected value (the message shows at most 80 characters of its repr, on one line).
+        expected: What was expected.
     """
 
     def __init__(self, name: str, value: Any, expected: str):
         self.name = name
         self.value = value
         self.expected = expected
-        super().__init__(f"invalid {name} = {value!r}: expected {expected}")
+        super().__init__(f"invalid {name} = {short_repr(value)}: expected {expected}")
+
+
+def short_repr(value: Any, limit: int = 80) -> str:
+    """``repr(value)`` on one line, cut to ``limit`` characters (a 400-digit integer or a large array stays
+    readable in a one-line error)."""
+    try:
+        text = " ".join(repr(value).split())
+    except Exception:  # noqa: BLE001 (a broken __repr__ must not hide the real error)
+        text = f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 class FingerModelError(RegraspError):

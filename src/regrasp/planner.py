@@ -32,6 +32,7 @@ from .intervals import Intervals, intersect, widest
 from .polygon import ConvexPolygon
 from .scenario import FingerContact, Scenario
 from .trajectory import Trajectory
+from .validation import MAX_SAMPLES, as_finite_array, as_sample_count
 
 __all__ = ["FingerPlan", "InfeasibleInterval", "PlanResult", "plan", "plan_scenario"]
 
@@ -218,8 +219,11 @@ def plan(
     if not contacts:
         raise InvalidParameterError("contacts", contacts, "at least one finger")
     if times is None:
-        times = trajectory.times(int(samples))
-    times = np.asarray(times, dtype=float)
+        times = trajectory.times(as_sample_count("samples", samples))
+    else:
+        times = as_finite_array("times", times, (-1,))
+        if not 1 <= len(times) <= MAX_SAMPLES:
+            raise InvalidParameterError("times", f"{len(times)} times", f"1 to {MAX_SAMPLES} sample times")
     poses = trajectory.pose(times)
     envelopes = [
         FingerEnvelope(c.finger, polygon, c.edge, geometry=geometry, tip_clearance=c.tip_clearance)
@@ -276,8 +280,8 @@ def plan_scenario(
     progress: Progress | None = None,
 ) -> PlanResult:
     """Run the planner on a loaded scenario (``samples``/``geometry`` override its settings)."""
-    if samples is not None and (isinstance(samples, bool) or int(samples) != samples or samples < 2):
-        raise InvalidParameterError("samples", samples, "an integer >= 2")
+    if samples is not None:
+        samples = as_sample_count("samples", samples)
     return plan(
         scenario.contacts,
         scenario.polygon,

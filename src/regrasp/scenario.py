@@ -51,6 +51,7 @@ Unknown keys are errors (they are usually typos). Every error is a
 
 from __future__ import annotations
 
+import difflib
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -61,7 +62,8 @@ import numpy as np
 
 from .contact import Friction
 from .envelope import Geometry
-from .exceptions import InvalidParameterError, RegraspError, ScenarioError
+from .exceptions import InvalidParameterError, RegraspError, ScenarioError, short_repr
+from .validation import MAX_SAMPLES, as_finite_array
 from .finger import Finger
 from .polygon import ConvexPolygon
 from .trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
@@ -109,6 +111,14 @@ class Scenario:
         return tuple(c.friction for c in self.contacts)
 
 
+def _finite(value: int | float) -> bool:
+    """Whether a TOML number is a finite float (an integer too large for a float is not)."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
 class _Reader:
     """Typed access to one TOML table with error messages that name the key."""
 
@@ -129,7 +139,8 @@ class _Reader:
         self.used.add(name)
         if name not in self.table:
             if default is ...:
-                raise self.fail(name, "this key is required")
+                near = difflib.get_close_matches(name, [k for k in self.table if isinstance(k, str)], n=1)
+                raise self.fail(name, "this key is required" + (f" (the table has {near[0]!r}: a typo?)" if near else ""))
             return default
         return self.table[name]
 
@@ -137,8 +148,8 @@ class _Reader:
         value = self.get(name, default)
         if value is None:
             return value
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise self.fail(name, f"expected a finite number, got {value!r}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not _finite(value):
+            raise self.fail(name, f"expected a finite number, got {short_repr(value)}")
         return float(value)
 
     def integer(self, name: str, default: Any = ...) -> int:
@@ -159,13 +170,12 @@ class _Reader:
         value = self.get(name, default)
         want = "x".join("n" if s == -1 else str(s) for s in shape)
         try:
-            arr = np.array(value, dtype=float)
-        except (TypeError, ValueError):
-            raise self.fail(name, f"expected an array of numbers of shape ({want}), got {value!r}") from None
+            arr = as_finite_array(self.key(name), value)
+        except InvalidParameterError as exc:
+            raise self.fail(name, f"expected an array of finite numbers of shape ({want}), got {short_repr(value)} "
+                                  f"({exc.expected})") from None
         if arr.ndim != len(shape) or any(s not in (-1, a) for s, a in zip(shape, arr.shape)):
-            raise self.fail(name, f"expected an array of numbers of shape ({want}), got {value!r}")
-        if not np.all(np.isfinite(arr)):
-            raise self.fail(name, "expected finite numbers")
+            raise self.fail(name, f"expected an array of numbers of shape ({want}), got {short_repr(value)}")
         return arr
 
     def finish(self) -> None:
@@ -285,8 +295,14 @@ def _fingers(path: Path, tables: Any, polygon: ConvexPolygon, friction: Friction
 
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file; raises ScenarioError naming the file and key."""
+    if not isinstance(path, (str, Path)):
+        raise InvalidParameterError("path", path, "a scenario file's path (str or pathlib.Path)")
     path = Path(path)
-    if not path.is_file():
+    try:
+        found = path.is_file()
+    except (OSError, ValueError) as exc:  # a name too long for the file system, a NUL byte
+        raise ScenarioError(path, None, f"not a usable file name ({type(exc).__name__}: {exc})") from None
+    if not found:
         raise ScenarioError(path, None, "scenario file not found")
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -311,8 +327,8 @@ def load_scenario(path: str | Path) -> Scenario:
         raise ScenarioError(path, "planner", "expected a table [planner]")
     planner = _Reader(path, planner_table, "planner.")
     samples = planner.integer("samples", 401)
-    if samples < 2:
-        raise planner.fail("samples", f"expected an integer >= 2, got {samples}")
+    if not 2 <= samples <= MAX_SAMPLES:
+        raise planner.fail("samples", f"expected an integer in [2, {MAX_SAMPLES}], got {short_repr(samples)}")
     geometry = Geometry(planner.string("geometry", "ideal", choices=("ideal", "urdf")))
     planner.finish()
     top.finish()

@@ -181,6 +181,9 @@ class EllipseTrajectory(Trajectory):
                     "t_end", None, "an explicit end time [s] when omega = 0 (no period to default to)"
                 )
             t1 = t0 + 2.0 * np.pi / abs(self.omega)
+            if not math.isfinite(t1):
+                raise InvalidParameterError("omega", omega, "a frequency whose period 2 pi / |omega| is finite "
+                                            "(or an explicit t_end)")
         else:
             t1 = as_finite_float("t_end", t_end)
         _check_domain(t0, t1)

@@ -1,4 +1,9 @@
-"""Argument checks that raise typed errors (never ``assert``)."""
+"""Argument checks that raise typed errors (never ``assert``): the one validation layer of the library.
+
+A *number* is an int or a float (Python's or numpy's), never a bool, a string, bytes or a complex
+number: ``float(True)``, ``float("2")`` and ``float(1 + 0j)``-style conversions that would silently
+accept them are refused, and so is an integer too large for a float (``10**400``).
+"""
 
 from __future__ import annotations
 
@@ -9,10 +14,33 @@ import numpy as np
 from .exceptions import InvalidParameterError
 
 
+_NOT_NUMBERS = (bool, np.bool_, str, bytes, complex, np.complexfloating)
+_NUMBER_KINDS = frozenset("iuf")
+
+
+def _has_non_numbers(value) -> bool:
+    """Whether ``value`` (a scalar, a nested list/tuple or an array) holds a bool, a string, bytes, a
+    complex number or None anywhere."""
+    if isinstance(value, np.ndarray):
+        if value.dtype.kind in _NUMBER_KINDS:
+            return False
+        if value.dtype.kind != "O":
+            return True
+        return any(_has_non_numbers(v) for v in value.reshape(-1).tolist())
+    if isinstance(value, (list, tuple)):
+        return any(_has_non_numbers(v) for v in value)
+    return value is None or isinstance(value, _NOT_NUMBERS)
+
+
 def as_finite_array(name: str, value, shape: tuple[int, ...] | None = None) -> np.ndarray:
-    """``value`` as a float array of the given shape with only finite entries."""
+    """``value`` as a float array of the given shape with only finite entries (numbers only: no bool,
+    string or complex entries)."""
+    if _has_non_numbers(value):
+        raise InvalidParameterError(name, value, "an array of numbers (no booleans, strings or complex numbers)")
     try:
         arr = np.array(value, dtype=float)
+    except OverflowError as exc:
+        raise InvalidParameterError(name, value, "finite numbers (an integer too large for a float)") from exc
     except (TypeError, ValueError) as exc:
         raise InvalidParameterError(name, value, "an array of numbers") from exc
     if shape is not None:
@@ -25,9 +53,13 @@ def as_finite_array(name: str, value, shape: tuple[int, ...] | None = None) -> n
 
 
 def as_finite_float(name: str, value) -> float:
-    """``value`` as a finite float."""
+    """``value`` as a finite float (a number: not a bool, a string or a complex number)."""
+    if isinstance(value, _NOT_NUMBERS) or value is None or (isinstance(value, np.ndarray) and value.ndim > 0):
+        raise InvalidParameterError(name, value, "a number")
     try:
         out = float(value)
+    except OverflowError as exc:
+        raise InvalidParameterError(name, value, "a finite number (an integer too large for a float)") from exc
     except (TypeError, ValueError) as exc:
         raise InvalidParameterError(name, value, "a number") from exc
     if not np.isfinite(out):
@@ -56,3 +88,17 @@ def as_finite_vectors(names: tuple[str, ...], values: tuple, n: int) -> np.ndarr
     if arr is None or arr.shape != (len(values), n) or not math.isfinite(sum(arr.reshape(-1).tolist())):
         arr = np.array([as_finite_array(name, value, (n,)) for name, value in zip(names, values)])
     return arr
+
+
+#: The most time samples a plan may ask for: 100 000 samples of 2 fingers at about 70 µs (``urdf``)
+#: is about 4 min and 0.3 GB of envelopes; more is a mistake, not a plan.
+MAX_SAMPLES = 100_000
+
+
+def as_sample_count(name: str, value) -> int:
+    """``value`` as a number of time samples: an integer in [2, :data:`MAX_SAMPLES`]."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise InvalidParameterError(name, value, f"an integer number of samples in [2, {MAX_SAMPLES}]")
+    if not 2 <= value <= MAX_SAMPLES:
+        raise InvalidParameterError(name, value, f"an integer number of samples in [2, {MAX_SAMPLES}]")
+    return int(value)
