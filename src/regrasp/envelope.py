@@ -100,7 +100,9 @@ class Geometry(str, Enum):
 
 
 def condition_of(d: float, l1: float) -> Condition:
-    """The condition (I–IV) for signed line distance ``d`` [m] and first link ``l1`` [m]."""
+    """The condition (I–IV) for signed line distance ``d`` [m] and first link ``l1`` [m] (> 0)."""
+    if not (math.isfinite(d) and l1 > 0.0 and math.isfinite(l1)):
+        raise InvalidParameterError("d, l1", (d, l1), "a finite distance d [m] and a link length l1 > 0 [m]")
     if d < -l1:
         return Condition.I
     if d > l1:
@@ -140,6 +142,9 @@ def reachable_on_line(d: float, l1: float, l2: float, sign: int) -> Intervals:
     (which can split an interval in two). The right configuration is the mirror image
     :math:`s \to -s`. Zero-length pieces are dropped.
     """
+    if not (math.isfinite(d) and 0.0 < l1 < math.inf and 0.0 < l2 < math.inf) or sign not in (-1, 1):
+        raise InvalidParameterError("d, l1, l2, sign", (d, l1, l2, sign),
+                                    "a finite distance d [m], link lengths l1, l2 > 0 [m] and a sign of +1 or -1")
     outer2 = (l1 + l2) ** 2 - d * d
     if outer2 <= 0.0 or d < -l1:
         return ()

@@ -232,8 +232,14 @@ class Finger:
         tip_frame: str = "tip",
     ) -> "Finger":
         """Load a finger from a URDF file (kinematics, dynamics and collision geometry)."""
+        if not isinstance(path, (str, Path)):
+            raise InvalidParameterError("path", path, "a URDF file's path (str or pathlib.Path)")
         path = Path(path)
-        if not path.is_file():
+        try:
+            found = path.is_file()
+        except (OSError, ValueError) as exc:  # a name too long for the file system, a NUL byte
+            raise FingerModelError(f"not a usable file name ({type(exc).__name__})", source=path) from None
+        if not found:
             raise FingerModelError("URDF file not found", source=path)
         try:
             model = pin.buildModelFromUrdf(str(path))

@@ -64,7 +64,7 @@ from .events import EventKind
 from ._scalar import solve_small as _solve_small
 from .hand import Hand, _condition
 from .polygon import ConvexPolygon
-from .validation import as_finite_array, as_positive_float
+from .validation import as_finite_array, as_finite_float, as_positive_float
 
 __all__ = ["Plant", "PlantContact", "PlantEvent", "PlantState", "PlantStep"]
 
@@ -102,6 +102,12 @@ def _reach(shape) -> float:
     else:
         return math.inf
     return float(np.linalg.norm(shape.placement_in_joint.translation)) + extent
+
+
+#: The plant's largest step [s].
+MAX_DT = 0.01
+_PLANT_KINDS = frozenset(k.value for k in (EventKind.SEPARATION, EventKind.SLIP, EventKind.STICK, EventKind.LEFT_EDGE,
+                                           EventKind.COLLISION, EventKind.SINGULAR))
 
 
 @dataclass
@@ -245,8 +251,14 @@ class Plant:
         self.inertia = as_positive_float("object_inertia",
                                          polygon.inertia if object_inertia is None else object_inertia)
         self.dt = as_positive_float("dt", dt)
+        if self.dt > MAX_DT:
+            raise InvalidParameterError("dt", dt, f"a step of at most {MAX_DT} s (the explicit integrator and the "
+                                        "Baumgarte terms need a fine step)")
         self.alpha = as_positive_float("baumgarte", baumgarte, allow_zero=True)
-        self.stop_on = frozenset(stop_on)
+        if isinstance(stop_on, str) or not all(isinstance(k, str) and k in _PLANT_KINDS for k in stop_on):
+            raise InvalidParameterError("stop_on", stop_on, f"a sequence of plant event kinds "
+                                        f"({', '.join(sorted(_PLANT_KINDS))})")
+        self.stop_on = frozenset(EventKind(k) for k in stop_on)
         self.contact_events = bool(contact_events)
         self.checkers = None
         if collision_check:
@@ -283,7 +295,7 @@ class Plant:
             if len(contacts) != self.hand.m:
                 raise InvalidParameterError("contacts", contacts, f"one contact per finger ({self.hand.m})")
             self.contacts = self._copy_contacts(contacts)
-        self.state = PlantState(float(t), as_finite_array("q", q, (n,)).copy(), as_finite_array("v", v, (n,)).copy(),
+        self.state = PlantState(as_finite_float("t", t), as_finite_array("q", q, (n,)).copy(), as_finite_array("v", v, (n,)).copy(),
                                 as_finite_array("X", X, (3,)).copy(), as_finite_array("V", V, (3,)).copy())
         self.events = []
         self.stopped = False
@@ -291,11 +303,16 @@ class Plant:
         return self.state
 
     def _copy_contacts(self, contacts: Sequence[PlantContact]) -> list[PlantContact]:
-        out = [PlantContact(c.edge, c.mode, float(c.xi), float(c.sign)) for c in contacts]
+        if not all(isinstance(c, PlantContact) for c in contacts):
+            raise InvalidParameterError("contacts", contacts, "a sequence of PlantContact")
+        out = [PlantContact(c.edge, c.mode, as_finite_float("xi", c.xi), as_finite_float("sign", c.sign))
+               for c in contacts]
         for c in out:
-            self.polygon.edge(c.edge)
+            lo, hi = self.polygon.edge(c.edge).xi_range
             if c.sign not in (-1.0, 1.0):
                 raise InvalidParameterError("sign", c.sign, "+1 or -1")
+            if c.mode is ContactMode.FIXED and not lo <= c.xi <= hi:
+                raise InvalidParameterError("xi", c.xi, f"a position on edge {c.edge}, in [{lo:.6g}, {hi:.6g}] m")
         return out
 
     # ------------------------------------------------------------------ geometry

@@ -63,7 +63,7 @@ import numpy as np
 from .contact import Friction
 from .envelope import Geometry
 from .exceptions import InvalidParameterError, RegraspError, ScenarioError, short_repr
-from .validation import MAX_SAMPLES, as_finite_array
+from .validation import MAX_SAMPLES, as_finite_array, as_positive_float
 from .finger import Finger
 from .polygon import ConvexPolygon
 from .trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
@@ -89,6 +89,18 @@ class FingerContact:
     edge: int
     tip_clearance: float | None = None
     friction: Friction = _DEFAULT_FRICTION
+
+    def __post_init__(self):
+        if not isinstance(self.finger, Finger):
+            raise InvalidParameterError("finger", self.finger, "a Finger (Finger.from_urdf)")
+        if isinstance(self.edge, bool) or not isinstance(self.edge, (int, np.integer)) or self.edge < 0:
+            raise InvalidParameterError("edge", self.edge, "an edge index (an integer >= 0)")
+        object.__setattr__(self, "edge", int(self.edge))
+        if self.tip_clearance is not None:
+            object.__setattr__(self, "tip_clearance", as_positive_float("tip_clearance", self.tip_clearance,
+                                                                        allow_zero=True))
+        if not isinstance(self.friction, Friction):
+            raise InvalidParameterError("friction", self.friction, "a Friction (regrasp.Friction)")
 
 
 @dataclass(frozen=True)

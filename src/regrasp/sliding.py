@@ -39,7 +39,7 @@ from .internal_force import (
     build_internal_force_qp,
     solve_internal_force_qp,
 )
-from .validation import as_finite_array, as_finite_float
+from .validation import as_finite_array, as_finite_float, as_positive_float
 
 __all__ = ["SlideFeasibility", "SlideObstacle", "sliding_feasibility"]
 
@@ -132,6 +132,8 @@ def sliding_feasibility(
         edge_mu = as_finite_float("edge_mu", edge_mu)
         if edge_mu < 0.0:
             raise InvalidParameterError("edge_mu", edge_mu, "a friction ratio >= 0")
+    object_mass = as_positive_float("object_mass", object_mass)
+    object_inertia = as_positive_float("object_inertia", object_inertia)
     pose = as_finite_array("pose", pose, (3,))
     xi = as_finite_array("xi", xi, (m,))
     acc = as_finite_array("object_acceleration", object_acceleration, (3,))

@@ -191,6 +191,11 @@ class EllipseTrajectory(Trajectory):
         self._t_end = t1
         self._amplitude = np.array([self.a, self.b, self.beta_a])
         self._offset = np.array([self.cx, self.cy, self.beta0])
+        for name, amplitude in (("a", self.a), ("b", self.b), ("beta_a", self.beta_a)):
+            extent = abs(amplitude) * max(1.0, abs(self.omega)) ** 2  # the largest of X, X', X'' (and their sum)
+            if not math.isfinite(extent + abs(self._offset).max()) or extent > 1e150:
+                raise InvalidParameterError(name, amplitude, "an amplitude whose pose, velocity and acceleration "
+                                            "(times omega and omega²) stay finite")
 
     @property
     def t_start(self) -> float:
