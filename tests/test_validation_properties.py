@@ -22,7 +22,7 @@ from regrasp.validation import as_finite_array, as_finite_float
 ROOT = Path(__file__).resolve().parents[1]
 BASE = (ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml").read_text().replace(
     '"../../urdf/', f'"{ROOT / "urdf"}/')
-SETTINGS = settings(derandomize=True, max_examples=150, deadline=None,
+SETTINGS = settings(derandomize=True, database=None, max_examples=150, deadline=None,
                     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
 scalars = st.one_of(
@@ -107,7 +107,7 @@ flags = st.lists(st.sampled_from(["--samples", "0", "-5", "1e9", "abc", "--geome
                                   "--plant-mass-scale", "--nope"]), min_size=1, max_size=4)
 
 
-@settings(derandomize=True, max_examples=60, deadline=None,
+@settings(derandomize=True, database=None, max_examples=60, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.sampled_from(["plan", "simulate"]), flags)
 def test_bad_command_lines_exit_2_with_one_error_line(capsys, command, extra):

@@ -191,11 +191,12 @@ class EllipseTrajectory(Trajectory):
         self._t_end = t1
         self._amplitude = np.array([self.a, self.b, self.beta_a])
         self._offset = np.array([self.cx, self.cy, self.beta0])
+        w = max(1.0, abs(self.omega))
         for name, amplitude in (("a", self.a), ("b", self.b), ("beta_a", self.beta_a)):
-            extent = abs(amplitude) * max(1.0, abs(self.omega)) ** 2  # the largest of X, X', X'' (and their sum)
-            if not math.isfinite(extent + abs(self._offset).max()) or extent > 1e150:
-                raise InvalidParameterError(name, amplitude, "an amplitude whose pose, velocity and acceleration "
-                                            "(times omega and omega²) stay finite")
+            extent = abs(amplitude) * w * w  # bounds X, X' and X'' (a product overflows to inf, never raises)
+            if amplitude != 0.0 and not (extent <= 1e150):
+                raise InvalidParameterError(name, amplitude, f"an amplitude whose pose, velocity and acceleration "
+                                            f"stay finite with omega = {self.omega:g} (|{name}| omega² <= 1e150)")
 
     @property
     def t_start(self) -> float:
