@@ -20,7 +20,9 @@ from regrasp import (
     PlantContact,
     WaypointTrajectory,
     condition_of,
+    build_rollout,
     load_scenario,
+    plan,
     planar_2r_urdf,
     reachable_on_line,
     sliding_feasibility,
@@ -72,6 +74,13 @@ CASES = {
     "11 friction as a string": lambda: Plant(Hand([FINGER]), BOX, [PlantContact(1, "fixed", 0.0)], friction="abc"),
     "11 a contact with a huge xi": lambda: plant(contacts=[PlantContact(1, "fixed", 1e308), PlantContact(3, "fixed", 0.0)]),
     "15 a rectangle 1e308 high": lambda: ConvexPolygon.rectangle(0.1, 1e308),
+    "11 plan with a string polygon": lambda: plan([FingerContact(FINGER, 1)], "abc", EllipseTrajectory(0, 0.12, 0.09,
+                                                                                                     0.05, 2.0)),
+    "11 plan with a string trajectory": lambda: plan([FingerContact(FINGER, 1)], BOX, "abc"),
+    "11 a hand of integers": lambda: Hand([1, 2]),
+    "11 rollout settings as a number": lambda: build_rollout(load_scenario(ROOT / "examples" / "scenarios" /
+                                                                          "paper_trajectory_2.toml"),
+                                                             regrasp_settings=5),
 }
 
 
@@ -96,3 +105,69 @@ def test_a_bad_input_is_a_typed_one_line_error_or_a_valid_result(case):
     assert result is not None and _no_nan(result), (case, result)
     if case.startswith(("12", "13", "11", "15")):
         pytest.fail(f"{case}: accepted ({result!r})")
+
+
+def test_a_closed_loop_or_a_rollout_of_a_billion_seconds_is_refused():
+    from regrasp import build_rollout, run_closed_loop
+    from regrasp.control import FixedContactController, Gains
+    from regrasp.reduced import ReducedModel
+
+    sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
+    with pytest.raises(RegraspError, match="duration"):
+        build_rollout(sc, policy="paper", duration=1e9)
+    with pytest.raises(RegraspError, match="periods"):
+        build_rollout(sc, policy="paper", periods=10**6)
+    p = plant()
+    model = ReducedModel(p.hand, Grasp(BOX, [1, 3], ["fixed", "fixed"]), [0.0, 0.0])
+    law = FixedContactController(model, Gains.critically_damped(20.0, 3))
+    with pytest.raises(RegraspError, match="duration"):
+        run_closed_loop(p, law, lambda t: (np.zeros(3), np.zeros(3), np.zeros(3)), 10**9)
+
+
+def test_every_public_name_loads_and_the_command_line_starts_without_the_heavy_libraries():
+    import subprocess
+    import sys
+
+    import regrasp
+
+    for name in regrasp.__all__:
+        assert getattr(regrasp, name) is not None, name
+    code = ("import sys, regrasp.cli; regrasp.cli.build_parser(); "
+            "print(sorted(m for m in ('pinocchio', 'coal', 'scipy', 'rerun', 'numba') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=True).stdout
+    assert out.strip() == "[]"
+
+
+@pytest.mark.parametrize("n, ok", [(252, True), (253, False), (2000, False)])
+def test_a_polygon_coal_cannot_take_is_a_polygon_error_with_the_limit(n, ok):
+    from regrasp.exceptions import PolygonError
+
+    a = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    polygon = ConvexPolygon.from_vertices(0.05 * np.c_[np.cos(a), np.sin(a)], mass=0.1)
+    if ok:
+        assert polygon.to_coal(0.1) is not None
+        return
+    with pytest.raises(PolygonError, match=f"{n}-gon.*up to 252 vertices"):
+        polygon.to_coal(0.1)
+
+
+URDF_TEXT = URDF.read_text()
+
+
+@pytest.mark.parametrize("text, says", [
+    ("", "XML_ERROR_EMPTY_DOCUMENT"),
+    ("<robot", "XML_ERROR_PARSING_ELEMENT"),
+    (URDF_TEXT.replace('<mass value="0.04"/>', '<mass value="-1"/>', 1), "mass -1 kg"),
+    (URDF_TEXT.replace('<mass value="0.015"/>', '<mass value="nan"/>', 1), "mass 0 kg"),  # (urdfdom reads NaN as 0)
+    (URDF_TEXT.replace('ixx="7.2e-07"', 'ixx="-1"', 1), "principal moments -1"),
+], ids=["empty", "not XML", "negative mass", "NaN mass", "negative inertia"])
+def test_a_bad_urdf_is_one_line_with_urdfdom_kept_off_stderr(tmp_path, capfd, text, says):
+    from regrasp.exceptions import FingerModelError
+
+    path = tmp_path / "finger.urdf"
+    path.write_text(text)
+    with pytest.raises(FingerModelError) as info:
+        Finger.from_urdf(path)
+    message = str(info.value)
+    assert says in message and "\n" not in message
+    assert capfd.readouterr().err == ""  # urdfdom's own lines went into the message, not the terminal

@@ -13,12 +13,11 @@ and a complete recording.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
-import os
 import sys
 from pathlib import Path
 
+from ._fd import captured_fd
 from .events import EventKind, FailureKind
 
 __all__ = ["DEFAULT_SCENARIO", "add_parser"]
@@ -127,27 +126,6 @@ def _no_schedule_text(error, scenario) -> str:
     return "\n".join(lines)
 
 
-@contextlib.contextmanager
-def _c_stdout_silenced():
-    """Route file descriptor 1 to /dev/null (OSQP's C library prints "Polishing not needed" on stdout
-    even with verbose=False), so that stdout carries only the summary or the JSON document."""
-    sys.stdout.flush()
-    try:
-        saved = os.dup(1)
-    except OSError:  # no file descriptor 1 (an embedded interpreter): nothing to protect
-        yield
-        return
-    devnull = os.open(os.devnull, os.O_WRONLY)
-    try:
-        os.dup2(devnull, 1)
-        yield
-    finally:
-        sys.stdout.flush()
-        os.dup2(saved, 1)
-        os.close(saved)
-        os.close(devnull)
-
-
 def _cmd_simulate(args, progress_bar) -> int:
     from .exceptions import InvalidParameterError
     from .rollout import DEFAULT_CONE_MARGIN
@@ -172,7 +150,8 @@ def _cmd_simulate(args, progress_bar) -> int:
     settings = SupervisorSettings.robust(scenario.geometry.value, cone)
     common = dict(periods=args.periods, duration=args.duration, settings=settings, regrasp_settings=regrasp_settings,
                   plant_mass_scale=args.plant_mass_scale, plant_mu_scale=args.plant_mu_scale)
-    with _c_stdout_silenced():
+    # OSQP's C library prints "Polishing not needed" on fd 1 even with verbose=False: keep stdout for the result
+    with captured_fd(1):
         code, output = _simulate(args, scenario, common, progress_bar)
     sys.stdout.write(output + "\n")
     return code

@@ -15,10 +15,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .control import ComputedTorqueController, ControlOutput, Proposition2Controller
+from .exceptions import InvalidParameterError
 from .plant import Plant, PlantEvent
 from .reduced import ReducedModel
 from .simulation import Command, StepRecord, sense_projected, simulate
 from .trajectory import TrajectorySample
+from .validation import as_duration, as_positive_float
 
 __all__ = ["ClosedLoopLog", "measure_reduced_state", "run_closed_loop"]
 
@@ -155,6 +157,14 @@ def run_closed_loop(
         RegraspError: the control law failed (e.g. its internal-force QP is infeasible): the
             controller's own error.
     """
+    if not isinstance(plant, Plant):
+        raise InvalidParameterError("plant", plant, "a regrasp.Plant")
+    if not isinstance(controller, ComputedTorqueController):
+        raise InvalidParameterError("controller", controller, "a control law (regrasp.control)")
+    if not callable(reference):
+        raise InvalidParameterError("reference", reference, "a function t -> (S_d, S_d_dot, S_d_ddot)")
+    duration = as_duration("duration", duration)
+    friction_noise = as_positive_float("friction_noise", friction_noise, allow_zero=True)
     model = controller.model
     sliding = list(model.grasp.sliding)
     rng = rng if rng is not None else np.random.default_rng(0)

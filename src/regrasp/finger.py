@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from ._fd import captured_fd
 from .exceptions import FingerModelError, InvalidParameterError, UnreachableError
 from .planar import se3_from_planar, wrap_angle
 from .validation import as_finite_array
@@ -241,11 +242,9 @@ class Finger:
             raise FingerModelError(f"not a usable file name ({type(exc).__name__})", source=path) from None
         if not found:
             raise FingerModelError("URDF file not found", source=path)
-        try:
-            model = pin.buildModelFromUrdf(str(path))
-            geom = pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.COLLISION)
-        except Exception as exc:  # Pinocchio raises bare ValueError/RuntimeError
-            raise FingerModelError(f"Pinocchio could not parse the URDF: {exc}", source=path) from exc
+        model, geom = _parse_urdf(lambda: pin.buildModelFromUrdf(str(path)),
+                                  lambda model: pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.COLLISION),
+                                  path)
         return cls(
             model,
             geom,
@@ -267,11 +266,11 @@ class Finger:
         tip_frame: str = "tip",
     ) -> "Finger":
         """Build a finger from URDF text (for generated fingers, see :mod:`regrasp.finger_urdf`)."""
-        try:
-            model = pin.buildModelFromXML(urdf)
-            geom = pin.buildGeomFromUrdfString(model, urdf, pin.GeometryType.COLLISION)
-        except Exception as exc:
-            raise FingerModelError(f"Pinocchio could not parse the URDF: {exc}", source="<string>") from exc
+        if not isinstance(urdf, str):
+            raise InvalidParameterError("urdf", urdf, "URDF text (a str)")
+        model, geom = _parse_urdf(lambda: pin.buildModelFromXML(urdf),
+                                  lambda model: pin.buildGeomFromUrdfString(model, urdf, pin.GeometryType.COLLISION),
+                                  "<string>")
         return cls(
             model,
             geom,
@@ -414,3 +413,30 @@ class Finger:
             f"Finger(name={self.name!r}, l1={l1:.4g} m, l2={l2:.4g} m, "
             f"base_in_hand={self.base_in_hand.tolist()}, configuration={self.configuration.value!r})"
         )
+
+
+def _parse_urdf(build_model, build_geometry, source):
+    """(model, collision geometry) from Pinocchio, urdfdom's own lines on fd 2 kept off the terminal
+    (its first line joins the error when parsing fails), and the links' inertial values checked."""
+    with captured_fd(2) as printed:
+        try:
+            model = build_model()
+            geom = build_geometry(model)
+        except Exception as exc:  # Pinocchio raises bare ValueError/RuntimeError
+            error = exc
+        else:
+            error = None
+    if error is not None:
+        said = next((" ".join(line.split()) for line in printed.text.splitlines() if line.strip()), "")
+        raise FingerModelError(f"Pinocchio could not parse the URDF: {' '.join(str(error).split())}"
+                               + (f" (urdfdom: {said})" if said else ""), source=source) from error
+    for j in range(1, model.njoints):
+        inertia = model.inertias[j]
+        mass, moments = float(inertia.mass), np.linalg.eigvalsh(0.5 * (inertia.inertia + inertia.inertia.T))
+        if not (np.isfinite(mass) and mass > 0.0 and np.isfinite(moments).all() and moments.min() >= 0.0
+                and moments.max() > 0.0 and np.isfinite(inertia.lever).all()):
+            raise FingerModelError(f"link of joint {model.names[j]!r}: expected a finite mass > 0 and a positive "
+                                   f"semi-definite inertia, got mass {mass:.6g} kg, principal moments "
+                                   f"{', '.join(f'{m:.3g}' for m in moments)} kg m^2", source=source,
+                                   joint=model.names[j])
+    return model, geom

@@ -26,7 +26,7 @@ import pinocchio as pin
 
 from .exceptions import InvalidParameterError, SingularFingerError
 from .finger import Finger
-from .validation import as_finite_array, as_positive_float
+from .validation import as_finite_array, as_positive_float, expect_sequence_of
 
 __all__ = ["Hand", "HandDynamics"]
 
@@ -74,6 +74,9 @@ class Hand:
         singular_threshold: float = 1e4,
         link_mass_scale: float = 1.0,
     ):
+        from .finger import Finger
+
+        fingers = expect_sequence_of("fingers", fingers, Finger, "Finger (Finger.from_urdf)")
         if len(fingers) == 0:
             raise InvalidParameterError("fingers", fingers, "at least one finger")
         names = [f.name for f in fingers]

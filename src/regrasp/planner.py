@@ -32,7 +32,7 @@ from .intervals import Intervals, intersect, widest
 from .polygon import ConvexPolygon
 from .scenario import FingerContact, Scenario
 from .trajectory import Trajectory
-from .validation import MAX_SAMPLES, as_finite_array, as_sample_count
+from .validation import MAX_SAMPLES, as_finite_array, as_sample_count, expect_sequence_of, expect_type
 
 __all__ = ["FingerPlan", "InfeasibleInterval", "PlanResult", "plan", "plan_scenario"]
 
@@ -216,6 +216,9 @@ def plan(
         progress: Called as ``progress(done, total)`` after each finger-sample.
         scenario: Name recorded in the result.
     """
+    contacts = expect_sequence_of("contacts", contacts, FingerContact, "FingerContact")
+    expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+    expect_type("trajectory", trajectory, Trajectory, "a Trajectory")
     if not contacts:
         raise InvalidParameterError("contacts", contacts, "at least one finger")
     if times is None:

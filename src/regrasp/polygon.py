@@ -315,6 +315,10 @@ class ConvexPolygon:
         if density is not None:
             density = as_positive_float("density", density)
 
+        size = float(np.abs(as_finite_array("vertices", vertices)).max(initial=0.0))
+        if size > MAX_LENGTH:
+            raise InvalidParameterError("vertices", vertices, f"coordinates of at most {MAX_LENGTH:g} m "
+                                        f"(this one reaches {size:.3g} m)")
         v = _validated_ccw_vertices(vertices)
         if inertia is not None:
             return cls(vertices=v, mass=mass, inertia=inertia)
@@ -352,6 +356,13 @@ class ConvexPolygon:
         """
         w = as_positive_float("width", width)
         h = as_positive_float("height", height)
+        for name, value in (("width", w), ("height", h)):
+            if value > MAX_LENGTH:
+                raise InvalidParameterError(name, value, f"a length of at most {MAX_LENGTH:g} m")
+        if max(w, h) > MAX_ASPECT * min(w, h):
+            raise InvalidParameterError("height" if h > w else "width", max(w, h),
+                                        f"at most {MAX_ASPECT:g} times the other side (a rectangle that thin is a "
+                                        "segment)")
         verts = 0.5 * np.array([[w, h], [-w, h], [-w, -h], [w, -h]])
         return cls.from_vertices(verts, mass=mass, inertia=inertia, density=density)
 
@@ -433,7 +444,18 @@ class ConvexPolygon:
         """
         h = as_positive_float("half_thickness", half_thickness)
         points = [np.array([x, y, z]) for x, y in self.vertices for z in (-h, h)]
-        return coal.Convex.convexHull(points, False, "Qt")
+        try:
+            return coal.Convex.convexHull(points, False, "Qt")
+        except RuntimeError as exc:  # e.g. "Too many neighbors": coal stores a vertex's neighbours in a byte
+            reason = str(exc).strip().splitlines()[-1].removeprefix("message: ")
+            raise PolygonError(f"coal cannot build the {self.n_vertices}-gon's collision shape ({reason}); the "
+                               "urdf geometry takes polygons of up to 252 vertices (measured with coal 3)",
+                               vertices=self.vertices, index=None) from None
 
 
 __all__ = ["Edge", "ConvexPolygon"]
+
+#: The largest object coordinate or side [m] (a hand's object, not a building).
+MAX_LENGTH = 1e3
+#: A rectangle's largest side / smallest side [-].
+MAX_ASPECT = 1e6

@@ -44,7 +44,7 @@ from .schedule_problem import trajectory_period
 from .simulation import Command, StepRecord, simulate
 from .supervisor import Measurement, RegraspSupervisor, SupervisorSettings
 from .trajectory import RepeatedTrajectory
-from .validation import as_finite_array, as_positive_float
+from .validation import MAX_DURATION, as_duration, as_finite_array, as_positive_float, expect_type
 
 __all__ = ["DEFAULT_CONE_MARGIN", "POLICIES", "Rollout", "RolloutResult", "build_rollout"]
 
@@ -155,7 +155,10 @@ def _run_scenario(scenario: Scenario, duration: float | None, periods) -> tuple[
             raise InvalidParameterError("periods", periods, f"a periodic trajectory (scenario {scenario.name!r} "
                                         "is not; use duration)")
         duration = float(periods) * period
-    duration = domain if duration is None else as_positive_float("duration", duration)
+        if duration > MAX_DURATION:
+            raise InvalidParameterError("periods", periods, f"at most {MAX_DURATION:g} s of simulated time "
+                                        f"({int(MAX_DURATION // period)} periods of {period:.6g} s)")
+    duration = domain if duration is None else as_duration("duration", duration)
     if duration > domain + 1e-9:
         if period is None:
             raise InvalidParameterError("duration", duration, f"at most the trajectory's domain, {domain:.6g} s "
@@ -204,7 +207,10 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
     mass_scale = as_positive_float("plant_mass_scale", plant_mass_scale)
     mu_scale = as_positive_float("plant_mu_scale", plant_mu_scale)
     regrasp_settings = RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN) if regrasp_settings is None \
-        else regrasp_settings
+        else expect_type("regrasp_settings", regrasp_settings, RegraspSettings, "a RegraspSettings")
+    if schedule is not None:
+        expect_type("schedule", schedule, RegraspSchedule, "a RegraspSchedule (regrasp.plan_regrasps)")
+    expect_type("scheduled_settings", scheduled_settings, ScheduledSettings, "a ScheduledSettings")
     if settings is None:  # the supervisor's runtime envelopes use the scenario's planner geometry
         settings = SupervisorSettings.robust(scenario.geometry.value, regrasp_settings.cone_margin)
     run_scenario, duration = _run_scenario(scenario, duration, periods)

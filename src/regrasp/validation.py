@@ -102,3 +102,34 @@ def as_sample_count(name: str, value) -> int:
     if not 2 <= value <= MAX_SAMPLES:
         raise InvalidParameterError(name, value, f"an integer number of samples in [2, {MAX_SAMPLES}]")
     return int(value)
+
+
+#: The longest simulated run [s]: an hour is 3.6 million 1 ms steps (about 3 h of wall time today).
+MAX_DURATION = 3600.0
+
+
+def as_duration(name: str, value) -> float:
+    """``value`` as a simulated duration [s]: a number in (0, :data:`MAX_DURATION`]."""
+    out = as_positive_float(name, value)
+    if out > MAX_DURATION:
+        raise InvalidParameterError(name, value, f"a duration of at most {MAX_DURATION:g} s")
+    return out
+
+
+def expect_type(name: str, value, kind: type | tuple[type, ...], what: str):
+    """``value`` if it is an instance of ``kind``, else an :class:`InvalidParameterError` saying ``what``
+    was expected (the check every public entry point makes of its structured arguments)."""
+    if not isinstance(value, kind):
+        raise InvalidParameterError(name, value, what)
+    return value
+
+
+def expect_sequence_of(name: str, values, kind: type, what: str) -> tuple:
+    """``values`` as a tuple whose items are all instances of ``kind`` (a list, a tuple...; not a string)."""
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+        raise InvalidParameterError(name, values, f"a sequence of {what}")
+    out = tuple(values)
+    for v in out:
+        if not isinstance(v, kind):
+            raise InvalidParameterError(name, values, f"a sequence of {what} (got a {type(v).__name__})")
+    return out
