@@ -171,3 +171,15 @@ def test_a_bad_urdf_is_one_line_with_urdfdom_kept_off_stderr(tmp_path, capfd, te
     message = str(info.value)
     assert says in message and "\n" not in message
     assert capfd.readouterr().err == ""  # urdfdom's own lines went into the message, not the terminal
+
+
+def test_huge_links_and_infinite_positions_are_refused():
+    from regrasp import EnvelopeSample  # noqa: F401 (public)
+    from regrasp.envelope import FingerEnvelope
+    from regrasp.exceptions import InvalidParameterError
+
+    with pytest.raises(InvalidParameterError, match="l2"):
+        planar_2r_urdf(0.1, 1e300)
+    sample = FingerEnvelope(FINGER, BOX, 1).at([0.0, 0.12, 0.0])
+    with pytest.raises(InvalidParameterError, match="xi"):
+        sample.margin(math.inf)

@@ -218,7 +218,9 @@ class EnvelopeSample:
 
     def margin(self, xi: float) -> float:
         """Distance [m] from ``xi`` to the nearest bound of the feasible interval holding it
-        (negative: distance to the nearest feasible interval; -inf if none)."""
+        (negative: distance to the nearest feasible interval; -inf if none); ``xi`` must be finite."""
+        if not math.isfinite(xi):
+            raise InvalidParameterError("xi", xi, "a finite position on the edge [m]")
         best = -math.inf
         for lo, hi in self.feasible:
             best = max(best, min(xi - lo, hi - xi))

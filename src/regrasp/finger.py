@@ -210,6 +210,9 @@ class Finger:
         self.joint1_in_hand_floats = tuple(self.joint1_in_hand.tolist())  # (hot paths)
         self._l1 = float(np.linalg.norm(elbow_in_j1))
         self._l2 = float(np.linalg.norm(tip_in_j2))
+        for label, length in (("link 1 (joint 1 to joint 2)", self._l1), ("link 2 (joint 2 to the tip)", self._l2)):
+            if not 1e-6 <= length <= 10.0:
+                raise FingerModelError(f"{label} is {length:.6g} m long: expected 1e-6 to 10 m", source=self.source)
         self._alpha1 = float(np.arctan2(elbow_in_j1[1], elbow_in_j1[0]))
         alpha2 = float(np.arctan2(tip_in_j2[1], tip_in_j2[0]))
         gamma2 = _planar_angle(self.model.jointPlacements[2])

@@ -11,6 +11,7 @@ end of the second link.
 
 from __future__ import annotations
 
+from .exceptions import InvalidParameterError
 from .validation import as_positive_float
 
 
@@ -46,6 +47,10 @@ def _joint(name: str, parent: str, child: str, x: float, damping: float) -> str:
 """
 
 
+#: The longest link or link radius a generated finger may have [m].
+MAX_LINK = 10.0
+
+
 def planar_2r_urdf(
     l1: float,
     l2: float,
@@ -71,6 +76,9 @@ def planar_2r_urdf(
     l2 = as_positive_float("l2", l2)
     radius1 = as_positive_float("radius1", radius1)
     radius2 = as_positive_float("radius2", radius2)
+    for label, value in (("l1", l1), ("l2", l2), ("radius1", radius1), ("radius2", radius2)):
+        if value > MAX_LINK:
+            raise InvalidParameterError(label, value, f"a length of at most {MAX_LINK:g} m")
     damping = as_positive_float("damping", damping, allow_zero=True)
     rho = 0.3 * 2700.0
     m1 = as_positive_float("mass1", mass1) if mass1 is not None else rho * 3.141592653589793 * radius1**2 * l1
