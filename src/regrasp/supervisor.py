@@ -39,7 +39,7 @@ from .planner import PlanResult
 from .policies import Policy
 from .policy_paper import PaperPolicy
 from .polygon import ConvexPolygon
-from .trajectory import Trajectory
+from .trajectory import Trajectory, TrajectorySample
 from .validation import as_finite_array, as_positive_float
 
 __all__ = [
@@ -241,6 +241,7 @@ class SupervisorOutput:
         targets: Each contact's slide target ξ* [m] (NaN when no slide is under way).
         reference_xi: ξ_d the sliding law tracks [m] per contact (NaN when not sliding).
         planned_xi: Where the policy's plan puts each contact now [m] (NaN without a plan).
+        desired: The desired object state at the step's start.
         events: Decisions taken at this step.
         supervisor_seconds: Wall time of the supervisor's own work (envelopes and decisions) [s].
         control_seconds: Wall time of the control law [s].
@@ -256,6 +257,7 @@ class SupervisorOutput:
     targets: np.ndarray
     reference_xi: np.ndarray
     planned_xi: np.ndarray
+    desired: TrajectorySample
     events: tuple[Event, ...]
     supervisor_seconds: float
     control_seconds: float
@@ -379,5 +381,5 @@ class RegraspSupervisor:
         return SupervisorOutput(
             tau=control.tau, control=control, law=law, phases=tuple(ex.phases), envelopes=reading.samples,
             margins=reading.margins, bounds=reading.bounds, targets=targets, reference_xi=reference,
-            planned_xi=self.policy.planned_xi(float(meas.t)), events=tuple(out),
+            planned_xi=self.policy.planned_xi(float(meas.t)), desired=desired, events=tuple(out),
             supervisor_seconds=supervisor_seconds, control_seconds=control.seconds)
