@@ -52,6 +52,12 @@ __all__ = [
 ]
 
 
+#: The settings the supervisor passes on to its executor (their defaults are the executor's).
+_EXECUTOR_FIELDS = ("omega_n", "zeta", "prime_time", "prime_overshoot", "prime_overshoot_max", "settle_undershoot",
+                    "arrive_tolerance", "arrive_speed", "max_slide_time", "control_omega", "slide_omega", "integral",
+                    "friction_filter_time", "internal_force")
+
+
 @dataclass(frozen=True)
 class SupervisorSettings:
     """Tuning of :class:`RegraspSupervisor`: its monitor, executor and the paper's policy.
@@ -126,24 +132,24 @@ class SupervisorSettings:
     danger_fraction: float = 0.1
     reaction_time: float = 0.4
     target_horizon: float = 0.6
-    omega_n: float = 20.0
-    zeta: float = 1.0
-    prime_time: float = 0.02
-    prime_overshoot: float = 0.05
-    prime_overshoot_max: float = 0.05
-    settle_undershoot: float = 0.05
-    arrive_tolerance: float = 5e-4
-    arrive_speed: float = 5e-3
-    max_slide_time: float = 1.5
+    omega_n: float = ExecutorSettings.omega_n
+    zeta: float = ExecutorSettings.zeta
+    prime_time: float = ExecutorSettings.prime_time
+    prime_overshoot: float = ExecutorSettings.prime_overshoot
+    prime_overshoot_max: float = ExecutorSettings.prime_overshoot_max
+    settle_undershoot: float = ExecutorSettings.settle_undershoot
+    arrive_tolerance: float = ExecutorSettings.arrive_tolerance
+    arrive_speed: float = ExecutorSettings.arrive_speed
+    max_slide_time: float = ExecutorSettings.max_slide_time
     recheck_time: float = 0.01
-    control_omega: float = 20.0
-    slide_omega: float = 20.0
-    integral: float = 0.0
-    friction_filter_time: float | None = None
+    control_omega: float = ExecutorSettings.control_omega
+    slide_omega: float = ExecutorSettings.slide_omega
+    integral: float = ExecutorSettings.integral
+    friction_filter_time: float | None = ExecutorSettings.friction_filter_time
     envelope_every: int = 1
     track_envelopes: bool = False
     geometry: str = "ideal"
-    internal_force: InternalForceSettings = field(default_factory=lambda: InternalForceSettings(f_min=0.2))
+    internal_force: InternalForceSettings = field(default_factory=lambda: ExecutorSettings().internal_force)
     feasibility: InternalForceSettings = field(
         default_factory=lambda: InternalForceSettings(f_min=0.2, margin=0.05, f_max=20.0))
     regrasp: bool = True
@@ -153,9 +159,8 @@ class SupervisorSettings:
     enabling_recheck_time: float = 0.05
 
     def __post_init__(self):
-        for name in ("reaction_time", "target_horizon", "omega_n", "zeta", "prime_time", "prime_overshoot", "settle_undershoot",
-                     "arrive_tolerance",
-                     "arrive_speed", "max_slide_time", "recheck_time", "control_omega", "enabling_recheck_time"):
+        self.executor_settings()  # the executor's fields are checked where they are used
+        for name in ("reaction_time", "target_horizon", "recheck_time", "enabling_recheck_time"):
             as_positive_float(name, getattr(self, name))
         for name, least in (("path_checks", 1), ("enabling_candidates", 1)):
             value = getattr(self, name)
@@ -189,15 +194,10 @@ class SupervisorSettings:
 
     def executor_settings(self) -> ExecutorSettings:
         """The executor's part of these settings."""
-        return ExecutorSettings(omega_n=self.omega_n, zeta=self.zeta, prime_time=self.prime_time,
-                                prime_overshoot=self.prime_overshoot,
-                                prime_overshoot_max=max(self.prime_overshoot, self.prime_overshoot_max),
-                                settle_undershoot=self.settle_undershoot,
-                                arrive_tolerance=self.arrive_tolerance, arrive_speed=self.arrive_speed,
-                                max_slide_time=self.max_slide_time, control_omega=self.control_omega,
-                                slide_omega=self.slide_omega, integral=self.integral,
-                                friction_filter_time=self.friction_filter_time,
-                                internal_force=self.internal_force)
+        values = {name: getattr(self, name) for name in _EXECUTOR_FIELDS}
+        if isinstance(self.prime_overshoot, (int, float)) and isinstance(self.prime_overshoot_max, (int, float)):
+            values["prime_overshoot_max"] = max(self.prime_overshoot, self.prime_overshoot_max)
+        return ExecutorSettings(**values)
 
 
 @dataclass(frozen=True)
