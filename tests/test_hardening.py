@@ -160,7 +160,8 @@ URDF_TEXT = URDF.read_text()
     (URDF_TEXT.replace('<mass value="0.04"/>', '<mass value="-1"/>', 1), "mass -1 kg"),
     (URDF_TEXT.replace('<mass value="0.015"/>', '<mass value="nan"/>', 1), "mass 0 kg"),  # (urdfdom reads NaN as 0)
     (URDF_TEXT.replace('ixx="7.2e-07"', 'ixx="-1"', 1), "principal moments -1"),
-], ids=["empty", "not XML", "negative mass", "NaN mass", "negative inertia"])
+    (URDF_TEXT.replace('<origin xyz="0.045 0 0"', '<origin xyz="1e300 0 0"', 1), "placed 1e+300 m from its joint"),
+], ids=["empty", "not XML", "negative mass", "NaN mass", "negative inertia", "a distal link 1e300 m long"])
 def test_a_bad_urdf_is_one_line_with_urdfdom_kept_off_stderr(tmp_path, capfd, text, says):
     from regrasp.exceptions import FingerModelError
 

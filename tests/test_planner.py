@@ -131,3 +131,21 @@ def test_json_document_has_the_documented_keys(trajectory_2):
             e, r = b - a, p - a
             assert abs(e[0] * r[1] - e[1] * r[0]) < 1e-12
             assert -1e-12 <= np.dot(p - a, b - a) <= np.dot(b - a, b - a) + 1e-12
+
+
+def test_motion_between_samples_is_the_worst_vertex_path_between_two_samples():
+    from regrasp import ConvexPolygon, EllipseTrajectory
+    from regrasp.planner import motion_between_samples
+
+    box = ConvexPolygon.rectangle(0.1, 0.04, mass=0.08)
+    traj = EllipseTrajectory(0.0, 0.1, 0.1, 0.05, 2.0, beta_a=1.0)
+    times = traj.times(401)
+    estimate = motion_between_samples(traj, box, times)
+    # independent: each vertex's path length between consecutive samples, from dense poses
+    dense = np.linspace(times[0], times[-1], 400 * 50 + 1)
+    vertices = np.array([box.vertices_in(q) for q in traj.pose(dense)])  # (time, vertex, xy)
+    steps = np.linalg.norm(np.diff(vertices, axis=0), axis=-1)  # (time - 1, vertex)
+    worst = steps.reshape(400, 50, -1).sum(axis=1).max()
+    # the estimate bounds every vertex's path (|v| + |omega| r >= a vertex's speed) and is close to it
+    assert worst <= estimate <= 1.5 * worst
+    assert motion_between_samples(traj, box, times[:1]) == 0.0

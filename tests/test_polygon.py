@@ -366,3 +366,12 @@ def test_to_coal_random_polygon_edge_distances():
 def test_to_coal_rejects_bad_thickness():
     with pytest.raises(InvalidParameterError, match="half_thickness"):
         ConvexPolygon.rectangle(W, H, density=1.0).to_coal(0.0)
+
+
+def test_width_is_the_least_distance_between_enclosing_parallel_lines():
+    assert ConvexPolygon.rectangle(0.1, 0.04, mass=0.08).width == pytest.approx(0.04)
+    triangle = ConvexPolygon.from_vertices(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]) - 1.0 / 3.0, mass=1.0)
+    # brute force over directions: the width in direction n is the spread of the vertices along n
+    angles = np.linspace(0.0, np.pi, 200001)
+    spread = np.ptp(triangle.vertices @ np.c_[np.cos(angles), np.sin(angles)].T, axis=0)
+    assert triangle.width == pytest.approx(spread.min(), abs=1e-9) and triangle.width == pytest.approx(np.sqrt(0.5))

@@ -126,3 +126,80 @@ def test_bad_command_lines_exit_2_with_one_error_line(capsys, command, extra):
 def test_unusable_scenario_paths_are_scenario_errors(name):
     with pytest.raises(ScenarioError):
         load_scenario(name)
+
+
+URDF_TEXT = (ROOT / "urdf" / "planar_2r_finger.urdf").read_text()
+# every attribute value of the shipped finger, by (element, attribute): what a generated URDF may break
+URDF_SLOTS = sorted({(element, attribute) for element, attributes in re.findall(r"<(\w+)\s([^>]*)>", URDF_TEXT)
+                     for attribute in re.findall(r"(\w+)=\"", attributes)})
+urdf_values = st.one_of(
+    st.sampled_from(["nan", "inf", "-inf", "-1", "0", "1e300", "-1e300", "1e-300", "1e400", "0 0 1e300", "nan 0 0",
+                     "0.1 0 0", "0 0 -1", "1 0 0", "0 0 0", "0 0.1 0", "0 1.5707963267948966 0", "0.5 0 0"]),
+    st.sampled_from(["abc", "", "1 2", "prismatic", "fixed", "continuous", "floating", "planar", "revolute", "link1",
+                     "tip", "base", "nowhere"]),
+    st.floats(allow_nan=True, allow_infinity=True, width=32).map(repr),
+    st.floats(min_value=1e-4, max_value=1.0).map(repr))
+# structural edits, as (regular expression, replacement) applied once at the i-th match
+structural = st.sampled_from([
+    (r"<inertial>.*?</inertial>", ""), (r"<collision>.*?</collision>", ""), (r"<visual>.*?</visual>", ""),
+    (r'<link name="tip"/>', ""), (r'name="tip"', 'name="tip2"'), (r'<joint name="joint2"', '<joint name="joint1"'),
+    (r"<cylinder", "<capsule"), (r"<cylinder [^>]*>", '<sphere radius="0.01"/>'),
+    (r"<cylinder [^>]*>", '<box size="0.12 0.01 0.01"/>'), (r"</robot>", ""), (r'type="fixed"', 'type="revolute"'),
+    (r"<parent", "<parent_"), (r'<link name="base"/>', '<link name="base"/><link name="base"/>'),
+    (r"<axis [^>]*>", ""), (r"<limit [^>]*>", ""), (r"<origin [^>]*>", "")])
+
+
+def mutated_urdf(text: str, edits) -> str:
+    for kind, a, b in edits:
+        if kind == "attr":
+            matches = [m for m in re.finditer(rf"<{a[0]}\b[^>]*?\s{a[1]}=\"([^\"]*)\"", text)]
+            if matches:
+                m = matches[b[1] % len(matches)]
+                text = text[:m.start(1)] + b[0] + text[m.end(1):]
+        else:
+            matches = list(re.finditer(a[0], text, re.S))
+            if matches:
+                m = matches[b % len(matches)]
+                text = text[:m.start()] + a[1] + text[m.end():]
+    return text
+
+
+urdf_edits = st.lists(st.one_of(
+    st.tuples(st.just("attr"), st.sampled_from(URDF_SLOTS), st.tuples(urdf_values, st.integers(0, 7))),
+    st.tuples(st.just("text"), structural, st.integers(0, 7))), min_size=1, max_size=3)
+
+
+@settings(derandomize=True, database=None, max_examples=200, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(urdf_edits)
+def test_a_generated_urdf_is_a_one_line_finger_error_or_a_finite_finger(tmp_path_factory, capfd, edits):
+    """A mutated finger URDF (attribute values and structure) either loads as a finger whose model is finite
+    (lengths, mass matrix positive definite, tip Jacobian) or raises a FingerModelError naming the file in one
+    line, with urdfdom's own output kept off stderr."""
+    import pinocchio as pin
+
+    from regrasp import Finger
+    from regrasp.collision import checked_link_shapes, default_tip_clearance
+    from regrasp.exceptions import FingerModelError, RegraspError
+
+    path = tmp_path_factory.mktemp("urdf") / "finger.urdf"
+    path.write_text(mutated_urdf(URDF_TEXT, edits))
+    capfd.readouterr()
+    try:
+        finger = Finger.from_urdf(path)
+    except RegraspError as exc:
+        assert isinstance(exc, FingerModelError) and str(path) in str(exc), exc
+        assert "\n" not in str(exc) and len(str(exc)) < 1200, str(exc)
+        assert capfd.readouterr().err == ""
+        return
+    assert capfd.readouterr().err == ""
+    assert all(1e-6 <= length <= 10.0 for length in finger.link_lengths)
+    data = finger.model.createData()
+    for q in np.random.default_rng(0).uniform(-3.0, 3.0, (3, finger.model.nq)):
+        mass = pin.crba(finger.model, data, q)
+        assert np.isfinite(mass).all() and np.linalg.eigvalsh(0.5 * (mass + mass.T)).min() > 0.0
+        assert np.isfinite(finger.tip_jacobian(q)).all() and np.isfinite(finger.forward_kinematics(q)).all()
+    try:  # the 'urdf' geometry's shapes: usable, or a one-line FingerModelError
+        checked_link_shapes(finger, default_tip_clearance(finger))
+    except FingerModelError as exc:
+        assert "\n" not in str(exc)

@@ -139,6 +139,8 @@ def _cmd_plan(args) -> int:
         output_directory("--plot", args.plot)
     progress = _ProgressBar(f"planning {scenario.name}") if not args.json else None
     result = plan_scenario(scenario, samples=args.samples, geometry=args.geometry, progress=progress)
+    if result.sampling_warning is not None:
+        print(f"regrasp plan: warning: {result.sampling_warning}", file=sys.stderr)
     schedule = error = None
     if args.regrasp:
         from .schedule import NoScheduleError

@@ -30,7 +30,7 @@ from .exceptions import FingerModelError, InvalidParameterError
 from .finger import Finger, LinkShape
 from .polygon import ConvexPolygon
 
-__all__ = ["UrdfCollisionChecker", "default_tip_clearance", "segment_hits_polygon"]
+__all__ = ["UrdfCollisionChecker", "checked_link_shapes", "default_tip_clearance", "segment_hits_polygon"]
 
 #: Safety margin of the certified-free shortcut of :meth:`UrdfCollisionChecker.links_collide`,
 #: as a fraction of the finger's reach l1 + l2.
@@ -97,7 +97,7 @@ def _truncate_distal(shape: LinkShape, tip_in_joint: np.ndarray, clearance: floa
             f"cannot apply the tip clearance to a {type(geom).__name__} collision shape "
             "(supported on the distal link: cylinder, capsule, box)",
             source=source,
-            joint=shape.name,
+            shape=shape.name,
         )
     axis = placement.rotation @ axis_local
     if abs(abs(axis[0] * link_dir[0] + axis[1] * link_dir[1]) - 1.0) > 1e-9 or abs(axis[2]) > 1e-9:
@@ -105,7 +105,7 @@ def _truncate_distal(shape: LinkShape, tip_in_joint: np.ndarray, clearance: floa
             "the distal collision shape is not aligned with the link (joint 2 to tip), so the tip "
             "clearance cannot be applied",
             source=source,
-            joint=shape.name,
+            shape=shape.name,
         )
     new_half = half - clearance / 2.0
     if new_half <= 0.0:
@@ -148,6 +148,29 @@ def default_tip_clearance(finger: Finger) -> float:
     return 3.0 * max((_half_width(s.geometry) for s in finger.link_shapes() if s.link == 1), default=0.0)
 
 
+def checked_link_shapes(finger: Finger, tip_clearance: float) -> tuple[LinkShape, ...]:
+    r"""The finger's collision shapes as the ``urdf`` geometry uses them: both links must have one, and the
+    distal shapes are shortened by the tip clearance :math:`\rho` [m] (a shape shorter than :math:`\rho`
+    is dropped). Raises :class:`~regrasp.exceptions.FingerModelError` naming the URDF and the shape when the
+    finger's collision model cannot be used so (a scenario reader checks this at load)."""
+    shapes = finger.link_shapes()
+    for link in (0, 1):
+        if not any(s.link == link for s in shapes):
+            raise FingerModelError(
+                f"link {link + 1} has no collision geometry, which the 'urdf' geometry mode needs "
+                "(urdfdom silently drops <capsule> elements: use <cylinder> or <box>)",
+                source=finger.source,
+            )
+    tip_in_joint = finger.model.frames[finger.tip_frame_id].placement.translation[:2]
+    kept = []
+    for shape in shapes:
+        if shape.link == 1:
+            shape = _truncate_distal(shape, tip_in_joint, tip_clearance, finger.source)
+        if shape is not None:
+            kept.append(shape)
+    return tuple(kept)
+
+
 class UrdfCollisionChecker:
     r"""Signed distances between a finger's URDF collision shapes and a polygon prism.
 
@@ -163,24 +186,9 @@ class UrdfCollisionChecker:
                  half_thickness: float | None = None):
         if not np.isfinite(tip_clearance) or tip_clearance < 0.0:
             raise InvalidParameterError("tip_clearance", tip_clearance, "a finite length >= 0 [m]")
-        shapes = finger.link_shapes()
-        for link in (0, 1):
-            if not any(s.link == link for s in shapes):
-                raise FingerModelError(
-                    f"link {link + 1} has no collision geometry, which the 'urdf' geometry mode needs "
-                    "(urdfdom silently drops <capsule> elements: use <cylinder> or <box>)",
-                    source=finger.source,
-                )
-        tip_in_joint = finger.model.frames[finger.tip_frame_id].placement.translation[:2]
-        kept = []
-        for shape in shapes:
-            if shape.link == 1:
-                shape = _truncate_distal(shape, tip_in_joint, tip_clearance, finger.source)
-            if shape is not None:
-                kept.append(shape)
         self.finger = finger
         self.tip_clearance = float(tip_clearance)
-        self.shapes: tuple[LinkShape, ...] = tuple(kept)
+        self.shapes: tuple[LinkShape, ...] = checked_link_shapes(finger, tip_clearance)
         h = half_thickness if half_thickness is not None else sum(finger.link_lengths)
         self.object_geometry = polygon.to_coal(h)
         self._object_radius = float(np.max(np.hypot(polygon.vertices[:, 0], polygon.vertices[:, 1])))

@@ -49,12 +49,16 @@ class FingerModelError(RegraspError):
     Attributes:
         source: The URDF path (or ``"<model>"`` for an in-memory model).
         joint: Name of the offending joint or frame, or None when the problem is global.
+        shape: Name of the offending collision shape (Pinocchio's geometry object), or None.
     """
 
-    def __init__(self, message: str, *, source: str | Path = "<model>", joint: str | None = None):
+    def __init__(self, message: str, *, source: str | Path = "<model>", joint: str | None = None,
+                 shape: str | None = None):
         self.source = str(source)
         self.joint = joint
-        where = f"{self.source}" + (f", joint '{joint}'" if joint is not None else "")
+        self.shape = shape
+        where = (f"{self.source}" + (f", joint '{joint}'" if joint is not None else "")
+                 + (f", collision shape '{shape}'" if shape is not None else ""))
         super().__init__(f"{where}: {message}")
 
 

@@ -31,7 +31,7 @@ import pinocchio as pin
 from ._fd import captured_fd
 from .exceptions import FingerModelError, InvalidParameterError, UnreachableError
 from .planar import se3_from_planar, wrap_angle
-from .validation import as_finite_array
+from .validation import as_finite_array, file_problem
 
 __all__ = ["Configuration", "Finger", "LinkShape"]
 
@@ -239,12 +239,9 @@ class Finger:
         if not isinstance(path, (str, Path)):
             raise InvalidParameterError("path", path, "a URDF file's path (str or pathlib.Path)")
         path = Path(path)
-        try:
-            found = path.is_file()
-        except (OSError, ValueError) as exc:  # a name too long for the file system, a NUL byte
-            raise FingerModelError(f"not a usable file name ({type(exc).__name__})", source=path) from None
-        if not found:
-            raise FingerModelError("URDF file not found", source=path)
+        problem = file_problem(path, "URDF file")
+        if problem is not None:
+            raise FingerModelError(problem, source=path)
         model, geom = _parse_urdf(lambda: pin.buildModelFromUrdf(str(path)),
                                   lambda model: pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.COLLISION),
                                   path)
@@ -433,13 +430,21 @@ def _parse_urdf(build_model, build_geometry, source):
         said = next((" ".join(line.split()) for line in printed.text.splitlines() if line.strip()), "")
         raise FingerModelError(f"Pinocchio could not parse the URDF: {' '.join(str(error).split())}"
                                + (f" (urdfdom: {said})" if said else ""), source=source) from error
+    for frame in model.frames:  # before the inertias, which Pinocchio sums over the links fixed to a joint
+        offset = math.hypot(*frame.placement.translation)  # (no overflow, unlike a sum of squares)
+        if not offset <= 10.0:
+            raise FingerModelError(f"frame {frame.name!r} is placed {offset:.6g} m from its joint: expected at "
+                                   "most 10 m", source=source)
     for j in range(1, model.njoints):
         inertia = model.inertias[j]
-        mass, moments = float(inertia.mass), np.linalg.eigvalsh(0.5 * (inertia.inertia + inertia.inertia.T))
+        rotational = np.asarray(inertia.inertia, dtype=float)
+        mass = float(inertia.mass)
+        moments = np.linalg.eigvalsh(0.5 * (rotational + rotational.T)) if np.isfinite(rotational).all() \
+            else np.full(3, np.nan)
         if not (np.isfinite(mass) and mass > 0.0 and np.isfinite(moments).all() and moments.min() >= 0.0
                 and moments.max() > 0.0 and np.isfinite(inertia.lever).all()):
-            raise FingerModelError(f"link of joint {model.names[j]!r}: expected a finite mass > 0 and a positive "
-                                   f"semi-definite inertia, got mass {mass:.6g} kg, principal moments "
+            raise FingerModelError(f"link of joint {model.names[j]!r}: expected a finite mass > 0 and a non-zero, "
+                                   f"positive semi-definite inertia, got mass {mass:.6g} kg, principal moments "
                                    f"{', '.join(f'{m:.3g}' for m in moments)} kg m^2", source=source,
                                    joint=model.names[j])
     return model, geom

@@ -34,9 +34,28 @@ from .scenario import FingerContact, Scenario
 from .trajectory import Trajectory
 from .validation import MAX_SAMPLES, as_finite_array, as_sample_count, expect_sequence_of, expect_type
 
-__all__ = ["FingerPlan", "InfeasibleInterval", "PlanResult", "plan", "plan_scenario"]
+__all__ = ["FingerPlan", "InfeasibleInterval", "PlanResult", "motion_between_samples", "plan", "plan_scenario"]
 
 Progress = Callable[[int, int], None]
+
+#: A plan warns (:attr:`PlanResult.sampling_warning`) when the object may move more than this fraction of
+#: its smallest width between two consecutive samples: what happens between them is then not seen.
+COARSE_SAMPLING_FRACTION = 0.25
+
+
+def motion_between_samples(trajectory: Trajectory, polygon: ConvexPolygon, times: np.ndarray) -> float:
+    r"""How far [m] a point of the object may move between two consecutive samples (first order):
+
+    .. math:: \max_k \; (t_{k+1} - t_k) \max_{j \in \{k, k+1\}} \left(|v(t_j)| + |\dot\beta(t_j)|\, r\right),
+
+    with :math:`r` the largest distance of a vertex from the object frame's origin. Zero for one sample.
+    """
+    if len(times) < 2:
+        return 0.0
+    twist = trajectory.velocity(times)
+    r = float(np.max(np.linalg.norm(polygon.vertices, axis=1)))
+    speed = np.hypot(twist[:, 0], twist[:, 1]) + np.abs(twist[:, 2]) * r
+    return float(np.max(np.abs(np.diff(times)) * np.maximum(speed[:-1], speed[1:])))
 
 
 @dataclass(frozen=True)
@@ -107,6 +126,8 @@ class PlanResult:
         geometry: The collision geometry used (``ideal`` or ``urdf``).
         seconds_per_sample: Median wall time [s] of one finger's envelope at one sample.
         scenario: The scenario's name, if the plan came from one.
+        motion_between_samples: How far [m] the object may move between two samples
+            (:func:`motion_between_samples`).
     """
 
     feasible: bool
@@ -117,6 +138,19 @@ class PlanResult:
     geometry: Geometry
     seconds_per_sample: float
     scenario: str | None = None
+    motion_between_samples: float = 0.0
+
+    @property
+    def sampling_warning(self) -> str | None:
+        """A one-line warning when the samples are too far apart to see the object's motion (it may move more
+        than :data:`COARSE_SAMPLING_FRACTION` of its smallest width between two), else None."""
+        width = self.polygon.width
+        if self.motion_between_samples <= COARSE_SAMPLING_FRACTION * width:
+            return None
+        return (f"{len(self.times)} samples over {self.times[-1] - self.times[0]:.4g} s are too few: the object may "
+                f"move {self.motion_between_samples * 1e3:.4g} mm between two, more than "
+                f"{COARSE_SAMPLING_FRACTION:.0%} of its {width * 1e3:.4g} mm width, and the plan does not see "
+                f"what happens in between (raise the samples)")
 
     def to_json_dict(self) -> dict:
         """A JSON-serialisable dict (the ``regrasp plan --json`` document)."""
@@ -136,6 +170,8 @@ class PlanResult:
             },
             "poses": self.poses.tolist(),
             "seconds_per_sample": self.seconds_per_sample,
+            "motion_between_samples": self.motion_between_samples,
+            "warnings": [w for w in (self.sampling_warning,) if w is not None],
             "fingers": [
                 {
                     "name": f.name,
@@ -272,6 +308,7 @@ def plan(
         geometry=envelopes[0].geometry,
         seconds_per_sample=float(np.median(durations)),
         scenario=scenario,
+        motion_between_samples=motion_between_samples(trajectory, polygon, times),
     )
 
 
@@ -290,7 +327,7 @@ def plan_scenario(
         scenario.polygon,
         scenario.trajectory,
         samples=scenario.samples if samples is None else int(samples),
-        geometry=scenario.geometry if geometry is None else geometry,
+        geometry=scenario.geometry if geometry is None else scenario.check_geometry(geometry),
         progress=progress,
         scenario=scenario.name,
     )

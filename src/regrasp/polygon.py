@@ -411,6 +411,13 @@ class ConvexPolygon:
         v = self.vertices
         return float(np.max(np.linalg.norm(v[:, None, :] - v[None, :, :], axis=-1)))
 
+    @cached_property
+    def width(self) -> float:
+        """Smallest width [m]: the least distance between two parallel lines that enclose the polygon
+        (for a convex polygon, attained with one line through an edge)."""
+        v = self.vertices
+        return float(min(np.ptp(v @ e.inward_normal) for e in self.edges))
+
     def vertices_in(self, pose) -> np.ndarray:
         """(n, 2) vertices [m] in the parent frame for the object pose ``(x [m], y [m], beta [rad])``."""
         pose = as_finite_array("pose", pose, (3,))

@@ -213,6 +213,7 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
     expect_type("scheduled_settings", scheduled_settings, ScheduledSettings, "a ScheduledSettings")
     if settings is None:  # the supervisor's runtime envelopes use the scenario's planner geometry
         settings = SupervisorSettings.robust(scenario.geometry.value, regrasp_settings.cone_margin)
+    scenario.check_geometry(expect_type("settings", settings, SupervisorSettings, "a SupervisorSettings").geometry)
     run_scenario, duration = _run_scenario(scenario, duration, periods)
     traj = run_scenario.trajectory
     m = len(scenario.contacts)

@@ -62,8 +62,9 @@ import numpy as np
 
 from .contact import Friction
 from .envelope import Geometry
-from .exceptions import InvalidParameterError, RegraspError, ScenarioError, short_repr
-from .validation import MAX_SAMPLES, as_finite_array, as_positive_float
+from .exceptions import (FingerModelError, InvalidParameterError, PolygonError, RegraspError, ScenarioError,
+                         short_repr)
+from .validation import MAX_SAMPLES, as_finite_array, as_positive_float, file_problem
 from .finger import Finger
 from .polygon import ConvexPolygon
 from .trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
@@ -116,6 +117,32 @@ class Scenario:
     gravity_in_hand: np.ndarray = field(default_factory=lambda: np.array([0.0, -9.81]))
     samples: int = 401
     geometry: Geometry = Geometry.IDEAL
+
+    def check_geometry(self, geometry: Geometry | str) -> Geometry:
+        """``geometry`` as a :class:`~regrasp.envelope.Geometry` every finger of this scenario can be planned
+        with: for ``urdf``, each finger's collision shapes (:func:`~regrasp.collision.checked_link_shapes`),
+        else a :class:`~regrasp.exceptions.ScenarioError` naming the finger's ``urdf`` key."""
+        try:
+            geometry = Geometry(geometry)
+        except ValueError:
+            raise InvalidParameterError("geometry", geometry, "'ideal' or 'urdf'") from None
+        if geometry is Geometry.URDF:
+            from .collision import checked_link_shapes, default_tip_clearance
+
+            try:
+                self.polygon.to_coal(1.0)
+            except PolygonError as exc:
+                raise ScenarioError(self.path or "<scenario>", "object.vertices",
+                                    f"{exc} (needed by the 'urdf' geometry)") from exc
+
+            for i, c in enumerate(self.contacts):
+                clearance = default_tip_clearance(c.finger) if c.tip_clearance is None else c.tip_clearance
+                try:
+                    checked_link_shapes(c.finger, clearance)
+                except FingerModelError as exc:
+                    raise ScenarioError(self.path or "<scenario>", f"fingers[{i}].urdf",
+                                        f"{exc} (needed by the 'urdf' geometry)") from exc
+        return geometry
 
     @property
     def friction(self) -> tuple[Friction, ...]:
@@ -287,8 +314,9 @@ def _fingers(path: Path, tables: Any, polygon: ConvexPolygon, friction: Friction
         urdf = Path(r.string("urdf"))
         if not urdf.is_absolute():
             urdf = (path.parent / urdf).resolve()
-        if not urdf.is_file():
-            raise r.fail("urdf", f"URDF file not found: {urdf}")
+        problem = file_problem(urdf, "URDF file")
+        if problem is not None:
+            raise r.fail("urdf", f"{problem}: {urdf}")
         base = r.array("base", (3,))
         configuration = r.string("configuration", choices=("left", "right"))
         edge = r.integer("edge")
@@ -310,12 +338,9 @@ def load_scenario(path: str | Path) -> Scenario:
     if not isinstance(path, (str, Path)):
         raise InvalidParameterError("path", path, "a scenario file's path (str or pathlib.Path)")
     path = Path(path)
-    try:
-        found = path.is_file()
-    except (OSError, ValueError) as exc:  # a name too long for the file system, a NUL byte
-        raise ScenarioError(path, None, f"not a usable file name ({type(exc).__name__}: {exc})") from None
-    if not found:
-        raise ScenarioError(path, None, "scenario file not found")
+    problem = file_problem(path, "scenario file")
+    if problem is not None:
+        raise ScenarioError(path, None, problem)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
@@ -344,7 +369,7 @@ def load_scenario(path: str | Path) -> Scenario:
     geometry = Geometry(planner.string("geometry", "ideal", choices=("ideal", "urdf")))
     planner.finish()
     top.finish()
-    return Scenario(
+    scenario = Scenario(
         path=path,
         name=name,
         description=description,
@@ -355,3 +380,5 @@ def load_scenario(path: str | Path) -> Scenario:
         samples=samples,
         geometry=geometry,
     )
+    scenario.check_geometry(geometry)
+    return scenario

@@ -208,7 +208,7 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time=N
         cells = np.arange(math.ceil((lo - anchor) / h - 1e-9), math.floor((hi - anchor) / h + 1e-9) + 1)
         grids.append(anchor + h * cells)
     start_cells = None if start is None else np.array([int(np.argmin(np.abs(g - x))) for g, x in zip(grids, start)])
-    geometry = Geometry(settings.geometry or scenario.geometry.value)
+    geometry = scenario.check_geometry(settings.geometry or scenario.geometry.value)
     envelopes = [FingerEnvelope(c.finger, scenario.polygon, c.edge, geometry=geometry, tip_clearance=c.tip_clearance)
                  for c in contacts]
     q = settings.envelope_substeps

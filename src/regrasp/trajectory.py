@@ -22,7 +22,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from .exceptions import InvalidParameterError, TrajectoryError
-from .validation import as_finite_array, as_finite_float
+from .validation import MAX_DURATION, as_finite_array, as_finite_float
 
 #: Relative slack on the time domain (times max(1, |t_start|, |t_end|)).
 DOMAIN_RTOL = 1e-12
@@ -126,8 +126,13 @@ class Trajectory(ABC):
 
 
 def _check_domain(t_start: float, t_end: float) -> None:
+    """A domain is t_start < t_end <= t_start + :data:`~regrasp.validation.MAX_DURATION` (an hour of motion
+    is far longer than any hand's task, and a longer one sampled by a planner is sampled too coarsely)."""
     if not t_end > t_start:
         raise InvalidParameterError("t_end", t_end, f"a time [s] > t_start = {t_start!r} s")
+    if t_end - t_start > MAX_DURATION:
+        raise InvalidParameterError("t_end", t_end, f"a domain of at most {MAX_DURATION:g} s "
+                                    f"(t_end - t_start = {t_end - t_start:.4g} s)")
 
 
 class EllipseTrajectory(Trajectory):
@@ -181,9 +186,9 @@ class EllipseTrajectory(Trajectory):
                     "t_end", None, "an explicit end time [s] when omega = 0 (no period to default to)"
                 )
             t1 = t0 + 2.0 * np.pi / abs(self.omega)
-            if not math.isfinite(t1):
-                raise InvalidParameterError("omega", omega, "a frequency whose period 2 pi / |omega| is finite "
-                                            "(or an explicit t_end)")
+            if not t1 - t0 <= MAX_DURATION:
+                raise InvalidParameterError("omega", omega, f"a frequency whose period 2 pi / |omega| is at most "
+                                            f"{MAX_DURATION:g} s (or an explicit t_end)")
         else:
             t1 = as_finite_float("t_end", t_end)
         _check_domain(t0, t1)

@@ -8,6 +8,7 @@ accept them are refused, and so is an integer too large for a float (``10**400``
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -133,3 +134,14 @@ def expect_sequence_of(name: str, values, kind: type, what: str) -> tuple:
         if not isinstance(v, kind):
             raise InvalidParameterError(name, values, f"a sequence of {what} (got a {type(v).__name__})")
     return out
+
+
+def file_problem(path: Path, what: str = "file") -> str | None:
+    """Why ``path`` cannot be read as a file (``"<what> not found"``, ``"not a usable file name (...)"`` for a
+    name too long for the file system or with a NUL byte), or None when it is a file."""
+    try:
+        found = Path(path).is_file()
+    except (OSError, ValueError) as exc:
+        reason = getattr(exc, "strerror", None) or str(exc)
+        return f"not a usable file name ({type(exc).__name__}: {reason})"
+    return None if found else f"{what} not found"

@@ -1,0 +1,131 @@
+"""Issue 13's examples through the command line and the scenario reader: each ends in exit 2 with exactly
+one error line naming the file and the key (or a valid result, with a warning where one is due).
+
+The number in each case's id is the issue's class.
+"""
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from regrasp.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+URDF = ROOT / "urdf" / "planar_2r_finger.urdf"
+BASE = (ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml").read_text().replace(
+    '"../../urdf/', f'"{ROOT / "urdf"}/')
+
+
+def edited(old: str, new: str, text: str = BASE) -> str:
+    assert old in text, old
+    return text.replace(old, new, 1)
+
+
+def sphere_tipped(tmp_path: Path) -> Path:
+    """The shipped finger with a sphere as its distal collision shape (fine for 'ideal', not for 'urdf')."""
+    path = tmp_path / "sphere.urdf"
+    text = URDF.read_text()
+    i = text.rindex('<cylinder radius="0.005" length="0.045"/>')
+    path.write_text(text[:i] + '<sphere radius="0.01"/>' + text[i + len('<cylinder radius="0.005" length="0.045"/>'):])
+    return path
+
+
+# (id, scenario text or a function of tmp_path giving it, extra arguments, the key the error must name)
+ERRORS = [
+    ("2 samples = 2**63 - 1", edited('geometry = "ideal"', 'geometry = "ideal"\nsamples = 9223372036854775807'
+                                     ).replace("samples = 401\n", ""), [], "planner.samples"),
+    ("2 t_end = 1e9", edited("beta_a = 0.0", "beta_a = 0.0\nt_end = 1e9"), [], "trajectory.t_end"),
+    ("2 omega = 1e-300 (a period of 6e300 s)", edited("omega = 2.0 ", "omega = 1e-300 "), [], "trajectory.omega"),
+    ("3 hand = 5", "hand = 5\n" + BASE.replace("[hand]", "[hand_]"), [], "'hand'"),
+    ("3 hand = 'abc'", 'hand = "abc"\n' + BASE.replace("[hand]", "[hand_]"), [], "'hand'"),
+    ("4 omega = 1e-308", edited("omega = 2.0 ", "omega = 1e-308 "), [], "trajectory.omega"),
+    ("5 a waypoint of 1.8e308", BASE.split("[trajectory]")[0] + '[trajectory]\ntype = "waypoints"\n'
+     'times = [0.0, 1.0, 2.0]\nposes = [[0, 0.12, 0], [1.8e308, 0.12, 0], [0, 0.12, 0]]\n\n[hand]'
+     + BASE.split("[hand]")[1], [], "trajectory.poses"),
+    ("6 a width of 1e200", edited("width = 0.10", "width = 1e200"), [], "object.width"),
+    ("9 a 300-character URDF name", edited("planar_2r_finger.urdf", "x" * 300 + ".urdf"), [], "fingers[0].urdf"),
+    ("10 a 2000-gon in the urdf geometry", edited("width = 0.10\nheight = 0.04", "vertices = VERTS").replace(
+        'geometry = "ideal"', 'geometry = "urdf"'), [], "object"),
+    ("13 a boolean in the base", edited("base = [-0.05, 0.0, 1.5707963267948966]", "base = [-0.05, 0.0, true]"), [],
+     "fingers[0].base"),
+    ("15 a typo key", edited("omega = 2.0 ", "omgea = 2.0 "), [], "the table has 'omgea': a typo?"),
+    ("15 a sphere tip in the urdf geometry", lambda tmp: edited(f'"{URDF}"\nbase = [0.05', f'"{sphere_tipped(tmp)}"'
+                                                               f'\nbase = [0.05').replace('geometry = "ideal"',
+                                                                                          'geometry = "urdf"'),
+     [], "fingers[1].urdf"),
+    ("15 a sphere tip with --geometry urdf", lambda tmp: edited(f'"{URDF}"\nbase = [0.05', f'"{sphere_tipped(tmp)}"'
+                                                               f'\nbase = [0.05'), ["--geometry", "urdf"],
+     "fingers[1].urdf"),
+]
+_A = np.linspace(0.0, 2.0 * np.pi, 2000, endpoint=False)
+VERTS = str([[round(0.03 * float(np.cos(a)), 9), round(0.03 * float(np.sin(a)), 9)] for a in _A])
+
+
+@pytest.mark.parametrize("text, extra, key", [e[1:] for e in ERRORS], ids=[e[0] for e in ERRORS])
+def test_a_bad_scenario_exits_2_with_one_line_naming_the_file_and_key(tmp_path, capfd, text, extra, key):
+    text = text(tmp_path) if callable(text) else text
+    path = tmp_path / "s.toml"
+    path.write_text(text.replace("VERTS", VERTS))
+    code = main(["plan", str(path), "--samples", "101", *extra])
+    out, err = capfd.readouterr()
+    lines = err.strip().splitlines()
+    assert code == 2, (out, err)
+    assert len(lines) == 1 and lines[0].startswith(f"regrasp: error: {path}: key "), lines
+    assert key in lines[0], lines[0]
+
+
+def test_too_few_samples_for_the_motion_are_a_warning_in_the_result_and_on_stderr(tmp_path, capfd):
+    path = tmp_path / "s.toml"
+    path.write_text(edited("beta_a = 0.0", "beta_a = 0.0\nt_end = 3000.0"))  # 401 samples over 3000 s
+    assert main(["plan", str(path)]) in (0, 1)
+    err = capfd.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and re.match(r"regrasp plan: warning: 401 samples over 3000 s are too few: the object may "
+                                      r"move [0-9.]+ mm between two", err[0]), err
+    assert main(["plan", str(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")]) == 0
+    assert capfd.readouterr().err == ""  # the shipped 401 samples see the motion: no warning
+
+
+@pytest.mark.parametrize("where", ["a file", "under a file", "unwritable"])
+def test_plot_into_a_bad_place_is_exit_2_before_any_work(tmp_path, capfd, where):
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    target = {"a file": afile, "under a file": afile / "figs", "unwritable": locked / "figs"}[where]
+    if where == "unwritable" and os.access(locked, os.W_OK):
+        pytest.skip("running as a user who can write anywhere (root)")
+    code = main(["plan", str(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml"), "--plot", str(target)])
+    err = capfd.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--plot" in err[0] and str(target) in err[0], err
+
+
+def test_plot_into_a_place_root_cannot_write_either(tmp_path, capfd):
+    """Where the tests run as root (CI containers), a read-only file system stands in for permissions."""
+    code = main(["plan", str(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml"), "--plot",
+                 "/proc/regrasp-figures"])
+    err = capfd.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "invalid --plot = '/proc/regrasp-figures'" in err[0], err
+
+
+def test_version_and_ctrl_c():
+    version = subprocess.run([sys.executable, "-m", "regrasp.cli", "--version"], capture_output=True, text=True,
+                             timeout=60)
+    assert version.returncode == 0 and re.fullmatch(r"regrasp \d+\.\d+\.\d+\S*\n", version.stdout)
+    proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli", "plan",
+                             str(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml"), "--samples", "100000",
+                             "--geometry", "urdf"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(5.0)  # past the imports (about 2 s), well inside the plan (200 000 envelopes, about 15 s)
+    assert proc.poll() is None, proc.communicate()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    lines = err.strip().splitlines()
+    assert proc.returncode == 130, err
+    assert lines[-1] == "regrasp: interrupted" and not any("Traceback" in line for line in lines), lines
