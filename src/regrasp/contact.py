@@ -20,12 +20,14 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import Enum
+from typing import TypeAlias
 
 import numpy as np
 
 from .exceptions import InvalidParameterError
 
-__all__ = ["ContactMode", "Friction", "as_frictions", "as_modes", "coefficients", "cone_margin"]
+__all__ = ["ContactMode", "Friction", "FrictionLike", "ModesLike", "as_frictions", "as_modes", "coefficients",
+           "cone_margin"]
 
 
 class ContactMode(str, Enum):
@@ -38,8 +40,11 @@ class ContactMode(str, Enum):
 
 _MODES_BY_VALUE = {mode.value: mode for mode in ContactMode}
 
+#: What ``modes`` arguments accept: per contact a :class:`ContactMode` or its string (see :func:`as_modes`).
+ModesLike: TypeAlias = Sequence[ContactMode | str]
 
-def as_modes(modes, m: int | None = None) -> tuple[ContactMode, ...]:
+
+def as_modes(modes: ModesLike, m: int | None = None) -> tuple[ContactMode, ...]:
     """``modes`` (ContactMode members or their strings ``"fixed"``, ``"sliding"``, ``"separated"``)
     as a tuple of :class:`ContactMode`, ``m`` of them when given."""
     if isinstance(modes, (str, bytes)):
@@ -107,7 +112,12 @@ class Friction:
         return f"mu_s = {self.static:g}, mu_k = {self.kinetic:g}"
 
 
-def as_frictions(friction, m: int) -> tuple[Friction, ...]:
+#: What ``friction`` arguments accept (see :func:`as_frictions`): a :class:`Friction` or a coefficient [-] for
+#: every contact, or one of them per contact.
+FrictionLike: TypeAlias = Friction | float | Sequence[Friction | float]
+
+
+def as_frictions(friction: FrictionLike, m: int) -> tuple[Friction, ...]:
     """One :class:`Friction` per contact from a Friction or a number (for all ``m`` contacts), or a
     sequence of ``m`` of them (a number is μ_s = μ_k)."""
     if isinstance(friction, Friction):
@@ -130,7 +140,7 @@ def coefficients(frictions: Sequence[Friction], modes: Sequence[ContactMode]) ->
     return tuple(f.coefficient(mode) for f, mode in zip(frictions, modes))
 
 
-def cone_margin(mu, f_n, f_t):
+def cone_margin(mu: float | np.ndarray, f_n: float | np.ndarray, f_t: float | np.ndarray) -> float | np.ndarray:
     r""":math:`\mu f_n - |f_t|` [N]: how far a contact force (normal ``f_n``, tangential ``f_t`` [N]) is
     inside the friction cone of coefficient ``mu`` [-] (negative: outside).
 
