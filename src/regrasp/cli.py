@@ -199,7 +199,7 @@ def _samples(text: str) -> int:
     return value
 
 
-def output_directory(option: str, path) -> Path:
+def output_directory(option: str, path: str | os.PathLike[str]) -> Path:
     """``path`` as a directory figures can be written into (made if missing), or an
     :class:`~regrasp.exceptions.InvalidParameterError` naming ``option``."""
     from .exceptions import InvalidParameterError

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from ._fd import captured_fd
@@ -39,7 +40,8 @@ def _positive(kind):
     return parse
 
 
-def add_parser(sub, progress_bar, nonnegative) -> None:
+def add_parser(sub: argparse._SubParsersAction, progress_bar: Callable[[str], Callable[[int, int], None]],
+               nonnegative: Callable[[str], float]) -> None:
     """Register ``simulate`` on the ``regrasp`` parser's subparsers."""
     p = sub.add_parser("simulate", help="run a regrasping rollout on the plant (paper §4) and record it",
                        description="Run a rollout: the supervisor and its policy drive the full-coordinate plant. "

@@ -9,7 +9,7 @@ Gaussian noise.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -82,7 +82,7 @@ class ClosedLoopLog:
     stopped: bool
 
     @classmethod
-    def from_records(cls, records, plant: Plant, n_forces: int, n: int) -> "ClosedLoopLog":
+    def from_records(cls, records: Sequence[StepRecord], plant: Plant, n_forces: int, n: int) -> "ClosedLoopLog":
         """The log of a run's :class:`~regrasp.simulation.StepRecord` s (``n_forces`` = 2m, ``n`` = 3 + p)."""
         def rows(get, shape):
             return np.array([get(r) for r in records]) if records else np.zeros((0, *shape))

@@ -40,13 +40,16 @@ the coefficient of each contact's mode.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.linalg import lapack
 
 from ._scalar import solve_small
-from .contact import as_frictions, coefficients, cone_margin
+from .contact import FrictionLike, as_frictions, coefficients, cone_margin
 from .exceptions import InvalidParameterError, SingularModelError
 from .internal_force import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver, as_cone_edges
 from .reduced import ReducedModel, ReducedState
@@ -124,7 +127,7 @@ class ComputedTorqueController:
 
     law = "computed torque"
 
-    def __init__(self, model: ReducedModel, gains: Gains, friction=0.5, *,
+    def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = 0.5, *,
                  internal_force: InternalForceSettings | None = InternalForceSettings(),
                  cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None):
         n = model.n
@@ -145,11 +148,12 @@ class ComputedTorqueController:
         # whether the law's f̂_ξ needs the ReducedState (the base law's is zero)
         self._estimates_friction = type(self).friction_estimate is not ComputedTorqueController.friction_estimate
 
-    def friction_estimate(self, st: ReducedState, command: np.ndarray, friction) -> np.ndarray:
+    def friction_estimate(self, st: ReducedState, command: np.ndarray, friction: ArrayLike | None) -> np.ndarray:
         """f̂_ξ (p,) [N]; the laws override this."""
         return np.zeros(self.model.grasp.p)
 
-    def __call__(self, S, S_dot, S_d, S_d_dot, S_d_ddot, *, friction=None) -> ControlOutput:
+    def __call__(self, S: ArrayLike, S_dot: ArrayLike, S_d: ArrayLike, S_d_dot: ArrayLike, S_d_ddot: ArrayLike, *,
+                 friction: ArrayLike | None = None) -> ControlOutput:
         """Torques for the measured (S, Ṡ) and the desired (S_d, Ṡ_d, S̈_d).
 
         ``friction``: the measured friction force at the sliding contacts (p,) [N], for
@@ -240,7 +244,7 @@ class FixedContactController(ComputedTorqueController):
 
     law = "fixed contacts"
 
-    def __init__(self, model: ReducedModel, gains: Gains, friction=0.5, **kwargs):
+    def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = 0.5, **kwargs: Any):
         if model.grasp.p != 0:
             raise InvalidParameterError("model", model.grasp.modes, "only fixed contacts (p = 0)")
         super().__init__(model, gains, friction, **kwargs)
@@ -257,7 +261,7 @@ class Proposition2Controller(ComputedTorqueController):
 
     law = "Proposition 2"
 
-    def friction_estimate(self, st, command, friction) -> np.ndarray:
+    def friction_estimate(self, st: ReducedState, command: np.ndarray, friction: ArrayLike | None) -> np.ndarray:
         if friction is None:
             raise InvalidParameterError("friction", None, "the measured friction force at each sliding contact")
         return as_finite_array("friction", friction, (self.model.grasp.p,))
@@ -300,8 +304,8 @@ class Proposition3Controller(ComputedTorqueController):
 
     law = "Proposition 3"
 
-    def __init__(self, model: ReducedModel, gains: Gains, friction=0.5, *, sample_time: float = 1e-3,
-                 direction=1.0, reversible: bool = True, **kwargs):
+    def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = 0.5, *, sample_time: float = 1e-3,
+                 direction: float | Sequence[float] = 1.0, reversible: bool = True, **kwargs: Any):
         m, p = model.grasp.m, model.grasp.p
         if m < 2 or p < 1 or 2 * m < 3 + p:
             raise InvalidParameterError("model", model.grasp.modes,
@@ -339,7 +343,7 @@ class Proposition3Controller(ComputedTorqueController):
                                         "use sliding_directions")
         return self.sliding_directions((xi_dot,), (xi_ddot_command,))[0]
 
-    def sliding_directions(self, xi_dots, xi_ddot_commands) -> tuple[float, ...]:
+    def sliding_directions(self, xi_dots: Sequence[float], xi_ddot_commands: Sequence[float]) -> tuple[float, ...]:
         """±1 per slider: the sign of its ξ̇ over the next sample (see the class docstring), from the
         measured ξ̇ [m/s] and the commanded ξ̈ [m/s²] of each slider."""
         if len(xi_dots) != len(self._directions) or len(xi_ddot_commands) != len(self._directions):
@@ -354,7 +358,7 @@ class Proposition3Controller(ComputedTorqueController):
                 self._directions[j] = float(np.sign(xi_dot))
         return tuple(self._directions)
 
-    def friction_estimate(self, st, command, friction) -> np.ndarray:
+    def friction_estimate(self, st: ReducedState, command: np.ndarray, friction: ArrayLike | None) -> np.ndarray:
         """m = 2: :math:`P (M_o a_X - f_g)` (3.4.9, the slider's μ_k); otherwise see :meth:`_torque`."""
         direction = self.sliding_direction(float(st.S_dot[3]), float(command[3]))
         P = self.model.grasp.friction_map(st.S[:3], st.xi, [direction], self.friction)

@@ -57,6 +57,7 @@ from enum import Enum
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .collision import UrdfCollisionChecker, default_tip_clearance, segment_hits_halfplanes
 from .exceptions import InvalidParameterError
@@ -365,7 +366,7 @@ class FingerEnvelope:
         lam = _wrap(math.atan2(ny, nx) - self._base_angle)
         return rx * nx + ry * ny, lam, ry * nx - rx * ny, nx, ny, c, s
 
-    def line(self, pose_object_in_hand) -> EdgeLine:
+    def line(self, pose_object_in_hand: ArrayLike) -> EdgeLine:
         """The edge's line parameters at an object pose ``(x, y, beta)`` in the hand frame."""
         d, lam, s0, nx, ny, _, _ = self._line(*_pose_floats(pose_object_in_hand))
         return EdgeLine(d, lam, np.array([nx, ny]), np.array([-ny, nx]), s0)
@@ -490,7 +491,7 @@ class FingerEnvelope:
         return tuple(out)
 
     # ------------------------------------------------------------------ envelope
-    def at(self, pose_object_in_hand, time: float = 0.0) -> EnvelopeSample:
+    def at(self, pose_object_in_hand: ArrayLike, time: float = 0.0) -> EnvelopeSample:
         """The envelope at one object pose ``(x [m], y [m], beta [rad])`` in the hand frame."""
         t_start = _time.perf_counter()
         x, y, beta = _pose_floats(pose_object_in_hand)
@@ -536,7 +537,7 @@ class FingerEnvelope:
             seconds=_time.perf_counter() - t_start,
         )
 
-    def tip_at(self, pose_object_in_hand, xi: float) -> np.ndarray:
+    def tip_at(self, pose_object_in_hand: ArrayLike, xi: float) -> np.ndarray:
         """Tip position [m] in the hand frame for contact ``xi`` [m] at an object pose."""
         pose = as_finite_array("pose_object_in_hand", pose_object_in_hand, (3,))
         return pose[:2] + rotation(pose[2]) @ self.edge.point(xi)

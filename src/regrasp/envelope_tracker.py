@@ -45,6 +45,8 @@ import time as _time
 from collections import Counter
 from typing import NamedTuple
 
+from numpy.typing import ArrayLike
+
 from .envelope import EnvelopeSample, FingerEnvelope, _pose_floats, _urdf_pieces
 from .exceptions import InvalidParameterError
 from .validation import as_positive_float
@@ -159,7 +161,7 @@ class EnvelopeTracker:
         """How many updates fell back to the full computation (``counts`` less tracked and closed form)."""
         return sum(n for key, n in self.counts.items() if key not in (TRACKED, CLOSED_FORM))
 
-    def update(self, pose_object_in_hand, time: float = 0.0) -> EnvelopeSample:
+    def update(self, pose_object_in_hand: ArrayLike, time: float = 0.0) -> EnvelopeSample:
         """The envelope at the object pose ``(x [m], y [m], beta [rad])`` in the hand frame at ``time`` [s]."""
         t_start = _time.perf_counter()
         env = self.envelope

@@ -7,10 +7,14 @@ key, the joint, the offending value) as attributes, not only in the message.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 
 class RegraspError(Exception):
@@ -72,7 +76,8 @@ class UnreachableError(RegraspError, ValueError):
         reach: (inner, outer) radii [m] of the workspace annulus.
     """
 
-    def __init__(self, finger: str, target, distance: float, reach: tuple[float, float]):
+    def __init__(self, finger: str, target: Sequence[float] | np.ndarray, distance: float,
+                 reach: tuple[float, float]):
         self.finger = finger
         self.target = target
         self.distance = distance
@@ -91,7 +96,7 @@ class PolygonError(RegraspError, ValueError):
         index: Index of the offending vertex, or None.
     """
 
-    def __init__(self, message: str, *, vertices=None, index: int | None = None):
+    def __init__(self, message: str, *, vertices: ArrayLike | None = None, index: int | None = None):
         self.vertices = vertices
         self.index = index
         super().__init__(message)
@@ -159,7 +164,7 @@ class SingularFingerError(RegraspError):
         threshold: The threshold it exceeded.
     """
 
-    def __init__(self, finger: str, q, condition: float, threshold: float):
+    def __init__(self, finger: str, q: Sequence[float] | np.ndarray, condition: float, threshold: float):
         self.finger = finger
         self.q = q
         self.condition = condition

@@ -29,8 +29,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .contact import ContactMode, Friction
 from .control import ComputedTorqueController, ControlOutput, FixedContactController, Gains, Proposition3Controller
@@ -42,6 +44,10 @@ from .hand import Hand
 from .internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
 from .reduced import ReducedModel
 from .validation import as_positive_float
+
+if TYPE_CHECKING:
+    from .supervisor import Measurement
+    from .trajectory import TrajectorySample
 
 __all__ = ["SLIPPING_PHASES", "ContactPhase", "ExecutorSettings", "Reference", "SlideEnd", "SlideExecutor",
            "SlideOrder"]
@@ -146,7 +152,7 @@ class SlideExecutor:
         settings: :class:`ExecutorSettings`.
     """
 
-    def __init__(self, hand: Hand, grasp: Grasp, xi, friction: tuple[Friction, ...], *, object_mass: float,
+    def __init__(self, hand: Hand, grasp: Grasp, xi: ArrayLike, friction: tuple[Friction, ...], *, object_mass: float,
                  object_inertia: float, settings: ExecutorSettings = ExecutorSettings()):
         self.hand = hand
         self.grasp = grasp
@@ -179,7 +185,7 @@ class SlideExecutor:
         out.append(Event(float(t), self.names[i], kind, detail, values=values))
 
     # ------------------------------------------------------------------ orders
-    def start(self, order: SlideOrder, meas, out: list) -> None:
+    def start(self, order: SlideOrder, meas: Measurement, out: list) -> None:
         """Prime ``order``'s contact (it must be fixed)."""
         i = order.contact
         if self.phases[i] is not ContactPhase.FIXED:
@@ -192,7 +198,7 @@ class SlideExecutor:
                     f"{meas.xi[i] * 1e3:.2f} mm to {order.target * 1e3:.2f} mm" + (f" ({order.why})" if order.why else ""),
                     xi=float(meas.xi[i]), target=order.target, direction=order.direction)
 
-    def advance(self, meas, out: list) -> list[SlideEnd]:
+    def advance(self, meas: Measurement, out: list) -> list[SlideEnd]:
         """Move every slide's phase on; the slides whose sliding phase ended at this step."""
         s = self.settings
         ends = []
@@ -287,7 +293,7 @@ class SlideExecutor:
             self.regrasps[i] += 1
         self._event(out, meas.t, i, EventKind.SETTLED, f"fixed at {meas.xi[i] * 1e3:.2f} mm", xi=float(meas.xi[i]))
 
-    def abort(self, meas, out: list, reason: str) -> list[SlideEnd]:
+    def abort(self, meas: Measurement, out: list, reason: str) -> list[SlideEnd]:
         """Abort every slide being primed or slid (the QP found no forces for them)."""
         ends = []
         for i in list(self._active):
@@ -362,7 +368,8 @@ class SlideExecutor:
         integral = np.concatenate([self._integral_X, [self._integral_xi[i] for i in sliders]])
         return S_d + s.integral * omega * integral  # (K_i / K_s) = integral · ω
 
-    def command(self, meas, desired, dt: float, out: list) -> tuple[ControlOutput, str, np.ndarray, list[SlideEnd]]:
+    def command(self, meas: Measurement, desired: TrajectorySample, dt: float,
+                out: list) -> tuple[ControlOutput, str, np.ndarray, list[SlideEnd]]:
         """(the law's output, the law's name, ξ_d per contact (NaN where not sliding), slides aborted at
         this step) for the measurement ``meas`` and the desired object state ``desired``
         (a :class:`~regrasp.trajectory.TrajectorySample`)."""

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ._fd import captured_fd
 from .exceptions import FingerModelError, InvalidParameterError, UnreachableError
@@ -182,7 +183,7 @@ class Finger:
         model: pin.Model,
         collision_model: pin.GeometryModel | None = None,
         *,
-        base_in_hand=(0.0, 0.0, 0.0),
+        base_in_hand: ArrayLike = (0.0, 0.0, 0.0),
         configuration: Configuration | str = Configuration.LEFT,
         name: str = "finger",
         tip_frame: str = "tip",
@@ -230,7 +231,7 @@ class Finger:
         cls,
         path: str | Path,
         *,
-        base_in_hand=(0.0, 0.0, 0.0),
+        base_in_hand: ArrayLike = (0.0, 0.0, 0.0),
         configuration: Configuration | str = Configuration.LEFT,
         name: str | None = None,
         tip_frame: str = "tip",
@@ -260,7 +261,7 @@ class Finger:
         cls,
         urdf: str,
         *,
-        base_in_hand=(0.0, 0.0, 0.0),
+        base_in_hand: ArrayLike = (0.0, 0.0, 0.0),
         configuration: Configuration | str = Configuration.LEFT,
         name: str = "finger",
         tip_frame: str = "tip",
@@ -281,7 +282,8 @@ class Finger:
             source="<string>",
         )
 
-    def with_placement(self, base_in_hand=None, configuration=None, name=None) -> "Finger":
+    def with_placement(self, base_in_hand: ArrayLike | None = None, configuration: Configuration | str | None = None,
+                       name: str | None = None) -> "Finger":
         """A copy of this finger with another base pose, configuration or name."""
         return Finger(
             self._model_unplaced,
@@ -322,12 +324,12 @@ class Finger:
     def _check_q(self, q) -> np.ndarray:
         return as_finite_array("q", q, (2,))
 
-    def theta2(self, q) -> float:
+    def theta2(self, q: ArrayLike) -> float:
         """Geometric elbow angle theta2 [rad] in (-pi, pi] for joint positions ``q``."""
         q = self._check_q(q)
         return float(wrap_angle(q[1] + self.theta2_offset))
 
-    def configuration_of(self, q) -> Configuration | None:
+    def configuration_of(self, q: ArrayLike) -> Configuration | None:
         """The configuration ``q`` is in, or None when the finger is stretched or folded."""
         t2 = self.theta2(q)
         if 0.0 < -t2 < np.pi:
@@ -336,7 +338,7 @@ class Finger:
             return Configuration.RIGHT
         return None
 
-    def joint_positions_in_hand(self, q) -> np.ndarray:
+    def joint_positions_in_hand(self, q: ArrayLike) -> np.ndarray:
         """(3, 2) array [m]: joint 1, joint 2 (elbow) and the tip in the hand frame (closed form)."""
         q = self._check_q(q)
         psi1 = self.psi1_offset + q[0]
@@ -346,19 +348,19 @@ class Finger:
         tip = elbow + self._l2 * np.array([np.cos(psi2), np.sin(psi2)])
         return np.stack([o1, elbow, tip])
 
-    def forward_kinematics(self, q) -> np.ndarray:
+    def forward_kinematics(self, q: ArrayLike) -> np.ndarray:
         """Tip position [m] in the hand frame, computed by Pinocchio."""
         q = self._check_q(q)
         pin.forwardKinematics(self.model, self.data, q)
         return pin.updateFramePlacement(self.model, self.data, self.tip_frame_id).translation[:2].copy()
 
-    def tip_jacobian(self, q) -> np.ndarray:
+    def tip_jacobian(self, q: ArrayLike) -> np.ndarray:
         r"""The 2x2 tip Jacobian :math:`J = \partial p_{tip} / \partial q` [m/rad] in the hand frame."""
         q = self._check_q(q)
         jac = pin.computeFrameJacobian(self.model, self.data, q, self.tip_frame_id, pin.LOCAL_WORLD_ALIGNED)
         return jac[:2, :].copy()
 
-    def inverse_kinematics(self, tip_in_hand) -> np.ndarray:
+    def inverse_kinematics(self, tip_in_hand: ArrayLike) -> np.ndarray:
         r"""Joint positions ``q`` [rad] that put the tip at ``tip_in_hand`` in this configuration.
 
         Closed form: with :math:`r = p - o_1`,

@@ -43,6 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.optimize
+from numpy.typing import ArrayLike
 
 from .contact import cone_margin
 from .exceptions import InvalidParameterError
@@ -98,7 +99,7 @@ class ForceGeometry:
 
     @classmethod
     def of(cls, polygon: ConvexPolygon, edges: Sequence[int], *, mass: float, inertia: float,
-           gravity) -> "ForceGeometry":
+           gravity: ArrayLike) -> "ForceGeometry":
         """The constants for contacts on ``edges`` of ``polygon``."""
         e = [polygon.edge(k) for k in edges]
         n = np.array([x.inward_normal for x in e])
@@ -183,8 +184,8 @@ def _check_mode(m: int, ratios, static_mu) -> tuple[tuple, np.ndarray]:
     return ratios, np.asarray(static_mu, dtype=float)
 
 
-def force_vertices(geometry: ForceGeometry, beta, acceleration, ratios: Sequence[float | None], static_mu,
-                   limits: ForceLimits) -> ForceVertices:
+def force_vertices(geometry: ForceGeometry, beta: ArrayLike, acceleration: ArrayLike, ratios: Sequence[float | None],
+                   static_mu: Sequence[float] | np.ndarray, limits: ForceLimits) -> ForceVertices:
     r"""P's vertices at each of T times (module docstring).
 
     Args:
@@ -262,7 +263,8 @@ class ForceSystem:
     cone_margins: np.ndarray
 
 
-def force_system(geometry: ForceGeometry, beta: float, acceleration, xi, ratios: Sequence[float | None], static_mu,
+def force_system(geometry: ForceGeometry, beta: float, acceleration: ArrayLike, xi: ArrayLike,
+                 ratios: Sequence[float | None], static_mu: Sequence[float] | np.ndarray,
                  limits: ForceLimits) -> ForceSystem:
     r"""The forces that keep the fixed contacts deepest inside their cones (the largest smallest cone
     margin, at least ``limits.cone_margin``), and among those the least squeeze (smallest Σ λ): two

@@ -42,8 +42,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from .contact import ContactMode, as_frictions
+from .contact import ContactMode, FrictionLike, as_frictions
 from .exceptions import InvalidParameterError, SlidingContactCountError
 from .planar import rotation
 from .polygon import ConvexPolygon
@@ -137,31 +138,31 @@ class Grasp:
         xi = as_finite_array("xi", xi, (self.m,))
         return pose, xi
 
-    def points_in_object(self, xi) -> np.ndarray:
+    def points_in_object(self, xi: ArrayLike) -> np.ndarray:
         """Contact points c_i(ξ_i) [m] in the object frame, shape (m, 2)."""
         xi = as_finite_array("xi", xi, (self.m,))
         return self._origins + xi[:, None] * self._tangents
 
-    def lever_arms(self, pose, xi) -> np.ndarray:
+    def lever_arms(self, pose: ArrayLike, xi: ArrayLike) -> np.ndarray:
         """r_i = R(β) c_i(ξ_i) [m], hand-frame orientation, shape (m, 2)."""
         pose, xi = self._check(pose, xi)
         return self._lever(pose[2], xi)
 
-    def points(self, pose, xi) -> np.ndarray:
+    def points(self, pose: ArrayLike, xi: ArrayLike) -> np.ndarray:
         """Contact points [m] in the hand frame, shape (m, 2)."""
         pose, xi = self._check(pose, xi)
         return pose[:2] + self._lever(pose[2], xi)
 
-    def surface_frames(self, pose) -> np.ndarray:
+    def surface_frames(self, pose: ArrayLike) -> np.ndarray:
         """R_fi = R(β) [n_i t_i] per contact, shape (m, 2, 2) (columns: normal, tangent)."""
         return self._frames(as_finite_array("pose", pose, (3,))[2])
 
     # ------------------------------------------------------------------ matrices
-    def grasp_matrix(self, pose, xi) -> np.ndarray:
+    def grasp_matrix(self, pose: ArrayLike, xi: ArrayLike) -> np.ndarray:
         r"""G (3 x 2m): column pair i maps contact force f_i to :math:`(f_i, r_i \times f_i)`."""
         return self._grasp_matrix(self.lever_arms(pose, xi))
 
-    def grasp_matrix_dot(self, pose, xi, pose_dot, xi_dot) -> np.ndarray:
+    def grasp_matrix_dot(self, pose: ArrayLike, xi: ArrayLike, pose_dot: ArrayLike, xi_dot: ArrayLike) -> np.ndarray:
         r"""Exact :math:`\dot G` for object twist ``pose_dot`` = (v_o, ω) and contact rates ``xi_dot``."""
         pose, xi = self._check(pose, xi)
         pose_dot = as_finite_array("pose_dot", pose_dot, (3,))
@@ -169,11 +170,11 @@ class Grasp:
         r = self._lever(pose[2], xi)
         return self._grasp_matrix_dot(r, self._frames(pose[2])[:, :, 1], pose_dot[2], xi_dot)
 
-    def surface_rotation(self, pose) -> np.ndarray:
+    def surface_rotation(self, pose: ArrayLike) -> np.ndarray:
         """R_f (2m x 2m): block R_fi for sliding contacts, I_2 for fixed ones (eq. 3.1.7)."""
         return self._surface_rotation(self.surface_frames(pose))
 
-    def surface_rotation_dot(self, pose, pose_dot) -> np.ndarray:
+    def surface_rotation_dot(self, pose: ArrayLike, pose_dot: ArrayLike) -> np.ndarray:
         r"""Exact :math:`\dot R_f`: :math:`\omega \perp R_{fi}` on sliding blocks, 0 elsewhere."""
         frames = self.surface_frames(pose)
         return self._surface_rotation_dot(frames, as_finite_array("pose_dot", pose_dot, (3,))[2])
@@ -182,7 +183,7 @@ class Grasp:
         """B_v (2m x p): the sliding direction (0, 1) of each sliding contact in its surface frame."""
         return self._bv.copy()
 
-    def force_basis(self, signs, friction) -> np.ndarray:
+    def force_basis(self, signs: ArrayLike, friction: FrictionLike) -> np.ndarray:
         r"""B_f (2m x (2m - p)): :math:`(1, s_i \mu_{k,i})^T` per sliding contact, :math:`I_2` per fixed one.
 
         ``signs`` are the sliding directions :math:`s_i = \mathrm{sign}(\dot\xi_i) \in \{-1, +1\}`
@@ -205,12 +206,14 @@ class Grasp:
                 col += 2
         return bf
 
-    def sliding_grasp_matrix(self, pose, xi, signs, friction) -> np.ndarray:
+    def sliding_grasp_matrix(
+        self, pose: ArrayLike, xi: ArrayLike, signs: ArrayLike, friction: FrictionLike
+    ) -> np.ndarray:
         """G_f = G R_f B_f (3 x (2m - p)), the sliding grasp matrix (eq. 3.4.5; ``friction`` as in
         :meth:`force_basis`)."""
         return self.grasp_matrix(pose, xi) @ self.surface_rotation(pose) @ self.force_basis(signs, friction)
 
-    def friction_map(self, pose, xi, signs, friction) -> np.ndarray:
+    def friction_map(self, pose: ArrayLike, xi: ArrayLike, signs: ArrayLike, friction: FrictionLike) -> np.ndarray:
         r"""P = B_v^T B_f G_f^{-1} (p x 3, eq. 3.4.9): :math:`f_\xi = P (M_o \ddot X - f_g)`, with the
         sliding contact's kinetic coefficient (``friction`` as in :meth:`force_basis`).
 

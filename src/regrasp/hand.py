@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .exceptions import InvalidParameterError, SingularFingerError
 from .finger import Finger
@@ -69,7 +70,7 @@ class Hand:
         self,
         fingers: Sequence[Finger],
         *,
-        gravity_in_hand=(0.0, -9.81),
+        gravity_in_hand: ArrayLike = (0.0, -9.81),
         damping: bool = True,
         singular_threshold: float = 1e4,
         link_mass_scale: float = 1.0,
@@ -111,7 +112,7 @@ class Hand:
         self.gravity_in_hand = np.zeros(2)
         self.set_gravity(gravity_in_hand)
 
-    def set_gravity(self, gravity_in_hand) -> None:
+    def set_gravity(self, gravity_in_hand: ArrayLike) -> None:
         """Set the gravity vector [m/s^2] in the hand frame."""
         g = as_finite_array("gravity_in_hand", gravity_in_hand, (2,))
         self.gravity_in_hand = g
@@ -128,7 +129,7 @@ class Hand:
     def _split(self, name: str, value) -> np.ndarray:
         return as_finite_array(name, value, (self.nq,)).reshape(self.m, 2)
 
-    def dynamics(self, q, v) -> HandDynamics:
+    def dynamics(self, q: ArrayLike, v: ArrayLike) -> HandDynamics:
         """M, N, J, J̇q̇ and the tips at joint positions ``q`` [rad] and velocities ``v`` [rad/s]."""
         return self._dynamics(self._split("q", q), self._split("v", v))
 
@@ -165,7 +166,7 @@ class Hand:
         model, data = self._hand_model, self._hand_data
         return np.array([pin.updateFramePlacement(model, data, fid).translation[:2] for fid in self._hand_tips])
 
-    def jacobian(self, q) -> np.ndarray:
+    def jacobian(self, q: ArrayLike) -> np.ndarray:
         """J(q) = blockdiag(J_i), (2m, 2m) [m/rad]."""
         return self._jacobian(self._split("q", q))
 
@@ -173,7 +174,7 @@ class Hand:
         pin.computeJointJacobians(self._hand_model, self._hand_data, qs.reshape(-1))
         return self._frame_jacobian()
 
-    def tip_positions(self, q) -> np.ndarray:
+    def tip_positions(self, q: ArrayLike) -> np.ndarray:
         """Tip positions [m], (m, 2), hand frame."""
         qs = self._split("q", q)
         out = np.empty((self.m, 2))
@@ -182,19 +183,19 @@ class Hand:
             out[i] = pin.updateFramePlacement(model, data, fid).translation[:2]
         return out
 
-    def potential_energy(self, q) -> float:
+    def potential_energy(self, q: ArrayLike) -> float:
         """Gravitational potential energy [J] of the fingers (zero at the hand frame's origin)."""
         qs = self._split("q", q)
         return float(sum(pin.computePotentialEnergy(model, data, qs[i])
                          for i, (model, data) in enumerate(zip(self._models, self._datas))))
 
-    def kinetic_energy(self, q, v) -> float:
+    def kinetic_energy(self, q: ArrayLike, v: ArrayLike) -> float:
         """Kinetic energy [J] of the fingers."""
         qs, vs = self._split("q", q), self._split("v", v)
         return float(sum(pin.computeKineticEnergy(model, data, qs[i], vs[i])
                          for i, (model, data) in enumerate(zip(self._models, self._datas))))
 
-    def check_singular(self, q, jacobian: np.ndarray | None = None) -> np.ndarray:
+    def check_singular(self, q: ArrayLike, jacobian: np.ndarray | None = None) -> np.ndarray:
         """Condition numbers of the fingers' tip Jacobians; raises SingularFingerError above the threshold."""
         qs = self._split("q", q)
         return self._check_singular(qs, self._jacobian(qs) if jacobian is None else jacobian)
@@ -226,7 +227,7 @@ class Hand:
         masses = [(rows[2 * i][2 * i], rows[2 * i][2 * i + 1], rows[2 * i + 1][2 * i + 1]) for i in range(self.m)]
         return masses, nle
 
-    def inverse_kinematics(self, tips_in_hand) -> np.ndarray:
+    def inverse_kinematics(self, tips_in_hand: ArrayLike) -> np.ndarray:
         """Joint positions q (2m,) putting each tip at ``tips_in_hand`` (m, 2), keeping configurations."""
         return self._inverse_kinematics(as_finite_array("tips_in_hand", tips_in_hand, (self.m, 2)))
 

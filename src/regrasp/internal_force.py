@@ -50,12 +50,14 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
 import numpy as np
 import osqp
 import qpsolvers
 import scipy.sparse as sp
+from numpy.typing import ArrayLike
 
 from ._force_rows import (
     _OSQP_INFTY,
@@ -65,6 +67,7 @@ from ._force_rows import (
     _null_basis,
     _Rows,
 )
+from .contact import FrictionLike, ModesLike
 from .exceptions import InvalidParameterError, RegraspError
 from .hand import block_diagonal
 
@@ -206,7 +209,7 @@ class InternalForceInfeasibleError(RegraspError):
         )
 
 
-def as_cone_edges(cone_edge, m: int) -> tuple[ConeEdge, ...]:
+def as_cone_edges(cone_edge: ConeEdge | Iterable[ConeEdge] | None, m: int) -> tuple[ConeEdge, ...]:
     """``cone_edge`` (None, a :class:`ConeEdge`, or a sequence of them on distinct contacts) as a tuple,
     validated against ``m`` contacts."""
     if cone_edge is None:
@@ -233,8 +236,8 @@ def build_internal_force_qp(
     constraint_matrix: np.ndarray,
     motion_forces: np.ndarray,
     surface_frames: np.ndarray,
-    modes,
-    friction,
+    modes: ModesLike,
+    friction: FrictionLike,
     settings: InternalForceSettings = InternalForceSettings(),
     cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None,
 ) -> InternalForceQP:
@@ -284,8 +287,8 @@ def _check(qp: InternalForceQP, forces, frames, modes, friction, cone_edge, slac
 def solve_internal_force_qp(
     qp: InternalForceQP,
     surface_frames: np.ndarray,
-    modes,
-    friction,
+    modes: ModesLike,
+    friction: FrictionLike,
     cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None,
 ) -> InternalForceResult:
     """Solve a built QP with OSQP (the contacts' ``modes``, ``friction`` and ``cone_edge`` as it was built
@@ -389,7 +392,8 @@ class InternalForceSolver:
             solver._solver.update_data_mat(P_x=None, P_i=None, A_x=a_t.reshape(-1), A_i=None)
         return solver
 
-    def solve(self, constraint_matrix, motion_forces, surface_frames, modes, friction,
+    def solve(self, constraint_matrix: ArrayLike, motion_forces: ArrayLike, surface_frames: ArrayLike,
+              modes: ModesLike, friction: FrictionLike,
               cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None) -> InternalForceResult:
         """Solve the QP of the module docstring; see :func:`build_internal_force_qp` for the arguments."""
         frames = [(n_x, n_y, t_x, t_y) for (n_x, t_x), (n_y, t_y) in np.asarray(surface_frames, dtype=float).tolist()]

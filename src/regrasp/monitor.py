@@ -14,6 +14,7 @@ k-th call and reuses the last samples (the margins are still taken at the curren
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -78,7 +79,8 @@ class EnvelopeMonitor:
         max_bound_step: The largest change of a bound between evaluations counted as motion [m].
     """
 
-    def __init__(self, envelopes, *, every: int = 1, track: bool = False, max_bound_step: float = 1e-3):
+    def __init__(self, envelopes: Iterable[FingerEnvelope], *, every: int = 1, track: bool = False,
+                 max_bound_step: float = 1e-3):
         self.envelopes = tuple(envelopes)
         if not self.envelopes or not all(isinstance(e, FingerEnvelope) for e in self.envelopes):
             raise InvalidParameterError("envelopes", envelopes, "a non-empty sequence of FingerEnvelope")

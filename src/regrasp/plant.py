@@ -56,9 +56,10 @@ from typing import NamedTuple
 import coal
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .collision import UrdfCollisionChecker, default_tip_clearance
-from .contact import ContactMode, as_frictions, as_modes, cone_margin
+from .contact import ContactMode, FrictionLike, as_frictions, as_modes, cone_margin
 from .exceptions import InvalidParameterError
 from .events import EventKind
 from ._scalar import solve_small as _solve_small
@@ -229,7 +230,7 @@ class Plant:
         polygon: ConvexPolygon,
         contacts: Sequence[PlantContact],
         *,
-        friction=0.0,
+        friction: FrictionLike = 0.0,
         object_mass: float | None = None,
         object_inertia: float | None = None,
         dt: float = 1e-3,
@@ -285,7 +286,8 @@ class Plant:
         self.max_constraint_error = 0.0
 
     # ------------------------------------------------------------------ set-up
-    def reset(self, q, v, X, V, t: float = 0.0, contacts: Sequence[PlantContact] | None = None) -> PlantState:
+    def reset(self, q: ArrayLike, v: ArrayLike, X: ArrayLike, V: ArrayLike, t: float = 0.0,
+              contacts: Sequence[PlantContact] | None = None) -> PlantState:
         """Set the state (q, v [rad, rad/s], X = (x, y, β), V = (vx, vy, ω)) and clear the event log.
 
         Contact modes persist across resets (events change them); pass ``contacts`` to set them anew.
@@ -336,7 +338,8 @@ class Plant:
         ux, uy = tip_vel[0] - (V[0] - V[2] * ry), tip_vel[1] - (V[1] + V[2] * rx)
         return xi, g.tx * (c * ux + s * uy) + g.ty * (c * uy - s * ux)
 
-    def contact_xi(self, st: PlantState, i: int, tip=None, tip_vel=None) -> tuple[float, float]:
+    def contact_xi(self, st: PlantState, i: int, tip: Sequence[float] | np.ndarray | None = None,
+                   tip_vel: Sequence[float] | np.ndarray | None = None) -> tuple[float, float]:
         """ξ [m] of tip i's projection on its edge's line, and its relative velocity ξ̇ [m/s]
         (``tip``/``tip_vel``: the tip's position and velocity if already known)."""
         if tip is None:
@@ -383,7 +386,8 @@ class Plant:
             worst = max(worst, err)
         return worst
 
-    def constraint_error(self, st: PlantState, tips=None) -> float:
+    def constraint_error(self, st: PlantState,
+                         tips: Sequence[Sequence[float] | np.ndarray | None] | np.ndarray | None = None) -> float:
         """Largest violation [m] of the active contact constraints (``tips``: (m, 2) if known)."""
         if tips is None:
             tips = [self._tip(st, i)[0] if c.mode is not _MODE_SEPARATED else None for i, c in enumerate(self.contacts)]
@@ -507,7 +511,8 @@ class Plant:
             qdd += (f[15] * r0 + f[16] * r1, f[16] * r0 + f[17] * r1)
         return qdd, [gravity[0] + obj[0] / self.mass, gravity[1] + obj[1] / self.mass, obj[2] / self.inertia], forces
 
-    def accelerations(self, st: PlantState, tau, modes=None):
+    def accelerations(self, st: PlantState, tau: ArrayLike,
+                      modes: Sequence[PlantContact] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(q̈, Ẍ, forces) at state ``st`` for torques ``tau``: ``forces`` (m, 2) are the contact
         forces on the object in the hand frame (zeros for separated contacts)."""
         tau = self._torques(tau)
@@ -593,7 +598,7 @@ class Plant:
                 return out
         return tuple(as_finite_array("tau", tau, (self.hand.nq,)).tolist())
 
-    def step(self, tau) -> PlantStep:
+    def step(self, tau: ArrayLike) -> PlantStep:
         """Advance one time step with constant joint torques ``tau`` [N m] (RK4)."""
         if self.state is None:
             raise InvalidParameterError("state", None, "a state: call reset() first")

@@ -11,7 +11,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -19,8 +21,18 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
+from numpy.typing import ArrayLike  # noqa: E402
 
 from .planner import FingerPlan, PlanResult  # noqa: E402
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from .contact import FrictionLike
+    from .finger import Finger
+    from .polygon import ConvexPolygon
+    from .schedule import NoScheduleError, RegraspSchedule
+    from .sliding import SlideFeasibility
 
 __all__ = ["plot_conditions", "plot_feasible", "plot_reachable", "plot_schedule", "plot_slide_feasibility",
            "write_plan_figures"]
@@ -151,7 +163,7 @@ def plot_feasible(plan: PlanResult, path: str | Path) -> Path:
     return save_figure(fig, path)
 
 
-def save_figure(fig, path, layout: bool = True) -> Path:
+def save_figure(fig: Figure, path: str | Path, layout: bool = True) -> Path:
     """Write ``fig`` to ``path`` (its directory made if missing) and close it."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -172,8 +184,10 @@ def write_plan_figures(plan: PlanResult, directory: str | Path) -> list[Path]:
     ]
 
 
-def plot_slide_feasibility(polygon, pose, fingers, points_in_hand, edges, friction, results, path, *,
-                           gravity_in_hand=(0.0, -9.81), title: str = "") -> Path:
+def plot_slide_feasibility(polygon: ConvexPolygon, pose: ArrayLike, fingers: Sequence[Finger],
+                           points_in_hand: np.ndarray | Sequence[ArrayLike], edges: Sequence[int],
+                           friction: FrictionLike, results: Sequence[SlideFeasibility], path: str | Path, *,
+                           gravity_in_hand: ArrayLike = (0.0, -9.81), title: str = "") -> Path:
     """Figure 3.4: the object, the fingers and, per slide direction, the predicted contact forces
     inside their friction cones, and whether the slide is possible.
 
@@ -239,7 +253,8 @@ def plot_slide_feasibility(polygon, pose, fingers, points_in_hand, edges, fricti
     return save_figure(fig, path)
 
 
-def plot_schedule(plan: PlanResult, schedule, path: str | Path, *, failure=None) -> Path:
+def plot_schedule(plan: PlanResult, schedule: RegraspSchedule, path: str | Path, *,
+                  failure: NoScheduleError | None = None) -> Path:
     """Paper Figure 4.3 for a planned schedule: per finger its feasible band over time, the zones
     within the required envelope margin of its bounds (the danger zones the schedule keeps out of),
     the scheduled contact ξ_d(t) and its slides (shaded, with their direction). With ``failure``

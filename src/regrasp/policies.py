@@ -22,9 +22,9 @@ re-plan waits until no slide is under way; a failed re-plan is logged and the ol
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -34,6 +34,9 @@ from .executor import ContactPhase, SlideEnd, SlideOrder
 from .monitor import EnvelopeReading
 from .schedule import RegraspSchedule, Slide
 
+if TYPE_CHECKING:
+    from .supervisor import Measurement
+
 __all__ = ["NoRegraspPolicy", "Policy", "ScheduledPolicy", "ScheduledSettings"]
 
 
@@ -42,9 +45,10 @@ class Policy(Protocol):
 
     name: str
 
-    def propose(self, meas, reading: EnvelopeReading, phases, out: list) -> list[SlideOrder]: ...
+    def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
+                out: list[Event]) -> list[SlideOrder]: ...
 
-    def notify(self, ends: list[SlideEnd], meas, out: list) -> None: ...
+    def notify(self, ends: list[SlideEnd], meas: Measurement, out: list[Event]) -> None: ...
 
     def planned_xi(self, t: float) -> np.ndarray: ...
 
@@ -57,10 +61,11 @@ class NoRegraspPolicy:
     def __init__(self, m: int):
         self.m = int(m)
 
-    def propose(self, meas, reading, phases, out) -> list[SlideOrder]:
+    def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
+                out: list[Event]) -> list[SlideOrder]:
         return []
 
-    def notify(self, ends, meas, out) -> None:
+    def notify(self, ends: list[SlideEnd], meas: Measurement, out: list[Event]) -> None:
         pass
 
     def planned_xi(self, t: float) -> np.ndarray:
@@ -122,7 +127,9 @@ class ScheduledPolicy:
 
     name = "scheduled"
 
-    def __init__(self, schedule: RegraspSchedule, names, *, replan=None, settings: ScheduledSettings = ScheduledSettings()):
+    def __init__(self, schedule: RegraspSchedule, names: Iterable[str], *,
+                 replan: Callable[..., RegraspSchedule] | None = None,
+                 settings: ScheduledSettings = ScheduledSettings()):
         if not isinstance(schedule, RegraspSchedule):
             raise InvalidParameterError("schedule", schedule, "a RegraspSchedule (regrasp.plan_regrasps)")
         self.names = tuple(names)
@@ -171,7 +178,8 @@ class ScheduledPolicy:
         k = int(np.clip(np.searchsorted(sch.times, local), 0, len(sch.times) - 1))
         return sch.envelope_margin[k]
 
-    def propose(self, meas, reading: EnvelopeReading, phases, out: list) -> list[SlideOrder]:
+    def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
+                out: list[Event]) -> list[SlideOrder]:
         t = float(meas.t)
         s = self.settings
         idle = all(p is ContactPhase.FIXED for p in phases)
@@ -200,7 +208,7 @@ class ScheduledPolicy:
                                      slide.end + offset, why=f"scheduled {start:.3f}-{slide.end + offset:.3f} s"))
         return orders
 
-    def notify(self, ends: list[SlideEnd], meas, out: list) -> None:
+    def notify(self, ends: list[SlideEnd], meas: Measurement, out: list[Event]) -> None:
         s = self.settings
         for end in ends:
             order = end.order

@@ -18,6 +18,8 @@ will become impossible.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,6 +29,10 @@ from .internal_force import InternalForceSolver
 from .intervals import intersect, widest
 from .monitor import EnvelopeReading, interval_of
 from .sliding import sliding_feasibility
+
+if TYPE_CHECKING:
+    from .executor import SlideEnd
+    from .supervisor import Measurement, SupervisorContext, SupervisorSettings
 
 __all__ = ["PaperPolicy"]
 
@@ -51,7 +57,7 @@ class PaperPolicy:
 
     name = "paper"
 
-    def __init__(self, context, settings):
+    def __init__(self, context: SupervisorContext, settings: SupervisorSettings):
         self.c = context
         self.settings = settings
         m = context.hand.m
@@ -67,7 +73,7 @@ class PaperPolicy:
         """No planned contact positions (NaN per contact)."""
         return np.full(self.c.hand.m, np.nan)
 
-    def notify(self, ends, meas, out: list) -> None:
+    def notify(self, ends: list[SlideEnd], meas: Measurement, out: list[Event]) -> None:
         """Nothing to learn from a finished slide."""
 
     def _event(self, out: list, t: float, i: int, kind: EventKind, detail: str, **values) -> None:
@@ -154,7 +160,8 @@ class PaperPolicy:
         return None
 
     # ------------------------------------------------------------------ the decision
-    def propose(self, meas, reading: EnvelopeReading, phases, out: list) -> list[SlideOrder]:
+    def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
+                out: list[Event]) -> list[SlideOrder]:
         """At most one slide order, for the most urgently endangered contact whose slide is possible."""
         s = self.settings
         danger = []

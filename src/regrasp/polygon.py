@@ -38,6 +38,7 @@ from functools import cached_property
 
 import coal
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .exceptions import InvalidParameterError, PolygonError, UnknownEdgeError
 from .planar import cross, perp, transform_points
@@ -105,7 +106,7 @@ class Edge:
             xi_range=(xi_end, xi_start),
         )
 
-    def point(self, xi) -> np.ndarray:
+    def point(self, xi: ArrayLike) -> np.ndarray:
         r"""Point(s) :math:`p_0 + \xi t` [m] in the object frame.
 
         Args:
@@ -119,7 +120,7 @@ class Edge:
             raise InvalidParameterError("xi", xi, "a scalar or a 1-D array of ξ [m]")
         return self.xi_origin + xi_arr[..., None] * self.xi_direction
 
-    def xi_of(self, points) -> float | np.ndarray:
+    def xi_of(self, points: ArrayLike) -> float | np.ndarray:
         r"""ξ [m] of point(s) in the object frame, :math:`(p - p_0) \cdot t`.
 
         Points off the edge's line are projected orthogonally onto it.
@@ -136,7 +137,7 @@ class Edge:
         xi = (pts - self.xi_origin) @ self.xi_direction
         return float(xi) if pts.ndim == 1 else xi
 
-    def contains_xi(self, xi, tol: float = 0.0) -> bool | np.ndarray:
+    def contains_xi(self, xi: ArrayLike, tol: float = 0.0) -> bool | np.ndarray:
         """Whether ξ [m] lies on the edge: ``xi_range[0] - tol <= xi <= xi_range[1] + tol``.
 
         Args:
@@ -268,7 +269,7 @@ class ConvexPolygon:
     @classmethod
     def from_vertices(
         cls,
-        vertices,
+        vertices: ArrayLike,
         *,
         mass: float | None = None,
         inertia: float | None = None,
@@ -379,7 +380,7 @@ class ConvexPolygon:
         n = self.n_vertices
         return tuple(Edge._from_vertices(k, v[k], v[(k + 1) % n]) for k in range(n))
 
-    def edge(self, k) -> Edge:
+    def edge(self, k: int | np.integer) -> Edge:
         """Edge ``k``; raises :class:`UnknownEdgeError` unless ``k`` is an int in 0..n-1."""
         if isinstance(k, bool) or not isinstance(k, numbers.Integral) or not 0 <= k < self.n_vertices:
             raise UnknownEdgeError(k, self.n_vertices)
@@ -418,12 +419,12 @@ class ConvexPolygon:
         v = self.vertices
         return float(min(np.ptp(v @ e.inward_normal) for e in self.edges))
 
-    def vertices_in(self, pose) -> np.ndarray:
+    def vertices_in(self, pose: ArrayLike) -> np.ndarray:
         """(n, 2) vertices [m] in the parent frame for the object pose ``(x [m], y [m], beta [rad])``."""
         pose = as_finite_array("pose", pose, (3,))
         return transform_points(pose, self.vertices)
 
-    def contains(self, points, *, strict: bool = True) -> bool | np.ndarray:
+    def contains(self, points: ArrayLike, *, strict: bool = True) -> bool | np.ndarray:
         r"""Whether point(s) [m], object frame, lie inside the polygon.
 
         A point is inside when its distance :math:`(p - v_k) \cdot n_k` to every edge line
@@ -443,7 +444,7 @@ class ConvexPolygon:
         inside = np.all(dist > eps, axis=-1) if strict else np.all(dist >= -eps, axis=-1)
         return bool(inside) if pts.ndim == 1 else inside
 
-    def to_coal(self, half_thickness: float):
+    def to_coal(self, half_thickness: float) -> coal.ConvexBase:
         """The polygon extruded to z in [-h, h] [m] as a coal convex shape (object frame).
 
         Built with ``coal.Convex.convexHull`` (qhull option ``"Qt"``); coal returns it as

@@ -127,8 +127,10 @@ import warnings
 import weakref
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 import pinocchio as pin
 import pyarrow as pa
 import rerun as rr
@@ -144,6 +146,10 @@ from .exceptions import InvalidParameterError, RegraspError
 from .executor import ContactPhase
 from .planar import wrap_angle
 from .plant import Plant, PlantStep
+
+if TYPE_CHECKING:
+    from .events import Failure
+    from .simulation import StepRecord
 
 __all__ = ["MODE_CODES", "PHASE_CODES", "WARN_KINDS", "RolloutRecorder"]
 
@@ -870,7 +876,7 @@ class RolloutRecorder:
         *,
         step: int | None = None,
         time: float | None = None,
-        desired_pose=None,
+        desired_pose: ArrayLike | None = None,
         plant_step: PlantStep | None = None,
     ) -> bool:
         r"""Log the plant's current state (and the step's control output) at one step, measuring the
@@ -917,11 +923,11 @@ class RolloutRecorder:
                                         "pass sliding= to the recorder)")
         return self._row(step, t, start, lambda: self._log_rows(plant, output, desired, plant_step))
 
-    def log_initial(self, plant: Plant, desired_pose) -> bool:
+    def log_initial(self, plant: Plant, desired_pose: ArrayLike | None) -> bool:
         """Log the plant's state before the first step (step 0)."""
         return self.log_step(plant, None, step=0, desired_pose=desired_pose)
 
-    def log_record(self, record, desired_pose) -> bool:
+    def log_record(self, record: StepRecord, desired_pose: ArrayLike | None) -> bool:
         """Log one :class:`~regrasp.simulation.StepRecord` of the simulation loop: the state after its
         step, as step ``record.index + 1``, against ``desired_pose`` (the desired pose then).
 
@@ -952,7 +958,7 @@ class RolloutRecorder:
         desired = self._desired(desired_pose)
         return self._row(step, t, start, lambda: self._record_rows(record, desired))
 
-    def log_failure(self, failure, plant: Plant | None = None) -> None:
+    def log_failure(self, failure: Failure, plant: Plant | None = None) -> None:
         """Log a rollout's :class:`~regrasp.events.Failure`: an ERROR line in ``events`` and the
         failure marked in the scene (``scene/failure``, module docstring) at the failure's time and
         the last step, drawn at ``plant``'s state (default: the recorder's plant)."""

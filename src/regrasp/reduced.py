@@ -34,8 +34,9 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from .contact import as_frictions
+from .contact import FrictionLike, as_frictions
 from .exceptions import InvalidParameterError
 from .grasp import Grasp
 from .hand import Hand, HandDynamics
@@ -110,7 +111,7 @@ class ReducedModel:
         object_inertia: [kg m^2] about the centre of mass; default: the polygon's.
     """
 
-    def __init__(self, hand: Hand, grasp: Grasp, xi, *, object_mass: float | None = None,
+    def __init__(self, hand: Hand, grasp: Grasp, xi: ArrayLike, *, object_mass: float | None = None,
                  object_inertia: float | None = None):
         if hand.m != grasp.m:
             raise InvalidParameterError("grasp", grasp.m, f"one contact per finger ({hand.m})")
@@ -138,7 +139,7 @@ class ReducedModel:
         return np.array([self.object_mass * gx, self.object_mass * gy, 0.0])
 
     # ------------------------------------------------------------------ coordinates
-    def split(self, S, S_dot=None):
+    def split(self, S: ArrayLike, S_dot: ArrayLike | None = None) -> tuple[np.ndarray, ...]:
         """(pose, ξ of all contacts[, twist, ξ̇ of all contacts]) from S (and Ṡ)."""
         S = as_finite_array("S", S, (self.n,))
         xi = self.xi.copy()
@@ -150,18 +151,18 @@ class ReducedModel:
         xi_dot[list(self.grasp.sliding)] = S_dot[3:]
         return S[:3], xi, S_dot[:3], xi_dot
 
-    def joint_positions(self, S) -> np.ndarray:
+    def joint_positions(self, S: ArrayLike) -> np.ndarray:
         """q (2m,) with every tip on its contact point, in each finger's configuration."""
         pose, xi = self.split(S)
         return self.hand.inverse_kinematics(self.grasp.points(pose, xi))
 
-    def constraint_matrix(self, S) -> np.ndarray:
+    def constraint_matrix(self, S: ArrayLike) -> np.ndarray:
         """A = [G^T | R_f B_v] (2m x (3 + p)): J q̇ = A Ṡ (eq. 3.1.8)."""
         pose, xi = self.split(S)
         return np.hstack([self.grasp.grasp_matrix(pose, xi).T,
                           self.grasp.surface_rotation(pose) @ self.grasp.sliding_directions()])
 
-    def state(self, S, S_dot) -> ReducedState:
+    def state(self, S: ArrayLike, S_dot: ArrayLike) -> ReducedState:
         """All the model's quantities at (S, Ṡ); raises SingularFingerError at a singular finger."""
         S, S_dot = as_finite_vectors(("S", "S_dot"), (S, S_dot), self.n)
         return self._state(S, S_dot)
@@ -269,14 +270,14 @@ class ReducedModel:
         """N_s = H^T M Ḣ Ṡ + H^T N (eq. 3.2.12)."""
         return st.H.T @ (st.hand.mass_matrix @ st.H_dot_S_dot + st.hand.nonlinear)
 
-    def contact_forces(self, st: ReducedState, tau, S_ddot) -> np.ndarray:
+    def contact_forces(self, st: ReducedState, tau: ArrayLike, S_ddot: ArrayLike) -> np.ndarray:
         r"""Contact forces on the object (m, 2) [N], hand frame: :math:`f = J^{-T}(\tau - M\ddot q - N)`."""
         tau = as_finite_array("tau", tau, (self.hand.nq,))
         q_ddot = st.H @ as_finite_array("S_ddot", S_ddot, (self.n,)) + st.H_dot_S_dot
         f = np.linalg.solve(st.hand.jacobian.T, tau - st.hand.mass_matrix @ q_ddot - st.hand.nonlinear)
         return f.reshape(self.grasp.m, 2)
 
-    def contact_generalized_force(self, st: ReducedState, forces) -> np.ndarray:
+    def contact_generalized_force(self, st: ReducedState, forces: ArrayLike) -> np.ndarray:
         r"""The generalized force on S of contact forces ``forces`` (m, 2) [N] acting on the object:
         :math:`[0;\ -B_v^T R_f^T f]`: all but the sliding contacts' friction cancel (virtual power)."""
         f = as_finite_array("forces", forces, (self.grasp.m, 2)).reshape(-1)
@@ -284,7 +285,8 @@ class ReducedModel:
         out[3:] = -(st.B_v.T @ st.R_f.T @ f)
         return out
 
-    def forward_dynamics(self, st: ReducedState, tau, friction=0.0, *, signs=None,
+    def forward_dynamics(self, st: ReducedState, tau: ArrayLike, friction: FrictionLike = 0.0, *,
+                         signs: ArrayLike | None = None,
                          paper_friction_term: bool = False) -> tuple[np.ndarray, np.ndarray]:
         r"""S̈ and the contact forces (m, 2) [N] for joint torques ``tau`` [N m] and Coulomb friction
         ``friction`` (a :class:`~regrasp.contact.Friction` or a coefficient [-] for all contacts, or one

@@ -22,10 +22,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from .contact import ContactMode, Friction
+from .contact import ContactMode, Friction, FrictionLike
 from .events import PLANT_FAILURES, EventKind, EventSource, Failure, FailureKind
 from .exceptions import InvalidParameterError
 from .executor import SLIPPING_PHASES, ContactPhase
@@ -45,6 +47,9 @@ from .simulation import Command, StepRecord, simulate
 from .supervisor import Measurement, RegraspSupervisor, SupervisorSettings
 from .trajectory import RepeatedTrajectory
 from .validation import MAX_DURATION, as_duration, as_finite_array, as_positive_float, expect_type
+
+if TYPE_CHECKING:
+    from .recording import RolloutRecorder
 
 __all__ = ["DEFAULT_CONE_MARGIN", "POLICIES", "Rollout", "RolloutResult", "build_rollout"]
 
@@ -108,7 +113,7 @@ class Rollout:
                 return Failure(e.time, PLANT_FAILURES[e.kind], f"{e.kind.value} of {e.contact}: {e.detail}", e.contact)
         return None
 
-    def run(self, *, recorder=None, progress: Callable[[int, int], None] | None = None,
+    def run(self, *, recorder: RolloutRecorder | None = None, progress: Callable[[int, int], None] | None = None,
             interruptible: bool = True) -> RolloutResult:
         """Run to ``duration`` or the first failure.
 
@@ -170,9 +175,10 @@ def _run_scenario(scenario: Scenario, duration: float | None, periods) -> tuple[
 def build_rollout(scenario: Scenario, *, duration: float | None = None, periods: int | None = None,
                   policy: str = "scheduled", settings: SupervisorSettings | None = None,
                   regrasp_settings: RegraspSettings | None = None, schedule: RegraspSchedule | None = None,
-                  scheduled_settings: ScheduledSettings = ScheduledSettings(), dt: float = 1e-3, xi0=None,
-                  plant_friction=None, plant_mass_scale: float = 1.0, plant_mu_scale: float = 1.0,
-                  replan: bool = True, plan_progress=None) -> Rollout:
+                  scheduled_settings: ScheduledSettings = ScheduledSettings(), dt: float = 1e-3,
+                  xi0: ArrayLike | None = None, plant_friction: FrictionLike | None = None,
+                  plant_mass_scale: float = 1.0, plant_mu_scale: float = 1.0, replan: bool = True,
+                  plan_progress: Callable[[int, int], None] | None = None) -> Rollout:
     """Plant + supervisor for ``scenario``, every contact fixed at the start.
 
     Args:

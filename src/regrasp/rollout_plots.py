@@ -10,10 +10,16 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .plotting import plt, save_figure
+
+if TYPE_CHECKING:
+    from .hand import Hand
+    from .polygon import ConvexPolygon
+    from .rollout_result import RolloutResult
 
 __all__ = ["plot_frames", "plot_rollout"]
 
@@ -28,7 +34,7 @@ def _failure_title(result) -> str:
     return f"failure at t = {f.time:.3f} s ({f.kind.value})"
 
 
-def plot_rollout(result, path: str | Path, *, danger_fraction: float = 0.1) -> Path:
+def plot_rollout(result: RolloutResult, path: str | Path, *, danger_fraction: float = 0.1) -> Path:
     """Per finger: feasible band, danger zones, planned and actual contact versus time (module docstring)."""
     m = len(result.names)
     fig, axes = plt.subplots(m, 1, figsize=(9, 2.4 * m), sharex=True, squeeze=False)
@@ -56,7 +62,8 @@ def plot_rollout(result, path: str | Path, *, danger_fraction: float = 0.1) -> P
     return save_figure(fig, path)
 
 
-def plot_frames(result, hand, polygon, path: str | Path, *, frames: int = 6) -> Path:
+def plot_frames(result: RolloutResult, hand: Hand, polygon: ConvexPolygon, path: str | Path, *,
+                frames: int = 6) -> Path:
     """The hand and the object at ``frames`` times of the rollout (module docstring)."""
     n = result.steps
     picks = list(np.linspace(0, n - 1, frames).round().astype(int)) if n else []

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -206,8 +207,9 @@ class RolloutRows:
         k, i = np.unravel_index(int(np.argmin(finite)), finite.shape)
         return float(finite[k, i]), (float(self.times[k]), names[i])
 
-    def result(self, outcome: SimulationOutcome, *, duration, object_width, names, regrasps, supervisor_events,
-               policy, replans, schedule, rrd) -> RolloutResult:
+    def result(self, outcome: SimulationOutcome, *, duration: float, object_width: float, names: Sequence[str],
+               regrasps: dict[str, int], supervisor_events: Iterable[Event], policy: str, replans: int,
+               schedule: RegraspSchedule | None, rrd: str | None) -> RolloutResult:
         n = self.n
         times = self.times[:n].copy()
         err = self.object_error[:n].copy()

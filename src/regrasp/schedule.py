@@ -21,10 +21,12 @@ A **periodic** schedule covers one period of a periodic trajectory and ends wher
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .exceptions import InvalidParameterError, RegraspError
 
@@ -177,7 +179,7 @@ class RegraspSchedule:
             return self.t_start + np.mod(t - self.t_start, self.t_end - self.t_start)
         return np.clip(t, self.t_start, self.t_end)
 
-    def at(self, t) -> ScheduleSample:
+    def at(self, t: ArrayLike) -> ScheduleSample:
         """ξ_d, ξ̇_d, ξ̈_d and the sliding directions at time(s) ``t`` [s]; a periodic schedule repeats
         past ``t_end``, another holds its last positions (and its first before ``t_start``)."""
         arr = np.asarray(t, dtype=float)
@@ -223,7 +225,7 @@ class RegraspSchedule:
         }
 
 
-def slides_at(xi_start: np.ndarray, slides, t: np.ndarray) -> ScheduleSample:
+def slides_at(xi_start: np.ndarray, slides: Iterable[Slide], t: np.ndarray) -> ScheduleSample:
     """The contacts' (ξ, ξ̇, ξ̈, direction) at times ``t`` (n,) [s] from their positions before any
     slide, ``xi_start`` (m,) [m], and the ``slides`` in start order."""
     n, m = len(t), len(xi_start)
@@ -281,7 +283,7 @@ class NoScheduleError(RegraspError):
                 "partial": None if self.partial is None else self.partial.to_json_dict()}
 
 
-def first_minimum(values: np.ndarray, times: np.ndarray, names, mask: np.ndarray | None = None
+def first_minimum(values: np.ndarray, times: np.ndarray, names: Sequence[str], mask: np.ndarray | None = None
                   ) -> tuple[float, tuple[float, str]]:
     """The smallest entry of ``values`` (k, m) (where ``mask``), and (its time, its contact's name)."""
     v = np.where(np.isfinite(values) if mask is None else mask & np.isfinite(values), values, np.inf)

@@ -17,12 +17,18 @@ The best schedule up to the latest time is attached as ``partial``.
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .schedule import NoScheduleError, ScheduleLimit
 from .schedule_lattice import move_runs, path, run
 from .slide_rule import two_finger_slide_range
+
+if TYPE_CHECKING:
+    from .schedule import RegraspSchedule
+    from .schedule_lattice import LatticeRun
+    from .schedule_problem import Problem
 
 __all__ = ["diagnose"]
 
@@ -114,7 +120,7 @@ def _along_gravity(problem, when: float) -> str:
             f"the weight instead of carrying it, so friction at the other contacts must carry both)")
 
 
-def diagnose(problem, free, partial=None) -> NoScheduleError:
+def diagnose(problem: Problem, free: LatticeRun, partial: RegraspSchedule | None = None) -> NoScheduleError:
     """The :class:`NoScheduleError` for a dynamic program ``free`` that did not reach the last layer
     (``problem``: the planner's :class:`~regrasp.schedule_planner.Problem`; ``partial``: the best
     schedule up to its last layer, attached to the error)."""

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numba
@@ -247,13 +248,13 @@ class LatticeRun:
         p, mu = divmod(int(np.argmin(V)), V.shape[1])
         return float(V[p, mu]), mu, p
 
-    def value(self, cells, mu: int = 0) -> float:
+    def value(self, cells: Iterable[int], mu: int = 0) -> float:
         """The value of the state (``cells``, move vector ``mu``) of the last layer (inf if none)."""
         p = flat_index(cells, self.boxes[self.last_layer])
         return math.inf if p < 0 else float(self.values[p, mu])
 
 
-def flat_index(cells, box) -> int:
+def flat_index(cells: Iterable[int], box: tuple[np.ndarray, np.ndarray]) -> int:
     """The flat index of global ``cells`` in a layer's ``box`` (-1 outside)."""
     lo, n = box
     p = 0
@@ -265,7 +266,7 @@ def flat_index(cells, box) -> int:
     return p
 
 
-def cells_of(p: int, box) -> np.ndarray:
+def cells_of(p: int, box: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
     """Global cells of flat index ``p`` in ``box``."""
     lo, n = box
     out = np.zeros(len(n), dtype=np.int64)
@@ -312,7 +313,9 @@ def _intersect(a, b) -> tuple[np.ndarray, np.ndarray]:
     return lo, np.maximum(hi - lo, 0)
 
 
-def run(lat: Lattice, start=None, bans=None, end=None, init: LatticeRun | None = None, *,
+def run(lat: Lattice, start: Sequence[int] | np.ndarray | None = None,
+        bans: Mapping[int, Iterable[tuple[int, Iterable[int]]]] | None = None,
+        end: Sequence[int] | np.ndarray | None = None, init: LatticeRun | None = None, *,
         keep_backs: bool = True) -> LatticeRun:
     """Sweep the layers. ``start``: global cells of the contacts at layer 0 (at rest), or None for
     every admissible rest state; ``bans``: {layer: [(move vector, global cells), ...]} states to

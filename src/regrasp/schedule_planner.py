@@ -47,6 +47,7 @@ import time
 from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .exceptions import InvalidParameterError
 from .force_polytope import ForceLimits, force_system, force_vertices
@@ -274,8 +275,9 @@ def _solve(problem: Problem, bans: dict, hint=None) -> tuple:
     return best[1], best[2], lower
 
 
-def plan_regrasps(scenario: Scenario, settings: RegraspSettings = RegraspSettings(), *, start_time=None, xi0=None,
-                  t_end=None, progress: Progress | None = None) -> RegraspSchedule:
+def plan_regrasps(scenario: Scenario, settings: RegraspSettings = RegraspSettings(), *,
+                  start_time: float | None = None, xi0: ArrayLike | None = None, t_end: float | None = None,
+                  progress: Progress | None = None) -> RegraspSchedule:
     """Plan the slides of every contact over the scenario's trajectory (module docstring).
 
     Args:

@@ -12,9 +12,12 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .envelope import FingerEnvelope, Geometry
 from .exceptions import InvalidParameterError
@@ -22,6 +25,10 @@ from .force_polytope import ForceGeometry, ForceLimits, force_vertices, xi_inter
 from .scenario import Scenario
 from .schedule_lattice import Lattice, motion_combos
 from .validation import as_finite_array, as_positive_float
+
+if TYPE_CHECKING:
+    from .contact import Friction
+    from .trajectory import Trajectory
 
 __all__ = ["Problem", "RegraspSettings", "build_problem", "slide_ratios", "trajectory_period"]
 
@@ -118,7 +125,7 @@ class RegraspSettings:
         return self.max_slide_speed / self.max_slide_acceleration
 
 
-def trajectory_period(trajectory) -> float | None:
+def trajectory_period(trajectory: Trajectory) -> float | None:
     """The trajectory's period [s] if it is periodic (an ellipse, or waypoints with a periodic
     boundary), else None."""
     period = getattr(trajectory, "period", None)
@@ -164,14 +171,15 @@ def _cell_margins(sample, grid: np.ndarray) -> np.ndarray:
     return out
 
 
-def slide_ratios(direction, friction, breaking: int | None = None) -> list:
+def slide_ratios(direction: Iterable[int], friction: Iterable[Friction], breaking: int | None = None
+                 ) -> list[float | None]:
     """Per contact None (fixed) or the signed force ratio τ/λ = s μ_k (s μ_s for ``breaking``)."""
     return [None if d == 0 else d * (f.static if i == breaking else f.kinetic)
             for i, (d, f) in enumerate(zip(direction, friction))]
 
 
-def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time=None, xi0=None,
-                  t_end=None) -> Problem:
+def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: float | None = None,
+                  xi0: ArrayLike | None = None, t_end: float | None = None) -> Problem:
     """The lattice of the module docstring for ``scenario`` (``xi0``: start positions [m], which then
     lie on the grid; ``start_time``/``t_end``: the horizon [s], default the trajectory's domain or,
     periodic, its first period)."""

@@ -28,8 +28,9 @@ from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from .contact import ContactMode, as_frictions, cone_margin
+from .contact import ContactMode, FrictionLike, as_frictions, cone_margin
 from .exceptions import InvalidParameterError
 from .grasp import Grasp
 from .internal_force import (
@@ -84,16 +85,16 @@ class SlideFeasibility:
 
 def sliding_feasibility(
     grasp: Grasp,
-    pose,
-    xi,
-    object_acceleration,
+    pose: ArrayLike,
+    xi: ArrayLike,
+    object_acceleration: ArrayLike,
     contact: int,
     direction: float,
-    friction,
+    friction: FrictionLike,
     *,
     object_mass: float,
     object_inertia: float,
-    gravity_in_hand=(0.0, -9.81),
+    gravity_in_hand: ArrayLike = (0.0, -9.81),
     settings: InternalForceSettings = InternalForceSettings(f_min=0.0, margin=0.0),
     solver: InternalForceSolver | None = None,
     edge_mu: float | None = None,

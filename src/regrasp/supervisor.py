@@ -21,11 +21,14 @@ sliding (a slip sensor). It never sees the plant.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from .contact import ContactMode, as_frictions
+from .contact import ContactMode, FrictionLike, as_frictions
 from .control import ControlOutput
 from .envelope import EnvelopeSample, FingerEnvelope, Geometry
 from .events import Event, EventKind
@@ -180,7 +183,7 @@ class SupervisorSettings:
 
 
     @classmethod
-    def robust(cls, geometry: str = "ideal", cone_margin: float = 0.2, **overrides) -> "SupervisorSettings":
+    def robust(cls, geometry: str = "ideal", cone_margin: float = 0.2, **overrides: Any) -> "SupervisorSettings":
         """Settings for a hand whose plant differs from the model (``docs/derivations.md``, §4 executed):
         the fixed contacts kept ``cone_margin`` [N] inside their cones where the forces allow, the sliders'
         ξ at 60 rad/s, integral action (0.3 ω³), a priming whose overshoot grows from 0.05 to 0.25 over
@@ -300,10 +303,12 @@ class RegraspSupervisor:
             False it reports danger and never slides).
     """
 
-    def __init__(self, hand: Hand, polygon: ConvexPolygon, edges, trajectory: Trajectory, xi, friction=0.5, *,
+    def __init__(self, hand: Hand, polygon: ConvexPolygon, edges: Iterable[int], trajectory: Trajectory,
+                 xi: ArrayLike, friction: FrictionLike = 0.5, *,
                  object_mass: float | None = None, object_inertia: float | None = None,
-                 tip_clearance=None, plan: PlanResult | None = None,
-                 settings: SupervisorSettings = SupervisorSettings(), policy: Policy | None = None):
+                 tip_clearance: Iterable[float | None] | None = None, plan: PlanResult | None = None,
+                 settings: SupervisorSettings = SupervisorSettings(),
+                 policy: Policy | Callable[[SupervisorContext], Policy] | None = None):
         m = hand.m
         edges = [int(e) for e in edges]
         if len(edges) != m:

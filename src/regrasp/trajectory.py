@@ -19,6 +19,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
 from .exceptions import InvalidParameterError, TrajectoryError
@@ -98,19 +99,19 @@ class Trajectory(ABC):
         return out[0] if scalar else out
 
     # ------------------------------------------------------------------ public API
-    def pose(self, t) -> np.ndarray:
+    def pose(self, t: ArrayLike) -> np.ndarray:
         """X(t) = (x [m], y [m], beta [rad]); shape (3,) for scalar t, (n, 3) for n times."""
         return self._derivative(t, 0)
 
-    def velocity(self, t) -> np.ndarray:
+    def velocity(self, t: ArrayLike) -> np.ndarray:
         """dX/dt ([m/s], [m/s], [rad/s]); shape (3,) or (n, 3)."""
         return self._derivative(t, 1)
 
-    def acceleration(self, t) -> np.ndarray:
+    def acceleration(self, t: ArrayLike) -> np.ndarray:
         """d²X/dt² ([m/s^2], [m/s^2], [rad/s^2]); shape (3,) or (n, 3)."""
         return self._derivative(t, 2)
 
-    def sample(self, t) -> TrajectorySample:
+    def sample(self, t: ArrayLike) -> TrajectorySample:
         """Pose, velocity and acceleration at ``t`` (scalar or 1-D array) [s]."""
         arr, scalar = self._times_in_domain(t)
         pose, vel, acc = (self._evaluate(arr, k) for k in range(3))
@@ -266,7 +267,7 @@ class WaypointTrajectory(Trajectory):
             boundary with different first and last poses.
     """
 
-    def __init__(self, times, poses, *, boundary: str = "natural", unwrap_angle: bool = False):
+    def __init__(self, times: ArrayLike, poses: ArrayLike, *, boundary: str = "natural", unwrap_angle: bool = False):
         if not isinstance(boundary, str) or boundary not in _BOUNDARIES:
             raise InvalidParameterError("boundary", boundary, f"one of {', '.join(_BOUNDARIES)}")
         t = as_finite_array("times", times, (-1,))

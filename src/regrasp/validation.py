@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -17,6 +18,8 @@ from .exceptions import InvalidParameterError
 
 _NOT_NUMBERS = (bool, np.bool_, str, bytes, complex, np.complexfloating)
 _NUMBER_KINDS = frozenset("iuf")
+
+_T = TypeVar("_T")
 
 
 def _has_non_numbers(value) -> bool:
@@ -33,7 +36,7 @@ def _has_non_numbers(value) -> bool:
     return value is None or isinstance(value, _NOT_NUMBERS)
 
 
-def as_finite_array(name: str, value, shape: tuple[int, ...] | None = None) -> np.ndarray:
+def as_finite_array(name: str, value: object, shape: tuple[int, ...] | None = None) -> np.ndarray:
     """``value`` as a float array of the given shape with only finite entries (numbers only: no bool,
     string or complex entries)."""
     if _has_non_numbers(value):
@@ -53,7 +56,7 @@ def as_finite_array(name: str, value, shape: tuple[int, ...] | None = None) -> n
     return arr
 
 
-def as_finite_float(name: str, value) -> float:
+def as_finite_float(name: str, value: object) -> float:
     """``value`` as a finite float (a number: not a bool, a string or a complex number)."""
     if isinstance(value, _NOT_NUMBERS) or value is None or (isinstance(value, np.ndarray) and value.ndim > 0):
         raise InvalidParameterError(name, value, "a number")
@@ -68,7 +71,7 @@ def as_finite_float(name: str, value) -> float:
     return out
 
 
-def as_positive_float(name: str, value, *, allow_zero: bool = False) -> float:
+def as_positive_float(name: str, value: object, *, allow_zero: bool = False) -> float:
     """``value`` as a finite float > 0 (or >= 0 with ``allow_zero``)."""
     out = as_finite_float(name, value)
     if out < 0.0 or (out == 0.0 and not allow_zero):
@@ -96,7 +99,7 @@ def as_finite_vectors(names: tuple[str, ...], values: tuple, n: int) -> np.ndarr
 MAX_SAMPLES = 100_000
 
 
-def as_sample_count(name: str, value) -> int:
+def as_sample_count(name: str, value: object) -> int:
     """``value`` as a number of time samples: an integer in [2, :data:`MAX_SAMPLES`]."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
         raise InvalidParameterError(name, value, f"an integer number of samples in [2, {MAX_SAMPLES}]")
@@ -109,7 +112,7 @@ def as_sample_count(name: str, value) -> int:
 MAX_DURATION = 3600.0
 
 
-def as_duration(name: str, value) -> float:
+def as_duration(name: str, value: object) -> float:
     """``value`` as a simulated duration [s]: a number in (0, :data:`MAX_DURATION`]."""
     out = as_positive_float(name, value)
     if out > MAX_DURATION:
@@ -117,7 +120,7 @@ def as_duration(name: str, value) -> float:
     return out
 
 
-def expect_type(name: str, value, kind: type | tuple[type, ...], what: str):
+def expect_type(name: str, value: _T, kind: type | tuple[type, ...], what: str) -> _T:
     """``value`` if it is an instance of ``kind``, else an :class:`InvalidParameterError` saying ``what``
     was expected (the check every public entry point makes of its structured arguments)."""
     if not isinstance(value, kind):
@@ -125,7 +128,7 @@ def expect_type(name: str, value, kind: type | tuple[type, ...], what: str):
     return value
 
 
-def expect_sequence_of(name: str, values, kind: type, what: str) -> tuple:
+def expect_sequence_of(name: str, values: object, kind: type, what: str) -> tuple:
     """``values`` as a tuple whose items are all instances of ``kind`` (a list, a tuple...; not a string)."""
     if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
         raise InvalidParameterError(name, values, f"a sequence of {what}")
