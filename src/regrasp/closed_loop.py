@@ -20,7 +20,7 @@ from .plant import Plant, PlantEvent
 from .reduced import ReducedModel
 from .simulation import Command, StepRecord, sense_projected, simulate
 from .trajectory import TrajectorySample
-from .validation import as_duration, as_positive_float
+from .validation import as_duration, as_positive_float, expect_type
 
 __all__ = ["ClosedLoopLog", "measure_reduced_state", "run_closed_loop"]
 
@@ -29,7 +29,11 @@ Reference = Callable[[float], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 def measure_reduced_state(plant: Plant, model: ReducedModel) -> tuple[np.ndarray, np.ndarray]:
     """(S, Ṡ) of ``model``'s coordinates, read from the plant's state."""
+    expect_type("plant", plant, Plant, "a Plant")
+    expect_type("model", model, ReducedModel, "a ReducedModel")
     st = plant.state
+    if st is None:
+        raise InvalidParameterError("plant", plant, "a plant with a state (call Plant.reset first)")
     xi = [plant.contact_xi(st, i) for i in model.grasp.sliding]
     S = np.concatenate([st.X, [x for x, _ in xi]])
     S_dot = np.concatenate([st.V, [v for _, v in xi]])

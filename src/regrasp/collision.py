@@ -26,9 +26,10 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from .exceptions import FingerModelError, InvalidParameterError
+from .exceptions import FingerModelError
 from .finger import Finger, LinkShape
 from .polygon import ConvexPolygon
+from .validation import as_positive_float, expect_type
 
 __all__ = ["UrdfCollisionChecker", "checked_link_shapes", "default_tip_clearance", "segment_hits_polygon"]
 
@@ -145,6 +146,7 @@ def _half_width(geometry) -> float:
 def default_tip_clearance(finger: Finger) -> float:
     r"""The default tip clearance :math:`\rho` [m]: three times the distal link's half-width
     (a cylinder's or capsule's radius, a box's middle half-side)."""
+    expect_type("finger", finger, Finger, "a Finger")
     return 3.0 * max((_half_width(s.geometry) for s in finger.link_shapes() if s.link == 1), default=0.0)
 
 
@@ -184,8 +186,9 @@ class UrdfCollisionChecker:
 
     def __init__(self, finger: Finger, polygon: ConvexPolygon, tip_clearance: float,
                  half_thickness: float | None = None):
-        if not np.isfinite(tip_clearance) or tip_clearance < 0.0:
-            raise InvalidParameterError("tip_clearance", tip_clearance, "a finite length >= 0 [m]")
+        expect_type("finger", finger, Finger, "a Finger")
+        expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+        tip_clearance = as_positive_float("tip_clearance", tip_clearance, allow_zero=True)
         self.finger = finger
         self.tip_clearance = float(tip_clearance)
         self.shapes: tuple[LinkShape, ...] = checked_link_shapes(finger, tip_clearance)

@@ -129,6 +129,8 @@ def as_frictions(friction: FrictionLike, m: int) -> tuple[Friction, ...]:
     items = list(friction)
     if len(items) != m:
         raise InvalidParameterError("friction", friction, f"one friction per contact ({m})")
+    if any(not isinstance(f, Friction) and np.ndim(f) != 0 for f in items):
+        raise InvalidParameterError("friction", friction, "one Friction or coefficient per contact (not arrays)")
     return tuple(f if isinstance(f, Friction) else Friction(f.item() if hasattr(f, "item") else f) for f in items)
 
 

@@ -53,7 +53,7 @@ from .contact import FrictionLike, as_frictions, coefficients, cone_margin
 from .exceptions import InvalidParameterError, SingularModelError
 from .internal_force import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver, as_cone_edges
 from .reduced import ReducedModel, ReducedState
-from .validation import as_finite_array, as_finite_vectors
+from .validation import as_finite_array, as_finite_vectors, as_integer, as_positive_float, expect_type
 
 __all__ = [
     "ComputedTorqueController",
@@ -73,11 +73,26 @@ class Gains:
     kv: np.ndarray
     ks: np.ndarray
 
+    def __post_init__(self) -> None:
+        kv = as_finite_array("kv", self.kv, (-1,))
+        ks = as_finite_array("ks", self.ks, (-1,))
+        if len(kv) != len(ks) or len(kv) < 3:
+            raise InvalidParameterError("ks", self.ks, f"one gain per reduced coordinate, as many as kv ({len(kv)} >= 3)")
+        for name, gains, value in (("kv", kv, self.kv), ("ks", ks, self.ks)):
+            if (gains <= 0.0).any():
+                raise InvalidParameterError(name, value, "positive gains (> 0)")
+        object.__setattr__(self, "kv", kv)
+        object.__setattr__(self, "ks", ks)
+
     @classmethod
     def critically_damped(cls, omega: float, n: int) -> "Gains":
-        """K_s = ω², K_v = 2ω on all n coordinates (ω [rad/s])."""
-        if not np.isfinite(omega) or omega <= 0:
-            raise InvalidParameterError("omega", omega, "a bandwidth > 0 [rad/s]")
+        """K_s = ω², K_v = 2ω on all n coordinates (ω [rad/s], at most 10⁶)."""
+        omega = as_positive_float("omega", omega)
+        if omega > 1e6:
+            raise InvalidParameterError("omega", omega, "a bandwidth in (0, 1e6] rad/s")
+        n = as_integer("n", n, 3)
+        if n > 1000:
+            raise InvalidParameterError("n", n, "a number of reduced coordinates from 3 to 1000")
         return cls(np.full(n, 2.0 * omega), np.full(n, omega**2))
 
 
@@ -130,6 +145,10 @@ class ComputedTorqueController:
     def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = 0.5, *,
                  internal_force: InternalForceSettings | None = InternalForceSettings(),
                  cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None):
+        expect_type("model", model, ReducedModel, "a ReducedModel")
+        expect_type("gains", gains, Gains, "a Gains")
+        if internal_force is not None:
+            expect_type("internal_force", internal_force, InternalForceSettings, "an InternalForceSettings or None")
         n = model.n
         kv = as_finite_array("gains.kv", gains.kv, (n,))
         ks = as_finite_array("gains.ks", gains.ks, (n,))
@@ -245,7 +264,7 @@ class FixedContactController(ComputedTorqueController):
     law = "fixed contacts"
 
     def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = 0.5, **kwargs: Any):
-        if model.grasp.p != 0:
+        if expect_type("model", model, ReducedModel, "a ReducedModel").grasp.p != 0:
             raise InvalidParameterError("model", model.grasp.modes, "only fixed contacts (p = 0)")
         super().__init__(model, gains, friction, **kwargs)
 

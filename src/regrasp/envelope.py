@@ -65,7 +65,7 @@ from .finger import Finger
 from .intervals import Intervals, intersect, merge
 from .planar import rotation
 from .polygon import ConvexPolygon
-from .validation import as_finite_array
+from .validation import as_finite_array, as_finite_float, as_integer, as_positive_float, as_sign, expect_type
 
 __all__ = [
     "Condition",
@@ -102,8 +102,9 @@ class Geometry(str, Enum):
 
 def condition_of(d: float, l1: float) -> Condition:
     """The condition (I–IV) for signed line distance ``d`` [m] and first link ``l1`` [m] (> 0)."""
-    if not (math.isfinite(d) and l1 > 0.0 and math.isfinite(l1)):
-        raise InvalidParameterError("d, l1", (d, l1), "a finite distance d [m] and a link length l1 > 0 [m]")
+    d, l1 = as_finite_float("d", d), as_finite_float("l1", l1)
+    if not l1 > 0.0:
+        raise InvalidParameterError("l1", l1, "a link length l1 > 0 [m]")
     if d < -l1:
         return Condition.I
     if d > l1:
@@ -143,9 +144,12 @@ def reachable_on_line(d: float, l1: float, l2: float, sign: int) -> Intervals:
     (which can split an interval in two). The right configuration is the mirror image
     :math:`s \to -s`. Zero-length pieces are dropped.
     """
-    if not (math.isfinite(d) and 0.0 < l1 < math.inf and 0.0 < l2 < math.inf) or sign not in (-1, 1):
-        raise InvalidParameterError("d, l1, l2, sign", (d, l1, l2, sign),
-                                    "a finite distance d [m], link lengths l1, l2 > 0 [m] and a sign of +1 or -1")
+    d = as_finite_float("d", d)
+    for name, length in (("l1", l1), ("l2", l2)):
+        if not 0.0 < as_finite_float(name, length) <= 1e3:
+            raise InvalidParameterError(name, length, "a link length in (0, 1000] m")
+    sign = int(as_sign("sign", sign))
+    l1, l2 = float(l1), float(l2)
     outer2 = (l1 + l2) ** 2 - d * d
     if outer2 <= 0.0 or d < -l1:
         return ()
@@ -220,8 +224,7 @@ class EnvelopeSample:
     def margin(self, xi: float) -> float:
         """Distance [m] from ``xi`` to the nearest bound of the feasible interval holding it
         (negative: distance to the nearest feasible interval; -inf if none); ``xi`` must be finite."""
-        if not math.isfinite(xi):
-            raise InvalidParameterError("xi", xi, "a finite position on the edge [m]")
+        xi = as_finite_float("xi", xi)
         best = -math.inf
         for lo, hi in self.feasible:
             best = max(best, min(xi - lo, hi - xi))
@@ -320,16 +323,15 @@ class FingerEnvelope:
         urdf_grid: int = 33,
         urdf_tolerance: float = 5e-5,
     ):
-        self.finger = finger
-        self.polygon = polygon
+        self.finger = expect_type("finger", finger, Finger, "a Finger")
+        self.polygon = expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
         self.edge = polygon.edge(edge)
         try:
             self.geometry = Geometry(geometry)
         except ValueError:
             raise InvalidParameterError("geometry", geometry, "'ideal' or 'urdf'") from None
-        if int(urdf_grid) < 2:
-            raise InvalidParameterError("urdf_grid", urdf_grid, "an integer >= 2")
-        if not 0.0 < urdf_tolerance <= 1e-4:
+        urdf_grid = as_integer("urdf_grid", urdf_grid, 2)
+        if not 0.0 < as_finite_float("urdf_tolerance", urdf_tolerance) <= 1e-4:
             raise InvalidParameterError("urdf_tolerance", urdf_tolerance, "a fraction in (0, 1e-4]")
         self.urdf_grid = int(urdf_grid)
         self.urdf_tolerance = float(urdf_tolerance)
@@ -337,6 +339,8 @@ class FingerEnvelope:
         self.sign = finger.configuration.sign
         self._eps = 1e-12 * (polygon.scale + self.l1 + self.l2)
         self.checker: UrdfCollisionChecker | None = None
+        if tip_clearance is not None:  # (checked in either geometry, though only 'urdf' uses it)
+            tip_clearance = as_positive_float("tip_clearance", tip_clearance, allow_zero=True)
         if self.geometry is Geometry.URDF:
             if tip_clearance is None:
                 tip_clearance = default_tip_clearance(finger)
@@ -494,6 +498,8 @@ class FingerEnvelope:
     def at(self, pose_object_in_hand: ArrayLike, time: float = 0.0) -> EnvelopeSample:
         """The envelope at one object pose ``(x [m], y [m], beta [rad])`` in the hand frame."""
         t_start = _time.perf_counter()
+        if type(time) is not float or time - time != 0.0:  # (a finite float passes without a call)
+            time = as_finite_float("time", time)
         x, y, beta = _pose_floats(pose_object_in_hand)
         frame = self._frame(x, y, beta)
         feasible_s = frame.ideal
@@ -540,4 +546,4 @@ class FingerEnvelope:
     def tip_at(self, pose_object_in_hand: ArrayLike, xi: float) -> np.ndarray:
         """Tip position [m] in the hand frame for contact ``xi`` [m] at an object pose."""
         pose = as_finite_array("pose_object_in_hand", pose_object_in_hand, (3,))
-        return pose[:2] + rotation(pose[2]) @ self.edge.point(xi)
+        return pose[:2] + rotation(pose[2]) @ self.edge.point(as_finite_float("xi", xi))

@@ -113,7 +113,7 @@ class UnknownEdgeError(RegraspError, IndexError):
     def __init__(self, edge: int, n_edges: int):
         self.edge = edge
         self.n_edges = n_edges
-        super().__init__(f"edge {edge} does not exist: the polygon has edges 0..{n_edges - 1}")
+        super().__init__(f"edge {short_repr(edge)} does not exist: the polygon has edges 0..{n_edges - 1}")
 
 
 class TrajectoryError(RegraspError, ValueError):

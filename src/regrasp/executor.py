@@ -43,7 +43,7 @@ from .grasp import Grasp
 from .hand import Hand
 from .internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
 from .reduced import ReducedModel
-from .validation import as_positive_float
+from .validation import as_duration, as_integer, as_positive_float
 
 if TYPE_CHECKING:
     from .supervisor import Measurement
@@ -112,13 +112,17 @@ class ExecutorSettings:
         for name in ("omega_n", "zeta", "prime_time", "prime_overshoot", "settle_undershoot", "arrive_tolerance",
                      "arrive_speed", "max_slide_time", "control_omega", "slide_omega"):
             as_positive_float(name, getattr(self, name))
+        for name in ("omega_n", "control_omega", "slide_omega"):  # (their squares are gains)
+            if getattr(self, name) > 1e6:
+                raise InvalidParameterError(name, getattr(self, name), "a frequency of at most 1e6 rad/s")
+        for name in ("prime_time", "max_slide_time"):
+            as_duration(name, getattr(self, name))
         as_positive_float("integral", self.integral, allow_zero=True)
         if self.friction_filter_time is not None:
             as_positive_float("friction_filter_time", self.friction_filter_time)
         for name in ("friction_min_force", "friction_resolution", "control_period"):
             as_positive_float(name, getattr(self, name))
-        if isinstance(self.max_reprimes, bool) or int(self.max_reprimes) != self.max_reprimes or self.max_reprimes < 0:
-            raise InvalidParameterError("max_reprimes", self.max_reprimes, "an integer >= 0")
+        as_integer("max_reprimes", self.max_reprimes)
         if not self.prime_overshoot_max >= self.prime_overshoot:
             raise InvalidParameterError("prime_overshoot_max", self.prime_overshoot_max,
                                         f"at least prime_overshoot = {self.prime_overshoot}")

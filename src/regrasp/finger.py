@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike
 from ._fd import captured_fd
 from .exceptions import FingerModelError, InvalidParameterError, UnreachableError
 from .planar import se3_from_planar, wrap_angle
-from .validation import as_finite_array, file_problem
+from .validation import as_finite_array, as_name, expect_type, file_problem
 
 __all__ = ["Configuration", "Finger", "LinkShape"]
 
@@ -190,8 +190,9 @@ class Finger:
         source: str | Path = "<model>",
     ):
         self.source = str(source)
-        _validate_model(model, self.source, tip_frame)
-        self.name = str(name)
+        expect_type("model", model, pin.Model, "a Pinocchio model (pin.Model)")
+        _validate_model(model, self.source, as_name("tip_frame", tip_frame))
+        self.name = as_name("name", name)
         self.configuration = Configuration.parse(configuration)
         self.base_in_hand = as_finite_array("base_in_hand", base_in_hand, (3,))
         self.tip_frame = tip_frame

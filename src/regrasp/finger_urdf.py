@@ -12,7 +12,7 @@ end of the second link.
 from __future__ import annotations
 
 from .exceptions import InvalidParameterError
-from .validation import as_positive_float
+from .validation import as_mass, as_positive_float
 
 
 def _link(name: str, length: float, radius: float, mass: float) -> str:
@@ -81,8 +81,8 @@ def planar_2r_urdf(
             raise InvalidParameterError(label, value, f"a length of at most {MAX_LINK:g} m")
     damping = as_positive_float("damping", damping, allow_zero=True)
     rho = 0.3 * 2700.0
-    m1 = as_positive_float("mass1", mass1) if mass1 is not None else rho * 3.141592653589793 * radius1**2 * l1
-    m2 = as_positive_float("mass2", mass2) if mass2 is not None else rho * 3.141592653589793 * radius2**2 * l2
+    m1 = as_mass("mass1", mass1) if mass1 is not None else rho * 3.141592653589793 * radius1**2 * l1
+    m2 = as_mass("mass2", mass2) if mass2 is not None else rho * 3.141592653589793 * radius2**2 * l2
     return (
         f'<?xml version="1.0"?>\n<robot name="{name}">\n'
         '  <link name="base"/>\n'

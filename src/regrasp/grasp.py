@@ -48,7 +48,7 @@ from .contact import ContactMode, FrictionLike, as_frictions
 from .exceptions import InvalidParameterError, SlidingContactCountError
 from .planar import rotation
 from .polygon import ConvexPolygon
-from .validation import as_finite_array
+from .validation import as_finite_array, expect_sequence_of, expect_type
 
 __all__ = ["ContactMode", "Grasp"]
 
@@ -66,11 +66,14 @@ class Grasp:
     """
 
     def __init__(self, polygon: ConvexPolygon, edges: Sequence[int], modes: Sequence[ContactMode | str]):
+        expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+        edges = expect_sequence_of("edges", edges, object, "edge indices")
+        modes = expect_sequence_of("modes", modes, object, "contact modes")
         if len(edges) != len(modes) or len(edges) == 0:
             raise InvalidParameterError("modes", modes, f"one mode per contact ({len(edges)} edges)")
         try:
             self.modes = tuple(ContactMode(m) for m in modes)
-        except ValueError:
+        except (ValueError, TypeError):
             raise InvalidParameterError("modes", modes, "'fixed' or 'sliding' for each contact") from None
         if ContactMode.SEPARATED in self.modes:
             raise InvalidParameterError("modes", modes, "'fixed' or 'sliding' for each contact (not 'separated')")

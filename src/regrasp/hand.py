@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 
 from .exceptions import InvalidParameterError, SingularFingerError
 from .finger import Finger
-from .validation import as_finite_array, as_positive_float, expect_sequence_of
+from .validation import as_finite_array, as_flag, as_positive_float, expect_sequence_of
 
 __all__ = ["Hand", "HandDynamics"]
 
@@ -87,7 +87,7 @@ class Hand:
         self.m = len(self.fingers)
         self.nq = 2 * self.m
         self.singular_threshold = as_positive_float("singular_threshold", singular_threshold)
-        self.damping_enabled = bool(damping)
+        self.damping_enabled = as_flag("damping", damping)
         self.link_mass_scale = as_positive_float("link_mass_scale", link_mass_scale)
         self._models = [pin.Model(f.model) for f in self.fingers]
         if self.link_mass_scale != 1.0:

@@ -70,6 +70,7 @@ from ._force_rows import (
 from .contact import FrictionLike, ModesLike
 from .exceptions import InvalidParameterError, RegraspError
 from .hand import block_diagonal
+from .validation import as_finite_float
 
 __all__ = [
     "ConeEdge",
@@ -106,21 +107,17 @@ class InternalForceSettings:
     def __post_init__(self):
         for name, low, strict in (("f_min", 0.0, False), ("margin", 0.0, False), ("tolerance", 0.0, True),
                                   ("target_cone_margin", 0.0, False)):
-            value = _finite(name, getattr(self, name))
+            value = as_finite_float(name, getattr(self, name))
             if value < low or (strict and value == low):
                 raise InvalidParameterError(name, value, f"a finite value {'>' if strict else '>='} {low:g}")
-        if isinstance(self.f_max, bool) or not isinstance(self.f_max, _NUMBERS) or math.isnan(self.f_max) \
-                or not self.f_max > self.f_min:
+        f_max = self.f_max
+        if not (isinstance(f_max, float) and f_max == math.inf):  # inf: no upper bound
+            try:
+                f_max = as_finite_float("f_max", f_max)
+            except InvalidParameterError:
+                f_max = math.nan  # (the error below says what f_max may be)
+        if not f_max > self.f_min:
             raise InvalidParameterError("f_max", self.f_max, f"a maximum normal force > f_min ({self.f_min}) or inf")
-
-
-_NUMBERS = (int, float, np.floating, np.integer)
-
-
-def _finite(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, _NUMBERS) or not math.isfinite(value):
-        raise InvalidParameterError(name, value, "a finite number")
-    return value
 
 
 @dataclass(frozen=True)
@@ -142,8 +139,7 @@ class ConeEdge:
     def __post_init__(self):
         if self.sign not in (-1, 1, -1.0, 1.0):
             raise InvalidParameterError("cone_edge.sign", self.sign, "+1 or -1")
-        if isinstance(self.mu, bool) or not isinstance(self.mu, _NUMBERS) \
-                or not math.isfinite(self.mu) or self.mu < 0.0:
+        if not as_finite_float("cone_edge.mu", self.mu) >= 0.0:
             raise InvalidParameterError("cone_edge.mu", self.mu, "a finite friction coefficient >= 0")
         object.__setattr__(self, "sign", float(self.sign))
         object.__setattr__(self, "mu", float(self.mu))

@@ -320,6 +320,7 @@ def plan_scenario(
     progress: Progress | None = None,
 ) -> PlanResult:
     """Run the planner on a loaded scenario (``samples``/``geometry`` override its settings)."""
+    expect_type("scenario", scenario, Scenario, "a Scenario (regrasp.load_scenario)")
     if samples is not None:
         samples = as_sample_count("samples", samples)
     return plan(

@@ -65,7 +65,8 @@ from .events import EventKind
 from ._scalar import solve_small as _solve_small
 from .hand import Hand, _condition
 from .polygon import ConvexPolygon
-from .validation import as_finite_array, as_finite_float, as_positive_float
+from .validation import (as_finite_array, as_finite_float, as_flag, as_inertia, as_integer, as_mass, as_positive_float,
+                         expect_sequence_of, expect_type)
 
 __all__ = ["Plant", "PlantContact", "PlantEvent", "PlantState", "PlantStep"]
 
@@ -128,7 +129,10 @@ class PlantContact:
     xi: float = 0.0
     sign: float = 1.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
+        self.edge = as_integer("edge", self.edge)
+        self.xi = as_finite_float("xi", self.xi)
+        self.sign = as_finite_float("sign", self.sign)
         if type(self.mode) is not ContactMode:
             try:
                 self.mode = as_modes((self.mode,))[0]
@@ -240,6 +244,9 @@ class Plant:
         stop_on: Sequence[str] = ("separation", "left_edge", "collision", "singular"),
         contact_events: bool = True,
     ):
+        expect_type("hand", hand, Hand, "a Hand")
+        expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+        contacts = expect_sequence_of("contacts", contacts, PlantContact, "PlantContact")
         if len(contacts) != hand.m:
             raise InvalidParameterError("contacts", contacts, f"one contact per finger ({hand.m})")
         self.hand = hand
@@ -248,8 +255,8 @@ class Plant:
         self.friction = as_frictions(friction, hand.m)
         self._static = [f.static for f in self.friction]
         self._kinetic = [f.kinetic for f in self.friction]
-        self.mass = as_positive_float("object_mass", polygon.mass if object_mass is None else object_mass)
-        self.inertia = as_positive_float("object_inertia",
+        self.mass = as_mass("object_mass", polygon.mass if object_mass is None else object_mass)
+        self.inertia = as_inertia("object_inertia",
                                          polygon.inertia if object_inertia is None else object_inertia)
         self.dt = as_positive_float("dt", dt)
         if self.dt > MAX_DT:
@@ -260,9 +267,9 @@ class Plant:
             raise InvalidParameterError("stop_on", stop_on, f"a sequence of plant event kinds "
                                         f"({', '.join(sorted(_PLANT_KINDS))})")
         self.stop_on = frozenset(EventKind(k) for k in stop_on)
-        self.contact_events = bool(contact_events)
+        self.contact_events = as_flag("contact_events", contact_events)
         self.checkers = None
-        if collision_check:
+        if as_flag("collision_check", collision_check):
             self.checkers = []
             for f in hand.fingers:
                 clearance = default_tip_clearance(f) if tip_clearance is None else tip_clearance

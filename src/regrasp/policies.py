@@ -33,6 +33,7 @@ from .exceptions import InvalidParameterError, RegraspError
 from .executor import ContactPhase, SlideEnd, SlideOrder
 from .monitor import EnvelopeReading
 from .schedule import RegraspSchedule, Slide
+from .validation import as_finite_float, as_positive_float
 
 if TYPE_CHECKING:
     from .supervisor import Measurement
@@ -97,10 +98,8 @@ class ScheduledSettings:
 
     def __post_init__(self):
         for name in ("prime_lead", "time_tolerance", "xi_tolerance", "replan_cooldown"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
-                raise InvalidParameterError(name, value, "a finite number >= 0")
-        if not 0.0 <= self.margin_fraction < 1.0:
+            as_positive_float(name, getattr(self, name), allow_zero=True)
+        if not 0.0 <= as_finite_float("margin_fraction", self.margin_fraction) < 1.0:
             raise InvalidParameterError("margin_fraction", self.margin_fraction, "a fraction in [0, 1)")
         if isinstance(self.max_replans, bool) or int(self.max_replans) != self.max_replans or self.max_replans < 0:
             raise InvalidParameterError("max_replans", self.max_replans, "an integer >= 0")

@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike
 
 from .exceptions import InvalidParameterError, PolygonError, UnknownEdgeError
 from .planar import cross, perp, transform_points
-from .validation import as_finite_array, as_positive_float
+from .validation import as_finite_array, as_inertia, as_mass, as_positive_float
 
 #: Relative tolerance (times the polygon's diameter) for coincident vertices.
 REPEATED_VERTEX_RTOL = 1e-12
@@ -262,8 +262,8 @@ class ConvexPolygon:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "vertices", _readonly(_validated_ccw_vertices(self.vertices)))
-        object.__setattr__(self, "mass", as_positive_float("mass", self.mass))
-        object.__setattr__(self, "inertia", as_positive_float("inertia", self.inertia))
+        object.__setattr__(self, "mass", as_mass("mass", self.mass))
+        object.__setattr__(self, "inertia", as_inertia("inertia", self.inertia))
 
     # ------------------------------------------------------------------ constructors
     @classmethod
@@ -310,9 +310,9 @@ class ConvexPolygon:
                 "density) or density [kg/m^2]",
             )
         if mass is not None:
-            mass = as_positive_float("mass", mass)
+            mass = as_mass("mass", mass)
         if inertia is not None:
-            inertia = as_positive_float("inertia", inertia)
+            inertia = as_inertia("inertia", inertia)
         if density is not None:
             density = as_positive_float("density", density)
 

@@ -40,7 +40,7 @@ from .contact import FrictionLike, as_frictions
 from .exceptions import InvalidParameterError
 from .grasp import Grasp
 from .hand import Hand, HandDynamics
-from .validation import as_finite_array, as_finite_vectors, as_positive_float
+from .validation import as_finite_array, as_finite_vectors, as_inertia, as_mass, expect_type
 
 __all__ = ["ReducedModel", "ReducedState"]
 
@@ -113,13 +113,15 @@ class ReducedModel:
 
     def __init__(self, hand: Hand, grasp: Grasp, xi: ArrayLike, *, object_mass: float | None = None,
                  object_inertia: float | None = None):
+        expect_type("hand", hand, Hand, "a Hand")
+        expect_type("grasp", grasp, Grasp, "a Grasp")
         if hand.m != grasp.m:
             raise InvalidParameterError("grasp", grasp.m, f"one contact per finger ({hand.m})")
         self.hand = hand
         self.grasp = grasp
         self.xi = as_finite_array("xi", xi, (grasp.m,)).copy()
-        mass = as_positive_float("object_mass", grasp.polygon.mass if object_mass is None else object_mass)
-        inertia = as_positive_float("object_inertia",
+        mass = as_mass("object_mass", grasp.polygon.mass if object_mass is None else object_mass)
+        inertia = as_inertia("object_inertia",
                                     grasp.polygon.inertia if object_inertia is None else object_inertia)
         self.object_mass = mass
         self.object_inertia = inertia

@@ -40,7 +40,8 @@ from .internal_force import (
     build_internal_force_qp,
     solve_internal_force_qp,
 )
-from .validation import as_finite_array, as_finite_float, as_positive_float
+from .validation import (as_finite_array, as_finite_float, as_inertia, as_integer, as_mass, as_sign,
+                         expect_type)
 
 __all__ = ["SlideFeasibility", "SlideObstacle", "sliding_feasibility"]
 
@@ -119,13 +120,14 @@ def sliding_feasibility(
         edge_mu: The slider's ratio t_j·f_j / (s n_j·f_j) [-], >= 0, instead of its μ_k (e.g. μ_s + an
             overshoot, for a slide that must first break away).
     """
-    m = grasp.m
-    if solver is not None and solver.settings != settings:
+    m = expect_type("grasp", grasp, Grasp, "a Grasp").m
+    expect_type("settings", settings, InternalForceSettings, "an InternalForceSettings")
+    if solver is not None and expect_type("solver", solver, InternalForceSolver, "an InternalForceSolver or None"
+                                          ).settings != settings:
         raise InvalidParameterError("solver", solver.settings, f"a solver with the same settings ({settings})")
-    if not 0 <= contact < m:
+    if not as_integer("contact", contact) < m:
         raise InvalidParameterError("contact", contact, f"a contact index in 0..{m - 1}")
-    if direction not in (-1, 1, -1.0, 1.0):
-        raise InvalidParameterError("direction", direction, "+1 or -1")
+    direction = as_sign("direction", direction)
     frictions = as_frictions(friction, m)
     if edge_mu is None:
         edge_mu = frictions[contact].kinetic
@@ -133,8 +135,8 @@ def sliding_feasibility(
         edge_mu = as_finite_float("edge_mu", edge_mu)
         if edge_mu < 0.0:
             raise InvalidParameterError("edge_mu", edge_mu, "a friction ratio >= 0")
-    object_mass = as_positive_float("object_mass", object_mass)
-    object_inertia = as_positive_float("object_inertia", object_inertia)
+    object_mass = as_mass("object_mass", object_mass)
+    object_inertia = as_inertia("object_inertia", object_inertia)
     pose = as_finite_array("pose", pose, (3,))
     xi = as_finite_array("xi", xi, (m,))
     acc = as_finite_array("object_acceleration", object_acceleration, (3,))

@@ -43,7 +43,7 @@ from .policies import Policy
 from .policy_paper import PaperPolicy
 from .polygon import ConvexPolygon
 from .trajectory import Trajectory, TrajectorySample
-from .validation import as_finite_array, as_positive_float
+from .validation import as_duration, as_finite_array, as_finite_float, as_inertia, as_mass
 
 __all__ = [
     "ContactPhase",
@@ -164,12 +164,12 @@ class SupervisorSettings:
     def __post_init__(self):
         self.executor_settings()  # the executor's fields are checked where they are used
         for name in ("reaction_time", "target_horizon", "recheck_time", "enabling_recheck_time"):
-            as_positive_float(name, getattr(self, name))
+            as_duration(name, getattr(self, name))
         for name, least in (("path_checks", 1), ("enabling_candidates", 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or int(value) != value or value < least:
                 raise InvalidParameterError(name, value, f"an integer >= {least}")
-        if not 0.0 < self.danger_fraction < 0.5:
+        if not 0.0 < as_finite_float("danger_fraction", self.danger_fraction) < 0.5:
             raise InvalidParameterError("danger_fraction", self.danger_fraction, "a fraction in (0, 0.5)")
         if isinstance(self.envelope_every, bool) or int(self.envelope_every) != self.envelope_every \
                 or self.envelope_every < 1:
@@ -321,8 +321,8 @@ class RegraspSupervisor:
         self.trajectory = trajectory
         self.settings = settings
         friction = as_frictions(friction, m)
-        mass = as_positive_float("object_mass", polygon.mass if object_mass is None else object_mass)
-        inertia = as_positive_float("object_inertia", polygon.inertia if object_inertia is None else object_inertia)
+        mass = as_mass("object_mass", polygon.mass if object_mass is None else object_mass)
+        inertia = as_inertia("object_inertia", polygon.inertia if object_inertia is None else object_inertia)
         self.names = tuple(f.name for f in hand.fingers)
         grasp = Grasp(polygon, edges, [ContactMode.FIXED] * m)
         self.context = SupervisorContext(hand, polygon, grasp, trajectory, friction, mass, inertia, plan, self.names)

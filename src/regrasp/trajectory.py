@@ -14,7 +14,6 @@ slack are clamped onto the domain.
 from __future__ import annotations
 
 import math
-import numbers
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
@@ -23,7 +22,7 @@ from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
 from .exceptions import InvalidParameterError, TrajectoryError
-from .validation import MAX_DURATION, as_finite_array, as_finite_float
+from .validation import MAX_DURATION, as_finite_array, as_finite_float, as_sample_count
 
 #: Relative slack on the time domain (times max(1, |t_start|, |t_end|)).
 DOMAIN_RTOL = 1e-12
@@ -120,10 +119,9 @@ class Trajectory(ABC):
         return TrajectorySample(arr, pose, vel, acc)
 
     def times(self, n: int) -> np.ndarray:
-        """``n`` >= 2 uniformly spaced times [s] from ``t_start`` to ``t_end`` inclusive."""
-        if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 2:
-            raise InvalidParameterError("n", n, "an integer number of samples >= 2")
-        return np.linspace(self.t_start, self.t_end, int(n))
+        """``n`` uniformly spaced times [s] from ``t_start`` to ``t_end`` inclusive (2 <= n <=
+        :data:`~regrasp.validation.MAX_SAMPLES`)."""
+        return np.linspace(self.t_start, self.t_end, as_sample_count("n", n))
 
 
 def _check_domain(t_start: float, t_end: float) -> None:

@@ -58,6 +58,8 @@ def as_finite_array(name: str, value: object, shape: tuple[int, ...] | None = No
 
 def as_finite_float(name: str, value: object) -> float:
     """``value`` as a finite float (a number: not a bool, a string or a complex number)."""
+    if type(value) is float and value - value == 0.0:  # the common case first (NaN and inf fail the test)
+        return value
     if isinstance(value, _NOT_NUMBERS) or value is None or (isinstance(value, np.ndarray) and value.ndim > 0):
         raise InvalidParameterError(name, value, "a number")
     try:
@@ -112,12 +114,17 @@ def as_sample_count(name: str, value: object) -> int:
 MAX_DURATION = 3600.0
 
 
+def _positive_at_most(name: str, value: object, limit: float, expected: str) -> float:
+    """``value`` as a float in (0, ``limit``], else an error saying ``expected``."""
+    out = as_positive_float(name, value)
+    if out > limit:
+        raise InvalidParameterError(name, value, expected)
+    return out
+
+
 def as_duration(name: str, value: object) -> float:
     """``value`` as a simulated duration [s]: a number in (0, :data:`MAX_DURATION`]."""
-    out = as_positive_float(name, value)
-    if out > MAX_DURATION:
-        raise InvalidParameterError(name, value, f"a duration of at most {MAX_DURATION:g} s")
-    return out
+    return _positive_at_most(name, value, MAX_DURATION, f"a duration of at most {MAX_DURATION:g} s")
 
 
 def expect_type(name: str, value: _T, kind: type | tuple[type, ...], what: str) -> _T:
@@ -148,3 +155,49 @@ def file_problem(path: Path, what: str = "file") -> str | None:
         reason = getattr(exc, "strerror", None) or str(exc)
         return f"not a usable file name ({type(exc).__name__}: {reason})"
     return None if found else f"{what} not found"
+
+
+def as_integer(name: str, value: object, least: int = 0) -> int:
+    """``value`` as an int >= ``least`` (an integer, Python's or numpy's; not a bool, a float or a string)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < least:
+        raise InvalidParameterError(name, value, f"an integer >= {least}")
+    return int(value)
+
+
+def as_flag(name: str, value: object) -> bool:
+    """``value`` if it is True or False (Python's or numpy's), else an error (no truthiness of other values)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InvalidParameterError(name, value, "True or False")
+    return bool(value)
+
+
+def as_name(name: str, value: object) -> str:
+    """``value`` as a non-empty string (a finger's, a frame's name)."""
+    if not isinstance(value, str) or not value:
+        raise InvalidParameterError(name, value, "a non-empty string")
+    return value
+
+
+#: The heaviest object or link [kg], and the largest rotational inertia [kg m^2], a hand model takes: far above any
+#: hand's (a test models an immovable wall as 1e9 kg), and low enough that forces (mass times gravity or
+#: acceleration) stay far from overflow.
+MAX_MASS = 1e12
+MAX_INERTIA = 1e12
+
+
+def as_mass(name: str, value: object) -> float:
+    """``value`` as a mass [kg] in (0, :data:`MAX_MASS`]."""
+    return _positive_at_most(name, value, MAX_MASS, f"a mass of at most {MAX_MASS:g} kg")
+
+
+def as_inertia(name: str, value: object) -> float:
+    """``value`` as a rotational inertia [kg m^2] in (0, :data:`MAX_INERTIA`]."""
+    return _positive_at_most(name, value, MAX_INERTIA, f"an inertia of at most {MAX_INERTIA:g} kg m^2")
+
+
+def as_sign(name: str, value: object) -> float:
+    """``value`` as a direction +1.0 or -1.0 (an int or a float equal to ±1; not a bool or an array)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or value not in (-1, 1):
+        raise InvalidParameterError(name, value, "+1 or -1")
+    return float(value)
