@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import regrasp as R
 from regrasp.exceptions import RegraspError
@@ -148,3 +150,33 @@ def test_each_argument_bad_in_turn_is_a_typed_error_or_a_finite_result(entry):
             elif not finite(out) and (entry, key) not in INF_ALLOWED:
                 problems.append(f"{key}={bad!r:.30}: a result with NaN or inf")
     assert problems == [], "\n".join(problems)
+
+
+SLOTS = [(entry, key) for entry, (_, args, kwargs) in ENTRIES.items() for key in [*range(len(args)), *kwargs]]
+generated = st.recursive(
+    st.one_of(st.booleans(), st.none(), st.text(max_size=4), st.complex_numbers(allow_nan=True),
+              st.floats(allow_nan=True, allow_infinity=True), st.integers(-(10**400), 10**400),
+              st.sampled_from([np.float32("nan"), np.int64(-1), np.bool_(True), np.zeros(0), np.full(3, np.inf)])),
+    lambda children: st.lists(children, max_size=4), max_leaves=6)
+
+
+@settings(derandomize=True, database=None, max_examples=400, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(SLOTS), generated)
+def test_a_generated_bad_argument_is_a_typed_error_or_a_finite_result(slot, value):
+    """The same property, with hypothesis drawing the entry point, the argument and the value (nested lists of
+    booleans, strings, complex numbers, NaN, inf, huge integers and numpy scalars)."""
+    entry, key = slot
+    fn, args, kwargs = ENTRIES[entry]
+    a, k = list(args), dict(kwargs)
+    if isinstance(key, int):
+        a[key] = value
+    else:
+        k[key] = value
+    try:
+        out = fn(*a, **k)
+    except RegraspError as exc:
+        assert "\n" not in str(exc) and len(str(exc)) <= 400, str(exc)
+        return
+    assert not isinstance(value, complex), (entry, key, value)  # no argument is a complex number
+    assert finite(out) or (entry, key) in INF_ALLOWED, (entry, key, value)
