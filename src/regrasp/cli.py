@@ -21,7 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ._cli_args import number_argument
 from .exceptions import RegraspError
+from .validation import MAX_SAMPLES
 
 __all__ = ["main"]
 
@@ -177,26 +179,8 @@ def _cmd_plan(args) -> int:
     return 0 if result.feasible and error is None else 1
 
 
-def _nonnegative(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (value >= 0.0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
-    return value
-
-
-def _samples(text: str) -> int:
-    from .validation import MAX_SAMPLES
-
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer in [2, {MAX_SAMPLES}], got {text!r}") from None
-    if not 2 <= value <= MAX_SAMPLES:
-        raise argparse.ArgumentTypeError(f"expected an integer in [2, {MAX_SAMPLES}], got {value}")
-    return value
+_nonnegative = number_argument(float, "a finite number >= 0", lambda v: 0.0 <= v < float("inf"))
+_samples = number_argument(int, f"an integer in [2, {MAX_SAMPLES}]", lambda v: 2 <= v <= MAX_SAMPLES)
 
 
 def output_directory(option: str, path: str | os.PathLike[str]) -> Path:
@@ -242,6 +226,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .cli_simulate import add_parser
 
     add_parser(sub, _ProgressBar, _nonnegative)
+    from .cli_study import add_study_parser
+
+    add_study_parser(sub, _ProgressBar)
     return parser
 
 

@@ -18,6 +18,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from ._cli_args import number_argument
 from ._fd import captured_fd
 from .events import EventKind, FailureKind
 
@@ -28,16 +29,8 @@ DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "examples" / "scenarios
     "paper_trajectory_2_three_fingers.toml"
 
 
-def _positive(kind):
-    def parse(text: str):
-        try:
-            value = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a {kind.__name__} > 0, got {text!r}") from None
-        if not (value > 0 and value < float("inf")):
-            raise argparse.ArgumentTypeError(f"expected a finite {kind.__name__} > 0, got {text!r}")
-        return value
-    return parse
+def _positive(kind: type) -> Callable[[str], float]:
+    return number_argument(kind, f"a finite {kind.__name__} > 0", lambda v: 0 < v < float("inf"))
 
 
 def add_parser(sub: argparse._SubParsersAction, progress_bar: Callable[[str], Callable[[int, int], None]],
