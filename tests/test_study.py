@@ -43,7 +43,12 @@ def test_draws_are_seeded_per_run_and_inside_the_half_widths():
     mu = np.array([d.mu_scale for d in draws])
     assert 0.8 <= mass.min() and mass.max() <= 1.2 and 0.9 <= mu.min() and mu.max() <= 1.1
     assert mass.std() > 0.05 and abs(np.corrcoef(mass, mu)[0, 1]) < 0.4  # spread, and drawn independently
-    assert all(d.mass_scale == 1.0 and d.mu_scale == 1.0 for d in draw_runs(3, 0, Perturbation()))
+    assert all(d.mass_scale == d.mu_scale == d.inertia_scale == d.link_mass_scale == 1.0
+               for d in draw_runs(3, 0, Perturbation()))
+    full = draw_runs(200, 3, Perturbation(mass=0.2, mu=0.2, inertia=0.2, link_mass=0.2))
+    factors = np.array([[d.mass_scale, d.mu_scale, d.inertia_scale, d.link_mass_scale] for d in full])
+    assert (factors >= 0.8).all() and (factors <= 1.2).all()
+    assert np.abs(np.corrcoef(factors.T) - np.eye(4)).max() < 0.25  # four independent draws
     for bad in (dict(mass=1.0), dict(mu=-0.1), dict(mass=math.nan), dict(mu="0.1")):
         with pytest.raises(InvalidParameterError):
             Perturbation(**bad)
@@ -75,3 +80,20 @@ def test_bad_study_arguments_exit_2_with_one_line(capsys, args):
         code = exc.code
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and err[-1].startswith(("regrasp study: error:", "regrasp: error:")), err
+
+
+def test_the_plant_gets_the_drawn_errors_and_the_controllers_keep_the_model():
+    from regrasp import build_rollout, load_scenario
+
+    sc = load_scenario(SCENARIO)
+    r = build_rollout(sc, policy="none", duration=0.1, plant_mass_scale=1.1, plant_inertia_scale=0.85,
+                      plant_mu_scale=0.9, plant_link_mass_scale=1.2)
+    assert r.plant.mass == pytest.approx(1.1 * sc.polygon.mass)
+    assert r.plant.inertia == pytest.approx(0.85 * sc.polygon.inertia)
+    assert r.plant.friction[0].static == pytest.approx(0.9 * sc.friction[0].static)
+    assert r.plant.hand.link_mass_scale == 1.2
+    assert r.supervisor.hand.link_mass_scale == 1.0
+    q = np.zeros(r.plant.hand.nq) + 0.3
+    plant_m = r.plant.hand.dynamics(q, np.zeros_like(q)).mass_matrix
+    model_m = r.supervisor.hand.dynamics(q, np.zeros_like(q)).mass_matrix
+    np.testing.assert_allclose(plant_m, 1.2 * model_m, rtol=1e-12, atol=1e-15)  # M is linear in the link inertias

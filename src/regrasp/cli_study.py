@@ -55,18 +55,24 @@ def add_study_parser(sub: argparse._SubParsersAction,
                    help="the plant's object mass and inertia: the model's times U(1-H, 1+H) (default 0)")
     p.add_argument("--mu", type=_half_width, default=0.0, metavar="H",
                    help="the plant's friction coefficients: the model's times U(1-H, 1+H) (default 0)")
+    p.add_argument("--inertia", type=_half_width, default=0.0, metavar="H",
+                   help="the plant's object inertia: the model's times U(1-H, 1+H), drawn on its own (default 0)")
+    p.add_argument("--link-mass", type=_half_width, default=0.0, metavar="H",
+                   help="the plant's finger link masses and inertias: the URDFs' times U(1-H, 1+H) (default 0)")
     p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
     p.add_argument("--plot", metavar="DIR", help="write study_outcomes.png and study_failure_times.png into DIR")
     p.set_defaults(func=lambda args: _cmd_study(args, progress_bar))
 
 
 def _summary(result: StudyResult) -> str:
+    from dataclasses import asdict
+
     import numpy as np
 
     lo, hi = result.interval
     runs = result.runs
     lines = [f"regrasp study: {Path(result.scenario).name}, {len(runs)} runs of {result.duration:.4g} s, seed "
-             f"{result.seed}, mass ±{result.perturbation.mass:.0%}, mu ±{result.perturbation.mu:.0%}",
+             f"{result.seed}, " + ", ".join(f"{k} ±{v:.0%}" for k, v in asdict(result.perturbation).items()),
              f"  success: {result.successes}/{len(runs)} = {result.success_rate:.1%} (Wilson 95 %: "
              f"[{lo:.1%}, {hi:.1%}])"]
     for kind, count in sorted(result.failures.items()):
@@ -121,7 +127,7 @@ def _cmd_study(args: argparse.Namespace, progress_bar: Callable[[str], Callable[
     load_scenario(path)  # a bad file is exit 2 before any work
     directory = output_directory("--plot", args.plot) if args.plot else None
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-    result = run_study(path, args.runs, seed=args.seed, perturbation=Perturbation(args.mass, args.mu),
+    result = run_study(path, args.runs, seed=args.seed, perturbation=Perturbation(args.mass, args.mu, args.inertia, args.link_mass),
                        duration=args.duration, periods=args.periods, workers=min(workers, args.runs),
                        progress=None if args.json else progress_bar(f"{args.runs} runs"))
     figures = _plots(result, directory) if directory is not None else []

@@ -177,7 +177,8 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
                   regrasp_settings: RegraspSettings | None = None, schedule: RegraspSchedule | None = None,
                   scheduled_settings: ScheduledSettings = ScheduledSettings(), dt: float = 1e-3,
                   xi0: ArrayLike | None = None, plant_friction: FrictionLike | None = None,
-                  plant_mass_scale: float = 1.0, plant_mu_scale: float = 1.0, replan: bool = True,
+                  plant_mass_scale: float = 1.0, plant_mu_scale: float = 1.0,
+                  plant_inertia_scale: float | None = None, plant_link_mass_scale: float = 1.0, replan: bool = True,
                   plan_progress: Callable[[int, int], None] | None = None) -> Rollout:
     """Plant + supervisor for ``scenario``, every contact fixed at the start.
 
@@ -199,6 +200,10 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
             scenario's, times ``plant_mu_scale``).
         plant_mass_scale: The plant's object mass and inertia are this times the scenario's (the
             controllers keep the scenario's) [-].
+        plant_inertia_scale: The plant's object inertia is this times the scenario's instead [-] (None: the
+            mass's scale).
+        plant_link_mass_scale: The plant's finger links' masses and inertias are this times the URDFs' (the
+            controllers keep the URDFs') [-].
         plant_mu_scale: The plant's μ_s and μ_k are this times the scenario's [-].
         replan: Let the scheduled policy re-plan.
         plan_progress: Passed to :func:`~regrasp.schedule_planner.plan_regrasps` as ``progress``.
@@ -212,6 +217,9 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
         raise InvalidParameterError("policy", policy, f"one of {', '.join(POLICIES)}")
     mass_scale = as_positive_float("plant_mass_scale", plant_mass_scale)
     mu_scale = as_positive_float("plant_mu_scale", plant_mu_scale)
+    inertia_scale = mass_scale if plant_inertia_scale is None else as_positive_float("plant_inertia_scale",
+                                                                                     plant_inertia_scale)
+    link_scale = as_positive_float("plant_link_mass_scale", plant_link_mass_scale)
     regrasp_settings = RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN) if regrasp_settings is None \
         else expect_type("regrasp_settings", regrasp_settings, RegraspSettings, "a RegraspSettings")
     if schedule is not None:
@@ -258,9 +266,11 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
     st = ReducedModel(hand, Grasp(scenario.polygon, edges, [ContactMode.FIXED] * m), xi0).state(X0, V0)
     if plant_friction is None:
         plant_friction = tuple(Friction(f.static * mu_scale, f.kinetic * mu_scale) for f in friction)
-    plant = Plant(hand, scenario.polygon, [PlantContact(e, ContactMode.FIXED, x) for e, x in zip(edges, xi0)],
+    plant_hand = hand if link_scale == 1.0 else Hand(list(hand.fingers), gravity_in_hand=scenario.gravity_in_hand,
+                                                      link_mass_scale=link_scale)
+    plant = Plant(plant_hand, scenario.polygon, [PlantContact(e, ContactMode.FIXED, x) for e, x in zip(edges, xi0)],
                   friction=plant_friction, object_mass=scenario.polygon.mass * mass_scale,
-                  object_inertia=scenario.polygon.inertia * mass_scale, dt=dt)
+                  object_inertia=scenario.polygon.inertia * inertia_scale, dt=dt)
     plant.reset(st.q, st.q_dot, X0, V0, t=traj.t_start)
     return Rollout(plant, supervisor, duration, names, policy, schedule, run_scenario)
 

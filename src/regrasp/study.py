@@ -7,8 +7,10 @@ The draws, and so the results, are the same however many workers run them, and i
 Perturbations (:class:`Perturbation`), each a relative half-width :math:`h` [-]: the plant's value is the
 model's times a factor drawn uniformly from :math:`[1 - h, 1 + h]`:
 
-* ``mass``: the object's mass and rotational inertia together;
-* ``mu``: every fingertip's :math:`\mu_s` and :math:`\mu_k` together.
+* ``mass``: the object's mass;
+* ``inertia``: the object's rotational inertia (drawn on its own);
+* ``mu``: every fingertip's :math:`\mu_s` and :math:`\mu_k` together;
+* ``link_mass``: every finger link's mass and inertia (one factor for all links).
 
 The controllers and the planner keep the model's values. The success rate comes with a Wilson score
 interval (:func:`wilson_interval`).
@@ -62,15 +64,19 @@ class Perturbation:
     """Relative half-widths [-] of the plant's model errors (0: the model's value exactly).
 
     Attributes:
-        mass: The object's mass and inertia, times U(1 - mass, 1 + mass).
+        mass: The object's mass, times U(1 - mass, 1 + mass).
         mu: Every fingertip's μ_s and μ_k, times U(1 - mu, 1 + mu).
+        inertia: The object's rotational inertia, times U(1 - inertia, 1 + inertia).
+        link_mass: The finger links' masses and inertias, times U(1 - link_mass, 1 + link_mass).
     """
 
     mass: float = 0.0
     mu: float = 0.0
+    inertia: float = 0.0
+    link_mass: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("mass", "mu"):
+        for name in ("mass", "mu", "inertia", "link_mass"):
             if not 0.0 <= as_finite_float(name, getattr(self, name)) < 1.0:
                 raise InvalidParameterError(name, getattr(self, name), "a relative half-width in [0, 1)")
 
@@ -82,14 +88,18 @@ class RunDraw:
     Attributes:
         index: The run's number in the study (0-based).
         entropy: The run's seed, as the spawned ``SeedSequence``'s words (to repeat the run alone).
-        mass_scale: The plant's object mass and inertia over the model's [-].
+        mass_scale: The plant's object mass over the model's [-].
         mu_scale: The plant's μ over the model's [-].
+        inertia_scale: The plant's object inertia over the model's [-].
+        link_mass_scale: The plant's link masses and inertias over the URDFs' [-].
     """
 
     index: int
     entropy: tuple[int, ...]
     mass_scale: float
     mu_scale: float
+    inertia_scale: float = 1.0
+    link_mass_scale: float = 1.0
 
 
 def draw_runs(runs: int, seed: int, perturbation: Perturbation) -> tuple[RunDraw, ...]:
@@ -101,9 +111,10 @@ def draw_runs(runs: int, seed: int, perturbation: Perturbation) -> tuple[RunDraw
     out = []
     for i, child in enumerate(np.random.SeedSequence(as_integer("seed", seed)).spawn(runs)):
         rng = np.random.default_rng(child)
-        mass, mu = rng.uniform(-1.0, 1.0, 2)
-        out.append(RunDraw(i, tuple(int(w) for w in child.generate_state(4)), 1.0 + perturbation.mass * float(mass),
-                           1.0 + perturbation.mu * float(mu)))
+        mass, mu, inertia, links = rng.uniform(-1.0, 1.0, 4).tolist()
+        p = perturbation
+        out.append(RunDraw(i, tuple(int(w) for w in child.generate_state(4)), 1.0 + p.mass * mass, 1.0 + p.mu * mu,
+                           1.0 + p.inertia * inertia, 1.0 + p.link_mass * links))
     return tuple(out)
 
 
@@ -142,7 +153,8 @@ def _run(job: tuple[str, RunDraw, object, float]) -> RunOutcome:
 
     path, draw, schedule, duration = job
     rollout = build_rollout(load_scenario(path), duration=duration, schedule=schedule,
-                            plant_mass_scale=draw.mass_scale, plant_mu_scale=draw.mu_scale)
+                            plant_mass_scale=draw.mass_scale, plant_mu_scale=draw.mu_scale,
+                            plant_inertia_scale=draw.inertia_scale, plant_link_mass_scale=draw.link_mass_scale)
     r = rollout.run(interruptible=False)
     return RunOutcome(draw, r.success, None if r.failure is None else r.failure.kind.value,
                       None if r.failure is None else r.failure.time, r.min_cone_margin, r.min_envelope_margin,
