@@ -19,6 +19,7 @@ interval (:func:`wilson_interval`).
 from __future__ import annotations
 
 import math
+import multiprocessing
 import time
 from collections import Counter
 from collections.abc import Callable
@@ -239,7 +240,9 @@ def run_study(scenario_path: str | Path, runs: int, *, seed: int = 0, perturbati
             if progress is not None:
                 progress(len(outcomes), len(jobs))
     else:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        # "spawn", not Linux's default "fork": the parent has run OpenMP code (planning), and forking such a
+        # process aborts the child ("fork() called from a process already using GNU OpenMP")
+        with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
             for outcome in pool.map(_run, jobs):
                 outcomes.append(outcome)
                 if progress is not None:
