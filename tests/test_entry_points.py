@@ -124,20 +124,32 @@ def finite(value, depth: int = 0) -> bool:
     return True
 
 
+def keys_of(entry: str) -> list:
+    """The entry's argument slots: positions, then keyword names."""
+    _, args, kwargs = ENTRIES[entry]
+    return [*range(len(args)), *kwargs]
+
+
+def call_with(entry: str, key, value):
+    """The entry's valid call with the argument at ``key`` replaced by ``value``."""
+    fn, args, kwargs = ENTRIES[entry]
+    a, k = list(args), dict(kwargs)
+    if isinstance(key, int):
+        a[key] = value
+    else:
+        k[key] = value
+    return fn(*a, **k)
+
+
 @pytest.mark.parametrize("entry", list(ENTRIES), ids=list(ENTRIES))
 def test_each_argument_bad_in_turn_is_a_typed_error_or_a_finite_result(entry):
     fn, args, kwargs = ENTRIES[entry]
     fn(*args, **kwargs)  # the valid call works
     problems = []
-    for key in [*range(len(args)), *kwargs]:
+    for key in keys_of(entry):
         for bad in BAD:
-            a, k = list(args), dict(kwargs)
-            if isinstance(key, int):
-                a[key] = bad
-            else:
-                k[key] = bad
             try:
-                out = fn(*a, **k)
+                out = call_with(entry, key, bad)
             except RegraspError as exc:
                 if "\n" in str(exc) or len(str(exc)) > 400:
                     problems.append(f"{key}={bad!r:.30}: a message of {len(str(exc))} characters or several lines")
@@ -152,7 +164,7 @@ def test_each_argument_bad_in_turn_is_a_typed_error_or_a_finite_result(entry):
     assert problems == [], "\n".join(problems)
 
 
-SLOTS = [(entry, key) for entry, (_, args, kwargs) in ENTRIES.items() for key in [*range(len(args)), *kwargs]]
+SLOTS = [(entry, key) for entry in ENTRIES for key in keys_of(entry)]
 generated = st.recursive(
     st.one_of(st.booleans(), st.none(), st.text(max_size=4), st.complex_numbers(allow_nan=True),
               st.floats(allow_nan=True, allow_infinity=True), st.integers(-(10**400), 10**400),
@@ -167,14 +179,8 @@ def test_a_generated_bad_argument_is_a_typed_error_or_a_finite_result(slot, valu
     """The same property, with hypothesis drawing the entry point, the argument and the value (nested lists of
     booleans, strings, complex numbers, NaN, inf, huge integers and numpy scalars)."""
     entry, key = slot
-    fn, args, kwargs = ENTRIES[entry]
-    a, k = list(args), dict(kwargs)
-    if isinstance(key, int):
-        a[key] = value
-    else:
-        k[key] = value
     try:
-        out = fn(*a, **k)
+        out = call_with(entry, key, value)
     except RegraspError as exc:
         assert "\n" not in str(exc) and len(str(exc)) <= 400, str(exc)
         return

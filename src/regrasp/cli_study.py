@@ -110,6 +110,7 @@ def _plots(result: StudyResult, directory: Path) -> list[Path]:
     ax.hist([r.failure_time for r in bad], bins=20, range=(0.0, result.duration))
     ax.set_xlabel("failure time [s]")
     ax.set_ylabel("runs")
+    ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.set_title(f"{len(bad)} failures")
     times = directory / "study_failure_times.png"
     fig.savefig(times, dpi=120, bbox_inches="tight")
