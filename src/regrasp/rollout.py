@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .contact import ContactMode, Friction, FrictionLike
+from .disturbance import ActuatorNoise, Disturbance, SensorNoise
 from .events import PLANT_FAILURES, EventKind, EventSource, Failure, FailureKind
 from .exceptions import InvalidParameterError
 from .executor import SLIPPING_PHASES, ContactPhase
@@ -46,7 +47,7 @@ from .schedule_problem import trajectory_period
 from .simulation import Command, StepRecord, simulate
 from .supervisor import Measurement, RegraspSupervisor, SupervisorSettings
 from .trajectory import RepeatedTrajectory
-from .validation import MAX_DURATION, as_duration, as_finite_array, as_positive_float, expect_type
+from .validation import MAX_DURATION, as_duration, as_finite_array, as_integer, as_positive_float, expect_type
 
 if TYPE_CHECKING:
     from .recording import RolloutRecorder
@@ -86,6 +87,7 @@ class Rollout:
         policy: The policy's name.
         schedule: The schedule the run starts with (``"scheduled"``), else None.
         scenario: The scenario, with its trajectory repeated when the run is longer than it.
+        disturbance: The sensing noise and actuation between the plant and the supervisor, or None.
     """
 
     plant: Plant
@@ -95,6 +97,7 @@ class Rollout:
     policy: str = "paper"
     schedule: RegraspSchedule | None = None
     scenario: Scenario | None = None
+    disturbance: Disturbance | None = None
 
     def check(self, record: StepRecord) -> Failure | None:
         """The failure a step's events mean, if any (module docstring)."""
@@ -135,7 +138,7 @@ class Rollout:
             consumers.append(lambda record: recorder.log_record(record, trajectory.pose(min(record.plant.state.t,
                                                                                               t_end))))
         outcome = simulate(plant, _SupervisorDriver(self.supervisor), total, consumers=consumers, check=self.check,
-                           progress=progress, interruptible=interruptible)
+                           progress=progress, interruptible=interruptible, disturbance=self.disturbance)
         if recorder is not None and outcome.failure is not None:
             recorder.log_failure(outcome.failure, plant)
         policy = self.supervisor.policy
@@ -178,8 +181,10 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
                   scheduled_settings: ScheduledSettings = ScheduledSettings(), dt: float = 1e-3,
                   xi0: ArrayLike | None = None, plant_friction: FrictionLike | None = None,
                   plant_mass_scale: float = 1.0, plant_mu_scale: float = 1.0,
-                  plant_inertia_scale: float | None = None, plant_link_mass_scale: float = 1.0, replan: bool = True,
-                  plan_progress: Callable[[int, int], None] | None = None) -> Rollout:
+                  plant_inertia_scale: float | None = None, plant_link_mass_scale: float = 1.0,
+                  plant_mu_kinetic_scale: float = 1.0, plant_xi_offset: ArrayLike | None = None, sensor_noise: SensorNoise = SensorNoise(),
+                  actuator_noise: ActuatorNoise = ActuatorNoise(), seed: int | np.random.SeedSequence | None = None,
+                  replan: bool = True, plan_progress: Callable[[int, int], None] | None = None) -> Rollout:
     """Plant + supervisor for ``scenario``, every contact fixed at the start.
 
     Args:
@@ -188,8 +193,8 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
         periods: Instead of ``duration``: this many periods of a periodic trajectory.
         policy: ``"scheduled"`` (plan the slides ahead, follow and re-plan them), ``"paper"`` (the
             danger-zone heuristic) or ``"none"`` (never slide).
-        settings: Supervisor settings (default :meth:`SupervisorSettings.robust` with the scenario's geometry
-            and the schedule's cone margin).
+        settings: Supervisor settings (default :meth:`SupervisorSettings.robust` with the scenario's geometry,
+            the schedule's cone margin and ``actuator_noise``'s delay).
         regrasp_settings: The schedule planner's settings (``"scheduled"``; default :class:`RegraspSettings`
             with a cone margin of ``DEFAULT_CONE_MARGIN`` = 0.2 N).
         schedule: A schedule planned already (``"scheduled"``; default: planned here).
@@ -205,6 +210,13 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
         plant_link_mass_scale: The plant's finger links' masses and inertias are this times the URDFs' (the
             controllers keep the URDFs') [-].
         plant_mu_scale: The plant's μ_s and μ_k are this times the scenario's [-].
+        plant_mu_kinetic_scale: The plant's μ_k is this times ``plant_mu_scale`` times the scenario's, at most
+            the plant's μ_s [-].
+        plant_xi_offset: Where the plant's fingertips are placed relative to ``xi0`` [m], (m,): the supervisor
+            believes ``xi0`` (a placement or calibration error of the initial grasp); default zeros.
+        sensor_noise, actuator_noise: The hand's sensing noise, slip sensor, torque noise and actuation delay
+            (:mod:`regrasp.disturbance`); default: none.
+        seed: Seeds the noise (required when there is any): an int or a ``numpy.random.SeedSequence``.
         replan: Let the scheduled policy re-plan.
         plan_progress: Passed to :func:`~regrasp.schedule_planner.plan_regrasps` as ``progress``.
 
@@ -220,13 +232,20 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
     inertia_scale = mass_scale if plant_inertia_scale is None else as_positive_float("plant_inertia_scale",
                                                                                      plant_inertia_scale)
     link_scale = as_positive_float("plant_link_mass_scale", plant_link_mass_scale)
+    kinetic_scale = as_positive_float("plant_mu_kinetic_scale", plant_mu_kinetic_scale)
+    expect_type("sensor_noise", sensor_noise, SensorNoise, "a SensorNoise (regrasp.disturbance)")
+    expect_type("actuator_noise", actuator_noise, ActuatorNoise, "an ActuatorNoise (regrasp.disturbance)")
+    if seed is not None and not isinstance(seed, np.random.SeedSequence):
+        seed = as_integer("seed", seed)
     regrasp_settings = RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN) if regrasp_settings is None \
         else expect_type("regrasp_settings", regrasp_settings, RegraspSettings, "a RegraspSettings")
     if schedule is not None:
         expect_type("schedule", schedule, RegraspSchedule, "a RegraspSchedule (regrasp.plan_regrasps)")
     expect_type("scheduled_settings", scheduled_settings, ScheduledSettings, "a ScheduledSettings")
-    if settings is None:  # the supervisor's runtime envelopes use the scenario's planner geometry
-        settings = SupervisorSettings.robust(scenario.geometry.value, regrasp_settings.cone_margin)
+    if settings is None:  # the supervisor's runtime envelopes use the scenario's planner geometry; it knows the
+        # hand's actuation delay (a latency is measured, unlike a friction coefficient)
+        settings = SupervisorSettings.robust(scenario.geometry.value, regrasp_settings.cone_margin,
+                                             actuation_delay=actuator_noise.delay)
     scenario.check_geometry(expect_type("settings", settings, SupervisorSettings, "a SupervisorSettings").geometry)
     run_scenario, duration = _run_scenario(scenario, duration, periods)
     traj = run_scenario.trajectory
@@ -263,14 +282,20 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
                                    tip_clearance=[c.tip_clearance for c in scenario.contacts], plan=plan,
                                    settings=settings, policy=chosen)
     X0, V0 = traj.pose(traj.t_start), traj.velocity(traj.t_start)
-    st = ReducedModel(hand, Grasp(scenario.polygon, edges, [ContactMode.FIXED] * m), xi0).state(X0, V0)
+    xi_plant = xi0 if plant_xi_offset is None else xi0 + as_finite_array("plant_xi_offset", plant_xi_offset, (m,))
+    st_plant = ReducedModel(hand, Grasp(scenario.polygon, edges, [ContactMode.FIXED] * m), xi_plant).state(X0, V0)
     if plant_friction is None:
-        plant_friction = tuple(Friction(f.static * mu_scale, f.kinetic * mu_scale) for f in friction)
+        plant_friction = tuple(Friction(f.static * mu_scale, min(f.static, f.kinetic * kinetic_scale) * mu_scale)
+                               for f in friction)
     plant_hand = hand if link_scale == 1.0 else Hand(list(hand.fingers), gravity_in_hand=scenario.gravity_in_hand,
                                                       link_mass_scale=link_scale)
-    plant = Plant(plant_hand, scenario.polygon, [PlantContact(e, ContactMode.FIXED, x) for e, x in zip(edges, xi0)],
+    plant = Plant(plant_hand, scenario.polygon, [PlantContact(e, ContactMode.FIXED, x) for e, x in zip(edges, xi_plant)],
                   friction=plant_friction, object_mass=scenario.polygon.mass * mass_scale,
                   object_inertia=scenario.polygon.inertia * inertia_scale, dt=dt)
-    plant.reset(st.q, st.q_dot, X0, V0, t=traj.t_start)
-    return Rollout(plant, supervisor, duration, names, policy, schedule, run_scenario)
+    plant.reset(st_plant.q, st_plant.q_dot, X0, V0, t=traj.t_start)
+    disturbance = None
+    if not (sensor_noise.ideal and actuator_noise.ideal):
+        rng = None if seed is None else np.random.default_rng(seed)
+        disturbance = Disturbance(sensor_noise, actuator_noise, rng)
+    return Rollout(plant, supervisor, duration, names, policy, schedule, run_scenario, disturbance)
 

@@ -178,7 +178,7 @@ class RolloutRows:
         out = record.supervision
         forces = record.plant.forces_surface
         self.times[k] = record.t
-        self.xi[k] = record.measurement.xi
+        self.xi[k] = record.truth.xi
         self.bounds[k] = out.bounds
         self.planned_xi[k] = out.planned_xi
         self.phases[k] = [p.value for p in out.phases]

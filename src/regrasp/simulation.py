@@ -12,6 +12,11 @@ The loop stops at the end, when ``check`` returns a :class:`~regrasp.events.Fail
 when the driver's control law fails (:class:`~regrasp.exceptions.RegraspError` or a singular
 model: a ``CONTROL`` failure, never an exception out of the loop), or, with ``interruptible``, on
 Ctrl-C (an ``INTERRUPTED`` failure: the records so far are intact).
+
+A :class:`~regrasp.disturbance.Disturbance` (optional) stands between the plant and the driver: the driver
+senses its noisy, delayed reading of the truth and the plant gets its delayed, noisy torques. A record keeps
+both sides (``measurement`` and ``truth``, ``command.tau`` and ``applied_tau``); the errors, the checks and
+the results read the truth.
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ import numpy as np
 
 from .contact import ContactMode, coefficients, cone_margin
 from .control import ControlOutput
+from .disturbance import Disturbance
 from .events import Event, EventSource, Failure, FailureKind
 from .exceptions import RegraspError
 from .plant import Plant, PlantStep
@@ -74,6 +80,9 @@ class StepRecord:
             mode during the step (μ_s fixed, μ_k sliding, 0 separated), (m,).
         events: The supervisor's decisions and the plant's events of this step, in that order.
         plant_seconds: Wall time of the plant step [s].
+        truth: The noise-free reading at ``t`` (``measurement`` itself without a disturbance).
+        applied_tau: The joint torques the plant got during the step [N m], (2m,) (``command.tau`` without a
+            disturbance).
     """
 
     index: int
@@ -84,11 +93,19 @@ class StepRecord:
     cone_margins: np.ndarray
     events: tuple[Event, ...]
     plant_seconds: float
+    truth: Measurement | None = None
+    applied_tau: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.truth is None:
+            object.__setattr__(self, "truth", self.measurement)
+        if self.applied_tau is None:
+            object.__setattr__(self, "applied_tau", self.command.tau)
 
     @property
     def object_error(self) -> np.ndarray:
-        """X_d - X at the step's start, (3,) [m, m, rad]."""
-        return self.command.desired.pose - self.measurement.X
+        """X_d - X at the step's start (the true X), (3,) [m, m, rad]."""
+        return self.command.desired.pose - self.truth.X
 
     @property
     def supervision(self) -> SupervisorOutput | None:
@@ -139,7 +156,8 @@ def simulate(plant: Plant, driver: Driver, steps: int, *,
              check: Callable[[StepRecord], Failure | None] | None = None,
              sensor: Callable[[Plant, PlantStep | None], Measurement] = sense,
              progress: Callable[[int, int], None] | None = None,
-             interruptible: bool = False, control_failures: bool = True) -> SimulationOutcome:
+             interruptible: bool = False, control_failures: bool = True,
+             disturbance: Disturbance | None = None) -> SimulationOutcome:
     """Run ``driver`` on ``plant`` for ``steps`` steps (module docstring).
 
     Args:
@@ -149,6 +167,8 @@ def simulate(plant: Plant, driver: Driver, steps: int, *,
         progress: Called as ``progress(done, steps)`` every 50 steps and at the end.
         interruptible: Turn Ctrl-C into an ``INTERRUPTED`` failure instead of raising it.
         control_failures: Turn the driver's errors into a ``CONTROL`` failure (else they propagate).
+        disturbance: Sensing noise, a slip sensor and the actuation between the driver and the plant (module
+            docstring); None: the driver reads the truth and its torques are applied at once.
     """
     dt = plant.dt
     mus = None
@@ -160,7 +180,8 @@ def simulate(plant: Plant, driver: Driver, steps: int, *,
         for k in range(steps):
             if plant.stopped:
                 break
-            meas = sensor(plant, last)
+            truth = sensor(plant, last)
+            meas = truth if disturbance is None else disturbance.measure(truth)
             try:
                 command = driver.step(meas, dt)
             except (RegraspError, np.linalg.LinAlgError) as exc:
@@ -168,8 +189,9 @@ def simulate(plant: Plant, driver: Driver, steps: int, *,
                     raise
                 failure = Failure(float(meas.t), FailureKind.CONTROL, f"control failed: {exc}")
                 break
+            tau = command.tau if disturbance is None else disturbance.actuate(command.tau)
             t0 = time.perf_counter()
-            step = plant.step(command.tau)
+            step = plant.step(tau)
             plant_seconds = time.perf_counter() - t0
             last = step
             if mus is None:
@@ -178,7 +200,7 @@ def simulate(plant: Plant, driver: Driver, steps: int, *,
             margins = cone_margin(np.array(coefficients(mus, step.modes)), forces[:, 0], forces[:, 1])
             events = (() if command.supervision is None else command.supervision.events) + tuple(
                 Event(e.time, e.contact, e.kind, e.detail, EventSource.PLANT, e.values) for e in step.events)
-            record = StepRecord(k, float(meas.t), meas, command, step, margins, events, plant_seconds)
+            record = StepRecord(k, float(meas.t), meas, command, step, margins, events, plant_seconds, truth, tau)
             for consume in consumers:
                 consume(record)
             done = k + 1
