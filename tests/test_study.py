@@ -1,5 +1,6 @@
 """Robustness studies: the Wilson interval against a brute-force inversion of the score test, seeded draws that
-do not depend on how many runs or workers there are, and one study run in-process and on two worker processes."""
+do not depend on how many runs or workers there are, one study run in-process, on two worker processes and on a
+local Ray with the same results, the scenario's [study] table and the command line's flags."""
 
 import json
 import math
@@ -8,8 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from regrasp import build_rollout, load_scenario
 from regrasp.cli import main
-from regrasp.exceptions import InvalidParameterError
+from regrasp.exceptions import InvalidParameterError, ScenarioError
 from regrasp.study import Perturbation, draw_runs, run_study, wilson_interval
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -49,30 +51,108 @@ def test_draws_are_seeded_per_run_and_inside_the_half_widths():
     factors = np.array([[d.mass_scale, d.mu_scale, d.inertia_scale, d.link_mass_scale] for d in full])
     assert (factors >= 0.8).all() and (factors <= 1.2).all()
     assert np.abs(np.corrcoef(factors.T) - np.eye(4)).max() < 0.25  # four independent draws
-    for bad in (dict(mass=1.0), dict(mu=-0.1), dict(mass=math.nan), dict(mu="0.1")):
+    offsets = np.array([d.xi_offset for d in draw_runs(300, 4, Perturbation(contact_position=2e-4), contacts=3)])
+    assert offsets.shape == (300, 3) and np.abs(offsets).max() <= 2e-4 and offsets.std() > 1e-4
+    assert np.abs(np.corrcoef(offsets.T) - np.eye(3)).max() < 0.2  # one independent error per fingertip
+    kinetic = np.array([d.mu_kinetic_scale for d in draw_runs(100, 4, Perturbation(mu_kinetic=0.1))])
+    assert 0.9 <= kinetic.min() and kinetic.max() <= 1.1 and kinetic.std() > 0.03
+    for bad in (dict(mass=1.0), dict(mu=-0.1), dict(mass=math.nan), dict(mu="0.1"), dict(contact_position=0.02),
+                dict(delay=-1), dict(xi_noise=math.inf), dict(slip_threshold=-1.0)):
         with pytest.raises(InvalidParameterError):
             Perturbation(**bad)
     with pytest.raises(InvalidParameterError, match="runs"):
         draw_runs(0, 1, Perturbation())
 
 
-def test_a_study_gives_the_same_runs_on_one_process_and_on_two(capsys, tmp_path):
-    local = run_study(SCENARIO, 3, seed=5, perturbation=Perturbation(mass=0.2, mu=0.2), duration=0.2, workers=1)
-    assert main(["study", str(SCENARIO), "--runs", "3", "--seed", "5", "--mass", "0.2", "--mu", "0.2", "--duration",
-                 "0.2", "--workers", "2", "--json", "--plot", str(tmp_path)]) == 0
-    doc = json.loads(capsys.readouterr().out)
-    assert doc["workers"] == 2 and doc["runs"] == 3 and doc["successes"] == local.successes
+#: The issue's robustness perturbations (model errors, placement and sensing noise, a one-step delay).
+TARGET = Perturbation(mass=0.2, inertia=0.2, mu=0.2, contact_position=2e-4, xi_noise=2e-4, position_noise=1e-4,
+                      angle_noise=1e-3, delay=1)
+FLAGS = ["--mass", "0.2", "--inertia", "0.2", "--mu", "0.2", "--contact-position", "0.0002", "--xi-noise", "0.0002",
+         "--position-noise", "0.0001", "--angle-noise", "0.001", "--delay", "1"]
+
+
+@pytest.fixture(scope="module")
+def in_process():
+    """Four short runs in this process: the reference the other back-ends must repeat exactly."""
+    return run_study(SCENARIO, 4, seed=5, perturbation=TARGET, duration=0.15, workers=1)
+
+
+def same_runs(local, doc):
+    assert doc["runs"] == 4 and doc["successes"] == local.successes
     assert doc["wilson_95"] == pytest.approx(list(local.interval))
     for mine, theirs in zip(local.runs, doc["outcomes"]):
         assert theirs["draw"]["mass_scale"] == mine.draw.mass_scale and theirs["draw"]["mu_scale"] == mine.draw.mu_scale
-        for key in ("success", "failure_kind", "failure_time", "min_cone_margin", "min_envelope_margin", "slides"):
+        assert theirs["draw"]["xi_offset"] == list(mine.draw.xi_offset)
+        for key in ("success", "failure_kind", "failure_time", "min_cone_margin", "min_envelope_margin", "slides",
+                    "max_orientation_error"):
             assert theirs[key] == getattr(mine, key), key
-    assert len({r.draw.mass_scale for r in local.runs}) == 3  # the runs do differ
-    assert all((tmp_path / name).stat().st_size > 1000 for name in ("study_outcomes.png", "study_failure_times.png"))
+
+
+def test_a_study_gives_the_same_runs_on_one_process_and_on_two(in_process, capsys, tmp_path):
+    assert main(["study", str(SCENARIO), "--runs", "4", "--seed", "5", *FLAGS, "--duration", "0.15", "--workers", "2",
+                 "--json", "--plot", str(tmp_path)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["workers"] == 2 and doc["backend"] == "process"
+    same_runs(in_process, doc)
+    assert len({r.draw.mass_scale for r in in_process.runs}) == 4  # the runs do differ
+    assert len({r.min_cone_margin for r in in_process.runs}) == 4
+    names = ("study_success.png", "study_failure_times.png", "study_margins.png")
+    assert all((tmp_path / name).stat().st_size > 1000 for name in names)
+    assert json.loads((tmp_path / "study.json").read_text())["outcomes"] == doc["outcomes"]
+
+
+def test_a_study_on_a_local_ray_gives_the_same_runs(in_process, capsys):
+    pytest.importorskip("ray")
+    assert main(["study", str(SCENARIO), "--runs", "4", "--seed", "5", *FLAGS, "--duration", "0.15", "--workers", "2",
+                 "--ray", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["backend"] == "ray"
+    same_runs(in_process, doc)
+
+
+def test_the_noise_is_seeded_per_run(in_process):
+    """A run repeated alone from its draw repeats exactly; another seed gives other noise."""
+    from regrasp.perturbation import RunDraw
+    from regrasp.study import run_once
+
+    sc = load_scenario(SCENARIO)
+    first = in_process.runs[0]
+    schedule = build_rollout(sc, duration=0.15).schedule
+    alone = run_once(sc, first.draw, schedule, 0.15, TARGET)
+    assert alone.min_cone_margin == first.min_cone_margin and alone.max_orientation_error is None
+    other = RunDraw(first.draw.index, (1, 2, 3, 4), *[getattr(first.draw, k) for k in
+                                                        ("mass_scale", "mu_scale", "inertia_scale", "link_mass_scale",
+                                                         "mu_kinetic_scale", "xi_offset")])
+    assert run_once(sc, other, schedule, 0.15, TARGET).min_cone_margin != first.min_cone_margin
+
+
+def test_the_scenario_study_table_sets_the_perturbations_and_flags_override_it(tmp_path, capsys):
+    text = SCENARIO.read_text().replace('urdf = "../../urdf/', f'urdf = "{ROOT / "urdf"}/')
+    path = tmp_path / "with_study.toml"
+    path.write_text(text + "\n[study]\nmass = 0.1\ncontact_position = 0.0002\ndelay = 1\nangle_noise = 0.001\n")
+    assert load_scenario(path).study == Perturbation(mass=0.1, contact_position=2e-4, delay=1, angle_noise=1e-3)
+    assert main(["study", str(path), "--runs", "1", "--duration", "0.02", "--workers", "1", "--mass", "0.05",
+                 "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["perturbation"]["mass"] == 0.05 and doc["perturbation"]["delay"] == 1
+    assert doc["perturbation"]["angle_noise"] == 0.001
+    for bad, key in (("mass = 1.5", "study.mass"), ("delay = 0.5", "study.delay"), ("xi_nosie = 1e-4", "study.xi_nosie"),
+                     ("position_noise = -1e-4", "study.position_noise")):
+        path.write_text(text + f"\n[study]\n{bad}\n")
+        with pytest.raises(ScenarioError, match=key):
+            load_scenario(path)
+
+
+def test_a_placement_error_that_would_leave_the_edge_is_refused_before_the_runs():
+    sc = load_scenario(SCENARIO)
+    with pytest.raises(InvalidParameterError, match="contact_position"):
+        run_study(sc, 2, perturbation=Perturbation(contact_position=0.0099), duration=0.01)
 
 
 @pytest.mark.parametrize("args", [["--runs", "0"], ["--mass", "1.5"], ["--mu", "abc"], ["--workers", "0"],
-                                  ["nowhere.toml"], ["--duration", "nan"]])
+                                  ["nowhere.toml"], ["--duration", "nan"], ["--delay", "-1"], ["--delay", "11"],
+                                  ["--xi-noise", "-0.1"], ["--contact-position", "0.5"], ["--torque-noise", "inf"],
+                                  ["--slip-delay", "1.5"]])
 def test_bad_study_arguments_exit_2_with_one_line(capsys, args):
     try:
         code = main(["study", *args])

@@ -16,6 +16,7 @@ import argparse
 import json
 import os
 import sys
+import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -29,12 +30,14 @@ __all__ = ["main"]
 
 
 class _ProgressBar:
-    """A one-line progress bar on stderr, drawn only when stderr is a terminal."""
+    """A one-line progress bar on stderr (done/total, elapsed and remaining time), drawn only when stderr is a
+    terminal."""
 
     def __init__(self, label: str, stream=sys.stderr):
         self.label, self.stream = label, stream
         self.enabled = stream.isatty()
         self._last = -1
+        self._start = time.monotonic()
 
     def __call__(self, done: int, total: int) -> None:
         if not self.enabled:
@@ -43,7 +46,9 @@ class _ProgressBar:
         if pct != self._last:
             self._last = pct
             bar = "#" * (pct // 4) + "." * (25 - pct // 4)
-            self.stream.write(f"\r{self.label} [{bar}] {pct:3d}%")
+            elapsed = time.monotonic() - self._start
+            left = f", {elapsed * (total - done) / done:.0f} s left" if 0 < done < total else ""
+            self.stream.write(f"\r{self.label} [{bar}] {pct:3d}% ({done}/{total}, {elapsed:.0f} s{left})  ")
             if done == total:
                 self.stream.write("\n")
             self.stream.flush()

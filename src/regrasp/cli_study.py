@@ -1,8 +1,9 @@
-"""``regrasp study``: many seeded rollouts under drawn model errors; the success rate and why runs failed.
+"""``regrasp study``: many seeded rollouts under model errors and noise; the success rate and why runs failed.
 
-``regrasp study [SCENARIO] --runs N [--seed S] [--workers K] [--periods P | --duration T] [--mass H] [--mu H]
-[--json] [--plot DIR]``
+``regrasp study [SCENARIO] --runs N [--seed S] [--workers K] [--ray [ADDRESS]] [--periods P | --duration T]
+[--mass H] [--mu H] ... [--delay STEPS] [--json] [--plot DIR]``
 
+The perturbations default to the scenario's ``[study]`` table; a flag overrides its key.
 Exit status: 0 the study ran (whatever its success rate), 2 bad input.
 """
 
@@ -28,8 +29,35 @@ def _count(least: int) -> Callable[[str], int]:
     return number_argument(int, f"an integer >= {least}", lambda v: v >= least)
 
 
+def _at_most(limit: float, unit: str) -> Callable[[str], float]:
+    return number_argument(float, f"a number in [0, {limit:g}] [{unit}]", lambda v: 0.0 <= v <= limit)
+
+
 _half_width = number_argument(float, "a relative half-width in [0, 1)", lambda v: 0.0 <= v < 1.0)
 _seconds = number_argument(float, "a finite duration > 0 [s]", lambda v: 0.0 < v < float("inf"))
+
+#: Each perturbation's flag: (metavar, help, argument type); the bounds are the library's.
+_FLAGS = {
+    "mass": ("H", "the plant's object mass: the model's times U(1-H, 1+H)", _half_width),
+    "inertia": ("H", "the plant's object inertia: the model's times U(1-H, 1+H), drawn on its own", _half_width),
+    "mu": ("H", "the plant's mu_s and mu_k: the model's times U(1-H, 1+H)", _half_width),
+    "mu_kinetic": ("H", "the plant's mu_k alone, times U(1-H, 1+H) more (at most the plant's mu_s)", _half_width),
+    "link_mass": ("H", "the plant's finger link masses and inertias: the URDFs' times U(1-H, 1+H)", _half_width),
+    "contact_position": ("M", "each fingertip placed U(-M, M) [m] off its planned xi (the supervisor believes the "
+                              "plan)", _at_most(0.01, "m")),
+    "position_noise": ("M", "object position sensing noise, standard deviation [m]", _at_most(0.1, "m")),
+    "angle_noise": ("RAD", "object angle sensing noise [rad]", _at_most(3.2, "rad")),
+    "velocity_noise": ("M/S", "object velocity sensing noise [m/s]", _at_most(10.0, "m/s")),
+    "angular_velocity_noise": ("RAD/S", "object angular velocity sensing noise [rad/s]", _at_most(100.0, "rad/s")),
+    "xi_noise": ("M", "contact position (xi) sensing noise [m]", _at_most(0.1, "m")),
+    "xi_dot_noise": ("M/S", "contact rate sensing noise [m/s]", _at_most(10.0, "m/s")),
+    "force_noise": ("N", "contact force sensing noise [N]", _at_most(100.0, "N")),
+    "slip_threshold": ("M/S", "the slip sensor reports sliding above this |xi_dot| [m/s] (default: a perfect "
+                              "slip sensor)", _at_most(10.0, "m/s")),
+    "slip_delay": ("STEPS", "the slip sensor's delay [control steps]", _count(0)),
+    "torque_noise": ("NM", "joint torque noise, standard deviation [N m]", _at_most(10.0, "N m")),
+    "delay": ("STEPS", "actuation delay: each torque is applied STEPS control steps late", _count(0)),
+}
 
 
 def add_study_parser(sub: argparse._SubParsersAction,
@@ -37,42 +65,38 @@ def add_study_parser(sub: argparse._SubParsersAction,
     """Register ``study`` on the ``regrasp`` parser's subparsers."""
     from .cli_simulate import DEFAULT_SCENARIO
 
-    p = sub.add_parser("study", help="a robustness study: many seeded rollouts under drawn model errors",
-                       description="Plan the regrasp schedule once, then run seeded rollouts whose plant's object mass "
-                                   "and friction are drawn around the model's. Prints the success rate with a Wilson "
-                                   "95 % interval and the failures by kind. Exit status 0: the study ran, "
-                                   "2: bad input.")
+    p = sub.add_parser("study", help="a robustness study: many seeded rollouts under model errors and noise",
+                       description="Plan the regrasp schedule once, then run seeded rollouts on plants whose model "
+                                   "errors are drawn around the model's, with sensing noise, torque noise and delays. "
+                                   "Prints the success rate with a Wilson 95 %% interval, the failures by kind and "
+                                   "time and the margins. The perturbations default to the scenario's [study] table; "
+                                   "a flag overrides its key. Exit status 0: the study ran, 2: bad input.")
     p.add_argument("scenario", nargs="?", default=None,
                    help=f"scenario file (TOML); default: {DEFAULT_SCENARIO.name} from examples/scenarios")
     p.add_argument("--runs", type=_count(1), default=20, metavar="N", help="number of runs (default 20)")
     p.add_argument("--seed", type=_count(0), default=0, metavar="S", help="the study's seed (default 0)")
     p.add_argument("--workers", type=_count(1), default=None, metavar="K",
                    help="worker processes (default: one per core); the results do not depend on it")
+    p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
+                   help="run on Ray: a local cluster of --workers CPUs, or the cluster at ADDRESS (ray.init's "
+                        "address); the results are the same as on processes")
     span = p.add_mutually_exclusive_group()
     span.add_argument("--periods", type=_count(1), metavar="P", help="each run: P periods of the trajectory")
     span.add_argument("--duration", type=_seconds, metavar="T", help="each run: T seconds")
-    p.add_argument("--mass", type=_half_width, default=0.0, metavar="H",
-                   help="the plant's object mass and inertia: the model's times U(1-H, 1+H) (default 0)")
-    p.add_argument("--mu", type=_half_width, default=0.0, metavar="H",
-                   help="the plant's friction coefficients: the model's times U(1-H, 1+H) (default 0)")
-    p.add_argument("--inertia", type=_half_width, default=0.0, metavar="H",
-                   help="the plant's object inertia: the model's times U(1-H, 1+H), drawn on its own (default 0)")
-    p.add_argument("--link-mass", type=_half_width, default=0.0, metavar="H",
-                   help="the plant's finger link masses and inertias: the URDFs' times U(1-H, 1+H) (default 0)")
+    for name, (metavar, text, kind) in _FLAGS.items():
+        p.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None, metavar=metavar, help=text)
     p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
-    p.add_argument("--plot", metavar="DIR", help="write study_outcomes.png and study_failure_times.png into DIR")
+    p.add_argument("--plot", metavar="DIR", help="write the study's figures (PNG) and study.json into DIR")
     p.set_defaults(func=lambda args: _cmd_study(args, progress_bar))
 
 
 def _summary(result: StudyResult) -> str:
-    from dataclasses import asdict
-
     import numpy as np
 
     lo, hi = result.interval
     runs = result.runs
     lines = [f"regrasp study: {Path(result.scenario).name}, {len(runs)} runs of {result.duration:.4g} s, seed "
-             f"{result.seed}, " + ", ".join(f"{k} ±{v:.0%}" for k, v in asdict(result.perturbation).items()),
+             f"{result.seed}: {result.perturbation.describe()}",
              f"  success: {result.successes}/{len(runs)} = {result.success_rate:.1%} (Wilson 95 %: "
              f"[{lo:.1%}, {hi:.1%}])"]
     for kind, count in sorted(result.failures.items()):
@@ -81,62 +105,49 @@ def _summary(result: StudyResult) -> str:
                      f"{', ...' if len(times) > 8 else ''} s)")
     cone = np.array([r.min_cone_margin for r in runs])
     env = np.array([r.min_envelope_margin for r in runs]) * 1e3
+    errors = np.array([r.max_object_error for r in runs if r.max_object_error is not None]) * 1e3
     lines.append(f"  smallest cone margin [N]: min {cone.min():.3f}, median {np.median(cone):.3f}")
     lines.append(f"  smallest envelope margin [mm]: min {env.min():.2f}, median {np.median(env):.2f}")
-    lines.append(f"  wall time: {result.wall_seconds:.1f} s on {result.workers} worker(s)")
+    if errors.size:
+        lines.append(f"  largest object error after 0.5 s [mm]: median {np.median(errors):.3f}, max {errors.max():.3f}")
+    lines.append(f"  wall time: {result.wall_seconds:.1f} s ({result.plan_seconds:.1f} s planning) on "
+                 f"{result.workers} {'Ray CPU' if result.backend == 'ray' else 'worker'}(s)")
     return "\n".join(lines)
 
 
-def _plots(result: StudyResult, directory: Path) -> list[Path]:
-    import matplotlib
+def _perturbation(args: argparse.Namespace, scenario) -> object:
+    """The scenario's [study] perturbation with the flags given on the command line."""
+    from dataclasses import replace
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    ok = [r for r in result.runs if r.success]
-    bad = [r for r in result.runs if not r.success]
-    fig, ax = plt.subplots(figsize=(5.5, 4.5))
-    ax.scatter([r.draw.mass_scale for r in ok], [r.draw.mu_scale for r in ok], marker="o", label="success")
-    ax.scatter([r.draw.mass_scale for r in bad], [r.draw.mu_scale for r in bad], marker="x", color="C3",
-               label="failure")
-    ax.set_xlabel("plant mass / model mass [-]")
-    ax.set_ylabel("plant μ / model μ [-]")
-    ax.set_title(f"{result.successes}/{len(result.runs)} succeeded")
-    ax.legend()
-    outcomes = directory / "study_outcomes.png"
-    fig.savefig(outcomes, dpi=120, bbox_inches="tight")
-    plt.close(fig)
-    fig, ax = plt.subplots(figsize=(5.5, 3.5))
-    ax.hist([r.failure_time for r in bad], bins=20, range=(0.0, result.duration))
-    ax.set_xlabel("failure time [s]")
-    ax.set_ylabel("runs")
-    ax.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
-    ax.set_title(f"{len(bad)} failures")
-    times = directory / "study_failure_times.png"
-    fig.savefig(times, dpi=120, bbox_inches="tight")
-    plt.close(fig)
-    return [outcomes, times]
+    given = {name: getattr(args, name) for name in _FLAGS if getattr(args, name) is not None}
+    return replace(scenario.study, **given)
 
 
 def _cmd_study(args: argparse.Namespace, progress_bar: Callable[[str], Callable[[int, int], None]]) -> int:
     from .cli import output_directory
     from .cli_simulate import DEFAULT_SCENARIO
     from .scenario import load_scenario
-    from .study import Perturbation, run_study
+    from .study import run_study
+    from .study_plots import plot_study
 
     path = Path(args.scenario) if args.scenario is not None else DEFAULT_SCENARIO
-    load_scenario(path)  # a bad file is exit 2 before any work
+    scenario = load_scenario(path)  # a bad file is exit 2 before any work
+    perturbation = _perturbation(args, scenario)
     directory = output_directory("--plot", args.plot) if args.plot else None
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-    result = run_study(path, args.runs, seed=args.seed, perturbation=Perturbation(args.mass, args.mu, args.inertia, args.link_mass),
-                       duration=args.duration, periods=args.periods, workers=min(workers, args.runs),
+    result = run_study(scenario, args.runs, seed=args.seed, perturbation=perturbation, duration=args.duration,
+                       periods=args.periods, workers=min(workers, args.runs), ray_address=args.ray,
                        progress=None if args.json else progress_bar(f"{args.runs} runs"))
-    figures = _plots(result, directory) if directory is not None else []
-    if args.json:
-        doc = result.to_json_dict()
+    doc = result.to_json_dict()
+    figures = []
+    if directory is not None:
+        figures = plot_study(result, directory)
         doc["figures"] = [str(f) for f in figures]
+        (directory / "study.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")
+    if args.json:
         json.dump(doc, sys.stdout)
         sys.stdout.write("\n")
     else:
-        print(_summary(result) + "".join(f"\n  figure: {f}" for f in figures))
+        print(_summary(result) + "".join(f"\n  figure: {f}" for f in figures)
+              + (f"\n  results: {directory / 'study.json'}" if directory is not None else ""))
     return 0

@@ -47,6 +47,13 @@ Unknown keys are errors (they are usually typos). Every error is a
     [planner]                            # optional
     samples = 401                        # time samples over the trajectory's domain
     geometry = "ideal"                   # "ideal" or "urdf"
+
+    [study]                              # optional: the perturbations of `regrasp study` (regrasp.perturbation)
+    mass = 0.2                           # relative half-widths: mass, inertia, mu, mu_kinetic, link_mass
+    contact_position = 0.0002            # [m] half-width of each fingertip's placement error
+    position_noise = 0.0001              # [m]; also angle_noise [rad], velocity_noise, angular_velocity_noise,
+    delay = 1                            # xi_noise, xi_dot_noise, force_noise, slip_threshold, slip_delay,
+                                         # torque_noise [N m]; delay and slip_delay in control steps
 """
 
 from __future__ import annotations
@@ -66,6 +73,7 @@ from .exceptions import (FingerModelError, InvalidParameterError, PolygonError, 
                          short_repr)
 from .validation import MAX_SAMPLES, as_finite_array, as_positive_float, file_problem
 from .finger import Finger
+from .perturbation import Perturbation
 from .polygon import ConvexPolygon
 from .trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
 
@@ -117,6 +125,7 @@ class Scenario:
     gravity_in_hand: np.ndarray = field(default_factory=lambda: np.array([0.0, -9.81]))
     samples: int = 401
     geometry: Geometry = Geometry.IDEAL
+    study: Perturbation = Perturbation()
 
     def check_geometry(self, geometry: Geometry | str) -> Geometry:
         """``geometry`` as a :class:`~regrasp.envelope.Geometry` every finger of this scenario can be planned
@@ -333,6 +342,21 @@ def _fingers(path: Path, tables: Any, polygon: ConvexPolygon, friction: Friction
     return tuple(contacts)
 
 
+def _study(path: Path, table: Any) -> Perturbation:
+    """The ``[study]`` table: a :class:`~regrasp.perturbation.Perturbation`'s fields by name."""
+    from dataclasses import fields
+
+    if not isinstance(table, dict):
+        raise ScenarioError(path, "study", "expected a table [study]")
+    r = _Reader(path, table, "study.")
+    values = {}
+    for f in fields(Perturbation):
+        if r.has(f.name):
+            values[f.name] = r.integer(f.name) if f.name in ("delay", "slip_delay") else r.number(f.name)
+    r.finish()
+    return _wrap(r, None, lambda: Perturbation(**values))
+
+
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file; raises ScenarioError naming the file and key."""
     if not isinstance(path, (str, Path)):
@@ -368,6 +392,7 @@ def load_scenario(path: str | Path) -> Scenario:
         raise planner.fail("samples", f"expected an integer in [2, {MAX_SAMPLES}], got {short_repr(samples)}")
     geometry = Geometry(planner.string("geometry", "ideal", choices=("ideal", "urdf")))
     planner.finish()
+    study = _study(path, top.get("study", {}))
     top.finish()
     scenario = Scenario(
         path=path,
@@ -379,6 +404,7 @@ def load_scenario(path: str | Path) -> Scenario:
         gravity_in_hand=gravity,
         samples=samples,
         geometry=geometry,
+        study=study,
     )
     scenario.check_geometry(geometry)
     return scenario

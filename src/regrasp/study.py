@@ -1,19 +1,16 @@
-r"""Robustness studies: many seeded rollouts of one scenario under drawn model errors, across processes.
+r"""Robustness studies: many seeded rollouts of one scenario under model errors and noise, across processes or Ray.
 
-A study plans the regrasp schedule once (with the model), then runs ``runs`` rollouts. Each one draws its
-plant's errors from its own seed: run :math:`i` uses ``numpy.random.SeedSequence(seed).spawn(runs)[i]``.
-The draws, and so the results, are the same however many workers run them, and in whatever order.
+A study plans the regrasp schedule once (with the model), then runs ``runs`` rollouts. Run :math:`i` draws its
+plant's errors, and seeds its sensor and actuator noise, from ``numpy.random.SeedSequence(seed).spawn(runs)[i]``
+(:func:`~regrasp.perturbation.draw_runs`; what is perturbed: :mod:`regrasp.perturbation`). The results are
+the same however many workers run them, in whatever order, on processes or on Ray.
 
-Perturbations (:class:`Perturbation`), each a relative half-width :math:`h` [-]: the plant's value is the
-model's times a factor drawn uniformly from :math:`[1 - h, 1 + h]`:
+Where runs go: this process (``workers=1``), a pool of ``workers`` spawned processes, or a Ray cluster
+(``ray_address``: ``"local"`` starts one on this machine, anything else is handed to ``ray.init(address=...)``).
+A job carries the scenario itself (pickled: the fingers' models, not file paths), so Ray workers on other
+machines need no copy of the files.
 
-* ``mass``: the object's mass;
-* ``inertia``: the object's rotational inertia (drawn on its own);
-* ``mu``: every fingertip's :math:`\mu_s` and :math:`\mu_k` together;
-* ``link_mass``: every finger link's mass and inertia (one factor for all links).
-
-The controllers and the planner keep the model's values. The success rate comes with a Wilson score
-interval (:func:`wilson_interval`).
+The success rate comes with a Wilson score interval (:func:`wilson_interval`).
 """
 
 from __future__ import annotations
@@ -22,20 +19,23 @@ import math
 import multiprocessing
 import time
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 from .exceptions import InvalidParameterError
+from .perturbation import MAX_RUNS, Perturbation, RunDraw, draw_runs
 from .validation import as_finite_float, as_integer, expect_type
 
-__all__ = ["Perturbation", "RunDraw", "RunOutcome", "StudyResult", "draw_runs", "run_study", "wilson_interval"]
+if TYPE_CHECKING:
+    from .scenario import Scenario
+    from .schedule import RegraspSchedule
+    from .supervisor import SupervisorSettings
 
-#: The most runs one study takes (a study of 2 periods of trajectory 2 is about 25 s of wall time per run today).
-MAX_RUNS = 100_000
+__all__ = ["MAX_RUNS", "Perturbation", "RunDraw", "RunOutcome", "StudyResult", "draw_runs", "run_study",
+           "wilson_interval"]
 
 #: z of a two-sided 95 % interval.
 Z_95 = 1.959963984540054
@@ -61,78 +61,22 @@ def wilson_interval(successes: int, runs: int, z: float = Z_95) -> tuple[float, 
 
 
 @dataclass(frozen=True)
-class Perturbation:
-    """Relative half-widths [-] of the plant's model errors (0: the model's value exactly).
-
-    Attributes:
-        mass: The object's mass, times U(1 - mass, 1 + mass).
-        mu: Every fingertip's μ_s and μ_k, times U(1 - mu, 1 + mu).
-        inertia: The object's rotational inertia, times U(1 - inertia, 1 + inertia).
-        link_mass: The finger links' masses and inertias, times U(1 - link_mass, 1 + link_mass).
-    """
-
-    mass: float = 0.0
-    mu: float = 0.0
-    inertia: float = 0.0
-    link_mass: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name in ("mass", "mu", "inertia", "link_mass"):
-            if not 0.0 <= as_finite_float(name, getattr(self, name)) < 1.0:
-                raise InvalidParameterError(name, getattr(self, name), "a relative half-width in [0, 1)")
-
-
-@dataclass(frozen=True)
-class RunDraw:
-    """One run's seed and the factors drawn from it.
-
-    Attributes:
-        index: The run's number in the study (0-based).
-        entropy: The run's seed, as the spawned ``SeedSequence``'s words (to repeat the run alone).
-        mass_scale: The plant's object mass over the model's [-].
-        mu_scale: The plant's μ over the model's [-].
-        inertia_scale: The plant's object inertia over the model's [-].
-        link_mass_scale: The plant's link masses and inertias over the URDFs' [-].
-    """
-
-    index: int
-    entropy: tuple[int, ...]
-    mass_scale: float
-    mu_scale: float
-    inertia_scale: float = 1.0
-    link_mass_scale: float = 1.0
-
-
-def draw_runs(runs: int, seed: int, perturbation: Perturbation) -> tuple[RunDraw, ...]:
-    """The ``runs`` draws of a study (module docstring: one spawned seed per run)."""
-    runs = as_integer("runs", runs, 1)
-    if runs > MAX_RUNS:
-        raise InvalidParameterError("runs", runs, f"at most {MAX_RUNS} runs")
-    expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
-    out = []
-    for i, child in enumerate(np.random.SeedSequence(as_integer("seed", seed)).spawn(runs)):
-        rng = np.random.default_rng(child)
-        mass, mu, inertia, links = rng.uniform(-1.0, 1.0, 4).tolist()
-        p = perturbation
-        out.append(RunDraw(i, tuple(int(w) for w in child.generate_state(4)), 1.0 + p.mass * mass, 1.0 + p.mu * mu,
-                           1.0 + p.inertia * inertia, 1.0 + p.link_mass * links))
-    return tuple(out)
-
-
-@dataclass(frozen=True)
 class RunOutcome:
     """What one run of a study did.
 
     Attributes:
-        draw: Its seed and factors.
+        draw: Its seed and drawn model errors.
         success: It reached the end without a failure.
         failure_kind: The :class:`~regrasp.events.FailureKind` value, or None.
         failure_time: When it failed [s], or None.
-        min_cone_margin: Its smallest cone margin of a fixed contact [N].
+        failure_contact: The finger the failure names, or None.
+        min_cone_margin: Its smallest cone margin of a contact held fixed [N].
         min_envelope_margin: Its smallest envelope margin [m].
         max_object_error: Its largest object position error after the transient [m] (None: the run ended
             before the transient did).
+        max_orientation_error: Its largest orientation error after the transient [rad] (None: likewise).
         slides: Its slides, all fingers.
+        replans: Its re-plans.
         wall_seconds: Its wall time [s].
     """
 
@@ -140,27 +84,40 @@ class RunOutcome:
     success: bool
     failure_kind: str | None
     failure_time: float | None
+    failure_contact: str | None
     min_cone_margin: float
     min_envelope_margin: float
     max_object_error: float | None
+    max_orientation_error: float | None
     slides: int
+    replans: int
     wall_seconds: float
 
 
-def _run(job: tuple[str, RunDraw, object, float]) -> RunOutcome:
-    """One run (a module-level function, so that a worker process can be handed it)."""
-    from .rollout import build_rollout
-    from .scenario import load_scenario
+def _finite_or_none(x: float) -> float | None:
+    return None if math.isnan(x) else float(x)
 
-    path, draw, schedule, duration = job
-    rollout = build_rollout(load_scenario(path), duration=duration, schedule=schedule,
-                            plant_mass_scale=draw.mass_scale, plant_mu_scale=draw.mu_scale,
-                            plant_inertia_scale=draw.inertia_scale, plant_link_mass_scale=draw.link_mass_scale)
+
+def run_once(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
+             perturbation: Perturbation, settings: SupervisorSettings | None = None) -> RunOutcome:
+    """One run of a study: the rollout of ``scenario`` on a plant with ``draw``'s errors and the noise of
+    ``perturbation`` seeded by ``draw.seed``, supervised with ``settings`` (None: the rollout's default,
+    :meth:`~regrasp.supervisor.SupervisorSettings.robust` told the actuation delay)."""
+    from .rollout import build_rollout
+
+    rollout = build_rollout(scenario, duration=duration, schedule=schedule, settings=settings,
+                            plant_mass_scale=draw.mass_scale,
+                            plant_mu_scale=draw.mu_scale, plant_inertia_scale=draw.inertia_scale,
+                            plant_link_mass_scale=draw.link_mass_scale, plant_mu_kinetic_scale=draw.mu_kinetic_scale,
+                            plant_xi_offset=draw.xi_offset or None, sensor_noise=perturbation.sensor_noise(),
+                            actuator_noise=perturbation.actuator_noise(), seed=draw.seed)
     r = rollout.run(interruptible=False)
-    return RunOutcome(draw, r.success, None if r.failure is None else r.failure.kind.value,
-                      None if r.failure is None else r.failure.time, r.min_cone_margin, r.min_envelope_margin,
-                      None if math.isnan(r.max_object_error_after_transient) else r.max_object_error_after_transient,
-                      sum(r.regrasps.values()), r.wall_seconds)
+    f = r.failure
+    return RunOutcome(draw, r.success, None if f is None else f.kind.value, None if f is None else f.time,
+                      None if f is None else f.contact, r.min_cone_margin, r.min_envelope_margin,
+                      _finite_or_none(r.max_object_error_after_transient),
+                      _finite_or_none(r.max_orientation_error_after_transient), sum(r.regrasps.values()), r.replans,
+                      r.wall_seconds)
 
 
 @dataclass(frozen=True)
@@ -168,13 +125,15 @@ class StudyResult:
     """A study's runs and their summary.
 
     Attributes:
-        scenario: The scenario file.
+        scenario: The scenario file (or name).
         runs: The outcomes, in run order.
-        perturbation: The half-widths drawn from.
+        perturbation: What was perturbed, and by how much.
         seed: The study's seed.
         duration: Each run's simulated time [s].
-        workers: The processes that ran it.
+        workers: The processes that ran it (Ray: the cluster's CPUs).
+        backend: ``"process"`` or ``"ray"``.
         wall_seconds: The study's wall time [s] (the plan included).
+        plan_seconds: The plan's wall time [s].
     """
 
     scenario: str
@@ -183,7 +142,9 @@ class StudyResult:
     seed: int
     duration: float
     workers: int
+    backend: str
     wall_seconds: float
+    plan_seconds: float
 
     @property
     def successes(self) -> int:
@@ -207,45 +168,121 @@ class StudyResult:
         """A JSON-serialisable dict (the ``regrasp study --json`` document)."""
         lo, hi = self.interval
         return {"scenario": self.scenario, "seed": self.seed, "duration": self.duration, "workers": self.workers,
-                "perturbation": asdict(self.perturbation), "runs": len(self.runs), "successes": self.successes,
-                "success_rate": self.success_rate, "wilson_95": [lo, hi], "failures": self.failures,
-                "wall_seconds": self.wall_seconds,
-                "outcomes": [{**asdict(r), "draw": {**asdict(r.draw), "entropy": list(r.draw.entropy)}}
-                             for r in self.runs]}
+                "backend": self.backend, "perturbation": asdict(self.perturbation), "runs": len(self.runs),
+                "successes": self.successes, "success_rate": self.success_rate, "wilson_95": [lo, hi],
+                "failures": self.failures, "wall_seconds": self.wall_seconds, "plan_seconds": self.plan_seconds,
+                "outcomes": [{**asdict(r), "draw": {**asdict(r.draw), "entropy": list(r.draw.entropy),
+                                                    "xi_offset": list(r.draw.xi_offset)}} for r in self.runs]}
 
 
-def run_study(scenario_path: str | Path, runs: int, *, seed: int = 0, perturbation: Perturbation = Perturbation(),
-              duration: float | None = None, periods: int | None = None, workers: int = 1,
+_JOB: dict = {}
+
+
+def _init_worker(scenario: Scenario, schedule: RegraspSchedule | None, duration: float,
+                 perturbation: Perturbation, settings: SupervisorSettings | None) -> None:
+    """A pool worker's shared inputs, handed over once per worker (not once per run)."""
+    _JOB.update(scenario=scenario, schedule=schedule, duration=duration, perturbation=perturbation,
+                settings=settings)
+
+
+def _pool_run(draw: RunDraw) -> RunOutcome:
+    return run_once(_JOB["scenario"], draw, _JOB["schedule"], _JOB["duration"], _JOB["perturbation"],
+                    _JOB["settings"])
+
+
+def _on_processes(workers: int, shared: tuple, draws: tuple[RunDraw, ...]) -> Iterator[RunOutcome]:
+    if workers == 1:
+        for draw in draws:
+            yield run_once(*shared[:1], draw, *shared[1:])
+        return
+    # "spawn", not Linux's default "fork": the parent has run OpenMP code (planning), and forking such a
+    # process aborts the child ("fork() called from a process already using GNU OpenMP")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                             initializer=_init_worker, initargs=shared) as pool:
+        yield from pool.map(_pool_run, draws)
+
+
+def _on_ray(address: str, workers: int | None, shared: tuple, draws: tuple[RunDraw, ...]) -> Iterator[RunOutcome]:
+    """The runs as Ray tasks, in run order (the results do not depend on where they ran)."""
+    try:
+        import ray
+    except ImportError:
+        raise InvalidParameterError("ray_address", address, "Ray installed (pip install 'regrasp[ray]')") from None
+    started = not ray.is_initialized()
+    if started:
+        kwargs = {"num_cpus": workers} if address == "local" and workers is not None else {}
+        ray.init(address=None if address == "local" else address, include_dashboard=False, log_to_driver=False,
+                 logging_level="ERROR", **kwargs)
+    try:
+        task = ray.remote(num_cpus=1)(run_once)
+        refs = [ray.put(x) for x in shared]
+        futures = [task.remote(refs[0], draw, *refs[1:]) for draw in draws]
+        yield from (ray.get(f) for f in futures)
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
+              perturbation: Perturbation = Perturbation(), duration: float | None = None, periods: int | None = None,
+              workers: int = 1, ray_address: str | None = None, schedule: RegraspSchedule | None = None,
+              settings: SupervisorSettings | None = None,
               progress: Callable[[int, int], None] | None = None) -> StudyResult:
-    """Plan the schedule once, then run ``runs`` seeded rollouts on ``workers`` processes (1: in this one).
+    """Plan the schedule once, then run ``runs`` seeded rollouts (module docstring).
 
-    ``duration``/``periods`` as in :func:`~regrasp.rollout.build_rollout` (default: the trajectory's domain).
+    Args:
+        scenario: A scenario file, or a loaded :class:`~regrasp.scenario.Scenario`.
+        runs: How many runs (at most ``MAX_RUNS``).
+        seed: The study's seed.
+        perturbation: What is perturbed, and by how much.
+        duration, periods: Each run's length, as in :func:`~regrasp.rollout.build_rollout` (default: the
+            trajectory's domain).
+        workers: Processes (1: this one); with Ray, the CPUs of a local cluster.
+        ray_address: None (processes), ``"local"`` (a Ray cluster on this machine) or a cluster's address.
+        schedule: The schedule every run starts with (default: planned here with the model, with the cone margin
+            rollouts keep by default): a planning stack that studies one plan under several perturbations plans
+            it once.
+        settings: The supervisor's settings in every run (None: the rollout's default).
+        progress: Called as ``progress(done, runs)`` after each run.
     """
     from .rollout import DEFAULT_CONE_MARGIN, build_rollout
-    from .scenario import load_scenario
+    from .scenario import Scenario, load_scenario
     from .schedule_planner import RegraspSettings, plan_regrasps
 
     start = time.perf_counter()
     workers = as_integer("workers", workers, 1)
-    draws = draw_runs(runs, seed, perturbation)
-    path = str(Path(scenario_path))
-    scenario = load_scenario(path)
-    probe = build_rollout(scenario, duration=duration, periods=periods,
-                          schedule=plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN)))
-    jobs = [(path, d, probe.schedule, probe.duration) for d in draws]
+    expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
+    if ray_address is not None and (not isinstance(ray_address, str) or not ray_address):
+        raise InvalidParameterError("ray_address", ray_address, "'local' or a Ray cluster's address")
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    name = str(scenario.path) if scenario.path is not None else scenario.name
+    draws = draw_runs(runs, seed, perturbation, len(scenario.contacts))
+    if schedule is None:
+        schedule = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
+    probe = build_rollout(scenario, duration=duration, periods=periods, schedule=schedule, settings=settings)
+    _check_offsets(scenario, probe.schedule.at(scenario.trajectory.t_start).xi if probe.schedule else None,
+                   perturbation.contact_position)
+    plan_seconds = time.perf_counter() - start
+    shared = (scenario, probe.schedule, probe.duration, perturbation, settings)
+    source = _on_processes(workers, shared, draws) if ray_address is None else \
+        _on_ray(ray_address, workers, shared, draws)
     outcomes: list[RunOutcome] = []
-    if workers == 1:
-        for job in jobs:
-            outcomes.append(_run(job))
-            if progress is not None:
-                progress(len(outcomes), len(jobs))
-    else:
-        # "spawn", not Linux's default "fork": the parent has run OpenMP code (planning), and forking such a
-        # process aborts the child ("fork() called from a process already using GNU OpenMP")
-        with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-            for outcome in pool.map(_run, jobs):
-                outcomes.append(outcome)
-                if progress is not None:
-                    progress(len(outcomes), len(jobs))
-    return StudyResult(path, tuple(outcomes), perturbation, int(seed), probe.duration, workers,
-                       time.perf_counter() - start)
+    for outcome in source:
+        outcomes.append(outcome)
+        if progress is not None:
+            progress(len(outcomes), len(draws))
+    return StudyResult(name, tuple(outcomes), perturbation, int(seed), probe.duration, workers,
+                       "process" if ray_address is None else "ray", time.perf_counter() - start, plan_seconds)
+
+
+def _check_offsets(scenario: Scenario, xi0, half_width: float) -> None:
+    """Every placement error a study can draw keeps each fingertip on its edge."""
+    if xi0 is None or half_width == 0.0:
+        return
+    for c, x in zip(scenario.contacts, xi0):
+        lo, hi = scenario.polygon.edge(c.edge).xi_range
+        if not (lo <= x - half_width and x + half_width <= hi):
+            raise InvalidParameterError("contact_position", half_width,
+                                        f"a placement error that keeps {c.finger.name} on its edge (xi0 = "
+                                        f"{x * 1e3:.2f} mm on [{lo * 1e3:.2f}, {hi * 1e3:.2f}] mm)")
