@@ -108,6 +108,70 @@ def test_the_sliders_kinetic_friction_is_estimated_from_the_sensed_forces():
     assert law == "Proposition 3" and ft == pytest.approx(0.6 * fn, rel=1e-9)  # on the estimated kinetic edge
 
 
+def test_the_first_friction_estimate_is_the_ratio_the_contact_broke_away_at():
+    """Sensed slipping at the end of its priming, the slider's law starts on the kinetic edge of the force ratio
+    the sensor read when it broke away (0.58 here, against the model's 0.5), not on the model's."""
+    ex = executor(friction_filter_time=0.01, breakaway_estimate=True)
+    out = []
+    ex.start(SlideOrder(0, 1, 0.0, reference=lambda t: (-0.014, 0.0, 0.0)), meas(0.0), out)
+    m = meas(0.001, sliding=(True, False, False), xi_dot=(0.0, 0, 0), normal=(1.0, 1.0, 1.0),
+             tangential=(0.58, 0.0, 0.0))
+    ex.advance(m, out)
+    control, law, _, _ = command(ex, 0.001, m, out)
+    fn, ft = control.contact_forces_surface[0]
+    assert law == "Proposition 3" and ft == pytest.approx(0.58 * fn, rel=1e-9)
+
+
+def test_with_a_start_speed_the_priming_lasts_until_the_contact_moves_the_right_way():
+    ex = executor(start_speed=1e-3)
+    out = []
+    ex.start(SlideOrder(0, -1, -0.02), meas(0.0), out)
+    for xi_dot in (0.0, 0.002, -0.0005):  # broke away, but not moving down yet (or moving up)
+        ex.advance(meas(0.001, sliding=(True, False, False), xi_dot=(xi_dot, 0, 0)), out)
+        assert ex.phases[0] is ContactPhase.PRIMING
+    ex.advance(meas(0.002, sliding=(True, False, False), xi_dot=(-0.0015, 0, 0)), out)
+    assert ex.phases[0] is ContactPhase.SLIDING and out[-1].kind is EventKind.SLIDE
+
+
+def test_a_settling_contact_keeps_a_margin_in_newtons_on_a_light_touch():
+    """f_n = 0.25 N: the 0.05 undershoot would leave 0.0125 N; settle_margin = 0.05 N asks for μ_k f_n - 0.05 N."""
+    ex = executor(settle_margin=0.05)
+    out = []
+    ex.start(SlideOrder(0, 1, -0.010), meas(0.0), out)
+    ex.advance(meas(0.001, sliding=(True, False, False), xi_dot=(0.001, 0, 0)), out)
+    arrived = meas(0.2, xi=(-0.0101, XI[1], XI[2]), xi_dot=(0.001, 0, 0), sliding=(True, False, False),
+                   normal=(0.25, 1.0, 1.0), tangential=(0.125, 0.0, 0.0))
+    ex.advance(arrived, out)
+    control, law, _, _ = command(ex, 0.2, arrived, out)
+    fn, ft = control.contact_forces_surface[0]
+    assert law == "fixed contacts (cone edge)" and ft == pytest.approx((0.5 - 0.05 / 0.25) * fn, rel=1e-9)
+    heavy = executor(settle_margin=0.05)  # f_n = 2 N: the undershoot's 0.1 N is the larger margin
+    heavy.start(SlideOrder(0, 1, -0.010), meas(0.0), out)
+    heavy.advance(meas(0.001, sliding=(True, False, False), xi_dot=(0.001, 0, 0)), out)
+    heavy.advance(meas(0.2, xi=(-0.0101, XI[1], XI[2]), xi_dot=(0.001, 0, 0), sliding=(True, False, False),
+                       normal=(2.0, 1.0, 1.0), tangential=(1.0, 0.0, 0.0)), out)
+    fn, ft = command(heavy, 0.2, arrived, out)[0].contact_forces_surface[0]
+    assert ft == pytest.approx(0.45 * fn, rel=1e-9)
+
+
+def test_with_an_actuation_delay_a_stuck_slide_settles_until_the_torques_in_flight_are_its_own():
+    ex = executor(actuation_delay=1)
+    out = []
+    ex.start(SlideOrder(0, 1, -0.010), meas(0.0), out)
+    ex.advance(meas(0.001, sliding=(True, False, False), xi_dot=(0.001, 0, 0)), out)
+    still = meas(0.2, xi=(-0.0101, XI[1], XI[2]))  # arrived and already stuck
+    (end,) = ex.advance(still, out)
+    assert end.kind is EventKind.ARRIVED and ex.phases[0] is ContactPhase.SETTLING
+    control, law, _, _ = command(ex, 0.2, still, out)
+    assert law == "fixed contacts"  # stuck: its own static cone, no cone edge
+    ex.advance(meas(0.201, xi=(-0.0101, XI[1], XI[2]), sliding=(True, False, False)), out)  # the last
+    assert ex.phases[0] is ContactPhase.SETTLING  # sliding law's torque broke it away: still the slide's
+    ex.advance(meas(0.202, xi=(-0.0101, XI[1], XI[2])), out)
+    assert ex.phases[0] is ContactPhase.SETTLING  # stuck for one step: one torque in flight was not its own
+    ex.advance(meas(0.203, xi=(-0.0101, XI[1], XI[2])), out)
+    assert ex.phases[0] is ContactPhase.FIXED and ex.regrasps[0] == 1
+
+
 def test_an_infeasible_slide_is_aborted_and_the_contact_held():
     # a priming that asks finger 1 for |f_t| = 3.5 f_n: no squeeze balances that with the others in their cones
     ex = executor(prime_overshoot=3.0, prime_overshoot_max=3.0, internal_force=InternalForceSettings(f_min=0.2, f_max=5.0))
@@ -124,6 +188,8 @@ def test_orders_and_settings_are_checked():
     ex.start(SlideOrder(0, 1, 0.0), meas(0.0), [])
     with pytest.raises(InvalidParameterError):
         ex.start(SlideOrder(0, 1, 0.0), meas(0.0), [])  # not fixed
-    for bad in (dict(integral=2.0), dict(prime_overshoot_max=0.01), dict(max_reprimes=-1), dict(slide_omega=0.0)):
+    for bad in (dict(integral=2.0), dict(prime_overshoot_max=0.01), dict(max_reprimes=-1), dict(slide_omega=0.0),
+                dict(settle_margin=-0.1), dict(actuation_delay=-1), dict(actuation_delay=0.5), dict(start_speed=-1e-3),
+                dict(start_speed=math.nan)):
         with pytest.raises(InvalidParameterError):
             ExecutorSettings(**bad)

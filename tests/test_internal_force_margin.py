@@ -204,3 +204,48 @@ def test_cone_edges_are_validated(edges):
         build_internal_force_qp(A, np.zeros(6), frames, model.grasp.modes, 0.5, InternalForceSettings(), edges)
     with pytest.raises(InvalidParameterError, match="cone_edge"):
         InternalForceSolver().solve(A, np.zeros(6), frames, model.grasp.modes, 0.5, edges)
+
+
+def test_a_fallback_margin_answers_where_the_margin_cannot_be_kept_and_only_there():
+    """For each random case, the largest friction margin the LP still finds feasible, m*: with margin above m*
+    and a fallback below it the solver answers with forces inside the fallback's cones (and fails without the
+    fallback); with a margin the forces allow, the fallback is not used and the answer is the plain one."""
+    relaxed = kept = 0
+    for kind, seed in CASES:
+        case = random_case(kind, seed)
+        A, f_m, frames, fixed, mu, modes, friction = (case[k] for k in ("A", "f_m", "frames", "fixed", "mu", "modes",
+                                                                        "friction"))
+        if not any(fixed):
+            continue
+        base = dataclasses.replace(case["settings"], target_cone_margin=0.2)
+        grid = np.linspace(0.0, min(mu[i] for i in range(len(mu)) if fixed[i]), 21)
+        feasible = [m for m in grid if best_margin(case, dataclasses.replace(base, margin=m)) is not None]
+        if len(feasible) < 2 or feasible[-1] == grid[-1]:
+            continue
+        # infeasible at high (the LP); low a grid step inside the feasible margins (at their very edge the
+        # feasible set is a point, and OSQP's iterations run out)
+        low, high = feasible[-2], grid[len(feasible)]
+        strict = dataclasses.replace(base, margin=high)
+        with pytest.raises(InternalForceInfeasibleError):
+            InternalForceSolver(strict).solve(A, f_m, frames, modes, friction)
+        solver = InternalForceSolver(dataclasses.replace(strict, fallback_margin=low))
+        result = solver.solve(A, f_m, frames, modes, friction)
+        scale = max(1.0, np.abs(f_m).max())
+        assert solver.relaxations == 1 and result.feasible
+        assert worst_violation(result.forces, frames, fixed, mu, dataclasses.replace(base, margin=low)) \
+            <= 10 * base.tolerance * scale
+        assert np.linalg.norm(A.T @ result.f_c) <= 1e-9 * np.linalg.norm(A, 2) * max(np.linalg.norm(result.f_c), 1)
+        relaxed += 1
+        inside = feasible[-3] if len(feasible) > 2 else 0.0  # a margin inside the feasible ones
+        easy = dataclasses.replace(base, margin=inside)
+        if inside > 0.0:
+            with_fallback = InternalForceSolver(dataclasses.replace(easy, fallback_margin=0.0))
+            plain = InternalForceSolver(easy).solve(A, f_m, frames, modes, friction)
+            np.testing.assert_allclose(with_fallback.solve(A, f_m, frames, modes, friction).forces, plain.forces,
+                                       rtol=0, atol=1e-9 * scale)
+            assert with_fallback.relaxations == 0
+            kept += 1
+    assert relaxed >= 10 and kept >= 5, (relaxed, kept)
+    for bad in (0.05, 0.1, -0.01, np.nan):  # at least the margin, negative, not a number
+        with pytest.raises(InvalidParameterError, match="fallback_margin"):
+            InternalForceSettings(margin=0.05, fallback_margin=bad)

@@ -236,8 +236,8 @@ def test_a_rejected_slide_gets_another_contact_to_enable_it():
 
 
 def test_a_slide_that_ends_sliding_settles_just_inside_the_cone_and_sticks():
-    """After a slide arrives the contact is still sliding; the settling law asks (μ_k - 0.05) f_n of
-    friction in the sliding direction, so the plant's kinetic friction slows it and it sticks
+    """After a slide arrives the contact is still sliding; the settling law asks μ_k f_n - max(0.05 f_n, 0.05 N)
+    of friction in the sliding direction, so the plant's kinetic friction slows it and it sticks
     within a few periods, without slipping any other contact."""
     from regrasp import build_rollout
 
@@ -248,7 +248,7 @@ def test_a_slide_that_ends_sliding_settles_just_inside_the_cone_and_sticks():
     arrived = next(e for e in result.events if e.kind == "arrived")
     stick = next(e for e in result.events if e.kind == "stick" and e.contact == arrived.contact)
     assert 0.0 < stick.time - arrived.time <= 0.02
-    settling = result.phases[(result.times > arrived.time) & (result.times < stick.time), :]
+    settling = result.phases[(result.times >= arrived.time) & (result.times < stick.time), :]
     assert settling.size and np.all(settling[:, ["finger1", "finger2", "palm"].index(arrived.contact)] == "settling")
     for k, (contact, kind) in enumerate(kinds):  # every slip is a primed one
         if kind == "slip":

@@ -9,14 +9,28 @@ through three phases (``docs/derivations.md`` §4, "lessons"):
 1. **priming**: the fixed-contact law with the contact's force put just past the edge of its static
    cone, :math:`\mu_s` + ``prime_overshoot``, in the sliding direction, the overshoot growing linearly
    to ``prime_overshoot_max`` over ``prime_time`` (the plant's μ_s may exceed the model's), until the
-   contact is sensed slipping (or for at most ``prime_time``). Switching to the sliding law while the contact is
-   still stuck makes the plant redistribute the forces for a step and can slip another contact;
+   contact is sensed slipping (with ``start_speed``: and moving in the sliding direction faster than that), or
+   for at most ``prime_time``. Switching to the sliding law while the contact is still stuck makes the plant
+   redistribute the forces for a step and can slip another contact; with an actuation delay, a contact that
+   has just broken away is still stuck one step later unless the priming has set it moving;
 2. **sliding**: the sliding law (:class:`~regrasp.control.Proposition3Controller`, every slider on
    its kinetic cone edge, p ≥ 1) tracking ξ_d, until the contact is at the target and slow
    (*arrived*), sticks before it (*stuck*), or runs out of ``max_slide_time`` (*timed out*);
 3. **settling**: a contact that ends its slide still sliding gets the fixed law with its force just
-   inside its kinetic cone in the sliding direction, :math:`\mu_k` - ``settle_undershoot``, until the
-   plant's contact sticks: it slows down gently.
+   inside its kinetic cone in the sliding direction, :math:`\mu_k - u` with the undershoot
+   :math:`u = \max(` ``settle_undershoot``, ``settle_margin`` :math:`/ f_n)` (:math:`f_n` the sensed normal
+   force when the slide ends), until the plant's contact sticks: it slows down gently. The margin in newtons
+   is what a torque applied late (an actuation delay) needs: a contact that sticks before the settling
+   torque arrives gets that torque as a fixed contact, with :math:`u f_n` of static margin against the
+   force errors of the model.
+
+**An actuation delay** of :math:`d` = ``actuation_delay`` control steps means that the torques of the
+:math:`d` steps after a phase change were computed for the phase before. A slide therefore ends in the
+settling phase even when the contact is sensed stuck, and settling ends only after :math:`d + 1` steps in a
+row sensed stuck: until the torques in flight were all computed for a stuck contact, a slip is still the
+slide's (the sliding law's torque, applied to a contact that stuck a step before, can break it away again).
+While it is sensed stuck, a settling contact gets the plain fixed-contact law (its static cone, with the cone
+margin the internal force seeks), no cone edge.
 
 Contacts being primed or settled are fixed in the model with a cone edge each; the sliders are
 sliding in the model; all of them share one control law per step. When no internal force keeps
@@ -43,7 +57,7 @@ from .grasp import Grasp
 from .hand import Hand
 from .internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
 from .reduced import ReducedModel
-from .validation import as_duration, as_integer, as_positive_float
+from .validation import as_duration, as_flag, as_integer, as_positive_float
 
 if TYPE_CHECKING:
     from .supervisor import Measurement
@@ -62,7 +76,11 @@ class ExecutorSettings:
         prime_time: Longest priming [s].
         prime_overshoot: Priming asks for |f_t| = (μ_s + this) f_n at first [-] ...
         prime_overshoot_max: ... and up to (μ_s + this) f_n at the end of ``prime_time`` [-].
-        settle_undershoot: Settling asks for (μ_k - this) f_n [-] (at most μ_k / 2).
+        start_speed: The priming ends when the contact is sensed sliding and moving in the slide's direction
+            faster than this [m/s] (None: sensed sliding is enough).
+        settle_undershoot: Settling asks for (μ_k - this) f_n [-] (at most μ_k / 2) ...
+        settle_margin: ... or for μ_k f_n - this [N] where that is less (with the normal force sensed when the
+            slide ends; still at most μ_k / 2 below μ_k).
         arrive_tolerance: A slide has arrived when |ξ - ξ*| is below this [m] ...
         arrive_speed: ... and |ξ̇| below this [m/s].
         max_slide_time: A slide that has not arrived after this long ends where it is [s].
@@ -72,10 +90,20 @@ class ExecutorSettings:
             the model's). The plant's μ_k may differ from the model's; a slider that carries more friction
             than its law predicts stops and sticks, one that carries less overshoots.
         friction_min_force: The estimate uses only steps with f_n above this [N].
+        shared_friction: Fingertips with the same model friction are of one material on one object: a slider's
+            estimate scales the friction the laws assume at all of them (μ_s and μ_k times μ̂_k / μ_k of the
+            model), from its first estimate on and after its slide. A plant whose μ is 20 % above the model's
+            otherwise makes a slide infeasible: the slider's measured friction must be balanced by contacts
+            whose cones the laws take 20 % too narrow.
+        breakaway_estimate: Start the estimate at the step the contact is sensed breaking away, from the
+            force ratio it broke away at (≈ the plant's μ_s ≥ μ_k), so that the sliding law's first steps
+            expect no less friction than the plant's (False: from its first step sensed sliding).
         friction_resolution: The laws get the estimate rounded to this [-] (a new law per change).
         control_period: The control period the filter assumes [s].
         max_reprimes: A planned slide (an order with a reference) that sticks before its planned end is
             primed again, at most this many times; then it ends where it stuck.
+        actuation_delay: The hand's actuation delay [control steps] (module docstring): a torque computed at
+            one step is applied this many steps later.
         control_omega: Bandwidth of the computed-torque laws on the object's coordinates [rad/s]
             (critically damped: K_v = 2ω, K_s = ω²).
         slide_omega: The same on the sliders' ξ [rad/s]. A slider's effective inertia along its edge is
@@ -94,13 +122,18 @@ class ExecutorSettings:
     prime_time: float = 0.02
     prime_overshoot: float = 0.05
     prime_overshoot_max: float = 0.05
+    start_speed: float | None = None
     settle_undershoot: float = 0.05
+    settle_margin: float = 0.0
     arrive_tolerance: float = 5e-4
     arrive_speed: float = 5e-3
     max_slide_time: float = 1.5
     max_reprimes: int = 5
+    actuation_delay: int = 0
     friction_filter_time: float | None = None
     friction_min_force: float = 0.05
+    breakaway_estimate: bool = False
+    shared_friction: bool = False
     friction_resolution: float = 0.0025
     control_period: float = 1e-3
     control_omega: float = 20.0
@@ -118,11 +151,17 @@ class ExecutorSettings:
         for name in ("prime_time", "max_slide_time"):
             as_duration(name, getattr(self, name))
         as_positive_float("integral", self.integral, allow_zero=True)
+        as_positive_float("settle_margin", self.settle_margin, allow_zero=True)
+        if self.start_speed is not None:
+            as_positive_float("start_speed", self.start_speed, allow_zero=True)
         if self.friction_filter_time is not None:
             as_positive_float("friction_filter_time", self.friction_filter_time)
         for name in ("friction_min_force", "friction_resolution", "control_period"):
             as_positive_float(name, getattr(self, name))
         as_integer("max_reprimes", self.max_reprimes)
+        as_integer("actuation_delay", self.actuation_delay)
+        as_flag("breakaway_estimate", self.breakaway_estimate)
+        as_flag("shared_friction", self.shared_friction)
         if not self.prime_overshoot_max >= self.prime_overshoot:
             raise InvalidParameterError("prime_overshoot_max", self.prime_overshoot_max,
                                         f"at least prime_overshoot = {self.prime_overshoot}")
@@ -141,6 +180,8 @@ class _Active:
     reprimes: int = 0
     mu_hat: float = math.nan  # the slider's kinetic friction ratio, estimated while it slides
     settle_sign: float = 0.0
+    settle_undershoot: float = 0.0  # u of the settling phase (module docstring)
+    still: int = 0  # steps in a row the settling contact was sensed stuck
     filter: list = field(default_factory=lambda: [0.0, 0.0])
 
 
@@ -174,6 +215,7 @@ class SlideExecutor:
         self._now = 0.0
         self._integral_X = np.zeros(3)          # ∫(X_d - X) dt
         self._integral_xi: dict[int, float] = {}  # ∫(ξ_d - ξ) dt per slider
+        self._friction_scale: dict[Friction, float] = {}  # a model friction -> μ̂_k / its μ_k (shared_friction)
 
     # ------------------------------------------------------------------ state
     @property
@@ -211,9 +253,15 @@ class SlideExecutor:
             phase = self.phases[i]
             t, xi, xi_dot, sliding = float(meas.t), float(meas.xi[i]), float(meas.xi_dot[i]), bool(meas.sliding[i])
             target = a.order.target
-            if phase is ContactPhase.PRIMING and (sliding or t - a.phase_start >= s.prime_time - 1e-12):
+            started = sliding and (s.start_speed is None or xi_dot * a.order.direction > s.start_speed)
+            if phase is ContactPhase.PRIMING and (started or t - a.phase_start >= s.prime_time - 1e-12):
                 self.phases[i] = ContactPhase.SLIDING
                 a.phase_start, a.slipped, a.filter = t, sliding, [xi, xi_dot]
+                if s.breakaway_estimate:
+                    # the first estimate: the force ratio at which it broke away, μ_s >= μ_k of the plant (the
+                    # sliding law then starts with no less friction than the plant's: a slider whose law
+                    # expects less friction than it gets reverses within a step and sticks again)
+                    self._estimate_friction(a, i, meas)
                 self.xi = meas.xi.copy()
                 self._event(out, t, i, EventKind.SLIDE, f"sliding law, target {target * 1e3:.2f} mm"
                             + ("" if sliding else " (not yet slipping)"), xi=xi, target=target)
@@ -246,8 +294,10 @@ class SlideExecutor:
                 elif t - a.phase_start > s.max_slide_time:
                     ends.append(self._end(meas, out, i, EventKind.TIMED_OUT, f"stopped after max_slide_time at "
                                           f"{xi * 1e3:.2f} mm (target {target * 1e3:.2f} mm)"))
-            elif phase is ContactPhase.SETTLING and not sliding:
-                self._finish(meas, out, i)
+            elif phase is ContactPhase.SETTLING:
+                a.still = 0 if sliding else a.still + 1
+                if a.still > s.actuation_delay:
+                    self._finish(meas, out, i)
         return ends
 
     def _estimate_friction(self, a: _Active, i: int, meas) -> None:
@@ -263,16 +313,30 @@ class SlideExecutor:
             a.mu_hat = ratio
         else:
             a.mu_hat += min(1.0, s.control_period / s.friction_filter_time) * (ratio - a.mu_hat)
+        model = self.friction[i]
+        if s.shared_friction and model.kinetic > 0.0:
+            self._friction_scale[model] = a.mu_hat / model.kinetic
+
+    def _round(self, mu: float) -> float:
+        r = self.settings.friction_resolution
+        return max(0.0, round(mu / r) * r)
+
+    def assumed_friction(self, i: int) -> Friction:
+        """The friction the laws assume at contact i when it is not sliding: the model's, times what the
+        sliders found (``shared_friction``), rounded to ``friction_resolution``."""
+        model = self.friction[i]
+        scale = self._friction_scale.get(model)
+        if scale is None:
+            return model
+        return Friction(self._round(model.static * scale), self._round(model.kinetic * scale))
 
     def _kinetic(self, i: int) -> float:
         """The kinetic friction ratio the laws use for contact i: the estimate while it slides, rounded to
-        ``friction_resolution``, else the model's."""
+        ``friction_resolution``, else the assumed one."""
         a = self._active.get(i)
-        mu = self.friction[i].kinetic
         if a is None or math.isnan(a.mu_hat):
-            return mu
-        r = self.settings.friction_resolution
-        return max(0.0, round(a.mu_hat / r) * r)
+            return self.assumed_friction(i).kinetic
+        return self._round(a.mu_hat)
 
     def _end(self, meas, out: list, i: int, kind: EventKind, detail: str) -> SlideEnd:
         """End contact i's sliding phase where it is: settle if it still slides, else fix it."""
@@ -281,10 +345,15 @@ class SlideExecutor:
         self._event(out, t, i, kind, detail, xi=xi, target=a.order.target,
                     **({} if a.order.planned_end is None else {"planned_end": a.order.planned_end}))
         self.xi = meas.xi.copy()
-        if meas.sliding[i]:
+        if meas.sliding[i] or self.settings.actuation_delay > 0:
             self.phases[i] = ContactPhase.SETTLING
+            a.still = 0 if meas.sliding[i] else 1
             moving = float(meas.xi_dot[i])
             a.settle_sign = math.copysign(1.0, moving) if moving else float(a.order.direction)
+            fn = math.nan if meas.normal_force is None else float(meas.normal_force[i])
+            s = self.settings
+            a.settle_undershoot = s.settle_undershoot if not fn > s.friction_min_force else \
+                max(s.settle_undershoot, s.settle_margin / fn)
         else:
             self._finish(meas, out, i)
         return SlideEnd(a.order, kind, t, xi)
@@ -322,13 +391,14 @@ class SlideExecutor:
             if self.phases[i] is ContactPhase.PRIMING:
                 ramp = min(1.0, (self._now - a.phase_start) / s.prime_time)
                 overshoot = s.prime_overshoot + ramp * (s.prime_overshoot_max - s.prime_overshoot)
-                edges.append(ConeEdge(i, a.order.direction, self.friction[i].static + overshoot))
-            elif self.phases[i] is ContactPhase.SETTLING:
+                edges.append(ConeEdge(i, a.order.direction, self.assumed_friction(i).static + overshoot))
+            elif self.phases[i] is ContactPhase.SETTLING and a.still == 0:  # (stuck: the fixed law's own cone)
                 kinetic = self._kinetic(i)
-                edges.append(ConeEdge(i, a.settle_sign, kinetic - min(s.settle_undershoot, 0.5 * kinetic)))
+                edges.append(ConeEdge(i, a.settle_sign, kinetic - min(a.settle_undershoot, 0.5 * kinetic)))
         sliders = [i for i in range(self.hand.m) if self.phases[i] is ContactPhase.SLIDING]
+        assumed = [self.assumed_friction(i) for i in range(self.hand.m)]
         friction = tuple(Friction(max(f.static, k), k) if k != f.kinetic else f
-                         for f, k in zip(self.friction, (self._kinetic(i) for i in range(self.hand.m))))
+                         for f, k in zip(assumed, (self._kinetic(i) for i in range(self.hand.m))))
         key = (tuple(self.phases), tuple(edges), self.xi.tobytes(), friction)
         if key == self._key:
             return self._controller

@@ -96,6 +96,9 @@ class InternalForceSettings:
         f_max: Maximum normal force [N] at every contact (what the fingers can push), > f_min, or inf.
         target_cone_margin: The smallest cone margin (μ_s - margin) f_n - |f_t| [N] to reach at the fixed
             contacts, >= 0 (the module docstring); 0: the least squeeze only.
+        fallback_margin: Where no internal force keeps the fixed contacts ``margin`` inside their cones, the
+            solver answers with this smaller friction margin [-] instead of failing (None: it fails). A margin
+            that covers an uncertain μ is a preference; the cone of the model's μ is the limit.
     """
 
     f_min: float = 0.5
@@ -103,6 +106,7 @@ class InternalForceSettings:
     tolerance: float = 1e-9
     f_max: float = float("inf")
     target_cone_margin: float = 0.0
+    fallback_margin: float | None = None
 
     def __post_init__(self):
         for name, low, strict in (("f_min", 0.0, False), ("margin", 0.0, False), ("tolerance", 0.0, True),
@@ -118,6 +122,10 @@ class InternalForceSettings:
                 f_max = math.nan  # (the error below says what f_max may be)
         if not f_max > self.f_min:
             raise InvalidParameterError("f_max", self.f_max, f"a maximum normal force > f_min ({self.f_min}) or inf")
+        if self.fallback_margin is not None and not 0.0 <= as_finite_float("fallback_margin", self.fallback_margin) \
+                < self.margin:
+            raise InvalidParameterError("fallback_margin", self.fallback_margin,
+                                        f"None or a friction margin in [0, margin = {self.margin:g})")
 
 
 @dataclass(frozen=True)
@@ -331,8 +339,11 @@ class InternalForceSolver:
         self._rows_settings = settings
         self._last_contacts = None  # (modes, friction) as last passed (tuples), and validated
         self._plain: InternalForceSolver | None = None  # the least-squeeze fallback of a target margin
+        self._relaxed: InternalForceSolver | None = None  # the fallback_margin's solver
         #: how often a target-margin problem fell back to the least squeeze (its QP did not converge)
         self.fallbacks = 0
+        #: how often the friction margin was relaxed to ``fallback_margin`` (no force kept ``margin``)
+        self.relaxations = 0
 
     def _rows_for(self, m: int, modes, friction, cone_edge) -> _Rows:
         """The rows of these modes, frictions and cone edges (cached: the key holds all three; a list of
@@ -428,6 +439,14 @@ class InternalForceSolver:
                 return InternalForceResult(f_c, np.array(forces).reshape(m, 2), k, True, status,
                                            time.perf_counter() - start, margin)
             status = f"{status} (solution violates the constraints)"
+        if self.settings.fallback_margin is not None:
+            # the friction margin is a preference too: the same problem with the smaller one (its own target
+            # margin, and its own least-squeeze fallback)
+            if self._relaxed is None:
+                self._relaxed = InternalForceSolver(replace(self.settings, margin=self.settings.fallback_margin,
+                                                            fallback_margin=None))
+            self.relaxations += 1
+            return self._relaxed._solve(constraint_matrix, motion_forces, frames, modes, friction, cone_edge, start)
         if rows.target > 0.0:
             # the margin is a preference: where its QP does not converge, the least squeeze that keeps the
             # constraints (the same feasible set) is the answer

@@ -56,9 +56,10 @@ __all__ = [
 
 
 #: The settings the supervisor passes on to its executor (their defaults are the executor's).
-_EXECUTOR_FIELDS = ("omega_n", "zeta", "prime_time", "prime_overshoot", "prime_overshoot_max", "settle_undershoot",
-                    "arrive_tolerance", "arrive_speed", "max_slide_time", "control_omega", "slide_omega", "integral",
-                    "friction_filter_time", "internal_force")
+_EXECUTOR_FIELDS = ("omega_n", "zeta", "prime_time", "prime_overshoot", "prime_overshoot_max", "start_speed",
+                    "settle_undershoot",
+                    "settle_margin", "actuation_delay", "arrive_tolerance", "arrive_speed", "max_slide_time", "control_omega", "slide_omega", "integral",
+                    "friction_filter_time", "breakaway_estimate", "shared_friction", "internal_force")
 
 
 @dataclass(frozen=True)
@@ -86,6 +87,8 @@ class SupervisorSettings:
             makes the plant redistribute the forces for one step and can slip another contact.
         prime_overshoot_max: The priming's overshoot grows to this over ``prime_time`` [-] (at least
             ``prime_overshoot``; see :class:`~regrasp.executor.ExecutorSettings`).
+        start_speed: The priming ends when the contact slides in the slide's direction faster than this [m/s]
+            (None: when it is sensed sliding; :class:`~regrasp.executor.ExecutorSettings`).
         settle_undershoot: A slide that ends with the contact still sliding settles with the
             fixed-contact law asking for (μ_k - this) f_n of friction in the sliding direction [-]
             (this at most μ_k / 2), just inside the kinetic cone: the plant's kinetic friction
@@ -93,6 +96,11 @@ class SupervisorSettings:
             fixed-contact law would predict static friction of either sign there, which a sliding
             contact cannot give; the plant would redistribute the forces for a step, enough to
             slip another contact when the slider carries much friction (the palm under the object).
+        settle_margin: ... or asking for μ_k f_n - this [N] where that is less [N]: a contact that sticks
+            before the settling torque arrives (an actuation delay) then holds it with this margin
+            (:class:`~regrasp.executor.ExecutorSettings`).
+        actuation_delay: The hand's actuation delay [control steps]: the executor holds a slide's settling
+            until the torques in flight were computed for it (:mod:`regrasp.executor`).
         arrive_tolerance: A slide ends when |ξ - ξ*| is below this [m] ...
         arrive_speed: ... and |ξ̇| below this [m/s].
         max_slide_time: A slide that has not arrived after this long ends where it is [s].
@@ -101,6 +109,10 @@ class SupervisorSettings:
         slide_omega: The same on the sliders' ξ [rad/s] (:class:`~regrasp.executor.ExecutorSettings`).
         friction_filter_time: Estimate sliders' kinetic friction from the sensed forces with this time
             constant [s] (None: the model's μ_k; :class:`~regrasp.executor.ExecutorSettings`).
+        breakaway_estimate: Start that estimate at the break-away, from the force ratio it happened at
+            (:class:`~regrasp.executor.ExecutorSettings`).
+        shared_friction: Take fingertips with the same model friction to be of one material: a slider's
+            estimate scales the friction assumed at all of them (:class:`~regrasp.executor.ExecutorSettings`).
         integral: Integral action, K_i = ``integral`` · ω³ on every coordinate (0: none; see
             :class:`~regrasp.executor.ExecutorSettings`).
         envelope_every: Evaluate the runtime envelopes every k-th step (1: every step).
@@ -140,7 +152,10 @@ class SupervisorSettings:
     prime_time: float = ExecutorSettings.prime_time
     prime_overshoot: float = ExecutorSettings.prime_overshoot
     prime_overshoot_max: float = ExecutorSettings.prime_overshoot_max
+    start_speed: float | None = ExecutorSettings.start_speed
     settle_undershoot: float = ExecutorSettings.settle_undershoot
+    settle_margin: float = ExecutorSettings.settle_margin
+    actuation_delay: int = ExecutorSettings.actuation_delay
     arrive_tolerance: float = ExecutorSettings.arrive_tolerance
     arrive_speed: float = ExecutorSettings.arrive_speed
     max_slide_time: float = ExecutorSettings.max_slide_time
@@ -149,6 +164,8 @@ class SupervisorSettings:
     slide_omega: float = ExecutorSettings.slide_omega
     integral: float = ExecutorSettings.integral
     friction_filter_time: float | None = ExecutorSettings.friction_filter_time
+    breakaway_estimate: bool = ExecutorSettings.breakaway_estimate
+    shared_friction: bool = ExecutorSettings.shared_friction
     envelope_every: int = 1
     track_envelopes: bool = False
     geometry: str = "ideal"
@@ -190,8 +207,10 @@ class SupervisorSettings:
         40 ms, and the sliders' kinetic friction estimated from the sensed forces (10 ms). With these the
         scheduled three-finger rollout survives 0.9x and 1.1x of the object's mass and of μ."""
         values = dict(geometry=geometry, slide_omega=60.0, integral=0.3, prime_time=0.04, prime_overshoot_max=0.25,
-                      friction_filter_time=0.01,
-                      internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=cone_margin))
+                      friction_filter_time=0.01, breakaway_estimate=True, shared_friction=True, settle_margin=0.05,
+                      start_speed=1e-3,
+                      internal_force=InternalForceSettings(f_min=0.2, margin=0.1, target_cone_margin=cone_margin,
+                                                           fallback_margin=0.05))
         values.update(overrides)
         return cls(**values)
 
