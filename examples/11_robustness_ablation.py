@@ -1,0 +1,83 @@
+"""What each robustness change bought: one study's draws under six supervisors, each adding one change.
+
+Run: python examples/11_robustness_ablation.py [--runs N] [--periods P | --duration T] [--workers K] [--seed S]
+
+The default scenario (trajectory 2, three fingers, the scheduled policy) is planned once. Every supervisor then
+runs the same seeded runs: the plant's object mass, inertia and μ drawn within ±20 % of the model's, each
+fingertip placed up to 0.2 mm off its plan, ξ sensed with 0.2 mm of noise, the object's pose with 0.1 mm and
+1 mrad, and every torque applied one control step late (the issue-14 perturbations). The supervisors:
+
+0. issue 12's robust settings (margins in cone ratio 0.05 and 0.2 N, integral action, growing priming, μ_k
+   estimated while sliding);
+1. + settling keeps 0.05 N of static margin (``settle_margin``);
+2. + the supervisor is told the actuation delay: a slide settles until the torques in flight are its own;
+3. + the kinetic friction estimate starts at the break-away (``breakaway_estimate``);
+4. + the priming lasts until the contact moves the right way at 1 mm/s (``start_speed``);
+5. + fixed contacts kept 0.1 inside their cones in ratio, 0.05 where no force allows more (``fallback_margin``):
+   today's ``SupervisorSettings.robust``.
+
+The default (4 runs of 0.3 s) only shows the machinery; the table in docs/derivations.md took
+``--runs 100 --periods 2`` (about 45 minutes on 2 cores).
+"""
+
+import argparse
+import os
+from dataclasses import replace
+from pathlib import Path
+
+from regrasp import load_scenario
+from regrasp.internal_force import InternalForceSettings
+from regrasp.rollout import DEFAULT_CONE_MARGIN
+from regrasp.schedule_planner import RegraspSettings, plan_regrasps
+from regrasp.study import Perturbation, run_study
+from regrasp.supervisor import SupervisorSettings
+
+SCENARIO = Path(__file__).resolve().parent / "scenarios" / "paper_trajectory_2_three_fingers.toml"
+
+#: The issue's perturbations.
+PERTURBATION = Perturbation(mass=0.2, inertia=0.2, mu=0.2, contact_position=2e-4, xi_noise=2e-4,
+                            position_noise=1e-4, angle_noise=1e-3, delay=1)
+
+
+def variants(geometry: str, delay: int) -> list[tuple[str, SupervisorSettings]]:
+    """The six supervisors of the docstring, each the one before plus one change."""
+    today = SupervisorSettings.robust(geometry, DEFAULT_CONE_MARGIN, actuation_delay=delay)
+    before = replace(today, settle_margin=0.0, actuation_delay=0, breakaway_estimate=False, start_speed=None,
+                     internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=DEFAULT_CONE_MARGIN))
+    steps = [("0 issue 12's robust settings", before)]
+    steps.append(("1 + settle margin 0.05 N", replace(steps[-1][1], settle_margin=today.settle_margin)))
+    steps.append(("2 + the delay told", replace(steps[-1][1], actuation_delay=today.actuation_delay)))
+    steps.append(("3 + estimate at break-away", replace(steps[-1][1], breakaway_estimate=True)))
+    steps.append(("4 + start speed 1 mm/s", replace(steps[-1][1], start_speed=today.start_speed)))
+    steps.append(("5 + cone ratio margin 0.1", replace(steps[-1][1], internal_force=today.internal_force)))
+    assert steps[-1][1] == today
+    return steps
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=int, default=4, help="runs per supervisor (default 4)")
+    span = parser.add_mutually_exclusive_group()
+    span.add_argument("--periods", type=int, help="each run: P periods of the trajectory")
+    span.add_argument("--duration", type=float, help="each run: T seconds (default 0.3 without --periods)")
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="worker processes (default: cores)")
+    parser.add_argument("--seed", type=int, default=1, help="the study's seed (default 1)")
+    args = parser.parse_args()
+    duration = None if args.periods else (args.duration or 0.3)
+    scenario = load_scenario(SCENARIO)
+    schedule = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
+    print(f"{args.runs} runs of {'%d periods' % args.periods if args.periods else '%g s' % duration} each, seed "
+          f"{args.seed}: {PERTURBATION.describe()}")
+    print(f"{'supervisor':32s} {'success':>9s} {'Wilson 95 %':>15s}  {'min cone margin':>15s}  failures")
+    for name, settings in variants(scenario.geometry.value, PERTURBATION.delay):
+        r = run_study(scenario, args.runs, seed=args.seed, perturbation=PERTURBATION, duration=duration,
+                      periods=args.periods, workers=min(args.workers, args.runs), schedule=schedule, settings=settings)
+        lo, hi = r.interval
+        cone = min(o.min_cone_margin for o in r.runs)
+        failures = ", ".join(f"{k} {v}" for k, v in sorted(r.failures.items())) or "none"
+        print(f"{name:32s} {r.successes:4d}/{len(r.runs):<4d} [{lo:5.1%}, {hi:5.1%}]  {cone:13.3f} N  {failures}",
+              flush=True)
+
+
+if __name__ == "__main__":
+    main()
