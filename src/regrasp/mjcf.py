@@ -144,6 +144,8 @@ def eroded_vertices(polygon: ConvexPolygon, distance: float) -> np.ndarray:
     """
     expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
     r = as_finite_float("distance", distance)
+    if abs(r) > polygon.scale:
+        raise InvalidParameterError("distance", r, f"an offset of at most the object's size ({polygon.scale:.3g} m)")
     edges = polygon.edges
     n = len(edges)
     out = np.empty((n, 2))

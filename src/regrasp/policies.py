@@ -34,7 +34,7 @@ from .exceptions import InvalidParameterError, RegraspError
 from .executor import ContactPhase, SlideEnd, SlideOrder
 from .monitor import EnvelopeReading
 from .schedule import RegraspSchedule, Slide
-from .validation import as_finite_float, as_positive_float
+from .validation import as_finite_float, as_integer, as_positive_float, expect_sequence_of
 
 if TYPE_CHECKING:
     from .supervisor import Measurement
@@ -86,11 +86,13 @@ class OrderedSlidesPolicy:
     name = "ordered"
 
     def __init__(self, orders: Sequence[SlideOrder], m: int):
-        if isinstance(orders, (str, bytes)) or not all(isinstance(o, SlideOrder) and o.planned_start is not None
-                                                       for o in orders):
+        orders = expect_sequence_of("orders", orders, SlideOrder, "SlideOrders")
+        if not all(o.planned_start is not None for o in orders):
             raise InvalidParameterError("orders", orders, "SlideOrders, each with a planned_start")
+        self.m = as_integer("m", m, least=1)
+        if not all(o.contact < self.m for o in orders):
+            raise InvalidParameterError("orders", orders, f"slides of contacts 0 to {self.m - 1}")
         self.orders = sorted(orders, key=lambda o: o.planned_start)
-        self.m = int(m)
 
     def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
                 out: list[Event]) -> list[SlideOrder]:
