@@ -10,6 +10,13 @@ from pathlib import Path
 
 import pytest
 
+import regrasp
+
+#: The examples run in a temporary directory against the regrasp these tests import (a relative PYTHONPATH, such
+#: as ``PYTHONPATH=src`` in a worktree, would no longer point there).
+ENV = {**os.environ, "MPLBACKEND": "Agg",
+       "PYTHONPATH": os.pathsep.join([str(Path(regrasp.__file__).resolve().parents[1]),
+                                      *filter(None, [os.environ.get("PYTHONPATH")])])}
 #: Examples that need an extra: their file name and the package.
 NEEDS = {"10_mujoco_plant.py": "mujoco"}
 EXAMPLES = [pytest.param(p, marks=pytest.mark.skipif(importlib.util.find_spec(NEEDS[p.name]) is None,
@@ -26,7 +33,7 @@ def test_there_are_examples():
 @pytest.mark.parametrize("path", EXAMPLES, ids=IDS)
 def test_example_runs(path, tmp_path):
     proc = subprocess.run([sys.executable, str(path)], capture_output=True, text=True, timeout=300,
-                          cwd=tmp_path, env={**os.environ, "MPLBACKEND": "Agg"}, check=False)
+                          cwd=tmp_path, env=ENV, check=False)
     assert proc.returncode == 0, proc.stderr
     assert len(proc.stdout.splitlines()) >= 3
 
@@ -34,7 +41,7 @@ def test_example_runs(path, tmp_path):
 @pytest.mark.parametrize("path", EXAMPLES, ids=IDS)
 def test_example_help(path, tmp_path):
     proc = subprocess.run([sys.executable, str(path), "--help"], capture_output=True, text=True, timeout=60,
-                          cwd=tmp_path, env={**os.environ, "MPLBACKEND": "Agg"}, check=False)
+                          cwd=tmp_path, env=ENV, check=False)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.startswith("usage:")
     assert path.name in proc.stdout
