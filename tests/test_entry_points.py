@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 import regrasp as R
 from regrasp.exceptions import RegraspError
 from regrasp.hand import Hand
+from regrasp.sphere_tip import sphere_tip_torque
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"
@@ -100,7 +101,22 @@ ENTRIES = {
  "UrdfCollisionChecker": (R.UrdfCollisionChecker, [F1, BOX, 0.01], {}),
  "load_scenario": (R.load_scenario, [SCENARIO], {}),
  "measure_reduced_state": (R.measure_reduced_state, [RESET_PLANT, MODEL], {}),
+ "sphere_tip_torque": (sphere_tip_torque, [[[1.0, 0.0], [-1.0, 0.0]], [[1.0, 0.2], [1.0, -0.3]], 2.5e-4], {}),
+ "OrderedSlidesPolicy": (R.OrderedSlidesPolicy, [[R.SlideOrder(0, 1, 0.01, planned_start=0.1)], 2], {}),
 }
+try:  # the MuJoCo plant's entry points, with the extra installed
+    import mujoco  # noqa: F401
+except ImportError:
+    pass
+else:
+    from regrasp.mjcf import eroded_vertices
+    ENTRIES.update({
+     "MujocoSettings": (R.MujocoSettings, [], dict(tip_radius=2.5e-4, timestep=1e-4, time_constant=5e-4, impratio=100.0,
+                                                   noslip_iterations=0, object_thickness=0.02, contact_depth=1e-6)),
+     "eroded_vertices": (eroded_vertices, [BOX, 2.5e-4], {}),
+     "MujocoPlant": (R.MujocoPlant, [HAND, BOX, [R.PlantContact(1, "fixed", 0.0), R.PlantContact(3, "fixed", 0.0)]],
+                     dict(friction=0.5, dt=1e-3, slip_speed=2e-3, stick_speed=1e-3, separation_gap=2.5e-5)),
+    })
 
 
 NEVER = (object(), 1 + 1j, math.nan, [math.nan, 0.0])

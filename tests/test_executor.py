@@ -193,3 +193,33 @@ def test_orders_and_settings_are_checked():
                 dict(start_speed=math.nan)):
         with pytest.raises(InvalidParameterError):
             ExecutorSettings(**bad)
+
+
+def test_held_contacts_follow_the_sensed_positions_past_the_resolution():
+    """A fingertip that rolls moves along its edge while held: the laws' model follows it once it has moved more
+    than ``hold_resolution`` (and never a contact being slid, nor with None)."""
+    out = []
+    for resolution, drift, follows in ((2e-6, 1e-5, True), (2e-6, 1e-6, False), (None, 1e-5, False)):
+        ex = executor(hold_resolution=resolution)
+        xi = XI + np.array([drift, -drift, drift])
+        ex.advance(meas(0.1, xi=xi), out)
+        np.testing.assert_array_equal(ex.xi, xi if follows else XI)
+    ex = executor()
+    ex.start(SlideOrder(0, 1, 0.0), meas(0.0), out)
+    ex.advance(meas(0.001, xi=XI + 1e-5), out)  # contact 0 is being primed: its position is set by its phases
+    assert ex.phases[0] is ContactPhase.PRIMING and ex.xi[0] == XI[0] and ex.xi[1] == XI[1] + 1e-5
+
+
+def test_spherical_tips_add_their_couple_to_every_laws_torque():
+    from regrasp.sphere_tip import sphere_tip_torque
+
+    t = 0.8
+    point = command(executor(), t, meas(t), [])[0]
+    sphere = command(executor(tip_radius=5e-4), t, meas(t), [])[0]
+    beta = SC.trajectory.pose(t)[2]
+    rot = np.array([[math.cos(beta), -math.sin(beta)], [math.sin(beta), math.cos(beta)]])
+    normals = [rot @ SC.polygon.edge(c.edge).inward_normal for c in SC.contacts]
+    np.testing.assert_allclose(sphere.contact_forces, point.contact_forces, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(sphere.tau - point.tau, sphere_tip_torque(normals, point.contact_forces, 5e-4),
+                               rtol=0, atol=1e-12)
+    assert np.abs(sphere.tau - point.tau).max() > 1e-5

@@ -13,7 +13,7 @@ from regrasp.events import EventKind
 from regrasp.exceptions import InvalidParameterError, RegraspError
 from regrasp.executor import ContactPhase, SlideEnd, SlideOrder
 from regrasp.monitor import EnvelopeReading
-from regrasp.policies import NoRegraspPolicy, ScheduledPolicy, ScheduledSettings
+from regrasp.policies import NoRegraspPolicy, OrderedSlidesPolicy, ScheduledPolicy, ScheduledSettings
 from regrasp.schedule import RegraspSchedule, Slide, slides_at
 from regrasp.supervisor import Measurement
 
@@ -139,6 +139,18 @@ def test_no_regrasp_never_orders_and_plans_nothing():
     policy = NoRegraspPolicy(2)
     assert policy.propose(meas(0.0), reading(0.0, (-1.0, -1.0)), FIXED, []) == []
     assert np.isnan(policy.planned_xi(0.3)).all()
+
+
+def test_ordered_slides_start_at_their_times_once_their_contacts_are_fixed():
+    first, second = SlideOrder(0, 1, 0.01, planned_start=0.3), SlideOrder(1, -1, 0.0, planned_start=0.1)
+    policy = OrderedSlidesPolicy([first, second], 2)
+    busy = (ContactPhase.FIXED, ContactPhase.SLIDING)
+    orders = [(round(float(t), 6), o) for t in np.arange(0.0, 0.5, 0.05)
+              for o in policy.propose(meas(t), reading(t), busy if t < 0.2 else FIXED, [])]
+    assert orders == [(0.2, second), (0.3, first)]  # the second waited for its contact
+    assert np.isnan(policy.planned_xi(0.3)).all()
+    with pytest.raises(InvalidParameterError):
+        OrderedSlidesPolicy([SlideOrder(0, 1, 0.01)], 2)  # no planned start
 
 
 def test_a_slide_order_checks_itself():

@@ -43,6 +43,7 @@ _SOURCES = {
     "FailureKind": "events",
     "FingerModelError": "exceptions",
     "InvalidParameterError": "exceptions",
+    "MissingDependencyError": "exceptions",
     "PolygonError": "exceptions",
     "RegraspError": "exceptions",
     "ScenarioError": "exceptions",
@@ -67,6 +68,9 @@ _SOURCES = {
     "InternalForceSolver": "internal_force",
     "build_internal_force_qp": "internal_force",
     "solve_internal_force_qp": "internal_force",
+    "MujocoSettings": "mjcf",
+    "scenario_to_mjcf": "mjcf",
+    "MujocoPlant": "mujoco_plant",
     "FingerPlan": "planner",
     "InfeasibleInterval": "planner",
     "PlanResult": "planner",
@@ -78,6 +82,7 @@ _SOURCES = {
     "PlantState": "plant",
     "PlantStep": "plant",
     "NoRegraspPolicy": "policies",
+    "OrderedSlidesPolicy": "policies",
     "ScheduledPolicy": "policies",
     "ScheduledSettings": "policies",
     "PaperPolicy": "policy_paper",
@@ -99,6 +104,7 @@ _SOURCES = {
     "RegraspSettings": "schedule_planner",
     "plan_regrasps": "schedule_planner",
     "StepRecord": "simulation",
+    "PlantLike": "simulation",
     "simulate": "simulation",
     "SlideFeasibility": "sliding",
     "sliding_feasibility": "sliding",
@@ -152,13 +158,18 @@ __all__ = [
     "InvalidParameterError",
     "LinkShape",
     "Measurement",
+    "MissingDependencyError",
+    "MujocoPlant",
+    "MujocoSettings",
     "NoRegraspPolicy",
     "NoScheduleError",
+    "OrderedSlidesPolicy",
     "PaperPolicy",
     "PlanResult",
     "Plant",
     "PlantContact",
     "PlantEvent",
+    "PlantLike",
     "PlantState",
     "PlantStep",
     "PolygonError",
@@ -207,6 +218,7 @@ __all__ = [
     "planar_2r_urdf",
     "reachable_on_line",
     "run_closed_loop",
+    "scenario_to_mjcf",
     "segment_hits_polygon",
     "simulate",
     "sliding_feasibility",
@@ -253,6 +265,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .exceptions import (  # noqa: F401
         FingerModelError,
         InvalidParameterError,
+        MissingDependencyError,
         PolygonError,
         RegraspError,
         ScenarioError,
@@ -277,9 +290,11 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
         build_internal_force_qp,
         solve_internal_force_qp,
     )
+    from .mjcf import MujocoSettings, scenario_to_mjcf  # noqa: F401
+    from .mujoco_plant import MujocoPlant  # noqa: F401
     from .planner import FingerPlan, InfeasibleInterval, PlanResult, plan, plan_scenario  # noqa: F401
     from .plant import Plant, PlantContact, PlantEvent, PlantState, PlantStep  # noqa: F401
-    from .policies import NoRegraspPolicy, ScheduledPolicy, ScheduledSettings  # noqa: F401
+    from .policies import NoRegraspPolicy, OrderedSlidesPolicy, ScheduledPolicy, ScheduledSettings  # noqa: F401
     from .policy_paper import PaperPolicy  # noqa: F401
     from .polygon import ConvexPolygon, Edge  # noqa: F401
     from .recording import RolloutRecorder  # noqa: F401
@@ -288,7 +303,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .scenario import FingerContact, Scenario, load_scenario  # noqa: F401
     from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide  # noqa: F401
     from .schedule_planner import RegraspSettings, plan_regrasps  # noqa: F401
-    from .simulation import StepRecord, simulate  # noqa: F401
+    from .simulation import PlantLike, StepRecord, simulate  # noqa: F401
     from .sliding import SlideFeasibility, sliding_feasibility  # noqa: F401
     from .supervisor import (  # noqa: F401
         ContactPhase,

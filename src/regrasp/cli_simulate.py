@@ -1,8 +1,8 @@
 """``regrasp simulate``: run a regrasping rollout on the plant, print what happened, record it.
 
 ``regrasp simulate [SCENARIO] [--periods N | --duration T] [--policy scheduled|paper|none]
-[--rrd FILE] [--decimate K] [--spawn | --connect ADDR] [--json] [--plant-mass-scale S]
-[--plant-mu-scale S] [--envelope-margin M] [--cone-margin N] [--plot DIR]``
+[--plant project|mujoco [--tip-radius MM]] [--rrd FILE] [--decimate K] [--spawn | --connect ADDR] [--json]
+[--plant-mass-scale S] [--plant-mu-scale S] [--envelope-margin M] [--cone-margin N] [--plot DIR]``
 
 Default: the shipped three-finger trajectory-2 scenario, the scheduled policy, the scenario's
 duration. Exit status: 0 the rollout succeeded, 1 it failed or no schedule exists (the result is
@@ -48,6 +48,11 @@ def add_parser(sub: argparse._SubParsersAction, progress_bar: Callable[[str], Ca
     p.add_argument("--policy", choices=("scheduled", "paper", "none"), default="scheduled",
                    help="scheduled: plan the slides ahead, follow and re-plan them (default); paper: the paper's "
                         "danger-zone heuristic; none: never slide")
+    p.add_argument("--plant", choices=("project", "mujoco"), default="project",
+                   help="project: the full-coordinate plant with point contacts (default); mujoco: MuJoCo with sphere "
+                        "tips and soft contacts (pip install 'regrasp[mujoco]')")
+    p.add_argument("--tip-radius", type=_positive(float), metavar="MM",
+                   help="--plant mujoco: the fingertips' sphere radius [mm] (default 0.25)")
     p.add_argument("--rrd", metavar="FILE", type=Path, help="write a rerun recording to FILE")
     p.add_argument("--decimate", type=_positive(int), default=10, metavar="K",
                    help="record every K-th step (events at every step); default 10, a 10 ms row at 1 kHz, about "
@@ -69,9 +74,17 @@ def add_parser(sub: argparse._SubParsersAction, progress_bar: Callable[[str], Ca
     p.set_defaults(func=lambda args: _cmd_simulate(args, progress_bar))
 
 
-def _format_summary(result, scenario) -> str:
+def _plant_text(name: str, plant) -> str:
+    if name != "mujoco":
+        return "project (point contacts, rigid)"
+    s = plant.settings
+    return f"mujoco (sphere tips r = {s.tip_radius * 1e3:g} mm, soft contacts, MuJoCo step {s.timestep * 1e3:g} ms)"
+
+
+def _format_summary(result, scenario, plant_text: str) -> str:
     mm = 1e3
     lines = [f"regrasp simulate: {scenario.name}" + (f" ({scenario.path})" if scenario.path else ""),
+             f"  plant: {plant_text}",
              f"  policy: {result.policy}; simulated {result.simulated_seconds:.3f} of {result.duration:.3f} s "
              f"({result.steps} steps)"]
     sch = result.schedule
@@ -137,14 +150,26 @@ def _cmd_simulate(args, progress_bar) -> int:
         from .cli import output_directory
 
         output_directory("--plot", args.plot)
+    if args.tip_radius is not None and args.plant != "mujoco":
+        raise InvalidParameterError("--tip-radius", args.tip_radius, "no radius unless --plant mujoco (the project's "
+                                    "plant has point contacts)")
+    plant_options, tips = {"plant": args.plant}, {}
+    if args.plant == "mujoco":
+        from .mjcf import MujocoSettings, require_mujoco
+
+        require_mujoco()  # (before planning: say at once that the extra is missing)
+        mujoco_settings = MujocoSettings() if args.tip_radius is None else MujocoSettings(tip_radius=args.tip_radius
+                                                                                           * 1e-3)
+        plant_options["mujoco_settings"] = mujoco_settings
+        tips["tip_radius"] = mujoco_settings.tip_radius  # (the laws know the tips' radius)
     cone = DEFAULT_CONE_MARGIN if args.cone_margin is None else args.cone_margin
     options = {"cone_margin": cone}
     if args.envelope_margin is not None:
         options["envelope_margin"] = args.envelope_margin
     regrasp_settings = RegraspSettings(**options)
-    settings = SupervisorSettings.robust(scenario.geometry.value, cone)
+    settings = SupervisorSettings.robust(scenario.geometry.value, cone, **tips)
     common = dict(periods=args.periods, duration=args.duration, settings=settings, regrasp_settings=regrasp_settings,
-                  plant_mass_scale=args.plant_mass_scale, plant_mu_scale=args.plant_mu_scale)
+                  plant_mass_scale=args.plant_mass_scale, plant_mu_scale=args.plant_mu_scale, **plant_options)
     # OSQP's C library prints "Polishing not needed" on fd 1 even with verbose=False: keep stdout for the result
     with captured_fd(1):
         code, output = _simulate(args, scenario, common, progress_bar)
@@ -193,9 +218,10 @@ def _simulate(args, scenario, common, progress_bar) -> tuple[int, str]:
     code = 0 if result.success else 1
     if args.json:
         doc = result.to_json_dict()
+        doc["plant"] = args.plant
         doc["figures"] = figures
         return code, json.dumps(doc)
-    lines = [_format_summary(result, scenario)] + [f"  figure: {f}" for f in figures]
+    lines = [_format_summary(result, scenario, _plant_text(args.plant, rollout.plant))] + [f"  figure: {f}" for f in figures]
     if result.failure is not None and result.failure.kind is FailureKind.INTERRUPTED:
         lines.append("  (interrupted: the result and the recording cover the run so far)")
     return code, "\n".join(lines)

@@ -16,9 +16,9 @@ import numpy as np
 
 from .control import ComputedTorqueController, ControlOutput, Proposition2Controller
 from .exceptions import InvalidParameterError
-from .plant import Plant, PlantEvent
+from .plant import PlantEvent
 from .reduced import ReducedModel
-from .simulation import Command, StepRecord, sense_projected, simulate
+from .simulation import Command, PlantLike, StepRecord, sense_projected, simulate
 from .trajectory import TrajectorySample
 from .validation import as_duration, as_positive_float, expect_type
 
@@ -27,9 +27,9 @@ __all__ = ["ClosedLoopLog", "measure_reduced_state", "run_closed_loop"]
 Reference = Callable[[float], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
 
-def measure_reduced_state(plant: Plant, model: ReducedModel) -> tuple[np.ndarray, np.ndarray]:
+def measure_reduced_state(plant: PlantLike, model: ReducedModel) -> tuple[np.ndarray, np.ndarray]:
     """(S, Ṡ) of ``model``'s coordinates, read from the plant's state."""
-    expect_type("plant", plant, Plant, "a Plant")
+    expect_type("plant", plant, PlantLike, "a plant (regrasp.Plant or a MujocoPlant)")
     expect_type("model", model, ReducedModel, "a ReducedModel")
     st = plant.state
     if st is None:
@@ -40,7 +40,7 @@ def measure_reduced_state(plant: Plant, model: ReducedModel) -> tuple[np.ndarray
     return S, S_dot
 
 
-def _initial_friction_reading(plant: Plant, controller, reference: Reference, sliding) -> np.ndarray:
+def _initial_friction_reading(plant: PlantLike, controller, reference: Reference, sliding) -> np.ndarray:
     """The friction sensor's reading before the first step: the plant's tangential force at the
     sliding contacts under the torque the controller would apply (two passes, so the reading and
     the torque are consistent)."""
@@ -86,7 +86,7 @@ class ClosedLoopLog:
     stopped: bool
 
     @classmethod
-    def from_records(cls, records: Sequence[StepRecord], plant: Plant, n_forces: int, n: int) -> "ClosedLoopLog":
+    def from_records(cls, records: Sequence[StepRecord], plant: PlantLike, n_forces: int, n: int) -> "ClosedLoopLog":
         """The log of a run's :class:`~regrasp.simulation.StepRecord` s (``n_forces`` = 2m, ``n`` = 3 + p)."""
         def rows(get, shape):
             return np.array([get(r) for r in records]) if records else np.zeros((0, *shape))
@@ -138,7 +138,7 @@ class _ControllerDriver:
 
 
 def run_closed_loop(
-    plant: Plant,
+    plant: PlantLike,
     controller: ComputedTorqueController,
     reference: Reference,
     duration: float,
@@ -161,8 +161,8 @@ def run_closed_loop(
         RegraspError: the control law failed (e.g. its internal-force QP is infeasible): the
             controller's own error.
     """
-    if not isinstance(plant, Plant):
-        raise InvalidParameterError("plant", plant, "a regrasp.Plant")
+    if not isinstance(plant, PlantLike):
+        raise InvalidParameterError("plant", plant, "a plant (regrasp.Plant or regrasp.mujoco_plant.MujocoPlant)")
     if not isinstance(controller, ComputedTorqueController):
         raise InvalidParameterError("controller", controller, "a control law (regrasp.control)")
     if not callable(reference):

@@ -177,3 +177,17 @@ class SingularFingerError(RegraspError):
 
 class SingularModelError(RegraspError, np.linalg.LinAlgError):
     """A control law's equations are singular (a singular grasp or finger posture): no torque."""
+
+
+class MissingDependencyError(RegraspError, ImportError):
+    """An optional dependency is not installed.
+
+    Attributes:
+        package: The missing Python package.
+        extra: The regrasp extra that installs it (``pip install 'regrasp[extra]'``).
+        feature: What needs it.
+    """
+
+    def __init__(self, package: str, extra: str, feature: str):
+        self.package, self.extra, self.feature = package, extra, feature
+        super().__init__(f"{feature} needs the '{package}' package: pip install 'regrasp[{extra}]'")

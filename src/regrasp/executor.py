@@ -42,7 +42,7 @@ the policy's (:mod:`regrasp.policies`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -57,6 +57,7 @@ from .grasp import Grasp
 from .hand import Hand
 from .internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
 from .reduced import ReducedModel
+from .sphere_tip import sphere_tip_torque
 from .validation import as_duration, as_flag, as_integer, as_positive_float
 
 if TYPE_CHECKING:
@@ -115,6 +116,14 @@ class ExecutorSettings:
             It acts through the reference: S_d + (K_i / K_s) ∫E dt gives a = S̈_d + K_v Ė + K_s E + K_i ∫E.
         internal_force: The controllers' internal-force QP settings; its ``target_cone_margin`` [N]
             is the margin the fixed contacts are kept inside their cones by (the paper's "γ large").
+        hold_resolution: A held contact's position in the laws' model follows the sensed one when the two
+            differ by more than this [m] (None: only at phase changes). A rigid point contact stays where it
+            is held; a real fingertip of radius r rolls on the edge, r Δθ for a turn Δθ of the distal link
+            relative to the object, and a model that keeps the old position puts the contact's normal force
+            at the wrong lever arm (``docs/derivations.md``, "A second plant: MuJoCo"). With a plant that
+            senses a fixed contact where it is held (the project's), this never triggers.
+        tip_radius: The fingertips are spheres of this radius [m] (0: points): every law's torque gets the
+            couple the sphere's contact point adds on the distal link (:func:`~regrasp.sphere_tip.sphere_tip_torque`).
     """
 
     omega_n: float = 20.0
@@ -140,6 +149,8 @@ class ExecutorSettings:
     slide_omega: float = 20.0
     integral: float = 0.0
     internal_force: InternalForceSettings = field(default_factory=lambda: InternalForceSettings(f_min=0.2))
+    hold_resolution: float | None = 2e-6
+    tip_radius: float = 0.0
 
     def __post_init__(self):
         for name in ("omega_n", "zeta", "prime_time", "prime_overshoot", "settle_undershoot", "arrive_tolerance",
@@ -169,6 +180,9 @@ class ExecutorSettings:
             raise InvalidParameterError("integral", self.integral, "a gain fraction in [0, 2) (stability)")
         if not isinstance(self.internal_force, InternalForceSettings):
             raise InvalidParameterError("internal_force", self.internal_force, "an InternalForceSettings")
+        if self.hold_resolution is not None:
+            as_positive_float("hold_resolution", self.hold_resolution)
+        as_positive_float("tip_radius", self.tip_radius, allow_zero=True)
 
 
 @dataclass
@@ -244,10 +258,21 @@ class SlideExecutor:
                     f"{meas.xi[i] * 1e3:.2f} mm to {order.target * 1e3:.2f} mm" + (f" ({order.why})" if order.why else ""),
                     xi=float(meas.xi[i]), target=order.target, direction=order.direction)
 
+    def _follow_held(self, meas: Measurement) -> None:
+        """Move the held contacts' model positions to the sensed ones where they drifted by more than
+        ``hold_resolution`` (a rolling fingertip)."""
+        r = self.settings.hold_resolution
+        if r is None:
+            return
+        for i, phase in enumerate(self.phases):
+            if phase is ContactPhase.FIXED and not meas.sliding[i] and abs(meas.xi[i] - self.xi[i]) > r:
+                self.xi[i] = meas.xi[i]
+
     def advance(self, meas: Measurement, out: list) -> list[SlideEnd]:
         """Move every slide's phase on; the slides whose sliding phase ended at this step."""
         s = self.settings
         ends = []
+        self._follow_held(meas)
         for i in list(self._active):
             a = self._active[i]
             phase = self.phases[i]
@@ -463,14 +488,24 @@ class SlideExecutor:
         S_d_dot = np.concatenate([desired.velocity, [r[1] for r in refs]])
         S_d_ddot = np.concatenate([desired.acceleration, [r[2] for r in refs]])
         try:
-            return law(S, S_dot, S_d, S_d_dot, S_d_ddot), _name(law), reference, []
+            return self._tipped(law(S, S_dot, S_d, S_d_dot, S_d_ddot), meas), _name(law), reference, []
         except InternalForceInfeasibleError as exc:
             if not any(self.phases[i] in (ContactPhase.PRIMING, ContactPhase.SLIDING) for i in self._active):
                 raise
             ends = self.abort(meas, out, f"no internal force keeps the slide in its cones ({exc.status})")
         law = self._law()
-        return law(meas.X, meas.V, desired.pose, desired.velocity, desired.acceleration), _name(law), \
-            np.full(m, np.nan), ends
+        output = law(meas.X, meas.V, desired.pose, desired.velocity, desired.acceleration)
+        return self._tipped(output, meas), _name(law), np.full(m, np.nan), ends
+
+    def _tipped(self, output: ControlOutput, meas: Measurement) -> ControlOutput:
+        """``output`` with the spherical tips' couple added to its torque (``tip_radius``)."""
+        r = self.settings.tip_radius
+        if r == 0.0:
+            return output
+        c, s = math.cos(meas.X[2]), math.sin(meas.X[2])
+        normals = np.array([e.inward_normal for e in self.grasp.edges])
+        return replace(output, tau=output.tau + sphere_tip_torque(normals @ np.array([[c, s], [-s, c]]),
+                                                                   output.contact_forces, r))
 
 
 def _name(law: ComputedTorqueController) -> str:

@@ -16,7 +16,8 @@ more than ``time_tolerance`` early or late or more than ``xi_tolerance`` from it
 when a contact's runtime envelope margin falls below ``margin_fraction`` of the planned one. A
 re-plan waits until no slide is under way; a failed re-plan is logged and the old schedule kept.
 :class:`~regrasp.policy_paper.PaperPolicy` is the paper's danger-zone heuristic;
-:class:`NoRegraspPolicy` never slides.
+:class:`NoRegraspPolicy` never slides; :class:`OrderedSlidesPolicy` starts given slides at given times
+(one slide on its own, e.g. Figure 3.4's on a plant).
 """
 
 from __future__ import annotations
@@ -33,12 +34,12 @@ from .exceptions import InvalidParameterError, RegraspError
 from .executor import ContactPhase, SlideEnd, SlideOrder
 from .monitor import EnvelopeReading
 from .schedule import RegraspSchedule, Slide
-from .validation import as_finite_float, as_positive_float
+from .validation import as_finite_float, as_integer, as_positive_float, expect_sequence_of
 
 if TYPE_CHECKING:
     from .supervisor import Measurement
 
-__all__ = ["NoRegraspPolicy", "Policy", "ScheduledPolicy", "ScheduledSettings"]
+__all__ = ["NoRegraspPolicy", "OrderedSlidesPolicy", "Policy", "ScheduledPolicy", "ScheduledSettings"]
 
 
 class Policy(Protocol):
@@ -65,6 +66,40 @@ class NoRegraspPolicy:
     def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
                 out: list[Event]) -> list[SlideOrder]:
         return []
+
+    def notify(self, ends: list[SlideEnd], meas: Measurement, out: list[Event]) -> None:
+        pass
+
+    def planned_xi(self, t: float) -> np.ndarray:
+        return np.full(self.m, np.nan)
+
+
+class OrderedSlidesPolicy:
+    """Starts each given :class:`~regrasp.slides.SlideOrder` at its ``planned_start`` [s] (a contact that is not
+    fixed then gets its order when it is), and nothing else.
+
+    Args:
+        orders: The slides, each with a ``planned_start``.
+        m: The number of contacts.
+    """
+
+    name = "ordered"
+
+    def __init__(self, orders: Sequence[SlideOrder], m: int):
+        orders = expect_sequence_of("orders", orders, SlideOrder, "SlideOrders")
+        if not all(o.planned_start is not None for o in orders):
+            raise InvalidParameterError("orders", orders, "SlideOrders, each with a planned_start")
+        self.m = as_integer("m", m, least=1)
+        if not all(o.contact < self.m for o in orders):
+            raise InvalidParameterError("orders", orders, f"slides of contacts 0 to {self.m - 1}")
+        self.orders = sorted(orders, key=lambda o: o.planned_start)
+
+    def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
+                out: list[Event]) -> list[SlideOrder]:
+        due = [o for o in self.orders if o.planned_start <= meas.t + 1e-9 and phases[o.contact] is ContactPhase.FIXED]
+        for o in due:
+            self.orders.remove(o)
+        return due
 
     def notify(self, ends: list[SlideEnd], meas: Measurement, out: list[Event]) -> None:
         pass

@@ -145,7 +145,8 @@ from .events import EventKind, EventSource, FailureKind
 from .exceptions import InvalidParameterError, RegraspError
 from .executor import ContactPhase
 from .planar import wrap_angle
-from .plant import Plant, PlantStep
+from .plant import PlantStep
+from .simulation import PlantLike
 
 if TYPE_CHECKING:
     from .events import Failure
@@ -565,7 +566,7 @@ class RolloutRecorder:
 
     def __init__(
         self,
-        plant: Plant,
+        plant: PlantLike,
         *,
         envelope_edges: Sequence[int | Sequence[int] | None] | None = None,
         rrd_path: str | Path | None = None,
@@ -584,8 +585,8 @@ class RolloutRecorder:
         flush_every: int = 500,
     ):
         # ---- validation first: a bad argument leaves nothing behind (no stream, no file)
-        if not isinstance(plant, Plant):
-            raise InvalidParameterError("plant", plant, "a regrasp.Plant")
+        if not isinstance(plant, PlantLike):
+            raise InvalidParameterError("plant", plant, "a plant (regrasp.Plant or regrasp.mujoco_plant.MujocoPlant)")
         if connect is not None:
             if not isinstance(connect, str) or not _GRPC_URL.match(connect):
                 raise InvalidParameterError("connect", connect,
@@ -871,7 +872,7 @@ class RolloutRecorder:
 
     def log_step(
         self,
-        plant: Plant,
+        plant: PlantLike,
         output: ControlOutput | None = None,
         *,
         step: int | None = None,
@@ -904,7 +905,7 @@ class RolloutRecorder:
                 hand, or an array has the wrong shape.
         """
         self._check_open()
-        if plant is not self.plant and (not isinstance(plant, Plant) or plant.hand.m != self.m
+        if plant is not self.plant and (not isinstance(plant, PlantLike) or plant.hand.m != self.m
                                         or plant.polygon.n_vertices != self.polygon.n_vertices):
             raise InvalidParameterError("plant", plant, f"a plant with the recorder's {self.m} fingers and object")
         st = plant.state
@@ -923,7 +924,7 @@ class RolloutRecorder:
                                         "pass sliding= to the recorder)")
         return self._row(step, t, start, lambda: self._log_rows(plant, output, desired, plant_step))
 
-    def log_initial(self, plant: Plant, desired_pose: ArrayLike | None) -> bool:
+    def log_initial(self, plant: PlantLike, desired_pose: ArrayLike | None) -> bool:
         """Log the plant's state before the first step (step 0)."""
         return self.log_step(plant, None, step=0, desired_pose=desired_pose)
 
@@ -958,7 +959,7 @@ class RolloutRecorder:
         desired = self._desired(desired_pose)
         return self._row(step, t, start, lambda: self._record_rows(record, desired))
 
-    def log_failure(self, failure: Failure, plant: Plant | None = None) -> None:
+    def log_failure(self, failure: Failure, plant: PlantLike | None = None) -> None:
         """Log a rollout's :class:`~regrasp.events.Failure`: an ERROR line in ``events`` and the
         failure marked in the scene (``scene/failure``, module docstring) at the failure's time and
         the last step, drawn at ``plant``'s state (default: the recorder's plant)."""
@@ -973,7 +974,7 @@ class RolloutRecorder:
         if marker is not None:
             self._writer.log_now("scene/failure", step, t, marker)
 
-    def hook(self, plant: Plant, reference: Callable | None = None, *,
+    def hook(self, plant: PlantLike, reference: Callable | None = None, *,
              log_initial: bool = True) -> Callable[[float, ControlOutput], None]:
         """An ``on_step`` callback for :func:`~regrasp.closed_loop.run_closed_loop`.
 
@@ -1096,7 +1097,7 @@ class RolloutRecorder:
                              rr.TextLog(f"t = {ev.time:.4f} s  {source} {ev.contact or '-'}: {kind} ({ev.detail})",
                                         level=level))
 
-    def _log_plant_events(self, plant: Plant, step: int) -> None:
+    def _log_plant_events(self, plant: PlantLike, step: int) -> None:
         events = plant.events
         seen_list, seen = self._events_seen
         if seen_list is not events:  # plant.reset() starts a new list
@@ -1105,7 +1106,7 @@ class RolloutRecorder:
             self._log_event(ev, step)
         self._events_seen = (events, len(events))
 
-    def _edges_drawn(self, plant: Plant, i: int):
+    def _edges_drawn(self, plant: PlantLike, i: int):
         if self.envelope_edges is None:
             return (plant.contacts[i].edge,)
         return self.envelope_edges[i]
@@ -1208,7 +1209,7 @@ class RolloutRecorder:
             np.asarray(sup.bounds, dtype=float).tolist(), np.asarray(sup.reference_xi, dtype=float).tolist(),
             np.asarray(sup.planned_xi, dtype=float).tolist(), phases)
 
-    def _log_rows(self, plant: Plant, output: ControlOutput | None, desired, plant_step: PlantStep | None) -> None:
+    def _log_rows(self, plant: PlantLike, output: ControlOutput | None, desired, plant_step: PlantStep | None) -> None:
         # the step's numbers are computed here; the drawn geometry per block of steps in _Scene.columns
         rows = self._writer.scene.rows
         st = plant.state
@@ -1296,7 +1297,7 @@ class RolloutRecorder:
         self._append_series(rows, X, xi, modes, desired, None if output is None else output.error,
                             fn + ft + pfn + pft, margin + pmargin, bands, law_xi, nan_m, nan_m)
 
-    def _failure_marker(self, kind: FailureKind, failure, plant: Plant):
+    def _failure_marker(self, kind: FailureKind, failure, plant: PlantLike):
         """The red outline marking ``failure`` at ``plant``'s state (module docstring), or None."""
         if kind is FailureKind.INTERRUPTED or plant.state is None:
             return None

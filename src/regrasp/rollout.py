@@ -44,18 +44,23 @@ from .scenario import Scenario
 from .schedule import RegraspSchedule
 from .schedule_planner import RegraspSettings, plan_regrasps
 from .schedule_problem import trajectory_period
-from .simulation import Command, StepRecord, simulate
+from .simulation import Command, PlantLike, StepRecord, simulate
 from .supervisor import Measurement, RegraspSupervisor, SupervisorSettings
 from .trajectory import RepeatedTrajectory
 from .validation import MAX_DURATION, as_duration, as_finite_array, as_integer, as_positive_float, expect_type
 
 if TYPE_CHECKING:
+    from .mjcf import MujocoSettings
     from .recording import RolloutRecorder
 
-__all__ = ["DEFAULT_CONE_MARGIN", "POLICIES", "Rollout", "RolloutResult", "build_rollout"]
+__all__ = ["DEFAULT_CONE_MARGIN", "PLANTS", "POLICIES", "Rollout", "RolloutResult", "build_rollout"]
 
 #: The policies :func:`build_rollout` knows by name.
 POLICIES = ("scheduled", "paper", "none")
+
+#: The plants :func:`build_rollout` knows by name: the project's (:class:`~regrasp.plant.Plant`) and MuJoCo
+#: (:class:`~regrasp.mujoco_plant.MujocoPlant`, the ``mujoco`` extra).
+PLANTS = ("project", "mujoco")
 
 #: The cone margin [N] rollouts plan with and keep by default: 0.2 N costs no slide over 0.1 N on the
 #: three-finger scenario (4 per period) and leaves room for a plant 10 % off the model.
@@ -90,7 +95,7 @@ class Rollout:
         disturbance: The sensing noise and actuation between the plant and the supervisor, or None.
     """
 
-    plant: Plant
+    plant: PlantLike
     supervisor: RegraspSupervisor
     duration: float
     names: tuple[str, ...]
@@ -149,6 +154,12 @@ class Rollout:
             rrd=None if recorder is None or recorder.rrd_path is None else str(recorder.rrd_path))
 
 
+def _mujoco_defaults() -> MujocoSettings:
+    from .mjcf import MujocoSettings
+
+    return MujocoSettings()
+
+
 def _run_scenario(scenario: Scenario, duration: float | None, periods) -> tuple[Scenario, float]:
     """The scenario with its trajectory repeated to cover the run, and the run's duration [s]."""
     traj = scenario.trajectory
@@ -182,9 +193,11 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
                   xi0: ArrayLike | None = None, plant_friction: FrictionLike | None = None,
                   plant_mass_scale: float = 1.0, plant_mu_scale: float = 1.0,
                   plant_inertia_scale: float | None = None, plant_link_mass_scale: float = 1.0,
-                  plant_mu_kinetic_scale: float = 1.0, plant_xi_offset: ArrayLike | None = None, sensor_noise: SensorNoise = SensorNoise(),
-                  actuator_noise: ActuatorNoise = ActuatorNoise(), seed: int | np.random.SeedSequence | None = None,
-                  replan: bool = True, plan_progress: Callable[[int, int], None] | None = None) -> Rollout:
+                  plant_mu_kinetic_scale: float = 1.0, plant_xi_offset: ArrayLike | None = None,
+                  sensor_noise: SensorNoise = SensorNoise(), actuator_noise: ActuatorNoise = ActuatorNoise(),
+                  seed: int | np.random.SeedSequence | None = None, replan: bool = True,
+                  plan_progress: Callable[[int, int], None] | None = None, plant: str = "project",
+                  mujoco_settings: MujocoSettings | None = None) -> Rollout:
     """Plant + supervisor for ``scenario``, every contact fixed at the start.
 
     Args:
@@ -194,7 +207,7 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
         policy: ``"scheduled"`` (plan the slides ahead, follow and re-plan them), ``"paper"`` (the
             danger-zone heuristic) or ``"none"`` (never slide).
         settings: Supervisor settings (default :meth:`SupervisorSettings.robust` with the scenario's geometry,
-            the schedule's cone margin and ``actuator_noise``'s delay).
+            the schedule's cone margin, ``actuator_noise``'s delay and, on MuJoCo, the tips' radius).
         regrasp_settings: The schedule planner's settings (``"scheduled"``; default :class:`RegraspSettings`
             with a cone margin of ``DEFAULT_CONE_MARGIN`` = 0.2 N).
         schedule: A schedule planned already (``"scheduled"``; default: planned here).
@@ -219,14 +232,31 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
         seed: Seeds the noise (required when there is any): an int or a ``numpy.random.SeedSequence``.
         replan: Let the scheduled policy re-plan.
         plan_progress: Passed to :func:`~regrasp.schedule_planner.plan_regrasps` as ``progress``.
+        plant: ``"project"`` (:class:`~regrasp.plant.Plant`) or ``"mujoco"``
+            (:class:`~regrasp.mujoco_plant.MujocoPlant`: sphere tips, soft contacts; the ``mujoco`` extra).
+        mujoco_settings: The MuJoCo plant's :class:`~regrasp.mjcf.MujocoSettings` (tip radius, contact
+            parameters, MuJoCo's step; default ``MujocoSettings()``). Only with ``plant="mujoco"``.
 
     Raises:
         NoScheduleError: ``"scheduled"`` and no schedule exists (the planner's diagnosis).
+        MissingDependencyError: ``plant="mujoco"`` and the ``mujoco`` package is not installed.
     """
     if not isinstance(scenario, Scenario):
         raise InvalidParameterError("scenario", scenario, "a Scenario (regrasp.load_scenario)")
     if policy not in POLICIES:
         raise InvalidParameterError("policy", policy, f"one of {', '.join(POLICIES)}")
+    if not isinstance(plant, str) or plant not in PLANTS:
+        raise InvalidParameterError("plant", plant, f"one of {', '.join(PLANTS)}")
+    if plant == "mujoco":  # (before any planning: a missing extra is a bad input)
+        from .mjcf import require_mujoco
+
+        require_mujoco()
+    if mujoco_settings is not None:
+        from .mjcf import MujocoSettings
+
+        expect_type("mujoco_settings", mujoco_settings, MujocoSettings, "a MujocoSettings (regrasp.mjcf)")
+        if plant != "mujoco":
+            raise InvalidParameterError("mujoco_settings", mujoco_settings, "None unless plant='mujoco'")
     mass_scale = as_positive_float("plant_mass_scale", plant_mass_scale)
     mu_scale = as_positive_float("plant_mu_scale", plant_mu_scale)
     inertia_scale = mass_scale if plant_inertia_scale is None else as_positive_float("plant_inertia_scale",
@@ -242,10 +272,11 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
     if schedule is not None:
         expect_type("schedule", schedule, RegraspSchedule, "a RegraspSchedule (regrasp.plan_regrasps)")
     expect_type("scheduled_settings", scheduled_settings, ScheduledSettings, "a ScheduledSettings")
-    if settings is None:  # the supervisor's runtime envelopes use the scenario's planner geometry; it knows the
-        # hand's actuation delay (a latency is measured, unlike a friction coefficient)
+    if settings is None:  # the supervisor's runtime envelopes use the scenario's planner geometry; the laws know
+        # the MuJoCo plant's sphere tips and the hand's actuation delay (a latency is measured, unlike a friction)
+        tips = {} if plant != "mujoco" else {"tip_radius": (mujoco_settings or _mujoco_defaults()).tip_radius}
         settings = SupervisorSettings.robust(scenario.geometry.value, regrasp_settings.cone_margin,
-                                             actuation_delay=actuator_noise.delay)
+                                             actuation_delay=actuator_noise.delay, **tips)
     scenario.check_geometry(expect_type("settings", settings, SupervisorSettings, "a SupervisorSettings").geometry)
     run_scenario, duration = _run_scenario(scenario, duration, periods)
     traj = run_scenario.trajectory
@@ -289,13 +320,21 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
                                for f in friction)
     plant_hand = hand if link_scale == 1.0 else Hand(list(hand.fingers), gravity_in_hand=scenario.gravity_in_hand,
                                                       link_mass_scale=link_scale)
-    plant = Plant(plant_hand, scenario.polygon, [PlantContact(e, ContactMode.FIXED, x) for e, x in zip(edges, xi_plant)],
-                  friction=plant_friction, object_mass=scenario.polygon.mass * mass_scale,
-                  object_inertia=scenario.polygon.inertia * inertia_scale, dt=dt)
-    plant.reset(st_plant.q, st_plant.q_dot, X0, V0, t=traj.t_start)
+    contacts = [PlantContact(e, ContactMode.FIXED, x) for e, x in zip(edges, xi_plant)]
+    physics = dict(friction=plant_friction, object_mass=scenario.polygon.mass * mass_scale,
+                   object_inertia=scenario.polygon.inertia * inertia_scale, dt=dt)
+    if plant == "mujoco":
+        from .mujoco_plant import MujocoPlant
+
+        built: PlantLike = MujocoPlant(plant_hand, scenario.polygon, contacts, **physics,
+                                       settings=_mujoco_defaults() if mujoco_settings is None else mujoco_settings,
+                                       tip_clearance=[c.tip_clearance for c in scenario.contacts])
+    else:
+        built = Plant(plant_hand, scenario.polygon, contacts, **physics)
+    built.reset(st_plant.q, st_plant.q_dot, X0, V0, t=traj.t_start)
     disturbance = None
     if not (sensor_noise.ideal and actuator_noise.ideal):
         rng = None if seed is None else np.random.default_rng(seed)
         disturbance = Disturbance(sensor_noise, actuator_noise, rng)
-    return Rollout(plant, supervisor, duration, names, policy, schedule, run_scenario, disturbance)
+    return Rollout(built, supervisor, duration, names, policy, schedule, run_scenario, disturbance)
 

@@ -24,20 +24,68 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from .contact import ContactMode, coefficients, cone_margin
+from .contact import ContactMode, Friction, coefficients, cone_margin
 from .control import ControlOutput
 from .disturbance import Disturbance
-from .events import Event, EventSource, Failure, FailureKind
+from .events import Event, EventKind, EventSource, Failure, FailureKind
 from .exceptions import RegraspError
-from .plant import Plant, PlantStep
+from .hand import Hand
+from .plant import PlantContact, PlantEvent, PlantState, PlantStep
+from .polygon import ConvexPolygon
 from .supervisor import Measurement, SupervisorOutput
 from .trajectory import TrajectorySample
 
-__all__ = ["Command", "Driver", "SimulationOutcome", "StepRecord", "sense", "sense_projected", "simulate"]
+__all__ = ["Command", "Driver", "PlantLike", "SimulationOutcome", "StepRecord", "sense", "sense_projected",
+           "simulate"]
+
+
+@runtime_checkable
+class PlantLike(Protocol):
+    """What the simulation loop, the rollout, the closed loop and the recorder read from a plant: the
+    project's :class:`~regrasp.plant.Plant` and MuJoCo's :class:`~regrasp.mujoco_plant.MujocoPlant`.
+
+    Attributes:
+        hand: The fingers (names, URDFs, base poses; the recorder draws them).
+        polygon: The object.
+        contacts: One :class:`~regrasp.plant.PlantContact` per finger: its edge, its mode now, and for a
+            fixed contact the ξ [m] it is held at (what :func:`sense` reads).
+        friction: The friction the plant has, one :class:`~regrasp.contact.Friction` per contact.
+        dt: The control step [s] (:meth:`step` advances by it).
+        state: The state now, or None before :meth:`reset`.
+        events: The events since the last reset.
+        stopped: Whether an event in ``stop_on`` stopped it.
+        stop_on: The event kinds that stop it.
+        max_constraint_error: The largest constraint violation [m] since the last reset.
+    """
+
+    hand: Hand
+    polygon: ConvexPolygon
+    contacts: list[PlantContact]
+    friction: tuple[Friction, ...]
+    dt: float
+    state: PlantState | None
+    events: list[PlantEvent]
+    stopped: bool
+    stop_on: frozenset[EventKind]
+    max_constraint_error: float
+
+    def reset(self, q: ArrayLike, v: ArrayLike, X: ArrayLike, V: ArrayLike, t: float = 0.0,
+              contacts: Sequence[PlantContact] | None = None) -> PlantState: ...
+
+    def step(self, tau: ArrayLike) -> PlantStep: ...
+
+    def contact_xi(self, st: PlantState, i: int, tip: Sequence[float] | np.ndarray | None = None,
+                   tip_vel: Sequence[float] | np.ndarray | None = None) -> tuple[float, float]: ...
+
+    def surface_forces(self, st: PlantState, forces: np.ndarray) -> np.ndarray: ...
+
+    def accelerations(self, st: PlantState, tau: ArrayLike,
+                      modes: Sequence[PlantContact] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 
 
 @dataclass(frozen=True)
@@ -121,11 +169,11 @@ class SimulationOutcome:
     wall_seconds: float
 
 
-def _modes_sliding(plant: Plant) -> np.ndarray:
+def _modes_sliding(plant: PlantLike) -> np.ndarray:
     return np.array([c.mode is ContactMode.SLIDING for c in plant.contacts])
 
 
-def sense(plant: Plant, last: PlantStep | None) -> Measurement:
+def sense(plant: PlantLike, last: PlantStep | None) -> Measurement:
     """What a hand's sensors read now: the object pose and twist, each contact's ξ and ξ̇ (a fixed
     contact's ξ is where it is held), a slip sensor and the contact forces of the last step."""
     st = plant.state
@@ -140,7 +188,7 @@ def sense(plant: Plant, last: PlantStep | None) -> Measurement:
     return Measurement(st.t, st.X.copy(), st.V.copy(), xi, xi_dot, _modes_sliding(plant), friction, normal)
 
 
-def sense_projected(plant: Plant, last: PlantStep | None) -> Measurement:
+def sense_projected(plant: PlantLike, last: PlantStep | None) -> Measurement:
     """Like :func:`sense`, with every ξ, ξ̇ the tip's projection on its edge at the current state
     (``Plant.contact_xi``; a fixed contact's drifts by the constraint error)."""
     st = plant.state
@@ -151,10 +199,10 @@ def sense_projected(plant: Plant, last: PlantStep | None) -> Measurement:
                        friction, normal)
 
 
-def simulate(plant: Plant, driver: Driver, steps: int, *,
+def simulate(plant: PlantLike, driver: Driver, steps: int, *,
              consumers: Sequence[Callable[[StepRecord], None]] = (),
              check: Callable[[StepRecord], Failure | None] | None = None,
-             sensor: Callable[[Plant, PlantStep | None], Measurement] = sense,
+             sensor: Callable[[PlantLike, PlantStep | None], Measurement] = sense,
              progress: Callable[[int, int], None] | None = None,
              interruptible: bool = False, control_failures: bool = True,
              disturbance: Disturbance | None = None) -> SimulationOutcome:

@@ -57,9 +57,9 @@ __all__ = [
 
 #: The settings the supervisor passes on to its executor (their defaults are the executor's).
 _EXECUTOR_FIELDS = ("omega_n", "zeta", "prime_time", "prime_overshoot", "prime_overshoot_max", "start_speed",
-                    "settle_undershoot",
-                    "settle_margin", "actuation_delay", "arrive_tolerance", "arrive_speed", "max_slide_time", "control_omega", "slide_omega", "integral",
-                    "friction_filter_time", "breakaway_estimate", "shared_friction", "internal_force")
+                    "settle_undershoot", "settle_margin", "actuation_delay", "arrive_tolerance", "arrive_speed",
+                    "max_slide_time", "control_omega", "slide_omega", "integral", "friction_filter_time",
+                    "breakaway_estimate", "shared_friction", "internal_force", "hold_resolution", "tip_radius")
 
 
 @dataclass(frozen=True)
@@ -114,6 +114,10 @@ class SupervisorSettings:
         shared_friction: Take fingertips with the same model friction to be of one material: a slider's
             estimate scales the friction assumed at all of them (:class:`~regrasp.executor.ExecutorSettings`).
         integral: Integral action, K_i = ``integral`` · ω³ on every coordinate (0: none; see
+            :class:`~regrasp.executor.ExecutorSettings`).
+        hold_resolution: A held contact's model position follows the sensed one when they differ by more than
+            this [m] (a rolling fingertip; None: only at phase changes; :class:`~regrasp.executor.ExecutorSettings`).
+        tip_radius: The fingertips' sphere radius [m] the laws' torques account for (0: point contacts;
             :class:`~regrasp.executor.ExecutorSettings`).
         envelope_every: Evaluate the runtime envelopes every k-th step (1: every step).
         track_envelopes: Follow each runtime envelope's ``urdf`` collision cuts from the last
@@ -170,6 +174,8 @@ class SupervisorSettings:
     track_envelopes: bool = False
     geometry: str = "ideal"
     internal_force: InternalForceSettings = field(default_factory=lambda: ExecutorSettings().internal_force)
+    hold_resolution: float | None = ExecutorSettings.hold_resolution
+    tip_radius: float = ExecutorSettings.tip_radius
     feasibility: InternalForceSettings = field(
         default_factory=lambda: InternalForceSettings(f_min=0.2, margin=0.05, f_max=20.0))
     regrasp: bool = True
