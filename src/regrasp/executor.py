@@ -52,13 +52,13 @@ from .contact import ContactMode, Friction
 from .control import ComputedTorqueController, ControlOutput, FixedContactController, Gains, Proposition3Controller
 from .events import Event, EventKind
 from .exceptions import InvalidParameterError
+from .executor_settings import ExecutorSettings
 from .slides import SLIPPING_PHASES, ContactPhase, Reference, SlideEnd, SlideOrder
 from .grasp import Grasp
 from .hand import Hand
-from .internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
+from .internal_force import ConeEdge, InternalForceInfeasibleError
 from .reduced import ReducedModel
 from .sphere_tip import sphere_tip_torque
-from .validation import as_duration, as_flag, as_integer, as_positive_float
 
 if TYPE_CHECKING:
     from .supervisor import Measurement
@@ -66,124 +66,6 @@ if TYPE_CHECKING:
 
 __all__ = ["SLIPPING_PHASES", "ContactPhase", "ExecutorSettings", "Reference", "SlideEnd", "SlideExecutor",
            "SlideOrder"]
-
-@dataclass(frozen=True)
-class ExecutorSettings:
-    """Tuning of :class:`SlideExecutor` (see the module docstring).
-
-    Attributes:
-        omega_n: Natural frequency of the slide filter [rad/s] (orders without a reference).
-        zeta: Damping ratio of the slide filter [-].
-        prime_time: Longest priming [s].
-        prime_overshoot: Priming asks for |f_t| = (μ_s + this) f_n at first [-] ...
-        prime_overshoot_max: ... and up to (μ_s + this) f_n at the end of ``prime_time`` [-].
-        start_speed: The priming ends when the contact is sensed sliding and moving in the slide's direction
-            faster than this [m/s] (None: sensed sliding is enough).
-        settle_undershoot: Settling asks for (μ_k - this) f_n [-] (at most μ_k / 2) ...
-        settle_margin: ... or for μ_k f_n - this [N] where that is less (with the normal force sensed when the
-            slide ends; still at most μ_k / 2 below μ_k).
-        arrive_tolerance: A slide has arrived when |ξ - ξ*| is below this [m] ...
-        arrive_speed: ... and |ξ̇| below this [m/s].
-        max_slide_time: A slide that has not arrived after this long ends where it is [s].
-        friction_filter_time: Estimate each slider's kinetic friction ratio |f_t| / f_n from the sensed
-            contact forces (:class:`~regrasp.supervisor.Measurement` ``normal_force``) with a first-order
-            filter of this time constant [s], and let the laws use it instead of the model's μ_k (None:
-            the model's). The plant's μ_k may differ from the model's; a slider that carries more friction
-            than its law predicts stops and sticks, one that carries less overshoots.
-        friction_min_force: The estimate uses only steps with f_n above this [N].
-        shared_friction: Fingertips with the same model friction are of one material on one object: a slider's
-            estimate scales the friction the laws assume at all of them (μ_s and μ_k times μ̂_k / μ_k of the
-            model), from its first estimate on and after its slide. A plant whose μ is 20 % above the model's
-            otherwise makes a slide infeasible: the slider's measured friction must be balanced by contacts
-            whose cones the laws take 20 % too narrow.
-        breakaway_estimate: Start the estimate at the step the contact is sensed breaking away, from the
-            force ratio it broke away at (≈ the plant's μ_s ≥ μ_k), so that the sliding law's first steps
-            expect no less friction than the plant's (False: from its first step sensed sliding).
-        friction_resolution: The laws get the estimate rounded to this [-] (a new law per change).
-        control_period: The control period the filter assumes [s].
-        max_reprimes: A planned slide (an order with a reference) that sticks before its planned end is
-            primed again, at most this many times; then it ends where it stuck.
-        actuation_delay: The hand's actuation delay [control steps] (module docstring): a torque computed at
-            one step is applied this many steps later.
-        control_omega: Bandwidth of the computed-torque laws on the object's coordinates [rad/s]
-            (critically damped: K_v = 2ω, K_s = ω²).
-        slide_omega: The same on the sliders' ξ [rad/s]. A slider's effective inertia along its edge is
-            small, so a friction error (μ_k of the plant ≠ the model's) moves it far at the object's
-            bandwidth: 10 % of μ_k is about 6 mm at 20 rad/s on the three-finger scenario.
-        integral: Integral action on every coordinate, K_i = ``integral`` · ω³ (0: none) [-]: it removes
-            the steady error that a wrong object mass or friction leaves (Δg / ω² = 2.5 mm for 10 % of
-            the weight at 20 rad/s). The law stays stable for K_i < K_v K_s = 2ω³, i.e. ``integral`` < 2.
-            It acts through the reference: S_d + (K_i / K_s) ∫E dt gives a = S̈_d + K_v Ė + K_s E + K_i ∫E.
-        internal_force: The controllers' internal-force QP settings; its ``target_cone_margin`` [N]
-            is the margin the fixed contacts are kept inside their cones by (the paper's "γ large").
-        hold_resolution: A held contact's position in the laws' model follows the sensed one when the two
-            differ by more than this [m] (None: only at phase changes). A rigid point contact stays where it
-            is held; a real fingertip of radius r rolls on the edge, r Δθ for a turn Δθ of the distal link
-            relative to the object, and a model that keeps the old position puts the contact's normal force
-            at the wrong lever arm (``docs/derivations.md``, "A second plant: MuJoCo"). With a plant that
-            senses a fixed contact where it is held (the project's), this never triggers.
-        tip_radius: The fingertips are spheres of this radius [m] (0: points): every law's torque gets the
-            couple the sphere's contact point adds on the distal link (:func:`~regrasp.sphere_tip.sphere_tip_torque`).
-    """
-
-    omega_n: float = 20.0
-    zeta: float = 1.0
-    prime_time: float = 0.02
-    prime_overshoot: float = 0.05
-    prime_overshoot_max: float = 0.05
-    start_speed: float | None = None
-    settle_undershoot: float = 0.05
-    settle_margin: float = 0.0
-    arrive_tolerance: float = 5e-4
-    arrive_speed: float = 5e-3
-    max_slide_time: float = 1.5
-    max_reprimes: int = 5
-    actuation_delay: int = 0
-    friction_filter_time: float | None = None
-    friction_min_force: float = 0.05
-    breakaway_estimate: bool = False
-    shared_friction: bool = False
-    friction_resolution: float = 0.0025
-    control_period: float = 1e-3
-    control_omega: float = 20.0
-    slide_omega: float = 20.0
-    integral: float = 0.0
-    internal_force: InternalForceSettings = field(default_factory=lambda: InternalForceSettings(f_min=0.2))
-    hold_resolution: float | None = 2e-6
-    tip_radius: float = 0.0
-
-    def __post_init__(self):
-        for name in ("omega_n", "zeta", "prime_time", "prime_overshoot", "settle_undershoot", "arrive_tolerance",
-                     "arrive_speed", "max_slide_time", "control_omega", "slide_omega"):
-            as_positive_float(name, getattr(self, name))
-        for name in ("omega_n", "control_omega", "slide_omega"):  # (their squares are gains)
-            if getattr(self, name) > 1e6:
-                raise InvalidParameterError(name, getattr(self, name), "a frequency of at most 1e6 rad/s")
-        for name in ("prime_time", "max_slide_time"):
-            as_duration(name, getattr(self, name))
-        as_positive_float("integral", self.integral, allow_zero=True)
-        as_positive_float("settle_margin", self.settle_margin, allow_zero=True)
-        if self.start_speed is not None:
-            as_positive_float("start_speed", self.start_speed, allow_zero=True)
-        if self.friction_filter_time is not None:
-            as_positive_float("friction_filter_time", self.friction_filter_time)
-        for name in ("friction_min_force", "friction_resolution", "control_period"):
-            as_positive_float(name, getattr(self, name))
-        as_integer("max_reprimes", self.max_reprimes)
-        as_integer("actuation_delay", self.actuation_delay)
-        as_flag("breakaway_estimate", self.breakaway_estimate)
-        as_flag("shared_friction", self.shared_friction)
-        if not self.prime_overshoot_max >= self.prime_overshoot:
-            raise InvalidParameterError("prime_overshoot_max", self.prime_overshoot_max,
-                                        f"at least prime_overshoot = {self.prime_overshoot}")
-        if self.integral >= 2.0:
-            raise InvalidParameterError("integral", self.integral, "a gain fraction in [0, 2) (stability)")
-        if not isinstance(self.internal_force, InternalForceSettings):
-            raise InvalidParameterError("internal_force", self.internal_force, "an InternalForceSettings")
-        if self.hold_resolution is not None:
-            as_positive_float("hold_resolution", self.hold_resolution)
-        as_positive_float("tip_radius", self.tip_radius, allow_zero=True)
-
 
 @dataclass
 class _Active:
@@ -221,6 +103,7 @@ class SlideExecutor:
         self.settings = settings
         self.names = tuple(f.name for f in hand.fingers)
         self.xi = np.array(xi, dtype=float)
+        self._xi_sensed = self.xi.copy()  # the sensed positions, the held ones filtered (hold_filter_time)
         self.phases = [ContactPhase.FIXED] * hand.m
         self.regrasps = [0] * hand.m
         self._active: dict[int, _Active] = {}
@@ -253,26 +136,35 @@ class SlideExecutor:
                                         f"{self.phases[i].value})")
         self._active[i] = _Active(order, float(meas.t))
         self.phases[i] = ContactPhase.PRIMING
-        self.xi = meas.xi.copy()
+        self.xi = self._sensed()
         self._event(out, meas.t, i, EventKind.PRIME, f"to slide {'+' if order.direction > 0 else '-'}xi from "
                     f"{meas.xi[i] * 1e3:.2f} mm to {order.target * 1e3:.2f} mm" + (f" ({order.why})" if order.why else ""),
                     xi=float(meas.xi[i]), target=order.target, direction=order.direction)
 
-    def _follow_held(self, meas: Measurement) -> None:
-        """Move the held contacts' model positions to the sensed ones where they drifted by more than
-        ``hold_resolution`` (a rolling fingertip)."""
-        r = self.settings.hold_resolution
-        if r is None:
-            return
+    def _sense_held(self, meas: Measurement) -> None:
+        """Filter the held contacts' sensed positions (``hold_filter_time``; the others are taken as sensed)
+        and move their model positions there where they drifted by more than ``hold_resolution`` (a rolling
+        fingertip)."""
+        s = self.settings
+        gain = 1.0 if s.hold_filter_time is None else min(1.0, s.control_period / s.hold_filter_time)
+        sensed = self._xi_sensed
         for i, phase in enumerate(self.phases):
-            if phase is ContactPhase.FIXED and not meas.sliding[i] and abs(meas.xi[i] - self.xi[i]) > r:
-                self.xi[i] = meas.xi[i]
+            if phase is ContactPhase.FIXED and not meas.sliding[i]:
+                sensed[i] += gain * (meas.xi[i] - sensed[i])
+                if s.hold_resolution is not None and abs(sensed[i] - self.xi[i]) > s.hold_resolution:
+                    self.xi[i] = sensed[i]
+            else:
+                sensed[i] = meas.xi[i]
+
+    def _sensed(self) -> np.ndarray:
+        """Every contact's sensed position for the model (the held ones filtered)."""
+        return self._xi_sensed.copy()
 
     def advance(self, meas: Measurement, out: list) -> list[SlideEnd]:
         """Move every slide's phase on; the slides whose sliding phase ended at this step."""
         s = self.settings
         ends = []
-        self._follow_held(meas)
+        self._sense_held(meas)
         for i in list(self._active):
             a = self._active[i]
             phase = self.phases[i]
@@ -287,7 +179,7 @@ class SlideExecutor:
                     # sliding law then starts with no less friction than the plant's: a slider whose law
                     # expects less friction than it gets reverses within a step and sticks again)
                     self._estimate_friction(a, i, meas)
-                self.xi = meas.xi.copy()
+                self.xi = self._sensed()
                 self._event(out, t, i, EventKind.SLIDE, f"sliding law, target {target * 1e3:.2f} mm"
                             + ("" if sliding else " (not yet slipping)"), xi=xi, target=target)
             elif phase is ContactPhase.SLIDING:
@@ -307,7 +199,7 @@ class SlideExecutor:
                         a.reprimes += 1
                         self.phases[i] = ContactPhase.PRIMING
                         a.phase_start, a.slipped = t, False
-                        self.xi = meas.xi.copy()
+                        self.xi = self._sensed()
                         self._event(out, t, i, EventKind.STUCK, f"stuck at {xi * 1e3:.2f} mm on the way (target "
                                     f"{target * 1e3:.2f} mm)", xi=xi, target=target, reprime=a.reprimes)
                         self._event(out, t, i, EventKind.PRIME, f"again ({a.reprimes} of {s.max_reprimes}) to slide "
@@ -369,7 +261,7 @@ class SlideExecutor:
         t, xi = float(meas.t), float(meas.xi[i])
         self._event(out, t, i, kind, detail, xi=xi, target=a.order.target,
                     **({} if a.order.planned_end is None else {"planned_end": a.order.planned_end}))
-        self.xi = meas.xi.copy()
+        self.xi = self._sensed()
         if meas.sliding[i] or self.settings.actuation_delay > 0:
             self.phases[i] = ContactPhase.SETTLING
             a.still = 0 if meas.sliding[i] else 1
@@ -386,7 +278,7 @@ class SlideExecutor:
     def _finish(self, meas, out: list, i: int) -> None:
         a = self._active.pop(i)
         self.phases[i] = ContactPhase.FIXED
-        self.xi = meas.xi.copy()
+        self.xi = self._sensed()
         if not a.aborted:  # an aborted slide that settles is not a regrasp
             self.regrasps[i] += 1
         self._event(out, meas.t, i, EventKind.SETTLED, f"fixed at {meas.xi[i] * 1e3:.2f} mm", xi=float(meas.xi[i]))

@@ -31,7 +31,7 @@ from .contact import ContactMode, Friction, FrictionLike
 from .disturbance import ActuatorNoise, Disturbance, SensorNoise
 from .events import PLANT_FAILURES, EventKind, EventSource, Failure, FailureKind
 from .exceptions import InvalidParameterError
-from .executor import SLIPPING_PHASES, ContactPhase
+from .executor import SLIPPING_PHASES, ContactPhase, ExecutorSettings
 from .grasp import Grasp
 from .hand import Hand
 from .plant import Plant, PlantContact
@@ -274,9 +274,13 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
     expect_type("scheduled_settings", scheduled_settings, ScheduledSettings, "a ScheduledSettings")
     if settings is None:  # the supervisor's runtime envelopes use the scenario's planner geometry; the laws know
         # the MuJoCo plant's sphere tips and the hand's actuation delay (a latency is measured, unlike a friction)
+        # and its sensors' noise: a held contact's model position moves when its filtered reading moved by
+        # half the noise's standard deviation, not at every step
         tips = {} if plant != "mujoco" else {"tip_radius": (mujoco_settings or _mujoco_defaults()).tip_radius}
+        hold = {} if sensor_noise.xi == 0.0 else {"hold_resolution": max(ExecutorSettings.hold_resolution,
+                                                                          0.5 * sensor_noise.xi)}
         settings = SupervisorSettings.robust(scenario.geometry.value, regrasp_settings.cone_margin,
-                                             actuation_delay=actuator_noise.delay, **tips)
+                                             actuation_delay=actuator_noise.delay, **tips, **hold)
     scenario.check_geometry(expect_type("settings", settings, SupervisorSettings, "a SupervisorSettings").geometry)
     run_scenario, duration = _run_scenario(scenario, duration, periods)
     traj = run_scenario.trajectory

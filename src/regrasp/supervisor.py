@@ -59,7 +59,8 @@ __all__ = [
 _EXECUTOR_FIELDS = ("omega_n", "zeta", "prime_time", "prime_overshoot", "prime_overshoot_max", "start_speed",
                     "settle_undershoot", "settle_margin", "actuation_delay", "arrive_tolerance", "arrive_speed",
                     "max_slide_time", "control_omega", "slide_omega", "integral", "friction_filter_time",
-                    "breakaway_estimate", "shared_friction", "internal_force", "hold_resolution", "tip_radius")
+                    "breakaway_estimate", "shared_friction", "internal_force", "hold_resolution", "hold_filter_time",
+                    "tip_radius")
 
 
 @dataclass(frozen=True)
@@ -117,6 +118,8 @@ class SupervisorSettings:
             :class:`~regrasp.executor.ExecutorSettings`).
         hold_resolution: A held contact's model position follows the sensed one when they differ by more than
             this [m] (a rolling fingertip; None: only at phase changes; :class:`~regrasp.executor.ExecutorSettings`).
+        hold_filter_time: The held contacts' sensed positions are filtered with this time constant [s] before the
+            model takes them (None: unfiltered; :class:`~regrasp.executor.ExecutorSettings`).
         tip_radius: The fingertips' sphere radius [m] the laws' torques account for (0: point contacts;
             :class:`~regrasp.executor.ExecutorSettings`).
         envelope_every: Evaluate the runtime envelopes every k-th step (1: every step).
@@ -175,6 +178,7 @@ class SupervisorSettings:
     geometry: str = "ideal"
     internal_force: InternalForceSettings = field(default_factory=lambda: ExecutorSettings().internal_force)
     hold_resolution: float | None = ExecutorSettings.hold_resolution
+    hold_filter_time: float | None = ExecutorSettings.hold_filter_time
     tip_radius: float = ExecutorSettings.tip_radius
     feasibility: InternalForceSettings = field(
         default_factory=lambda: InternalForceSettings(f_min=0.2, margin=0.05, f_max=20.0))
@@ -207,14 +211,18 @@ class SupervisorSettings:
 
     @classmethod
     def robust(cls, geometry: str = "ideal", cone_margin: float = 0.2, **overrides: Any) -> "SupervisorSettings":
-        """Settings for a hand whose plant differs from the model (``docs/derivations.md``, §4 executed):
-        the fixed contacts kept ``cone_margin`` [N] inside their cones where the forces allow, the sliders'
-        ξ at 60 rad/s, integral action (0.3 ω³), a priming whose overshoot grows from 0.05 to 0.25 over
-        40 ms, and the sliders' kinetic friction estimated from the sensed forces (10 ms). With these the
-        scheduled three-finger rollout survives 0.9x and 1.1x of the object's mass and of μ."""
+        """Settings for a hand whose plant differs from the model and whose sensors and actuators are not
+        perfect (``docs/derivations.md``, "§4, executed" and "Robustness"): the fixed contacts kept 0.1 inside
+        their cones in ratio (0.05 where no force allows more) and ``cone_margin`` [N] inside where the forces
+        allow, the sliders' ξ at 60 rad/s, integral action (0.3 ω³), a priming whose overshoot grows from 0.05
+        to 0.25 over 40 ms and lasts until the contact moves the right way at 1 mm/s, the sliders' kinetic
+        friction estimated from the sensed forces (10 ms, from the break-away on) and shared by fingertips of
+        one material, settling with 0.05 N of static margin, and the held contacts' model positions following
+        their sensed ones through a 20 ms filter. ``overrides`` replace any of these (e.g. the hand's
+        ``actuation_delay``)."""
         values = dict(geometry=geometry, slide_omega=60.0, integral=0.3, prime_time=0.04, prime_overshoot_max=0.25,
                       friction_filter_time=0.01, breakaway_estimate=True, shared_friction=True, settle_margin=0.05,
-                      start_speed=1e-3,
+                      start_speed=1e-3, hold_filter_time=0.02,
                       internal_force=InternalForceSettings(f_min=0.2, margin=0.1, target_cone_margin=cone_margin,
                                                            fallback_margin=0.05))
         values.update(overrides)
