@@ -19,6 +19,7 @@ import regrasp as R
 from regrasp.exceptions import RegraspError
 from regrasp.hand import Hand
 from regrasp.sphere_tip import sphere_tip_torque
+from regrasp.study import draw_runs, wilson_interval
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"
@@ -103,6 +104,13 @@ ENTRIES = {
  "measure_reduced_state": (R.measure_reduced_state, [RESET_PLANT, MODEL], {}),
  "sphere_tip_torque": (sphere_tip_torque, [[[1.0, 0.0], [-1.0, 0.0]], [[1.0, 0.2], [1.0, -0.3]], 2.5e-4], {}),
  "OrderedSlidesPolicy": (R.OrderedSlidesPolicy, [[R.SlideOrder(0, 1, 0.01, planned_start=0.1)], 2], {}),
+ "SensorNoise": (R.SensorNoise, [1e-4, 1e-3, 1e-3, 1e-2, 2e-4, 1e-3, 0.01, 2e-3, 1], {}),
+ "ActuatorNoise": (R.ActuatorNoise, [1e-3, 1], {}),
+ "Disturbance": (R.Disturbance, [R.SensorNoise(xi=1e-4), R.ActuatorNoise(delay=1), np.random.default_rng(0)], {}),
+ "Perturbation": (R.Perturbation, [], dict(mass=0.2, inertia=0.2, mu=0.2, contact_position=2e-4, position_noise=1e-4,
+                                         slip_threshold=2e-3, slip_delay=1, torque_noise=1e-3, delay=1)),
+ "wilson_interval": (wilson_interval, [19, 20], dict(z=1.96)),
+ "draw_runs": (draw_runs, [3, 1, R.Perturbation(mass=0.1)], dict(contacts=2)),
 }
 try:  # the MuJoCo plant's entry points, with the extra installed
     import mujoco  # noqa: F401

@@ -110,6 +110,19 @@ def test_a_study_on_a_local_ray_gives_the_same_runs(in_process, capsys):
     same_runs(in_process, doc)
 
 
+def test_a_run_replayed_alone_repeats_the_studys_run_and_records_it(in_process, capsys, tmp_path):
+    rrd = tmp_path / "run2.rrd"
+    code = main(["study", str(SCENARIO), "--seed", "5", *FLAGS, "--duration", "0.15", "--replay", "2", "--rrd", str(rrd),
+                 "--json"])
+    doc = json.loads(capsys.readouterr().out)
+    run = in_process.runs[2]
+    assert code == (0 if run.success else 1) and doc["run"] == 2 and doc["draw"]["xi_offset"] == list(run.draw.xi_offset)
+    assert doc["min_cone_margin"] == run.min_cone_margin and doc["min_envelope_margin"] == run.min_envelope_margin
+    assert rrd.stat().st_size > 10_000
+    assert main(["study", str(SCENARIO), "--rrd", str(rrd)]) == 2  # a recording needs --replay
+    assert "--replay" in capsys.readouterr().err
+
+
 def test_the_noise_is_seeded_per_run(in_process):
     """A run repeated alone from its draw repeats exactly; another seed gives other noise."""
     from regrasp.perturbation import RunDraw
@@ -152,7 +165,7 @@ def test_a_placement_error_that_would_leave_the_edge_is_refused_before_the_runs(
 @pytest.mark.parametrize("args", [["--runs", "0"], ["--mass", "1.5"], ["--mu", "abc"], ["--workers", "0"],
                                   ["nowhere.toml"], ["--duration", "nan"], ["--delay", "-1"], ["--delay", "11"],
                                   ["--xi-noise", "-0.1"], ["--contact-position", "0.5"], ["--torque-noise", "inf"],
-                                  ["--slip-delay", "1.5"]])
+                                  ["--slip-delay", "1.5"], ["--tip-radius", "0.3"]])
 def test_bad_study_arguments_exit_2_with_one_line(capsys, args):
     try:
         code = main(["study", *args])

@@ -30,6 +30,9 @@ _SOURCES = {
     "Proposition1Controller": "control",
     "Proposition2Controller": "control",
     "Proposition3Controller": "control",
+    "ActuatorNoise": "disturbance",
+    "Disturbance": "disturbance",
+    "SensorNoise": "disturbance",
     "Condition": "envelope",
     "EdgeLine": "envelope",
     "EnvelopeSample": "envelope",
@@ -71,6 +74,7 @@ _SOURCES = {
     "MujocoSettings": "mjcf",
     "scenario_to_mjcf": "mjcf",
     "MujocoPlant": "mujoco_plant",
+    "Perturbation": "perturbation",
     "FingerPlan": "planner",
     "InfeasibleInterval": "planner",
     "PlanResult": "planner",
@@ -107,6 +111,8 @@ _SOURCES = {
     "PlantLike": "simulation",
     "simulate": "simulation",
     "SlideFeasibility": "sliding",
+    "StudyResult": "study",
+    "run_study": "study",
     "sliding_feasibility": "sliding",
     "ContactPhase": "supervisor",
     "Measurement": "supervisor",
@@ -120,6 +126,7 @@ _SOURCES = {
 }
 
 __all__ = [
+    "ActuatorNoise",
     "ClosedLoopLog",
     "ComputedTorqueController",
     "Condition",
@@ -129,6 +136,7 @@ __all__ = [
     "ContactPhase",
     "ControlOutput",
     "ConvexPolygon",
+    "Disturbance",
     "Edge",
     "EdgeLine",
     "EllipseTrajectory",
@@ -165,6 +173,7 @@ __all__ = [
     "NoScheduleError",
     "OrderedSlidesPolicy",
     "PaperPolicy",
+    "Perturbation",
     "PlanResult",
     "Plant",
     "PlantContact",
@@ -190,12 +199,14 @@ __all__ = [
     "ScheduleLimit",
     "ScheduledPolicy",
     "ScheduledSettings",
+    "SensorNoise",
     "SingularFingerError",
     "Slide",
     "SlideFeasibility",
     "SlideOrder",
     "SlidingContactCountError",
     "StepRecord",
+    "StudyResult",
     "SupervisorOutput",
     "SupervisorSettings",
     "Trajectory",
@@ -218,6 +229,7 @@ __all__ = [
     "planar_2r_urdf",
     "reachable_on_line",
     "run_closed_loop",
+    "run_study",
     "scenario_to_mjcf",
     "segment_hits_polygon",
     "simulate",
@@ -252,6 +264,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
         Proposition2Controller,
         Proposition3Controller,
     )
+    from .disturbance import ActuatorNoise, Disturbance, SensorNoise  # noqa: F401
     from .envelope import (  # noqa: F401
         Condition,
         EdgeLine,
@@ -292,6 +305,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     )
     from .mjcf import MujocoSettings, scenario_to_mjcf  # noqa: F401
     from .mujoco_plant import MujocoPlant  # noqa: F401
+    from .perturbation import Perturbation  # noqa: F401
     from .planner import FingerPlan, InfeasibleInterval, PlanResult, plan, plan_scenario  # noqa: F401
     from .plant import Plant, PlantContact, PlantEvent, PlantState, PlantStep  # noqa: F401
     from .policies import NoRegraspPolicy, OrderedSlidesPolicy, ScheduledPolicy, ScheduledSettings  # noqa: F401
@@ -305,6 +319,7 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
     from .schedule_planner import RegraspSettings, plan_regrasps  # noqa: F401
     from .simulation import PlantLike, StepRecord, simulate  # noqa: F401
     from .sliding import SlideFeasibility, sliding_feasibility  # noqa: F401
+    from .study import StudyResult, run_study  # noqa: F401
     from .supervisor import (  # noqa: F401
         ContactPhase,
         Measurement,

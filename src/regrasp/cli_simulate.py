@@ -17,12 +17,18 @@ import json
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ._cli_args import number_argument
 from ._fd import captured_fd
 from .events import EventKind, FailureKind
 
-__all__ = ["DEFAULT_SCENARIO", "add_parser"]
+if TYPE_CHECKING:
+    from .rollout_result import RolloutResult
+    from .scenario import Scenario
+    from .simulation import PlantLike
+
+__all__ = ["DEFAULT_SCENARIO", "add_parser", "add_plant_arguments", "plant_options", "plant_text", "rollout_summary"]
 
 #: The default scenario (in the source tree's examples/).
 DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "examples" / "scenarios" / \
@@ -31,6 +37,32 @@ DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "examples" / "scenarios
 
 def _positive(kind: type) -> Callable[[str], float]:
     return number_argument(kind, f"a finite {kind.__name__} > 0", lambda v: 0 < v < float("inf"))
+
+
+def add_plant_arguments(p: argparse.ArgumentParser) -> None:
+    """``--plant`` and ``--tip-radius`` (read back by :func:`plant_options`)."""
+    p.add_argument("--plant", choices=("project", "mujoco"), default="project",
+                   help="project: the full-coordinate plant with point contacts (default); mujoco: MuJoCo with sphere "
+                        "tips and soft contacts (pip install 'regrasp[mujoco]')")
+    p.add_argument("--tip-radius", type=_positive(float), metavar="MM",
+                   help="--plant mujoco: the fingertips' sphere radius [mm] (default 0.25)")
+
+
+def plant_options(args: argparse.Namespace) -> dict:
+    """``build_rollout``'s ``plant`` and ``mujoco_settings`` from ``--plant`` and ``--tip-radius``; a missing
+    ``mujoco`` or a radius without MuJoCo is an error before any work."""
+    from .exceptions import InvalidParameterError
+
+    if args.tip_radius is not None and args.plant != "mujoco":
+        raise InvalidParameterError("--tip-radius", args.tip_radius, "no radius unless --plant mujoco (the project's "
+                                    "plant has point contacts)")
+    if args.plant != "mujoco":
+        return {"plant": args.plant}
+    from .mjcf import MujocoSettings, require_mujoco
+
+    require_mujoco()  # (before planning: say at once that the extra is missing)
+    return {"plant": "mujoco", "mujoco_settings": MujocoSettings() if args.tip_radius is None else
+            MujocoSettings(tip_radius=args.tip_radius * 1e-3)}
 
 
 def add_parser(sub: argparse._SubParsersAction, progress_bar: Callable[[str], Callable[[int, int], None]],
@@ -48,11 +80,7 @@ def add_parser(sub: argparse._SubParsersAction, progress_bar: Callable[[str], Ca
     p.add_argument("--policy", choices=("scheduled", "paper", "none"), default="scheduled",
                    help="scheduled: plan the slides ahead, follow and re-plan them (default); paper: the paper's "
                         "danger-zone heuristic; none: never slide")
-    p.add_argument("--plant", choices=("project", "mujoco"), default="project",
-                   help="project: the full-coordinate plant with point contacts (default); mujoco: MuJoCo with sphere "
-                        "tips and soft contacts (pip install 'regrasp[mujoco]')")
-    p.add_argument("--tip-radius", type=_positive(float), metavar="MM",
-                   help="--plant mujoco: the fingertips' sphere radius [mm] (default 0.25)")
+    add_plant_arguments(p)
     p.add_argument("--rrd", metavar="FILE", type=Path, help="write a rerun recording to FILE")
     p.add_argument("--decimate", type=_positive(int), default=10, metavar="K",
                    help="record every K-th step (events at every step); default 10, a 10 ms row at 1 kHz, about "
@@ -74,17 +102,19 @@ def add_parser(sub: argparse._SubParsersAction, progress_bar: Callable[[str], Ca
     p.set_defaults(func=lambda args: _cmd_simulate(args, progress_bar))
 
 
-def _plant_text(name: str, plant) -> str:
+def plant_text(name: str, plant: PlantLike) -> str:
+    """One line on the plant ``name`` (``"project"`` or ``"mujoco"``) built as ``plant``."""
     if name != "mujoco":
         return "project (point contacts, rigid)"
     s = plant.settings
     return f"mujoco (sphere tips r = {s.tip_radius * 1e3:g} mm, soft contacts, MuJoCo step {s.timestep * 1e3:g} ms)"
 
 
-def _format_summary(result, scenario, plant_text: str) -> str:
+def rollout_summary(result: RolloutResult, scenario: Scenario, plant_line: str) -> str:
+    """A rollout's result as ``regrasp simulate`` prints it (``plant_line``: :func:`plant_text`'s)."""
     mm = 1e3
     lines = [f"regrasp simulate: {scenario.name}" + (f" ({scenario.path})" if scenario.path else ""),
-             f"  plant: {plant_text}",
+             f"  plant: {plant_line}",
              f"  policy: {result.policy}; simulated {result.simulated_seconds:.3f} of {result.duration:.3f} s "
              f"({result.steps} steps)"]
     sch = result.schedule
@@ -150,18 +180,9 @@ def _cmd_simulate(args, progress_bar) -> int:
         from .cli import output_directory
 
         output_directory("--plot", args.plot)
-    if args.tip_radius is not None and args.plant != "mujoco":
-        raise InvalidParameterError("--tip-radius", args.tip_radius, "no radius unless --plant mujoco (the project's "
-                                    "plant has point contacts)")
-    plant_options, tips = {"plant": args.plant}, {}
-    if args.plant == "mujoco":
-        from .mjcf import MujocoSettings, require_mujoco
-
-        require_mujoco()  # (before planning: say at once that the extra is missing)
-        mujoco_settings = MujocoSettings() if args.tip_radius is None else MujocoSettings(tip_radius=args.tip_radius
-                                                                                           * 1e-3)
-        plant_options["mujoco_settings"] = mujoco_settings
-        tips["tip_radius"] = mujoco_settings.tip_radius  # (the laws know the tips' radius)
+    plant = plant_options(args)
+    tips = {"tip_radius": plant["mujoco_settings"].tip_radius} if "mujoco_settings" in plant else {}  # (the laws
+    # know the tips' radius)
     cone = DEFAULT_CONE_MARGIN if args.cone_margin is None else args.cone_margin
     options = {"cone_margin": cone}
     if args.envelope_margin is not None:
@@ -169,7 +190,7 @@ def _cmd_simulate(args, progress_bar) -> int:
     regrasp_settings = RegraspSettings(**options)
     settings = SupervisorSettings.robust(scenario.geometry.value, cone, **tips)
     common = dict(periods=args.periods, duration=args.duration, settings=settings, regrasp_settings=regrasp_settings,
-                  plant_mass_scale=args.plant_mass_scale, plant_mu_scale=args.plant_mu_scale, **plant_options)
+                  plant_mass_scale=args.plant_mass_scale, plant_mu_scale=args.plant_mu_scale, **plant)
     # OSQP's C library prints "Polishing not needed" on fd 1 even with verbose=False: keep stdout for the result
     with captured_fd(1):
         code, output = _simulate(args, scenario, common, progress_bar)
@@ -221,7 +242,7 @@ def _simulate(args, scenario, common, progress_bar) -> tuple[int, str]:
         doc["plant"] = args.plant
         doc["figures"] = figures
         return code, json.dumps(doc)
-    lines = [_format_summary(result, scenario, _plant_text(args.plant, rollout.plant))] + [f"  figure: {f}" for f in figures]
+    lines = [rollout_summary(result, scenario, plant_text(args.plant, rollout.plant))] + [f"  figure: {f}" for f in figures]
     if result.failure is not None and result.failure.kind is FailureKind.INTERRUPTED:
         lines.append("  (interrupted: the result and the recording cover the run so far)")
     return code, "\n".join(lines)

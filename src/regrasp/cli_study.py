@@ -1,10 +1,12 @@
 """``regrasp study``: many seeded rollouts under model errors and noise; the success rate and why runs failed.
 
-``regrasp study [SCENARIO] --runs N [--seed S] [--workers K] [--ray [ADDRESS]] [--periods P | --duration T]
-[--mass H] [--mu H] ... [--delay STEPS] [--json] [--plot DIR]``
+``regrasp study [SCENARIO] --runs N [--seed S] [--workers K] [--ray [ADDRESS]] [--plant project|mujoco]
+[--periods P | --duration T] [--mass H] [--mu H] ... [--delay STEPS] [--json] [--plot DIR]
+[--replay I [--rrd FILE]]``
 
 The perturbations default to the scenario's ``[study]`` table; a flag overrides its key.
-Exit status: 0 the study ran (whatever its success rate), 2 bad input.
+Exit status: 0 the study ran (whatever its success rate), 2 bad input; with ``--replay``, 0 or 1 as the run
+succeeded or failed.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import argparse
 import json
 import os
 import sys
+from dataclasses import asdict
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -63,12 +66,12 @@ _FLAGS = {
 def add_study_parser(sub: argparse._SubParsersAction,
                      progress_bar: Callable[[str], Callable[[int, int], None]]) -> None:
     """Register ``study`` on the ``regrasp`` parser's subparsers."""
-    from .cli_simulate import DEFAULT_SCENARIO
+    from .cli_simulate import DEFAULT_SCENARIO, add_plant_arguments
 
     p = sub.add_parser("study", help="a robustness study: many seeded rollouts under model errors and noise",
                        description="Plan the regrasp schedule once, then run seeded rollouts on plants whose model "
                                    "errors are drawn around the model's, with sensing noise, torque noise and delays. "
-                                   "Prints the success rate with a Wilson 95 %% interval, the failures by kind and "
+                                   "Prints the success rate with a Wilson 95 % interval, the failures by kind and "
                                    "time and the margins. The perturbations default to the scenario's [study] table; "
                                    "a flag overrides its key. Exit status 0: the study ran, 2: bad input.")
     p.add_argument("scenario", nargs="?", default=None,
@@ -80,6 +83,7 @@ def add_study_parser(sub: argparse._SubParsersAction,
     p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
                    help="run on Ray: a local cluster of --workers CPUs, or the cluster at ADDRESS (ray.init's "
                         "address); the results are the same as on processes")
+    add_plant_arguments(p)
     span = p.add_mutually_exclusive_group()
     span.add_argument("--periods", type=_count(1), metavar="P", help="each run: P periods of the trajectory")
     span.add_argument("--duration", type=_seconds, metavar="T", help="each run: T seconds")
@@ -87,6 +91,10 @@ def add_study_parser(sub: argparse._SubParsersAction,
         p.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None, metavar=metavar, help=text)
     p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
     p.add_argument("--plot", metavar="DIR", help="write the study's figures (PNG) and study.json into DIR")
+    p.add_argument("--replay", type=_count(0), metavar="I",
+                   help="run only run I of this study (the same seed and perturbations) and print its rollout; exit "
+                        "status 0 if it succeeds, 1 if it fails")
+    p.add_argument("--rrd", metavar="FILE", type=Path, help="with --replay: write the run to a rerun recording")
     p.set_defaults(func=lambda args: _cmd_study(args, progress_bar))
 
 
@@ -95,7 +103,8 @@ def _summary(result: StudyResult) -> str:
 
     lo, hi = result.interval
     runs = result.runs
-    lines = [f"regrasp study: {Path(result.scenario).name}, {len(runs)} runs of {result.duration:.4g} s, seed "
+    lines = [f"regrasp study: {Path(result.scenario).name} on the {result.plant} plant, {len(runs)} runs of "
+             f"{result.duration:.4g} s, seed "
              f"{result.seed}: {result.perturbation.describe()}",
              f"  success: {result.successes}/{len(runs)} = {result.success_rate:.1%} (Wilson 95 %: "
              f"[{lo:.1%}, {hi:.1%}])"]
@@ -115,6 +124,44 @@ def _summary(result: StudyResult) -> str:
     return "\n".join(lines)
 
 
+def _replay(args: argparse.Namespace, scenario, perturbation, plant: dict,
+            progress_bar: Callable[[str], Callable[[int, int], None]]) -> int:
+    """``--replay I``: run I of the study alone, printed as ``regrasp simulate`` prints a rollout (and recorded)."""
+    from .cli_simulate import plant_text, rollout_summary
+    from .rollout import DEFAULT_CONE_MARGIN, build_rollout
+    from .schedule_planner import RegraspSettings, plan_regrasps
+    from .study import build_run, draw_runs
+
+    draw = draw_runs(args.replay + 1, args.seed, perturbation, len(scenario.contacts))[args.replay]
+    schedule = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN),
+                             progress=None if args.json else progress_bar("planning regrasps"))
+    duration = build_rollout(scenario, duration=args.duration, periods=args.periods, schedule=schedule, **plant).duration
+    rollout = build_run(scenario, draw, schedule, duration, perturbation, **plant)
+    recorder = None
+    if args.rrd is not None:
+        from .recording import RolloutRecorder
+
+        recorder = RolloutRecorder(rollout.plant, rrd_path=args.rrd, envelope_geometry=scenario.geometry.value,
+                                   recording_name=f"{scenario.name}, study seed {args.seed}, run {args.replay}")
+    try:
+        result = rollout.run(recorder=recorder, progress=None if args.json else progress_bar("simulating"))
+    finally:
+        if recorder is not None:
+            recorder.close()
+    if args.json:
+        doc = result.to_json_dict()
+        doc.update(plant=plant["plant"], run=args.replay, seed=args.seed, draw={**asdict(draw), "entropy": list(draw.entropy),
+                                                                                "xi_offset": list(draw.xi_offset)})
+        json.dump(doc, sys.stdout)
+        sys.stdout.write("\n")
+    else:
+        factors = (f"mass x{draw.mass_scale:.3f}, inertia x{draw.inertia_scale:.3f}, mu x{draw.mu_scale:.3f}, "
+                   f"placement {', '.join(f'{x * 1e3:+.3f}' for x in draw.xi_offset)} mm")
+        print(f"run {args.replay} of seed {args.seed} ({perturbation.describe()}): {factors}")
+        print(rollout_summary(result, scenario, plant_text(plant["plant"], rollout.plant)))
+    return 0 if result.success else 1
+
+
 def _perturbation(args: argparse.Namespace, scenario) -> object:
     """The scenario's [study] perturbation with the flags given on the command line."""
     from dataclasses import replace
@@ -125,18 +172,24 @@ def _perturbation(args: argparse.Namespace, scenario) -> object:
 
 def _cmd_study(args: argparse.Namespace, progress_bar: Callable[[str], Callable[[int, int], None]]) -> int:
     from .cli import output_directory
-    from .cli_simulate import DEFAULT_SCENARIO
+    from .cli_simulate import DEFAULT_SCENARIO, plant_options
     from .scenario import load_scenario
+    from .exceptions import InvalidParameterError
     from .study import run_study
     from .study_plots import plot_study
 
     path = Path(args.scenario) if args.scenario is not None else DEFAULT_SCENARIO
     scenario = load_scenario(path)  # a bad file is exit 2 before any work
     perturbation = _perturbation(args, scenario)
+    plant = plant_options(args)
+    if args.rrd is not None and args.replay is None:
+        raise InvalidParameterError("--rrd", str(args.rrd), "--replay I (a study records no run; replay one)")
+    if args.replay is not None:
+        return _replay(args, scenario, perturbation, plant, progress_bar)
     directory = output_directory("--plot", args.plot) if args.plot else None
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     result = run_study(scenario, args.runs, seed=args.seed, perturbation=perturbation, duration=args.duration,
-                       periods=args.periods, workers=min(workers, args.runs), ray_address=args.ray,
+                       periods=args.periods, workers=min(workers, args.runs), ray_address=args.ray, **plant,
                        progress=None if args.json else progress_bar(f"{args.runs} runs"))
     doc = result.to_json_dict()
     figures = []

@@ -40,6 +40,9 @@ MAX_RUNS = 100_000
 #: The relative model errors (half-widths in [0, 1)), in the order a run draws them.
 RELATIVE = ("mass", "mu", "inertia", "link_mass", "mu_kinetic")
 
+#: The most fingers a study draws placement errors for.
+MAX_CONTACTS = 64
+
 #: The largest contact placement error [m] (a fingertip this far off its plan is another grasp).
 MAX_CONTACT_POSITION = 0.01
 
@@ -180,6 +183,8 @@ def draw_runs(runs: int, seed: int, perturbation: Perturbation, contacts: int = 
         raise InvalidParameterError("runs", runs, f"at most {MAX_RUNS} runs")
     expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
     contacts = as_integer("contacts", contacts)
+    if contacts > MAX_CONTACTS:
+        raise InvalidParameterError("contacts", contacts, f"at most {MAX_CONTACTS} fingers")
     p = perturbation
     out = []
     for i, child in enumerate(np.random.SeedSequence(as_integer("seed", seed)).spawn(runs)):

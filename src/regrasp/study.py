@@ -23,19 +23,22 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from types import ModuleType
 from typing import TYPE_CHECKING
 
-from .exceptions import InvalidParameterError
+from .exceptions import InvalidParameterError, MissingDependencyError
 from .perturbation import MAX_RUNS, Perturbation, RunDraw, draw_runs
 from .validation import as_finite_float, as_integer, expect_type
 
 if TYPE_CHECKING:
+    from .mjcf import MujocoSettings
+    from .rollout import Rollout
     from .scenario import Scenario
     from .schedule import RegraspSchedule
     from .supervisor import SupervisorSettings
 
-__all__ = ["MAX_RUNS", "Perturbation", "RunDraw", "RunOutcome", "StudyResult", "draw_runs", "run_study",
-           "wilson_interval"]
+__all__ = ["MAX_RUNS", "Perturbation", "RunDraw", "RunOutcome", "StudyResult", "build_run", "draw_runs", "run_once",
+           "run_study", "wilson_interval"]
 
 #: z of a two-sided 95 % interval.
 Z_95 = 1.959963984540054
@@ -50,6 +53,8 @@ def wilson_interval(successes: int, runs: int, z: float = Z_95) -> tuple[float, 
     :math:`k = 0` or :math:`k = n`.
     """
     k, n = as_integer("successes", successes), as_integer("runs", runs, 1)
+    if n > 2**53:
+        raise InvalidParameterError("runs", runs, "a count of at most 2**53 (exact as a float)")
     if k > n:
         raise InvalidParameterError("successes", successes, f"at most runs = {n}")
     z = as_finite_float("z", z)
@@ -98,20 +103,30 @@ def _finite_or_none(x: float) -> float | None:
     return None if math.isnan(x) else float(x)
 
 
-def run_once(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
-             perturbation: Perturbation, settings: SupervisorSettings | None = None) -> RunOutcome:
-    """One run of a study: the rollout of ``scenario`` on a plant with ``draw``'s errors and the noise of
+def build_run(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
+              perturbation: Perturbation, settings: SupervisorSettings | None = None, plant: str = "project",
+              mujoco_settings: MujocoSettings | None = None) -> Rollout:
+    """One run of a study, ready to run: the rollout of ``scenario`` on a plant (``plant``, ``mujoco_settings``:
+    as :func:`~regrasp.rollout.build_rollout` takes them) with ``draw``'s errors and the noise of
     ``perturbation`` seeded by ``draw.seed``, supervised with ``settings`` (None: the rollout's default,
-    :meth:`~regrasp.supervisor.SupervisorSettings.robust` told the actuation delay)."""
+    :meth:`~regrasp.supervisor.SupervisorSettings.robust` told the actuation delay). Run it with a recorder to
+    look at a failed run on a rerun timeline (``regrasp study --replay I --rrd FILE``)."""
     from .rollout import build_rollout
 
-    rollout = build_rollout(scenario, duration=duration, schedule=schedule, settings=settings,
-                            plant_mass_scale=draw.mass_scale,
-                            plant_mu_scale=draw.mu_scale, plant_inertia_scale=draw.inertia_scale,
-                            plant_link_mass_scale=draw.link_mass_scale, plant_mu_kinetic_scale=draw.mu_kinetic_scale,
-                            plant_xi_offset=draw.xi_offset or None, sensor_noise=perturbation.sensor_noise(),
-                            actuator_noise=perturbation.actuator_noise(), seed=draw.seed)
-    r = rollout.run(interruptible=False)
+    return build_rollout(scenario, duration=duration, schedule=schedule, settings=settings, plant=plant,
+                         mujoco_settings=mujoco_settings, plant_mass_scale=draw.mass_scale,
+                         plant_mu_scale=draw.mu_scale, plant_inertia_scale=draw.inertia_scale,
+                         plant_link_mass_scale=draw.link_mass_scale, plant_mu_kinetic_scale=draw.mu_kinetic_scale,
+                         plant_xi_offset=draw.xi_offset or None, sensor_noise=perturbation.sensor_noise(),
+                         actuator_noise=perturbation.actuator_noise(), seed=draw.seed)
+
+
+def run_once(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
+             perturbation: Perturbation, settings: SupervisorSettings | None = None, plant: str = "project",
+             mujoco_settings: MujocoSettings | None = None) -> RunOutcome:
+    """:func:`build_run`'s rollout, run: what it did."""
+    r = build_run(scenario, draw, schedule, duration, perturbation, settings, plant, mujoco_settings).run(
+        interruptible=False)
     f = r.failure
     return RunOutcome(draw, r.success, None if f is None else f.kind.value, None if f is None else f.time,
                       None if f is None else f.contact, r.min_cone_margin, r.min_envelope_margin,
@@ -132,6 +147,7 @@ class StudyResult:
         duration: Each run's simulated time [s].
         workers: The processes that ran it (Ray: the cluster's CPUs).
         backend: ``"process"`` or ``"ray"``.
+        plant: ``"project"`` or ``"mujoco"``.
         wall_seconds: The study's wall time [s] (the plan included).
         plan_seconds: The plan's wall time [s].
     """
@@ -145,6 +161,7 @@ class StudyResult:
     backend: str
     wall_seconds: float
     plan_seconds: float
+    plant: str = "project"
 
     @property
     def successes(self) -> int:
@@ -168,7 +185,7 @@ class StudyResult:
         """A JSON-serialisable dict (the ``regrasp study --json`` document)."""
         lo, hi = self.interval
         return {"scenario": self.scenario, "seed": self.seed, "duration": self.duration, "workers": self.workers,
-                "backend": self.backend, "perturbation": asdict(self.perturbation), "runs": len(self.runs),
+                "backend": self.backend, "plant": self.plant, "perturbation": asdict(self.perturbation), "runs": len(self.runs),
                 "successes": self.successes, "success_rate": self.success_rate, "wilson_95": [lo, hi],
                 "failures": self.failures, "wall_seconds": self.wall_seconds, "plan_seconds": self.plan_seconds,
                 "outcomes": [{**asdict(r), "draw": {**asdict(r.draw), "entropy": list(r.draw.entropy),
@@ -178,16 +195,15 @@ class StudyResult:
 _JOB: dict = {}
 
 
-def _init_worker(scenario: Scenario, schedule: RegraspSchedule | None, duration: float,
-                 perturbation: Perturbation, settings: SupervisorSettings | None) -> None:
-    """A pool worker's shared inputs, handed over once per worker (not once per run)."""
-    _JOB.update(scenario=scenario, schedule=schedule, duration=duration, perturbation=perturbation,
-                settings=settings)
+def _init_worker(*shared: object) -> None:
+    """A pool worker's shared inputs (``run_once``'s arguments but the draw), handed over once per worker, not
+    once per run."""
+    _JOB["shared"] = shared
 
 
 def _pool_run(draw: RunDraw) -> RunOutcome:
-    return run_once(_JOB["scenario"], draw, _JOB["schedule"], _JOB["duration"], _JOB["perturbation"],
-                    _JOB["settings"])
+    scenario, *rest = _JOB["shared"]
+    return run_once(scenario, draw, *rest)
 
 
 def _on_processes(workers: int, shared: tuple, draws: tuple[RunDraw, ...]) -> Iterator[RunOutcome]:
@@ -202,12 +218,18 @@ def _on_processes(workers: int, shared: tuple, draws: tuple[RunDraw, ...]) -> It
         yield from pool.map(_pool_run, draws)
 
 
-def _on_ray(address: str, workers: int | None, shared: tuple, draws: tuple[RunDraw, ...]) -> Iterator[RunOutcome]:
-    """The runs as Ray tasks, in run order (the results do not depend on where they ran)."""
+def _require_ray() -> ModuleType:
+    """The ``ray`` module, or a :class:`~regrasp.exceptions.MissingDependencyError` naming the extra."""
     try:
         import ray
-    except ImportError:
-        raise InvalidParameterError("ray_address", address, "Ray installed (pip install 'regrasp[ray]')") from None
+    except ImportError as exc:
+        raise MissingDependencyError("ray", "ray", "a study on Ray") from exc
+    return ray
+
+
+def _on_ray(address: str, workers: int | None, shared: tuple, draws: tuple[RunDraw, ...]) -> Iterator[RunOutcome]:
+    """The runs as Ray tasks, in run order (the results do not depend on where they ran)."""
+    ray = _require_ray()
     started = not ray.is_initialized()
     if started:
         kwargs = {"num_cpus": workers} if address == "local" and workers is not None else {}
@@ -226,7 +248,8 @@ def _on_ray(address: str, workers: int | None, shared: tuple, draws: tuple[RunDr
 def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
               perturbation: Perturbation = Perturbation(), duration: float | None = None, periods: int | None = None,
               workers: int = 1, ray_address: str | None = None, schedule: RegraspSchedule | None = None,
-              settings: SupervisorSettings | None = None,
+              settings: SupervisorSettings | None = None, plant: str = "project",
+              mujoco_settings: MujocoSettings | None = None,
               progress: Callable[[int, int], None] | None = None) -> StudyResult:
     """Plan the schedule once, then run ``runs`` seeded rollouts (module docstring).
 
@@ -243,6 +266,7 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
             rollouts keep by default): a planning stack that studies one plan under several perturbations plans
             it once.
         settings: The supervisor's settings in every run (None: the rollout's default).
+        plant, mujoco_settings: The plant every run is on (:func:`~regrasp.rollout.build_rollout`'s).
         progress: Called as ``progress(done, runs)`` after each run.
     """
     from .rollout import DEFAULT_CONE_MARGIN, build_rollout
@@ -252,19 +276,22 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     start = time.perf_counter()
     workers = as_integer("workers", workers, 1)
     expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
-    if ray_address is not None and (not isinstance(ray_address, str) or not ray_address):
-        raise InvalidParameterError("ray_address", ray_address, "'local' or a Ray cluster's address")
+    if ray_address is not None:
+        if not isinstance(ray_address, str) or not ray_address:
+            raise InvalidParameterError("ray_address", ray_address, "'local' or a Ray cluster's address")
+        _require_ray()  # (before planning)
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     name = str(scenario.path) if scenario.path is not None else scenario.name
     draws = draw_runs(runs, seed, perturbation, len(scenario.contacts))
     if schedule is None:
         schedule = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
-    probe = build_rollout(scenario, duration=duration, periods=periods, schedule=schedule, settings=settings)
+    probe = build_rollout(scenario, duration=duration, periods=periods, schedule=schedule, settings=settings,
+                          plant=plant, mujoco_settings=mujoco_settings)
     _check_offsets(scenario, probe.schedule.at(scenario.trajectory.t_start).xi if probe.schedule else None,
                    perturbation.contact_position)
     plan_seconds = time.perf_counter() - start
-    shared = (scenario, probe.schedule, probe.duration, perturbation, settings)
+    shared = (scenario, probe.schedule, probe.duration, perturbation, settings, plant, mujoco_settings)
     source = _on_processes(workers, shared, draws) if ray_address is None else \
         _on_ray(ray_address, workers, shared, draws)
     outcomes: list[RunOutcome] = []
@@ -273,7 +300,7 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
         if progress is not None:
             progress(len(outcomes), len(draws))
     return StudyResult(name, tuple(outcomes), perturbation, int(seed), probe.duration, workers,
-                       "process" if ray_address is None else "ray", time.perf_counter() - start, plan_seconds)
+                       "process" if ray_address is None else "ray", time.perf_counter() - start, plan_seconds, plant)
 
 
 def _check_offsets(scenario: Scenario, xi0, half_width: float) -> None:
