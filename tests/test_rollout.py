@@ -218,3 +218,29 @@ def test_the_gravity_up_scenario_runs_a_period_as_planned():
     assert result.regrasps["finger1"] >= 1 and result.regrasps["finger2"] >= 1
     only_planned_slips(result)
     assert result.min_cone_margin > 0.0 and result.replans == 0
+
+
+def test_a_one_step_delay_slips_issue_12s_supervisor_and_not_todays(three_fingers_schedule):
+    """Study seed 1, run 0 (mass x1.08, inertia x1.06, mu x0.87), with one step of actuation delay: both side
+    fingers end a slide at 1.366 s with 0.24 N of normal force; issue 12's supervisor settles them 0.012 N
+    inside their cones, the late settling torque lands on contacts that already stuck, and finger 1 slips. The
+    robust settings (a settling margin in newtons, the slide held until the torques in flight are its own) hold."""
+    from dataclasses import replace as swap
+
+    from regrasp.disturbance import ActuatorNoise
+    from regrasp.internal_force import InternalForceSettings
+    from regrasp.supervisor import SupervisorSettings
+
+    sc, schedule = three_fingers_schedule
+    plant = dict(plant_mass_scale=1.0796, plant_inertia_scale=1.058, plant_mu_scale=0.8697,
+                 actuator_noise=ActuatorNoise(delay=1), duration=1.45, schedule=schedule)
+    today = SupervisorSettings.robust(sc.geometry.value, 0.2, actuation_delay=1)
+    before = swap(today, settle_margin=0.0, actuation_delay=0, breakaway_estimate=False, start_speed=None,
+                  shared_friction=False, hold_resolution=None, hold_filter_time=None,
+                  internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=0.2))
+    failed = build_rollout(sc, settings=before, **plant).run()
+    assert failed.failure is not None and failed.failure.kind is FailureKind.UNPLANNED_SLIP
+    assert failed.failure.contact == "finger1" and 1.36 < failed.failure.time < 1.38
+    held = build_rollout(sc, **plant).run()  # (build_rollout's default: robust, told the delay)
+    assert held.success, held.failure
+    assert held.regrasps["finger1"] == held.regrasps["finger2"] >= 1  # the slides that ended at 1.366 s counted
