@@ -123,6 +123,29 @@ def test_a_run_replayed_alone_repeats_the_studys_run_and_records_it(in_process, 
     assert "--replay" in capsys.readouterr().err
 
 
+def test_a_sweep_is_one_study_per_size_with_the_same_draws(capsys, tmp_path):
+    from regrasp.study import sweep_study
+
+    sc = load_scenario(SCENARIO)
+    schedule = build_rollout(sc, duration=0.1).schedule
+    results = sweep_study(sc, 2, "xi_noise", [0.0, 4e-4], perturbation=Perturbation(mass=0.2, delay=1), seed=3,
+                          duration=0.1, schedule=schedule)
+    assert [r.perturbation.xi_noise for r in results] == [0.0, 4e-4]
+    assert all(r.perturbation.mass == 0.2 and r.perturbation.delay == 1 for r in results)
+    for a, b in zip(*(r.runs for r in results)):
+        assert a.draw == b.draw  # the k-th runs differ only in the swept size
+    assert results[0].runs[0].min_envelope_margin != results[1].runs[0].min_envelope_margin  # (the noisy xi)
+    with pytest.raises(InvalidParameterError, match="name"):
+        sweep_study(sc, 2, "bogus", [0.0], schedule=schedule, duration=0.1)
+    with pytest.raises(InvalidParameterError, match="mass"):
+        sweep_study(sc, 2, "mass", [0.1, 1.5], schedule=schedule, duration=0.1)
+    assert main(["study", str(SCENARIO), "--runs", "2", "--duration", "0.05", "--workers", "1", "--sweep",
+                 "angle-noise=0,0.001", "--plot", str(tmp_path), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["sweep"] == "angle_noise" and doc["values"] == [0.0, 0.001] and len(doc["studies"]) == 2
+    assert (tmp_path / "study_sweep.png").stat().st_size > 1000 and (tmp_path / "study_sweep.json").exists()
+
+
 def test_the_noise_is_seeded_per_run(in_process):
     """A run repeated alone from its draw repeats exactly; another seed gives other noise."""
     from regrasp.perturbation import RunDraw
@@ -165,7 +188,9 @@ def test_a_placement_error_that_would_leave_the_edge_is_refused_before_the_runs(
 @pytest.mark.parametrize("args", [["--runs", "0"], ["--mass", "1.5"], ["--mu", "abc"], ["--workers", "0"],
                                   ["nowhere.toml"], ["--duration", "nan"], ["--delay", "-1"], ["--delay", "11"],
                                   ["--xi-noise", "-0.1"], ["--contact-position", "0.5"], ["--torque-noise", "inf"],
-                                  ["--slip-delay", "1.5"], ["--tip-radius", "0.3"]])
+                                  ["--slip-delay", "1.5"], ["--tip-radius", "0.3"], ["--sweep", "bogus=1"],
+                                  ["--sweep", "mass=0.1,2"], ["--sweep", "delay="], ["--sweep", "mass=0.1",
+                                                                                     "--replay", "0"]])
 def test_bad_study_arguments_exit_2_with_one_line(capsys, args):
     try:
         code = main(["study", *args])

@@ -2,7 +2,7 @@
 
 ``regrasp study [SCENARIO] --runs N [--seed S] [--workers K] [--ray [ADDRESS]] [--plant project|mujoco]
 [--periods P | --duration T] [--mass H] [--mu H] ... [--delay STEPS] [--json] [--plot DIR]
-[--replay I [--rrd FILE]]``
+[--sweep NAME=V1,V2,... | --replay I [--rrd FILE]]``
 
 The perturbations default to the scenario's ``[study]`` table; a flag overrides its key.
 Exit status: 0 the study ran (whatever its success rate), 2 bad input; with ``--replay``, 0 or 1 as the run
@@ -15,7 +15,7 @@ import argparse
 import json
 import os
 import sys
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -63,6 +63,22 @@ _FLAGS = {
 }
 
 
+def _sweep(text: str) -> tuple[str, tuple[float, ...]]:
+    """``NAME=V1,V2,...`` as (the Perturbation field, the sizes); argparse turns an error into exit 2."""
+    name, _, values = text.partition("=")
+    name = name.strip().lstrip("-").replace("-", "_")
+    if name not in _FLAGS or not values:
+        raise argparse.ArgumentTypeError(f"expected NAME=V1,V2,... with NAME one of {', '.join(_FLAGS)}, got {text!r}")
+    _, _, kind = _FLAGS[name]
+    try:
+        sizes = tuple(kind(v.strip()) for v in values.split(","))
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"--sweep {name}: {exc}") from None
+    if len(sizes) > 100:
+        raise argparse.ArgumentTypeError(f"expected at most 100 sizes, got {len(sizes)}")
+    return name, sizes
+
+
 def add_study_parser(sub: argparse._SubParsersAction,
                      progress_bar: Callable[[str], Callable[[int, int], None]]) -> None:
     """Register ``study`` on the ``regrasp`` parser's subparsers."""
@@ -91,6 +107,9 @@ def add_study_parser(sub: argparse._SubParsersAction,
         p.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None, metavar=metavar, help=text)
     p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
     p.add_argument("--plot", metavar="DIR", help="write the study's figures (PNG) and study.json into DIR")
+    p.add_argument("--sweep", type=_sweep, metavar="NAME=V1,V2,...",
+                   help="one study per size of one perturbation (a flag's name, e.g. xi-noise=0,1e-4,2e-4), the others "
+                        "as given: the success rate against that size (--plot: study_sweep.png)")
     p.add_argument("--replay", type=_count(0), metavar="I",
                    help="run only run I of this study (the same seed and perturbations) and print its rollout; exit "
                         "status 0 if it succeeds, 1 if it fails")
@@ -162,10 +181,42 @@ def _replay(args: argparse.Namespace, scenario, perturbation, plant: dict,
     return 0 if result.success else 1
 
 
+def _sweep_study(args: argparse.Namespace, scenario, perturbation, plant: dict,
+                 progress_bar: Callable[[str], Callable[[int, int], None]]) -> int:
+    """``--sweep NAME=V1,...``: one study per size, a line each (and study_sweep.png, study_sweep.json)."""
+    from .cli import output_directory
+    from .study import sweep_study
+    from .study_plots import plot_sweep
+
+    name, values = args.sweep
+    directory = output_directory("--plot", args.plot) if args.plot else None
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    results = sweep_study(scenario, args.runs, name, values, perturbation=perturbation, seed=args.seed,
+                          duration=args.duration, periods=args.periods, workers=min(workers, args.runs),
+                          ray_address=args.ray, progress=None if args.json else progress_bar(
+                              f"{len(values)} x {args.runs} runs"), **plant)
+    doc = {"sweep": name, "values": list(values), "studies": [r.to_json_dict() for r in results]}
+    if directory is not None:
+        doc["figures"] = [str(plot_sweep(name, results, directory / "study_sweep.png"))]
+        (directory / "study_sweep.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")
+    if args.json:
+        json.dump(doc, sys.stdout)
+        sys.stdout.write("\n")
+        return 0
+    print(f"regrasp study --sweep {name}: {len(values)} studies of {args.runs} runs, seed {args.seed}; besides "
+          f"{name}: {replace(perturbation, **{name: type(perturbation).__dataclass_fields__[name].default}).describe()}")
+    for value, r in zip(values, results):
+        lo, hi = r.interval
+        failures = ", ".join(f"{k} {v}" for k, v in sorted(r.failures.items())) or "none"
+        print(f"  {name} = {value:<10g} success {r.successes}/{len(r.runs)} (Wilson 95 %: [{lo:.1%}, {hi:.1%}]); "
+              f"failures: {failures}")
+    for f in doc.get("figures", []):
+        print(f"  figure: {f}")
+    return 0
+
+
 def _perturbation(args: argparse.Namespace, scenario) -> object:
     """The scenario's [study] perturbation with the flags given on the command line."""
-    from dataclasses import replace
-
     given = {name: getattr(args, name) for name in _FLAGS if getattr(args, name) is not None}
     return replace(scenario.study, **given)
 
@@ -185,7 +236,11 @@ def _cmd_study(args: argparse.Namespace, progress_bar: Callable[[str], Callable[
     if args.rrd is not None and args.replay is None:
         raise InvalidParameterError("--rrd", str(args.rrd), "--replay I (a study records no run; replay one)")
     if args.replay is not None:
+        if args.sweep is not None:
+            raise InvalidParameterError("--replay", args.replay, "a run of one study (not with --sweep)")
         return _replay(args, scenario, perturbation, plant, progress_bar)
+    if args.sweep is not None:
+        return _sweep_study(args, scenario, perturbation, plant, progress_bar)
     directory = output_directory("--plot", args.plot) if args.plot else None
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     result = run_study(scenario, args.runs, seed=args.seed, perturbation=perturbation, duration=args.duration,

@@ -19,9 +19,9 @@ import math
 import multiprocessing
 import time
 from collections import Counter
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING
@@ -38,7 +38,7 @@ if TYPE_CHECKING:
     from .supervisor import SupervisorSettings
 
 __all__ = ["MAX_RUNS", "Perturbation", "RunDraw", "RunOutcome", "StudyResult", "build_run", "draw_runs", "run_once",
-           "run_study", "wilson_interval"]
+           "run_study", "sweep_study", "wilson_interval"]
 
 #: z of a two-sided 95 % interval.
 Z_95 = 1.959963984540054
@@ -313,3 +313,34 @@ def _check_offsets(scenario: Scenario, xi0, half_width: float) -> None:
             raise InvalidParameterError("contact_position", half_width,
                                         f"a placement error that keeps {c.finger.name} on its edge (xi0 = "
                                         f"{x * 1e3:.2f} mm on [{lo * 1e3:.2f}, {hi * 1e3:.2f}] mm)")
+
+
+def sweep_study(scenario: str | Path | Scenario, runs: int, name: str, values: Sequence[float], *,
+                perturbation: Perturbation = Perturbation(), progress: Callable[[int, int], None] | None = None,
+                **options: object) -> tuple[StudyResult, ...]:
+    """One study per value of one perturbation (``name``, a :class:`~regrasp.perturbation.Perturbation` field),
+    the others as ``perturbation`` gives them: success against that perturbation's size. The schedule is planned
+    once; every study has the same seed, so the k-th runs of two studies differ only in that perturbation.
+    ``options``: :func:`run_study`'s. ``progress(done, total)`` counts runs over all the studies."""
+    from .scenario import Scenario, load_scenario
+
+    if not isinstance(name, str) or name not in {f.name for f in fields(Perturbation)}:
+        raise InvalidParameterError("name", name, "a Perturbation field (" + ", ".join(f.name for f in
+                                                                                     fields(Perturbation)) + ")")
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or not 1 <= len(values) <= 100:
+        raise InvalidParameterError("values", values, "1 to 100 sizes")
+    expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
+    perturbations = [replace(perturbation, **{name: v}) for v in values]  # (each checked by Perturbation)
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    if options.get("schedule") is None:
+        from .rollout import DEFAULT_CONE_MARGIN
+        from .schedule_planner import RegraspSettings, plan_regrasps
+
+        options["schedule"] = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
+    out = []
+    for k, p in enumerate(perturbations):
+        step = None if progress is None else (lambda done, total, k=k: progress(k * total + done,
+                                                                               len(perturbations) * total))
+        out.append(run_study(scenario, runs, perturbation=p, progress=step, **options))
+    return tuple(out)

@@ -3,6 +3,8 @@ kind, and the runs' smallest margins."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -11,7 +13,7 @@ import numpy as np
 if TYPE_CHECKING:
     from .study import StudyResult
 
-__all__ = ["drawn_factors", "plot_study"]
+__all__ = ["drawn_factors", "plot_study", "plot_sweep"]
 
 #: The drawn model errors a figure can show: (the perturbation's field, the axis label, the run's value).
 _DRAWN = (
@@ -120,3 +122,35 @@ def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
     fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
     plt.close(fig)
     return paths
+
+
+def plot_sweep(name: str, results: Sequence[StudyResult], path: str | Path) -> Path:
+    """``study_sweep.png``: each study's success rate (Wilson 95 % bars) and its runs' median smallest cone margin
+    against the size of the perturbation ``name`` the studies differ in."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .perturbation import Perturbation
+    from .study import wilson_interval
+
+    x = [getattr(r.perturbation, name) for r in results]
+    x = [0.0 if v is None else float(v) for v in x]
+    rates = [r.success_rate for r in results]
+    bars = [wilson_interval(r.successes, len(r.runs)) for r in results]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.0, 5.5), sharex=True)
+    top.errorbar(x, rates, yerr=[[p - lo for p, (lo, _) in zip(rates, bars)], [hi - p for p, (_, hi) in zip(rates,
+                                                                                                           bars)]],
+                 fmt="o-", capsize=3)
+    top.set_ylim(-0.05, 1.05)
+    top.set_ylabel("success rate [-]")
+    rest = replace(results[0].perturbation, **{name: Perturbation.__dataclass_fields__[name].default})
+    top.set_title(f"{len(results[0].runs)} runs a size; besides {name}: {rest.describe()}", fontsize=8)
+    bottom.plot(x, [float(np.median([o.min_cone_margin for o in r.runs])) for r in results], "s-")
+    bottom.set_ylabel("median smallest cone margin [N]")
+    bottom.set_xlabel(name)
+    path = Path(path)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path
