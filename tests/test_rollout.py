@@ -236,7 +236,7 @@ def test_a_one_step_delay_slips_issue_12s_supervisor_and_not_todays(three_finger
                  actuator_noise=ActuatorNoise(delay=1), duration=1.45, schedule=schedule)
     today = SupervisorSettings.robust(sc.geometry.value, 0.2, actuation_delay=1)
     before = swap(today, settle_margin=0.0, actuation_delay=0, breakaway_estimate=False, start_speed=None,
-                  shared_friction=False, hold_resolution=None, hold_filter_time=None,
+                  hold_resolution=None, hold_filter_time=None,
                   internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=0.2))
     failed = build_rollout(sc, settings=before, **plant).run()
     assert failed.failure is not None and failed.failure.kind is FailureKind.UNPLANNED_SLIP

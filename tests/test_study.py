@@ -164,6 +164,8 @@ def test_the_noise_is_seeded_per_run(in_process):
 
 def test_the_scenario_study_table_sets_the_perturbations_and_flags_override_it(tmp_path, capsys):
     text = SCENARIO.read_text().replace('urdf = "../../urdf/', f'urdf = "{ROOT / "urdf"}/')
+    assert load_scenario(SCENARIO).study == TARGET  # the shipped scenario carries the issue's perturbations
+    text = text[:text.index("[study]")]
     path = tmp_path / "with_study.toml"
     path.write_text(text + "\n[study]\nmass = 0.1\ncontact_position = 0.0002\ndelay = 1\nangle_noise = 0.001\n")
     assert load_scenario(path).study == Perturbation(mass=0.1, contact_position=2e-4, delay=1, angle_noise=1e-3)

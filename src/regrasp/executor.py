@@ -112,7 +112,6 @@ class SlideExecutor:
         self._now = 0.0
         self._integral_X = np.zeros(3)          # ∫(X_d - X) dt
         self._integral_xi: dict[int, float] = {}  # ∫(ξ_d - ξ) dt per slider
-        self._friction_scale: dict[Friction, float] = {}  # a model friction -> μ̂_k / its μ_k (shared_friction)
 
     # ------------------------------------------------------------------ state
     @property
@@ -230,30 +229,16 @@ class SlideExecutor:
             a.mu_hat = ratio
         else:
             a.mu_hat += min(1.0, s.control_period / s.friction_filter_time) * (ratio - a.mu_hat)
-        model = self.friction[i]
-        if s.shared_friction and model.kinetic > 0.0:
-            self._friction_scale[model] = a.mu_hat / model.kinetic
-
-    def _round(self, mu: float) -> float:
-        r = self.settings.friction_resolution
-        return max(0.0, round(mu / r) * r)
-
-    def assumed_friction(self, i: int) -> Friction:
-        """The friction the laws assume at contact i when it is not sliding: the model's, times what the
-        sliders found (``shared_friction``), rounded to ``friction_resolution``."""
-        model = self.friction[i]
-        scale = self._friction_scale.get(model)
-        if scale is None:
-            return model
-        return Friction(self._round(model.static * scale), self._round(model.kinetic * scale))
 
     def _kinetic(self, i: int) -> float:
         """The kinetic friction ratio the laws use for contact i: the estimate while it slides, rounded to
-        ``friction_resolution``, else the assumed one."""
+        ``friction_resolution``, else the model's."""
         a = self._active.get(i)
+        mu = self.friction[i].kinetic
         if a is None or math.isnan(a.mu_hat):
-            return self.assumed_friction(i).kinetic
-        return self._round(a.mu_hat)
+            return mu
+        r = self.settings.friction_resolution
+        return max(0.0, round(a.mu_hat / r) * r)
 
     def _end(self, meas, out: list, i: int, kind: EventKind, detail: str) -> SlideEnd:
         """End contact i's sliding phase where it is: settle if it still slides, else fix it."""
@@ -308,14 +293,13 @@ class SlideExecutor:
             if self.phases[i] is ContactPhase.PRIMING:
                 ramp = min(1.0, (self._now - a.phase_start) / s.prime_time)
                 overshoot = s.prime_overshoot + ramp * (s.prime_overshoot_max - s.prime_overshoot)
-                edges.append(ConeEdge(i, a.order.direction, self.assumed_friction(i).static + overshoot))
+                edges.append(ConeEdge(i, a.order.direction, self.friction[i].static + overshoot))
             elif self.phases[i] is ContactPhase.SETTLING and a.still == 0:  # (stuck: the fixed law's own cone)
                 kinetic = self._kinetic(i)
                 edges.append(ConeEdge(i, a.settle_sign, kinetic - min(a.settle_undershoot, 0.5 * kinetic)))
         sliders = [i for i in range(self.hand.m) if self.phases[i] is ContactPhase.SLIDING]
-        assumed = [self.assumed_friction(i) for i in range(self.hand.m)]
         friction = tuple(Friction(max(f.static, k), k) if k != f.kinetic else f
-                         for f, k in zip(assumed, (self._kinetic(i) for i in range(self.hand.m))))
+                         for f, k in zip(self.friction, (self._kinetic(i) for i in range(self.hand.m))))
         key = (tuple(self.phases), tuple(edges), self.xi.tobytes(), friction)
         if key == self._key:
             return self._controller

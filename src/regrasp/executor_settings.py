@@ -36,11 +36,6 @@ class ExecutorSettings:
             the model's). The plant's μ_k may differ from the model's; a slider that carries more friction
             than its law predicts stops and sticks, one that carries less overshoots.
         friction_min_force: The estimate uses only steps with f_n above this [N].
-        shared_friction: Fingertips with the same model friction are of one material on one object: a slider's
-            estimate scales the friction the laws assume at all of them (μ_s and μ_k times μ̂_k / μ_k of the
-            model), from its first estimate on and after its slide. A plant whose μ is 20 % above the model's
-            otherwise makes a slide infeasible: the slider's measured friction must be balanced by contacts
-            whose cones the laws take 20 % too narrow.
         breakaway_estimate: Start the estimate at the step the contact is sensed breaking away, from the
             force ratio it broke away at (≈ the plant's μ_s ≥ μ_k), so that the sliding law's first steps
             expect no less friction than the plant's (False: from its first step sensed sliding).
@@ -91,7 +86,6 @@ class ExecutorSettings:
     friction_filter_time: float | None = None
     friction_min_force: float = 0.05
     breakaway_estimate: bool = False
-    shared_friction: bool = False
     friction_resolution: float = 0.0025
     control_period: float = 1e-3
     control_omega: float = 20.0
@@ -122,7 +116,6 @@ class ExecutorSettings:
         as_integer("max_reprimes", self.max_reprimes)
         as_integer("actuation_delay", self.actuation_delay)
         as_flag("breakaway_estimate", self.breakaway_estimate)
-        as_flag("shared_friction", self.shared_friction)
         if not self.prime_overshoot_max >= self.prime_overshoot:
             raise InvalidParameterError("prime_overshoot_max", self.prime_overshoot_max,
                                         f"at least prime_overshoot = {self.prime_overshoot}")

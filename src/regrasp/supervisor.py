@@ -59,7 +59,7 @@ __all__ = [
 _EXECUTOR_FIELDS = ("omega_n", "zeta", "prime_time", "prime_overshoot", "prime_overshoot_max", "start_speed",
                     "settle_undershoot", "settle_margin", "actuation_delay", "arrive_tolerance", "arrive_speed",
                     "max_slide_time", "control_omega", "slide_omega", "integral", "friction_filter_time",
-                    "breakaway_estimate", "shared_friction", "internal_force", "hold_resolution", "hold_filter_time",
+                    "breakaway_estimate", "internal_force", "hold_resolution", "hold_filter_time",
                     "tip_radius")
 
 
@@ -112,8 +112,6 @@ class SupervisorSettings:
             constant [s] (None: the model's μ_k; :class:`~regrasp.executor.ExecutorSettings`).
         breakaway_estimate: Start that estimate at the break-away, from the force ratio it happened at
             (:class:`~regrasp.executor.ExecutorSettings`).
-        shared_friction: Take fingertips with the same model friction to be of one material: a slider's
-            estimate scales the friction assumed at all of them (:class:`~regrasp.executor.ExecutorSettings`).
         integral: Integral action, K_i = ``integral`` · ω³ on every coordinate (0: none; see
             :class:`~regrasp.executor.ExecutorSettings`).
         hold_resolution: A held contact's model position follows the sensed one when they differ by more than
@@ -172,7 +170,6 @@ class SupervisorSettings:
     integral: float = ExecutorSettings.integral
     friction_filter_time: float | None = ExecutorSettings.friction_filter_time
     breakaway_estimate: bool = ExecutorSettings.breakaway_estimate
-    shared_friction: bool = ExecutorSettings.shared_friction
     envelope_every: int = 1
     track_envelopes: bool = False
     geometry: str = "ideal"
@@ -216,12 +213,11 @@ class SupervisorSettings:
         their cones in ratio (0.05 where no force allows more) and ``cone_margin`` [N] inside where the forces
         allow, the sliders' ξ at 60 rad/s, integral action (0.3 ω³), a priming whose overshoot grows from 0.05
         to 0.25 over 40 ms and lasts until the contact moves the right way at 1 mm/s, the sliders' kinetic
-        friction estimated from the sensed forces (10 ms, from the break-away on) and shared by fingertips of
-        one material, settling with 0.05 N of static margin, and the held contacts' model positions following
+        friction estimated from the sensed forces (10 ms, from the break-away on), settling with 0.05 N of static margin, and the held contacts' model positions following
         their sensed ones through a 20 ms filter. ``overrides`` replace any of these (e.g. the hand's
         ``actuation_delay``)."""
         values = dict(geometry=geometry, slide_omega=60.0, integral=0.3, prime_time=0.04, prime_overshoot_max=0.25,
-                      friction_filter_time=0.01, breakaway_estimate=True, shared_friction=True, settle_margin=0.05,
+                      friction_filter_time=0.01, breakaway_estimate=True, settle_margin=0.05,
                       start_speed=1e-3, hold_filter_time=0.02,
                       internal_force=InternalForceSettings(f_min=0.2, margin=0.1, target_cone_margin=cone_margin,
                                                            fallback_margin=0.05))
