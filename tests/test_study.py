@@ -28,12 +28,38 @@ def test_wilson_interval_is_the_set_of_proportions_the_score_test_accepts(k, n):
     assert lo == pytest.approx(accepted.min(), abs=1e-6) and hi == pytest.approx(accepted.max(), abs=1e-6)
 
 
+def test_wilson_interval_contains_the_proportion_exactly_for_every_count():
+    # rounding once left the upper end 1 - 1e-16 at k = n, and a plot's error bar negative
+    for n in range(1, 301):
+        for k in range(n + 1):
+            lo, hi = wilson_interval(k, n)
+            assert 0.0 <= lo <= k / n <= hi <= 1.0, (k, n)
+        assert wilson_interval(0, n)[0] == 0.0 and wilson_interval(n, n)[1] == 1.0
+
+
 def test_wilson_interval_textbook_values_and_bad_counts():
     assert wilson_interval(5, 10) == pytest.approx((0.2366, 0.7634), abs=1e-4)
     assert wilson_interval(0, 10) == pytest.approx((0.0, 0.2775), abs=1e-4)
     for k, n in ((3, 2), (-1, 5), (1, 0), (1.0, 5), (True, 5)):
         with pytest.raises(InvalidParameterError):
             wilson_interval(k, n)
+
+
+def test_the_figures_of_a_study_whose_bins_all_succeed(tmp_path):
+    # synthetic outcomes (no rollout): 200 runs, most bins all successes, one failure; once this raised
+    # in matplotlib ("yerr must not contain negative values") and lost a 19-minute study
+    from regrasp.study import RunOutcome, StudyResult
+    from regrasp.study_plots import plot_study
+
+    perturbation = Perturbation(mass=0.2, mu=0.2, contact_position=2e-4)
+    draws = draw_runs(200, 3, perturbation, contacts=3)
+    runs = tuple(RunOutcome(d, i != 7, None if i != 7 else "unplanned_slip", None if i != 7 else 0.5,
+                            None if i != 7 else "finger1", 0.05, 4e-3, 1e-4, 1e-3, 8, 0, 1.0)
+                 for i, d in enumerate(draws))
+    result = StudyResult("synthetic", runs, perturbation, 3, 2.0, 1, "process", 1.0, 0.1)
+    paths = plot_study(result, tmp_path)
+    assert [p.name for p in paths] == ["study_success.png", "study_failure_times.png", "study_margins.png"]
+    assert all(p.stat().st_size > 1000 for p in paths)
 
 
 def test_draws_are_seeded_per_run_and_inside_the_half_widths():

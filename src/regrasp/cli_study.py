@@ -197,6 +197,7 @@ def _sweep_study(args: argparse.Namespace, scenario, perturbation, plant: dict,
                               f"{len(values)} x {args.runs} runs"), **plant)
     doc = {"sweep": name, "values": list(values), "studies": [r.to_json_dict() for r in results]}
     if directory is not None:
+        (directory / "study_sweep.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")  # results first
         doc["figures"] = [str(plot_sweep(name, results, directory / "study_sweep.png"))]
         (directory / "study_sweep.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")
     if args.json:
@@ -249,6 +250,8 @@ def _cmd_study(args: argparse.Namespace, progress_bar: Callable[[str], Callable[
     doc = result.to_json_dict()
     figures = []
     if directory is not None:
+        # the results first: a long study is never lost to a figure
+        (directory / "study.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")
         figures = plot_study(result, directory)
         doc["figures"] = [str(f) for f in figures]
         (directory / "study.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")

@@ -50,7 +50,8 @@ def wilson_interval(successes: int, runs: int, z: float = Z_95) -> tuple[float, 
     .. math:: \frac{\hat p + z^2 / 2n \pm z \sqrt{\hat p (1 - \hat p) / n + z^2 / 4n^2}}{1 + z^2 / n}
 
     (E. B. Wilson, 1927). Unlike the normal approximation it stays inside [0, 1] and is not empty at
-    :math:`k = 0` or :math:`k = n`.
+    :math:`k = 0` or :math:`k = n`. The interval always contains :math:`\hat p` (exactly: rounding
+    alone would leave the upper end a hair below 1 at :math:`k = n`, or the lower above 0 at :math:`k = 0`).
     """
     k, n = as_integer("successes", successes), as_integer("runs", runs, 1)
     if n > 2**53:
@@ -62,7 +63,7 @@ def wilson_interval(successes: int, runs: int, z: float = Z_95) -> tuple[float, 
     denominator = 1.0 + z * z / n
     centre = (p + z * z / (2 * n)) / denominator
     half = z * math.sqrt(p * (1.0 - p) / n + z * z / (4 * n * n)) / denominator
-    return max(0.0, centre - half), min(1.0, centre + half)
+    return min(p, max(0.0, centre - half)), max(p, min(1.0, centre + half))
 
 
 @dataclass(frozen=True)
