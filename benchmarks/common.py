@@ -37,12 +37,14 @@ class SlidingHold:
     state: object
     tau: np.ndarray
     plant: Plant
+    plant_reference: Plant
 
-    def plant_step(self) -> None:
-        """One plant step, restarting from the initial state every 50 ms."""
-        if self.plant.state is None or self.plant.state.t > 0.05:
-            self.plant.reset(self.state.q, self.state.q_dot, self.S[:3], self.S_dot[:3])
-        self.plant.step(self.tau)
+    def plant_step(self, plant: Plant | None = None) -> None:
+        """One step of ``plant`` (default: the compiled one), restarting from the initial state every 50 ms."""
+        plant = self.plant if plant is None else plant
+        if plant.state is None or plant.state.t > 0.05:
+            plant.reset(self.state.q, self.state.q_dot, self.S[:3], self.S_dot[:3])
+        plant.step(self.tau)
 
 
 def sliding_hold() -> SlidingHold:
@@ -56,10 +58,11 @@ def sliding_hold() -> SlidingHold:
     forces = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
     forces += 2.0 * np.concatenate([frames[0][:, 0], frames[1][:, 0]])
     tau = st.hand.nonlinear + st.hand.jacobian.T @ forces
-    plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", 0.0, 1.0), PlantContact(3, "fixed", 0.0)],
-                  friction=0.0, stop_on=())
-    plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
-    return SlidingHold(sc, hand, model, S, S_dot, st, tau, plant)
+    plants = [Plant(hand, sc.polygon, [PlantContact(1, "sliding", 0.0, 1.0), PlantContact(3, "fixed", 0.0)],
+                    friction=0.0, stop_on=(), compiled=compiled) for compiled in (True, False)]
+    for plant in plants:
+        plant.reset(st.q, st.q_dot, S[:3], S_dot[:3])
+    return SlidingHold(sc, hand, model, S, S_dot, st, tau, *plants)
 
 
 def parse_args(doc: str, full: int) -> tuple[argparse.Namespace, int]:

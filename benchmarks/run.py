@@ -7,7 +7,10 @@ Items and their floors:
   the Pinocchio calls one step needs (per finger: crba, nonLinearEffects, the tip's frame
   Jacobian, and forward kinematics + the classical acceleration for J̇q̇), plus, with the QP,
   the bare solve of the controller's persistent, warm-started ``osqp.OSQP`` object;
-* one plant step: floor = four times those Pinocchio calls (RK4 evaluates the dynamics 4 times);
+* one plant step, compiled (the default, :mod:`regrasp.kernels.plant`): floor = the bare kernel call
+  (``plant_step``: RK4, the end evaluation and the event inputs, no Python around it); and on the
+  reference path (``Plant(compiled=False)``): floor = four times those Pinocchio calls (RK4 evaluates the
+  dynamics 4 times);
 * the planner per time sample (``ideal``, ``urdf``): no floor (null);
 * one supervisor step (``RegraspSupervisor.step`` minus its control law: the runtime envelopes of
   all fingers at the measured pose, the look-ahead in the plan, the danger test), three fingers of
@@ -39,10 +42,17 @@ from common import ROOT, median_us, parse_args, sliding_hold
 from regrasp import (FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario,
                      plan_regrasps)
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.kernels.plant import plant_step
 from regrasp.simulation import sense
 from regrasp.supervisor import SupervisorSettings
 
 THREE = ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
+
+
+def plant_kernel_us(plant, n: int) -> float:
+    """Median of the bare compiled plant step (:func:`regrasp.kernels.plant.plant_step`) at the plant's state."""
+    args = plant.kernel_arguments(np.zeros(plant.hand.nq))
+    return median_us(lambda: plant_step(*args), n)
 
 
 def supervisor_step_us(geometry: str, n: int, track: bool = False) -> tuple[float, float]:
@@ -184,7 +194,9 @@ def main() -> None:
                                   "floor_us": floor_dyn3 + osqp_floor},
         "control_sliding_m3_no_qp": {"median_us": median_us(lambda: slide_no(S3, S3d, S3, S3d, np.zeros(4)), n),
                                      "floor_us": floor_dyn3},
-        "plant_step": {"median_us": median_us(setup.plant_step, n), "floor_us": 4 * floor_dyn},
+        "plant_step": {"median_us": median_us(setup.plant_step, n), "floor_us": plant_kernel_us(setup.plant, n)},
+        "plant_step_reference": {"median_us": median_us(lambda: setup.plant_step(setup.plant_reference), n),
+                                 "floor_us": 4 * floor_dyn},
         "planner_sample_ideal": {"median_us": median_us(lambda: env_ideal.at(pose), n), "floor_us": None},
         "planner_sample_urdf": {"median_us": median_us(lambda: env_urdf.at(pose), max(5, n // 10)), "floor_us": None},
     }

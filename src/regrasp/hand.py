@@ -12,12 +12,19 @@ The hand keeps its own copies of the finger models (with the hand's gravity); th
 passed in are not modified. The hot paths run them as one Pinocchio model of the whole hand
 (each finger a chain from the hand frame, ``pin.appendModel``): one ``pin.computeAllTerms`` pass
 gives every block of M and N at once.
+
+**Compiled terms.** The hand also reads each finger's constants from that model
+(:func:`~regrasp.kernels.finger.finger_parameters`) for the compiled kernels (:mod:`regrasp.kernels`), and
+checks the kernels against Pinocchio at 16 seeded random states (M, N, J, J̇q̇ and the tip, to 1e-12
+relative to max(1, |value|)). Where they disagree, it warns (:class:`KernelMismatchWarning`) and
+``kernel_parameters`` is None: every consumer then keeps the Pinocchio path.
 """
 
 from __future__ import annotations
 
 import functools
 import math
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -27,9 +34,18 @@ from numpy.typing import ArrayLike
 
 from .exceptions import InvalidParameterError, SingularFingerError
 from .finger import Finger
+from .kernels.finger import condition_2x2 as _compiled_condition
 from .validation import as_finite_array, as_flag, as_positive_float, expect_sequence_of
 
-__all__ = ["Hand", "HandDynamics"]
+__all__ = ["Hand", "HandDynamics", "KERNEL_TOLERANCE", "KernelMismatchWarning"]
+
+#: The largest disagreement between the compiled terms and Pinocchio's a hand accepts [relative to
+#: max(1, |value|)].
+KERNEL_TOLERANCE = 1e-12
+
+
+class KernelMismatchWarning(UserWarning):
+    """The compiled kernels disagree with Pinocchio on a hand's model: the hand keeps the Pinocchio path."""
 
 
 @dataclass(frozen=True)
@@ -111,6 +127,27 @@ class Hand:
         self._mirror_mass = not np.array_equal(self._hand_data.M, self._hand_data.M.T)
         self.gravity_in_hand = np.zeros(2)
         self.set_gravity(gravity_in_hand)
+        #: Each finger's constants for the compiled kernels ((m,) :data:`~regrasp.kernels.FINGER_PARAMETERS`),
+        #: or None where the kernels disagree with Pinocchio (module docstring).
+        self.kernel_parameters: np.ndarray | None = None
+        #: The largest disagreement found by the check, and the term it was in.
+        self.kernel_disagreement: tuple[float, str] = (math.inf, "")
+        self._build_kernels()
+
+    def _build_kernels(self) -> None:
+        from .kernels.finger import finger_parameters, largest_disagreement
+
+        params = np.stack([finger_parameters(self._hand_model, tip, 2 * i + 1)
+                           for i, tip in enumerate(self._hand_tips)])
+        found = largest_disagreement(self._hand_model, self._hand_tips, params, self.gravity_in_hand,
+                                     self.damping_enabled)
+        self.kernel_disagreement = found
+        if found[0] <= KERNEL_TOLERANCE:
+            self.kernel_parameters = params
+        else:
+            warnings.warn(f"the compiled finger kernels disagree with Pinocchio by {found[0]:.3g} (relative) in "
+                          f"{found[1]}, more than {KERNEL_TOLERANCE:g}: this hand keeps the Pinocchio path",
+                          KernelMismatchWarning, stacklevel=3)
 
     def set_gravity(self, gravity_in_hand: ArrayLike) -> None:
         """Set the gravity vector [m/s^2] in the hand frame."""
@@ -272,15 +309,8 @@ def condition_2x2(a: np.ndarray) -> float:
 
     :math:`\sigma^2_{max,min} = (s \pm \sqrt{s^2 - 4 \det^2})/2` with :math:`s = \|a\|_F^2`.
     """
-    return _condition(*np.asarray(a, dtype=float).reshape(-1).tolist())
+    return float(_condition(*np.asarray(a, dtype=float).reshape(-1).tolist()))
 
 
-def _condition(a: float, b: float, c: float, d: float) -> float:
-    """:func:`condition_2x2` of [[a, b], [c, d]] in scalar arithmetic."""
-    s = a * a + b * b + c * c + d * d
-    det = a * d - b * c
-    disc = math.sqrt(max(s * s - 4.0 * det * det, 0.0))
-    small = 0.5 * (s - disc)
-    if small <= 0.0:
-        return math.inf
-    return math.sqrt(0.5 * (s + disc) / small)
+#: :func:`condition_2x2` of [[a, b], [c, d]] from four floats (compiled: the hot paths' and the kernels' one).
+_condition = _compiled_condition

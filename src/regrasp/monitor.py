@@ -9,6 +9,19 @@ is a change of the set's shape, not a motion, and gets rate 0). ``every`` > 1 ev
 k-th call and reuses the last samples (the margins are still taken at the current ξ); with
 ``track`` the ``urdf`` cuts are followed from the last evaluation
 (:class:`~regrasp.envelope_tracker.EnvelopeTracker`).
+
+**What a reading between evaluations can miss.** A margin is the distance of ξ to the nearer bound of its
+interval, so it is 1-Lipschitz in each bound: a reading whose samples are ``age`` old differs from the reading a
+fresh evaluation would give by at most how far a bound moved in that time. The reading reports
+``miss_bound`` = ``speed_factor`` · v · age per contact, v the fastest its bounds are known to move: the largest
+of a prior (``bound_speed``: :func:`bound_speeds` of the plan, along the planned motion) and every smooth rate
+the monitor has measured. It holds while the bounds move no faster than ``speed_factor`` · v. What is faster is
+seen at the next evaluation, at most (k − 1) steps late: a change of shape (an interval appearing, splitting or
+vanishing) and a ``urdf`` collision cut near a tangency (where a link's distance to the object hardly changes
+along the edge, the cut moves arbitrarily fast; no finite v bounds it). ``tests/test_monitor.py`` checks both
+against a monitor evaluating every step, on 1.5 s of the three-finger trajectory at 1 kHz with k = 10: the
+plan's fastest bound moves 127 mm/s, so the bound reaches 2.3 mm nine steps after an evaluation, while half of
+the stale margins equal the fresh ones (a margin to an edge's end does not move).
 """
 
 from __future__ import annotations
@@ -18,12 +31,14 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .envelope import EnvelopeSample, FingerEnvelope, Geometry
 from .envelope_tracker import EnvelopeTracker
 from .exceptions import InvalidParameterError
+from .validation import as_finite_array, as_positive_float
 
-__all__ = ["EnvelopeMonitor", "EnvelopeReading", "interval_of"]
+__all__ = ["EnvelopeMonitor", "EnvelopeReading", "bound_speeds", "interval_of"]
 
 _NO_INTERVAL = (math.nan, math.nan)
 
@@ -49,6 +64,9 @@ class EnvelopeReading:
         bounds: The feasible interval (lo, hi) holding (or nearest to) each ξ [m], (m, 2); NaN when empty.
         rates: d(lo)/dt, d(hi)/dt [m/s], (m, 2).
         fresh: Whether the samples were evaluated at this step.
+        age: How old the samples are [s] (0 when fresh).
+        miss_bound: How far each margin may be from a fresh evaluation's [m], (m,), while the sets keep their
+            shape (module docstring); zeros when fresh.
     """
 
     t: float
@@ -57,6 +75,8 @@ class EnvelopeReading:
     bounds: np.ndarray
     rates: np.ndarray
     fresh: bool
+    age: float = 0.0
+    miss_bound: np.ndarray | None = None
 
     def time_to_bound(self, i: int, xi: float) -> float:
         """Time [s] until contact i's nearer moving bound reaches ``xi`` at its current rate (inf if never)."""
@@ -76,18 +96,34 @@ class EnvelopeMonitor:
         envelopes: One :class:`~regrasp.envelope.FingerEnvelope` per contact.
         every: Evaluate every k-th call (k >= 1).
         track: Follow ``urdf`` envelopes' cuts with an :class:`~regrasp.envelope_tracker.EnvelopeTracker`.
-        max_bound_step: The largest change of a bound between evaluations counted as motion [m].
+        max_bound_step: The largest change of a bound per call counted as motion [m] (k calls apart: k times it).
+        bound_speed: A prior for the fastest a bound moves [m/s]: one for all contacts or one per contact
+            (:func:`bound_speeds` of a plan); the monitor raises it to every smooth rate it measures.
+        speed_factor: The safety factor on that speed in ``miss_bound`` [-] (>= 1).
     """
 
     def __init__(self, envelopes: Iterable[FingerEnvelope], *, every: int = 1, track: bool = False,
-                 max_bound_step: float = 1e-3):
+                 max_bound_step: float = 1e-3, bound_speed: ArrayLike = 0.0, speed_factor: float = 2.0):
         self.envelopes = tuple(envelopes)
         if not self.envelopes or not all(isinstance(e, FingerEnvelope) for e in self.envelopes):
             raise InvalidParameterError("envelopes", envelopes, "a non-empty sequence of FingerEnvelope")
         if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
             raise InvalidParameterError("every", every, "an integer >= 1")
         self.every = int(every)
-        self.max_bound_step = float(max_bound_step)
+        self.max_bound_step = as_positive_float("max_bound_step", max_bound_step)
+        speed = as_finite_array("bound_speed", bound_speed)
+        if speed.ndim == 0:
+            speed = np.full(len(self.envelopes), float(speed))
+        elif speed.shape != (len(self.envelopes),):
+            raise InvalidParameterError("bound_speed", bound_speed, f"one speed, or one per contact ({len(self.envelopes)})")
+        if np.any(speed < 0.0):
+            raise InvalidParameterError("bound_speed", bound_speed, "speeds >= 0 [m/s]")
+        self.speed_factor = as_positive_float("speed_factor", speed_factor)
+        if self.speed_factor < 1.0:
+            raise InvalidParameterError("speed_factor", speed_factor, "a factor >= 1")
+        #: The fastest each contact's bounds have moved [m/s]: the prior, raised by the measured rates.
+        self.bound_speed = np.array(speed, dtype=float)
+        self._sample_time = math.nan
         self.trackers = ([EnvelopeTracker(e) for e in self.envelopes]
                          if track and all(e.geometry is Geometry.URDF for e in self.envelopes) else None)
         self._calls = 0
@@ -115,10 +151,35 @@ class EnvelopeMonitor:
             rows.append(_NO_INTERVAL if iv is None else iv)
         margins, bounds = np.array(margins), np.array(rows)
         if fresh:
+            self._sample_time = float(t)
             if self._previous is not None and t > self._previous[0]:
                 change = bounds - self._previous[1]
                 rates = change / (t - self._previous[0])
-                smooth = np.isfinite(rates) & (np.abs(change) <= self.max_bound_step)
+                # (max_bound_step is per call: k calls apart, a bound may move k times as far)
+                smooth = np.isfinite(rates) & (np.abs(change) <= self.max_bound_step * self.every)
                 self._rates = np.where(smooth, rates, 0.0)
+                self.bound_speed = np.maximum(self.bound_speed, np.abs(self._rates).max(axis=1))
             self._previous = (t, bounds)
-        return EnvelopeReading(float(t), tuple(self._samples), margins, bounds, self._rates.copy(), fresh)
+        age = max(0.0, float(t) - self._sample_time)
+        return EnvelopeReading(float(t), tuple(self._samples), margins, bounds, self._rates.copy(), fresh, age,
+                               self.speed_factor * self.bound_speed * age)
+
+
+def bound_speeds(samples_per_contact: Iterable[Iterable[EnvelopeSample]], max_bound_step: float = 2e-3) -> np.ndarray:
+    """The fastest each contact's feasible bounds move [m/s] along a sequence of envelope samples (a plan's:
+    ``[f.samples for f in plan.fingers]``): the largest |change| / Δt of a bound between consecutive samples with
+    as many intervals, changes above ``max_bound_step`` [m] (a change of shape) left out."""
+    out = []
+    for samples in samples_per_contact:
+        fastest = 0.0
+        samples = list(samples)
+        for a, b in zip(samples, samples[1:]):
+            dt = b.time - a.time
+            if not dt > 0.0 or len(a.feasible) != len(b.feasible):
+                continue
+            for (lo0, hi0), (lo1, hi1) in zip(a.feasible, b.feasible):
+                for change in (abs(lo1 - lo0), abs(hi1 - hi0)):
+                    if change <= max_bound_step:
+                        fastest = max(fastest, change / dt)
+        out.append(fastest)
+    return np.array(out)

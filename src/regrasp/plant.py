@@ -64,6 +64,8 @@ from .exceptions import InvalidParameterError
 from .events import EventKind
 from ._scalar import solve_small as _solve_small
 from .hand import Hand, _condition
+from .kernels.finger import FINGER_TERMS
+from .kernels.plant import FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, plant_evaluate, plant_step
 from .polygon import ConvexPolygon
 from .validation import (as_finite_array, as_finite_float, as_flag, as_inertia, as_integer, as_mass, as_positive_float,
                          expect_sequence_of, expect_type)
@@ -226,6 +228,10 @@ class Plant:
             contacts are ideal bilateral constraints whose modes never change (for checking
             the integrator's energy conservation, e.g. a torque-free motion, which pulls on
             the contacts).
+        compiled: Step with the compiled kernel (:mod:`regrasp.kernels.plant`; the same equations,
+            ``tests/test_kernels.py`` checks it against this module's reference path). None (default):
+            when the hand's kernels agree with Pinocchio (``hand.kernel_parameters``); False: the
+            reference path (Pinocchio and plain floats).
     """
 
     def __init__(
@@ -243,6 +249,7 @@ class Plant:
         tip_clearance: float | None = None,
         stop_on: Sequence[str] = ("separation", "left_edge", "collision", "singular"),
         contact_events: bool = True,
+        compiled: bool | None = None,
     ):
         expect_type("hand", hand, Hand, "a Hand")
         expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
@@ -276,7 +283,8 @@ class Plant:
                 self.checkers.append(UrdfCollisionChecker(f, polygon, clearance))
             self._link_radii = [tuple(max((_reach(s) for s in checker.shapes if s.link == k), default=0.0)
                                       for k in (0, 1)) for checker in self.checkers]
-            self._certificates = [None] * hand.m  # see _collisions()
+            self._link_radii_array = np.array(self._link_radii, dtype=float)
+            self._certificates = np.full((hand.m, 9), np.nan)  # per finger (a NaN row: none): see _collisions()
         # the plant's own Pinocchio data on the hand's model of all fingers (their gravity and link masses)
         self._hand_pin = (hand._hand_model, hand._hand_model.createData())
         # per finger: its tip frame in that model, its joints' damping and joint 1's axis
@@ -291,6 +299,16 @@ class Plant:
         self.events: list[PlantEvent] = []
         self.stopped = False
         self.max_constraint_error = 0.0
+        if compiled is None:
+            compiled = hand.kernel_parameters is not None
+        elif as_flag("compiled", compiled) and hand.kernel_parameters is None:
+            raise InvalidParameterError("compiled", compiled, "False for this hand: its compiled kernels disagree "
+                                        f"with Pinocchio ({hand.kernel_disagreement[1]})")
+        #: Whether :meth:`step` runs the compiled kernel.
+        self.compiled = bool(compiled)
+        self._kernel_contacts: tuple | None = None  # (key, records): see _contact_records()
+        self._kernel_plant: tuple | None = None  # (key, record): see _plant_record()
+        self._no_certificates, self._no_radii = np.full((hand.m, 9), np.nan), np.zeros((hand.m, 2))
 
     # ------------------------------------------------------------------ set-up
     def reset(self, q: ArrayLike, v: ArrayLike, X: ArrayLike, V: ArrayLike, t: float = 0.0,
@@ -522,6 +540,12 @@ class Plant:
                       modes: Sequence[PlantContact] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(q̈, Ẍ, forces) at state ``st`` for torques ``tau``: ``forces`` (m, 2) are the contact
         forces on the object in the hand frame (zeros for separated contacts)."""
+        if self.compiled:
+            n = self.hand.nq
+            dy, forces, _ = plant_evaluate(self.hand.kernel_parameters, self._plant_record(),
+                                           self._contact_records(self.contacts if modes is None else modes),
+                                           self._flat(st), np.array(self._torques(tau)))
+            return dy[n:2 * n], dy[2 * n + 3:2 * n + 6], forces
         tau = self._torques(tau)
         fingers = self._pin_pass(st.q, st.v)
         specs = self._specs(self.contacts if modes is None else modes)
@@ -611,6 +635,8 @@ class Plant:
             raise InvalidParameterError("state", None, "a state: call reset() first")
         if self.stopped:
             raise InvalidParameterError("plant", "stopped", "a running plant (it stopped on an event)")
+        if self.compiled:
+            return self._step_compiled(tau)
         tau = self._torques(tau)
         st, h, n, hand = self.state, self.dt, self.hand.nq, self.hand
         specs = self._specs(self.contacts)
@@ -644,6 +670,86 @@ class Plant:
         events, xis = self._events(new, tau, end[1], fingers)
         return PlantStep(new, surface, np.array([x[0] for x in xis]), np.array([x[1] for x in xis]), modes, err,
                          tuple(events))
+
+    # ------------------------------------------------------------------ the compiled path
+    @staticmethod
+    def _flat(st: PlantState) -> np.ndarray:
+        """The kernels' flat state (q, v, X, V, works)."""
+        return np.concatenate((st.q, st.v, st.X, st.V, (st.torque_work, st.damping_work, st.contact_work)))
+
+    def _contact_records(self, contacts: Sequence[PlantContact]) -> np.ndarray:
+        """``contacts`` as :data:`~regrasp.kernels.plant.PLANT_CONTACT` records (the plant's own, cached)."""
+        key = tuple((c.edge, c.mode, c.xi, c.sign) for c in contacts)
+        cached = self._kernel_contacts
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        out = np.zeros(len(contacts), dtype=PLANT_CONTACT)
+        codes = {_MODE_FIXED: FIXED, _MODE_SLIDING: SLIDING, _MODE_SEPARATED: SEPARATED}
+        for i, c in enumerate(contacts):
+            if c.mode not in codes:
+                raise InvalidParameterError("mode", c.mode, "a ContactMode member (PlantContact converts strings)")
+            g = self._edge_geometry(c.edge)
+            out[i] = (codes[c.mode], c.xi, c.sign, self._static[i], self._kinetic[i], g.nx, g.ny, g.tx, g.ty, g.ox,
+                      g.oy, g.offset, g.lo, g.hi)
+        if contacts is self.contacts:
+            self._kernel_contacts = (key, out)
+        return out
+
+    def _plant_record(self) -> np.ndarray:
+        """The plant's constants as a :data:`~regrasp.kernels.plant.PLANT_PARAMETERS` record (cached)."""
+        hand = self.hand
+        gx, gy = hand.gravity_in_hand.tolist()
+        key = (self.mass, self.inertia, gx, gy, self.alpha, hand.damping_enabled, self.dt, self.contact_events,
+               hand.singular_threshold)
+        if self._kernel_plant is None or self._kernel_plant[0] != key:
+            record = np.zeros((), dtype=PLANT_PARAMETERS)
+            for name, value in zip(PLANT_PARAMETERS.names, key):
+                record[name] = value
+            self._kernel_plant = (key, record)
+        return self._kernel_plant[1]
+
+    @staticmethod
+    def _terms_as_pass(terms: np.ndarray) -> list[tuple]:
+        """The kernel's terms in :meth:`_pin_pass`'s layout (for the event logic)."""
+        names = [name for name in FINGER_TERMS.names if name not in ("ex", "ey")]
+        return [tuple(float(record[name]) for name in names) for record in terms]
+
+    def kernel_arguments(self, tau: ArrayLike) -> tuple:
+        """The arguments :meth:`step` passes to :func:`~regrasp.kernels.plant.plant_step` at the current state
+        with torques ``tau`` [N m] (benchmarks time the bare kernel with them)."""
+        if self.state is None:
+            raise InvalidParameterError("state", None, "a state: call reset() first")
+        return self._kernel_arguments(np.array(self._torques(tau)))
+
+    def _kernel_arguments(self, tau: np.ndarray) -> tuple:
+        checked = self.checkers is not None
+        return (self.hand.kernel_parameters, self._plant_record(), self._contact_records(self.contacts),
+                self._flat(self.state), tau, self._certificates if checked else self._no_certificates,
+                self._link_radii_array if checked else self._no_radii)
+
+    def _step_compiled(self, tau) -> PlantStep:
+        """:meth:`step` with the compiled kernel (:func:`~regrasp.kernels.plant.plant_step`)."""
+        tau = self._torques(tau)
+        st, n = self.state, self.hand.nq
+        modes = tuple(c.mode for c in self.contacts)
+        checked = self.checkers is not None
+        new, surface, forces, _, terms, xi, xi_dot, err, attention, needs_coal, posture = plant_step(
+            *self._kernel_arguments(np.array(tau)))
+        works = new[2 * n + 6:].tolist()
+        state = PlantState(st.t + self.dt, new[:n], new[n:2 * n], new[2 * n:2 * n + 3], new[2 * n + 3:2 * n + 6],
+                           *works)
+        self.state = state
+        self._last_key = (None,) * 4
+        self.max_constraint_error = max(self.max_constraint_error, err)
+        if attention:
+            events, xis = self._events(state, tau, forces.tolist(), self._terms_as_pass(terms))
+            xi, xi_dot = np.array([x[0] for x in xis]), np.array([x[1] for x in xis])
+        else:
+            events = []
+            if checked and needs_coal.any():
+                for i in np.flatnonzero(needs_coal).tolist():
+                    self._coal(state, i, tuple(posture[i].tolist()), events)
+        return PlantStep(state, surface, xi, xi_dot, modes, err, tuple(events))
 
     def _event(self, t, i, kind, detail, out, **values):
         ev = PlantEvent(t, self.hand.fingers[i].name, EventKind(kind), detail, values)
@@ -684,10 +790,11 @@ class Plant:
             if not cond <= self.hand.singular_threshold:
                 self._event(st.t, i, "singular", f"Jacobian condition number {cond:.3g}", out)
         if self.checkers is not None:
-            self._collisions(st, fingers, out)
+            # the elbows: p - o_2 = (j11, -j01)
+            self._collisions(st, [(f[11] - f[8], f[12] + f[6]) for f in fingers], out)
         return out, (current if st.V is V0 else xis())
 
-    def _collisions(self, st: PlantState, fingers, out: list[PlantEvent]) -> None:
+    def _collisions(self, st: PlantState, elbows, out: list[PlantEvent]) -> None:
         r"""Collision events from coal's signed distances of each finger's link shapes.
 
         Coal is skipped for a finger whose links cannot have reached the object since coal last
@@ -696,18 +803,18 @@ class Plant:
         (:math:`r_k`: the link's joint in the object frame, :math:`\theta_k`: its direction
         relative to the object, :math:`R_k`: the largest distance of a point of its shapes from
         the joint). The link is free while that stays below its last distance, less 0.1 % and
-        10 µm (far above coal's tolerance): coal's verdict there would be the same."""
+        10 µm (far above coal's tolerance): coal's verdict there would be the same. ``elbows``: each
+        finger's joint 2 axis (hand frame)."""
         x, y, beta = st.X.tolist()
         c, s = math.cos(beta), math.sin(beta)
         q = st.q.tolist()
-        for i, checker in enumerate(self.checkers):
-            f = fingers[i]
+        for i in range(len(self.checkers)):
             ox, oy = self._pin[i][3:5]
-            ex, ey = f[11] - f[8], f[12] + f[6]  # the elbow: p - o_2 = (j11, -j01)
+            ex, ey = elbows[i]
             posture = (q[2 * i], q[2 * i + 1], beta, c * (ox - x) + s * (oy - y), c * (oy - y) - s * (ox - x),
                        c * (ex - x) + s * (ey - y), c * (ey - y) - s * (ex - x))
-            cert = self._certificates[i]
-            if cert is not None:
+            cert = self._certificates[i].tolist()
+            if not math.isnan(cert[0]):
                 q1, q2, b, r1x, r1y, r2x, r2y, budget1, budget2 = cert
                 turn1 = abs(posture[0] - q1 - (beta - b))
                 turn2 = abs(posture[0] - q1 + posture[1] - q2 - (beta - b))
@@ -715,15 +822,20 @@ class Plant:
                 if (math.hypot(posture[3] - r1x, posture[4] - r1y) + turn1 * radius1 < budget1
                         and math.hypot(posture[5] - r2x, posture[6] - r2y) + turn2 * radius2 < budget2):
                     continue
-            dist = checker.signed_distances(st.q[2 * i:2 * i + 2], st.X).tolist()
-            nearest = [math.inf, math.inf]
-            for d, shape in zip(dist, checker.shapes):
-                nearest[shape.link] = min(nearest[shape.link], d)
-            self._certificates[i] = (*posture, *(d * (1.0 - 1e-3) - 1e-5 for d in nearest))
-            if dist and min(dist) < 0.0:
-                link = min(range(2), key=lambda k: nearest[k])
-                self._event(st.t, i, "collision", f"link {link + 1} penetrates the object by {-min(dist):.3g} m",
-                            out, link=link, depth=-min(dist))
+            self._coal(st, i, posture, out)
+
+    def _coal(self, st: PlantState, i: int, posture, out: list[PlantEvent]) -> None:
+        """Finger i's links against the object with coal: a collision event where one penetrates, and the
+        finger's new certificate (``posture``: see :meth:`_collisions`)."""
+        dist = self.checkers[i].signed_distances(st.q[2 * i:2 * i + 2], st.X).tolist()
+        nearest = [math.inf, math.inf]
+        for d, shape in zip(dist, self.checkers[i].shapes):
+            nearest[shape.link] = min(nearest[shape.link], d)
+        self._certificates[i] = (*posture, *(d * (1.0 - 1e-3) - 1e-5 for d in nearest))
+        if dist and min(dist) < 0.0:
+            link = min(range(2), key=lambda k: nearest[k])
+            self._event(st.t, i, "collision", f"link {link + 1} penetrates the object by {-min(dist):.3g} m",
+                        out, link=link, depth=-min(dist))
 
     def _switch_mode(self, st: PlantState, tau, i: int, force_surface, xi: float, xi_dot: float, out) -> None:
         """Separation, slip (the static cone) and stick (the static cone) of contact i (module docstring)."""

@@ -37,7 +37,7 @@ from .executor import ContactPhase, ExecutorSettings, SlideExecutor
 from .grasp import Grasp
 from .hand import Hand
 from .internal_force import InternalForceSettings
-from .monitor import EnvelopeMonitor
+from .monitor import EnvelopeMonitor, bound_speeds
 from .planner import PlanResult
 from .policies import Policy
 from .policy_paper import PaperPolicy
@@ -358,7 +358,10 @@ class RegraspSupervisor:
         clearances = [None] * m if tip_clearance is None else list(tip_clearance)
         envelopes = [FingerEnvelope(f, polygon, e, geometry=settings.geometry, tip_clearance=c)
                      for f, e, c in zip(hand.fingers, edges, clearances)]
-        self.monitor = EnvelopeMonitor(envelopes, every=settings.envelope_every, track=settings.track_envelopes)
+        # the prior for how fast the bounds move: the plan's, along the planned motion (monitor.py)
+        speeds = 0.0 if plan is None else bound_speeds([f.samples for f in plan.fingers])
+        self.monitor = EnvelopeMonitor(envelopes, every=settings.envelope_every, track=settings.track_envelopes,
+                                       bound_speed=speeds)
         self.executor = SlideExecutor(hand, grasp, as_finite_array("xi", xi, (m,)), friction, object_mass=mass,
                                       object_inertia=inertia, settings=settings.executor_settings())
         if policy is None:  # (with regrasp False it still reports danger, and never slides)
