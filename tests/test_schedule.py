@@ -61,6 +61,26 @@ def test_schedule_sample_follows_each_contacts_latest_slide_and_repeats_when_per
         sched.at(math.nan)
 
 
+@pytest.mark.parametrize("periodic", [True, False])
+def test_one_time_is_the_array_path_at_that_time(periodic):
+    """``at(t)`` for one float (the supervisor's path, in floats) equals ``at`` of an array holding t, at
+    random times and at every slide's corners (start, ramp ends, end)."""
+    slides = (_slide(contact=0, start=0.1, end=0.3, start_xi=0.0, end_xi=0.01),
+              _slide(contact=1, direction=-1, start=0.2, end=0.5, start_xi=0.005, end_xi=-0.005),
+              _slide(contact=0, direction=-1, start=0.6, end=0.8, start_xi=0.01, end_xi=0.0))
+    sched = _schedule(slides, np.array([0.0, 0.005]), periodic=periodic, t_end=1.0)
+    corners = [c + k for s in slides for c in (s.start, s.start + s.ramp, s.end - s.ramp, s.end) for k in (0.0, 2.0)]
+    times = np.concatenate([np.random.default_rng(3).uniform(-0.5, 3.5, 400), corners])
+    many = sched.at(times)
+    for j, t in enumerate(times.tolist()):
+        one = sched.at(t)
+        for name in ("xi", "xi_dot", "xi_ddot"):
+            np.testing.assert_allclose(getattr(one, name), getattr(many, name)[j], rtol=1e-15, atol=1e-17)
+        assert one.direction.tolist() == many.direction[j].tolist()
+        assert one.direction.dtype == many.direction.dtype
+    assert sched.at(np.float64(0.35)).xi.tolist() == sched.at(0.35).xi.tolist()
+
+
 def _schedule(slides, xi0, *, periodic, t_end):
     times = np.linspace(0, t_end, 11)
     sample = slides_at(xi0, slides, times)

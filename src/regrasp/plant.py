@@ -65,6 +65,7 @@ from .events import EventKind
 from ._scalar import solve_small as _solve_small
 from .hand import Hand, _condition
 from .kernels.finger import FINGER_TERMS
+from .kernels import warm_up
 from .kernels.plant import FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, plant_evaluate, plant_step
 from .polygon import ConvexPolygon
 from .validation import (as_finite_array, as_finite_float, as_flag, as_inertia, as_integer, as_mass, as_positive_float,
@@ -306,6 +307,8 @@ class Plant:
                                         f"with Pinocchio ({hand.kernel_disagreement[1]})")
         #: Whether :meth:`step` runs the compiled kernel.
         self.compiled = bool(compiled)
+        if self.compiled:
+            warm_up()
         self._kernel_contacts: tuple | None = None  # (key, records): see _contact_records()
         self._kernel_plant: tuple | None = None  # (key, record): see _plant_record()
         self._no_certificates, self._no_radii = np.full((hand.m, 9), np.nan), np.zeros((hand.m, 2))

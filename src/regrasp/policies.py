@@ -143,8 +143,7 @@ class ScheduledSettings:
 def _profile(slide: Slide, offset: float) -> Callable[[float], tuple[float, float, float]]:
     """t [s] -> (ξ, ξ̇, ξ̈) of ``slide`` shifted by ``offset`` [s]."""
     def at(t: float) -> tuple[float, float, float]:
-        x, v, a = slide.profile(np.array([t - offset]))
-        return float(x[0]), float(v[0]), float(a[0])
+        return slide.profile_at(float(t) - offset)
     return at
 
 
@@ -208,8 +207,7 @@ class ScheduledPolicy:
 
     def _planned_margin(self, t: float) -> np.ndarray:
         sch = self.schedule
-        local = float(sch.local_time(np.array([t]))[0])
-        k = int(np.clip(np.searchsorted(sch.times, local), 0, len(sch.times) - 1))
+        k = min(int(sch.times.searchsorted(sch.local_time_at(t))), len(sch.times) - 1)
         return sch.envelope_margin[k]
 
     def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],

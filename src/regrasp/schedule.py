@@ -86,6 +86,21 @@ class Slide:
         moving = (t > self.start) & (t < self.end)
         return self.start_xi + s * travelled, np.where(moving, s * speed, 0.0), np.where(moving, s * accel, 0.0)
 
+    def profile_at(self, t: float) -> tuple[float, float, float]:
+        """:meth:`profile` at one time ``t`` [s], in floats (hot paths: numpy's per-call cost dominates)."""
+        T, r, v, s = self.duration, self.ramp, self.speed, float(self.direction)
+        u = min(max(t - self.start, 0.0), T)
+        if u < r:
+            travelled, speed, accel = v * u * u / (2 * r), v * u / r, v / r
+        elif u > T - r:
+            distance = abs(self.end_xi - self.start_xi)
+            travelled, speed, accel = distance - v * (T - u) ** 2 / (2 * r), v * (T - u) / r, -v / r
+        else:
+            travelled, speed, accel = v * (u - r / 2), v, 0.0
+        if self.start < t < self.end:
+            return self.start_xi + s * travelled, s * speed, s * accel
+        return self.start_xi + s * travelled, 0.0, 0.0
+
     def to_json_dict(self) -> dict:
         return {"contact": self.name, "direction": self.direction, "start": self.start, "end": self.end,
                 "from": self.start_xi, "to": self.end_xi}
@@ -179,16 +194,35 @@ class RegraspSchedule:
             return self.t_start + np.mod(t - self.t_start, self.t_end - self.t_start)
         return np.clip(t, self.t_start, self.t_end)
 
+    def local_time_at(self, t: float) -> float:
+        """:meth:`local_time` of one time [s], in floats."""
+        if self.periodic:
+            return self.t_start + (t - self.t_start) % (self.t_end - self.t_start)
+        return min(max(t, self.t_start), self.t_end)
+
     def at(self, t: ArrayLike) -> ScheduleSample:
         """ξ_d, ξ̇_d, ξ̈_d and the sliding directions at time(s) ``t`` [s]; a periodic schedule repeats
         past ``t_end``, another holds its last positions (and its first before ``t_start``)."""
+        if type(t) is float and math.isfinite(t):  # one time: in floats (the supervisor's every step)
+            return self._at_scalar(t)
         arr = np.asarray(t, dtype=float)
         if arr.ndim > 1 or not np.all(np.isfinite(arr)):
             raise InvalidParameterError("t", t, "a finite time [s] or a 1-D array of them")
-        out = slides_at(self.xi_start, self.slides, self.local_time(np.atleast_1d(arr)))
         if arr.ndim == 0:
-            return ScheduleSample(out.xi[0], out.xi_dot[0], out.xi_ddot[0], out.direction[0])
-        return out
+            return self._at_scalar(float(arr))
+        return slides_at(self.xi_start, self.slides, self.local_time(arr))
+
+    def _at_scalar(self, t: float) -> ScheduleSample:
+        """:meth:`at` one finite time, in floats (:func:`slides_at` for one time)."""
+        local = self.local_time_at(t)
+        m = len(self.names)
+        xi, xi_dot, xi_ddot, direction = self.xi_start.tolist(), [0.0] * m, [0.0] * m, [0] * m
+        for s in self.slides:  # the latest slide that has started sets the position
+            if local >= s.start:
+                xi[s.contact], v, a = s.profile_at(local)
+                if s.start < local < s.end:
+                    xi_dot[s.contact], xi_ddot[s.contact], direction[s.contact] = v, a, s.direction
+        return ScheduleSample(np.array(xi), np.array(xi_dot), np.array(xi_ddot), np.array(direction))
 
     def to_json_dict(self) -> dict:
         """The ``"schedule"`` object of ``regrasp plan --regrasp --json``."""

@@ -70,6 +70,10 @@ class Trajectory(ABC):
     def _evaluate(self, t: np.ndarray, order: int) -> np.ndarray:
         """Derivative of order 0, 1 or 2 of the pose at the 1-D times ``t``, shape (n, 3)."""
 
+    def _evaluate_all(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The derivatives of order 0, 1 and 2 at the 1-D times ``t`` (a subclass may share their work)."""
+        return self._evaluate(t, 0), self._evaluate(t, 1), self._evaluate(t, 2)
+
     # ------------------------------------------------------------------ helpers
     def _times_in_domain(self, t) -> tuple[np.ndarray, bool]:
         """``t`` as a 1-D array clamped onto the domain, and whether it was a scalar."""
@@ -113,7 +117,7 @@ class Trajectory(ABC):
     def sample(self, t: ArrayLike) -> TrajectorySample:
         """Pose, velocity and acceleration at ``t`` (scalar or 1-D array) [s]."""
         arr, scalar = self._times_in_domain(t)
-        pose, vel, acc = (self._evaluate(arr, k) for k in range(3))
+        pose, vel, acc = self._evaluate_all(arr)
         if scalar:
             return TrajectorySample(float(arr[0]), pose[0], vel[0], acc[0])
         return TrajectorySample(arr, pose, vel, acc)
@@ -230,6 +234,14 @@ class EllipseTrajectory(Trajectory):
             return self.omega * self._amplitude * basis
         basis = np.stack([-s, -c, -s], axis=-1)
         return self.omega**2 * self._amplitude * basis
+
+    def _evaluate_all(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_evaluate` of orders 0, 1, 2 from one sine and cosine (the same arithmetic)."""
+        phase = self.omega * t
+        s, c = np.sin(phase), np.cos(phase)
+        return (self._offset + self._amplitude * np.stack([s, c, s], axis=-1),
+                self.omega * self._amplitude * np.stack([c, -s, c], axis=-1),
+                self.omega**2 * self._amplitude * np.stack([-s, -c, -s], axis=-1))
 
     def __repr__(self) -> str:
         return (
@@ -388,6 +400,10 @@ class RepeatedTrajectory(Trajectory):
         t0 = self.base.t_start
         local = t0 + np.mod(t - t0, self._period)
         return self.base._evaluate(np.clip(local, t0, self.base.t_end), order)
+
+    def _evaluate_all(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        t0 = self.base.t_start
+        return self.base._evaluate_all(np.clip(t0 + np.mod(t - t0, self._period), t0, self.base.t_end))
 
     def __repr__(self) -> str:
         return f"RepeatedTrajectory({self.base!r}, t_end={self._t_end!r})"

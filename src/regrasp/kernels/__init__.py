@@ -14,13 +14,39 @@ fixed and sliding contacts,            ``compiled=False``
 Baumgarte, works, event inputs)
 =====================================  ==========================================  ===========================
 
+:func:`warm_up` loads every kernel (compiling it where the cache has none): a compiled
+:class:`~regrasp.plant.Plant` calls it when built, so a rollout's timed loop never pays for it.
+
 Every kernel reads named fields (numpy record dtypes: :data:`FINGER_PARAMETERS`, :data:`FINGER_TERMS`,
 :data:`PLANT_CONTACT`, :data:`PLANT_PARAMETERS`), never positional tuples. Compiled code is cached on disk
 (``cache=True``), so only the first run on a machine pays for the compile.
 """
 
+import numpy as np
+
 from .finger import FINGER_PARAMETERS, FINGER_TERMS, finger_parameters, finger_terms, finger_terms_at
 from .plant import FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, plant_evaluate, plant_step
 
 __all__ = ["FINGER_PARAMETERS", "FINGER_TERMS", "FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDING",
-           "finger_parameters", "finger_terms", "finger_terms_at", "plant_evaluate", "plant_step"]
+           "finger_parameters", "finger_terms", "finger_terms_at", "plant_evaluate", "plant_step", "warm_up"]
+
+_WARM = []
+
+
+def warm_up() -> None:
+    """Load every kernel once in this process, on a one-finger dummy with the argument types the library
+    passes (later calls return at once)."""
+    if _WARM:
+        return
+    fingers = np.zeros(1, dtype=FINGER_PARAMETERS)
+    for name in ("m1", "m2", "i1", "i2", "d2x", "tx"):
+        fingers[name] = 1.0
+    plant = np.zeros((), dtype=PLANT_PARAMETERS)
+    plant["mass"], plant["inertia"], plant["dt"] = 1.0, 1.0, 1e-3
+    contacts = np.zeros(1, dtype=PLANT_CONTACT)
+    contacts["mode"] = SEPARATED
+    zeros = np.zeros(2)
+    finger_terms(fingers, zeros, zeros, zeros, True)
+    plant_evaluate(fingers, plant, contacts, np.zeros(13), zeros)
+    plant_step(fingers, plant, contacts, np.zeros(13), zeros, np.full((1, 9), np.nan), np.zeros((1, 2)))
+    _WARM.append(True)
