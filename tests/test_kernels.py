@@ -210,3 +210,60 @@ def test_a_scheduled_rollout_is_the_same_on_both_paths():
     assert events_a == events_b and any(kind.value == "stick" for kind, _ in events_a)
     for name in ("q", "v", "X", "V"):
         np.testing.assert_allclose(getattr(b, name), getattr(a, name), rtol=0, atol=1e-10)
+
+
+# ---------------------------------------------------------------------------------------- the reduced model
+def _models(modes, xi, singular_threshold=1e4):
+    from regrasp import Grasp, ReducedModel
+
+    sc = load_scenario(EXAMPLES / "paper_trajectory_2_three_fingers.toml")
+    hand = Hand([c.finger for c in sc.contacts], singular_threshold=singular_threshold)
+    grasp = Grasp(sc.polygon, [c.edge for c in sc.contacts], modes)
+    return [ReducedModel(hand, grasp, xi, compiled=compiled) for compiled in (False, True)]
+
+
+@pytest.mark.parametrize("modes", [("fixed", "fixed", "fixed"), ("sliding", "fixed", "fixed"),
+                                   ("fixed", "sliding", "sliding")])
+def test_compiled_reduced_terms_equal_the_reference(modes):
+    rng = np.random.default_rng(len(modes[0]) + modes.count("sliding"))
+    ref, fast = _models(modes, [-0.0125, 0.0125, 0.0])
+    assert fast.compiled and not ref.compiled
+    p = modes.count("sliding")
+    for _ in range(25):
+        S = np.concatenate([[0.0, 0.12, 0.0] + rng.uniform(-0.005, 0.005, 3), rng.uniform(-0.01, 0.01, p)])
+        S_dot = rng.uniform(-0.05, 0.05, 3 + p)
+        a, b = ref._terms(S.tolist(), S_dot.tolist()), fast._terms(S.tolist(), S_dot.tolist())
+        for name in a._fields:
+            x, y = np.asarray(getattr(a, name), dtype=float), np.asarray(getattr(b, name), dtype=float)
+            assert x.shape == y.shape, name
+            assert np.all(np.abs(x - y) <= 1e-12 * np.maximum(1.0, np.abs(x))), name
+        st_a, st_b = ref.state(S, S_dot), fast.state(S, S_dot)
+        np.testing.assert_allclose(fast.mass_matrix(st_b), ref.mass_matrix(st_a), rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(fast.bias(st_b), ref.bias(st_a), rtol=1e-12, atol=1e-15)
+
+
+def test_compiled_reduced_terms_raise_what_the_reference_raises():
+    from regrasp.exceptions import SingularFingerError, UnreachableError
+
+    ref, fast = _models(("fixed", "fixed", "fixed"), [-0.0125, 0.0125, 0.0])
+    far = [0.0, 0.5, 0.0]  # the object out of every finger's reach
+    for model in (ref, fast):
+        with pytest.raises(UnreachableError) as info:
+            model._terms(far, [0.0] * 3)
+        assert info.value.finger == "finger1"
+    errors = []
+    for model in (ref, fast):  # the object drawn down until a finger is out of reach
+        for y in np.linspace(0.1, 0.3, 400):
+            try:
+                model._terms([0.0, float(y), 0.0], [0.0] * 3)
+            except (SingularFingerError, UnreachableError) as exc:
+                errors.append((type(exc).__name__, exc.finger, round(float(y), 6)))
+                break
+    assert len(errors) == 2 and errors[0] == errors[1]
+    strict = _models(("fixed", "fixed", "fixed"), [-0.0125, 0.0125, 0.0], singular_threshold=1.5)
+    found = []
+    for model in strict:  # a threshold every finger exceeds
+        with pytest.raises(SingularFingerError) as info:
+            model._terms([0.0, 0.12, 0.0], [0.0] * 3)
+        found.append((info.value.finger, info.value.condition))
+    assert found[0][0] == found[1][0] and found[0][1] == pytest.approx(found[1][1], rel=1e-12)

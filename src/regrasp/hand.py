@@ -149,6 +149,17 @@ class Hand:
                           f"{found[1]}, more than {KERNEL_TOLERANCE:g}: this hand keeps the Pinocchio path",
                           KernelMismatchWarning, stacklevel=3)
 
+    def use_kernels(self, compiled: bool | None) -> bool:
+        """Whether a consumer (a plant, a reduced model) runs the compiled kernels, given its ``compiled``
+        argument: None, when they agree with Pinocchio; True, they must (else an
+        :class:`~regrasp.exceptions.InvalidParameterError`); False, never."""
+        if compiled is None:
+            return self.kernel_parameters is not None
+        if as_flag("compiled", compiled) and self.kernel_parameters is None:
+            raise InvalidParameterError("compiled", compiled, "False for this hand: its compiled kernels disagree "
+                                        f"with Pinocchio ({self.kernel_disagreement[1]})")
+        return compiled
+
     def set_gravity(self, gravity_in_hand: ArrayLike) -> None:
         """Set the gravity vector [m/s^2] in the hand frame."""
         g = as_finite_array("gravity_in_hand", gravity_in_hand, (2,))

@@ -300,13 +300,8 @@ class Plant:
         self.events: list[PlantEvent] = []
         self.stopped = False
         self.max_constraint_error = 0.0
-        if compiled is None:
-            compiled = hand.kernel_parameters is not None
-        elif as_flag("compiled", compiled) and hand.kernel_parameters is None:
-            raise InvalidParameterError("compiled", compiled, "False for this hand: its compiled kernels disagree "
-                                        f"with Pinocchio ({hand.kernel_disagreement[1]})")
         #: Whether :meth:`step` runs the compiled kernel.
-        self.compiled = bool(compiled)
+        self.compiled = hand.use_kernels(compiled)
         if self.compiled:
             warm_up()
         self._kernel_contacts: tuple | None = None  # (key, records): see _contact_records()

@@ -40,6 +40,8 @@ from .contact import FrictionLike, as_frictions
 from .exceptions import InvalidParameterError
 from .grasp import Grasp
 from .hand import Hand, HandDynamics
+from .exceptions import UnreachableError
+from .kernels.reduced import UNREACHABLE, contact_edges, ik_parameters, reduced_terms
 from .validation import as_finite_array, as_finite_vectors, as_inertia, as_mass, expect_type
 
 __all__ = ["ReducedModel", "ReducedState"]
@@ -109,10 +111,13 @@ class ReducedModel:
         xi: ξ [m] of every contact; fixed contacts stay there, sliding ones start there.
         object_mass: [kg]; default: the polygon's.
         object_inertia: [kg m^2] about the centre of mass; default: the polygon's.
+        compiled: Evaluate the terms with the compiled kernel (:mod:`regrasp.kernels.reduced`; the same
+            equations, ``tests/test_kernels.py`` checks it against the reference path). None (default): when
+            the hand's kernels agree with Pinocchio; False: the reference path (Pinocchio, plain floats).
     """
 
     def __init__(self, hand: Hand, grasp: Grasp, xi: ArrayLike, *, object_mass: float | None = None,
-                 object_inertia: float | None = None):
+                 object_inertia: float | None = None, compiled: bool | None = None):
         expect_type("hand", hand, Hand, "a Hand")
         expect_type("grasp", grasp, Grasp, "a Grasp")
         if hand.m != grasp.m:
@@ -133,6 +138,13 @@ class ReducedModel:
         self._bv = grasp.sliding_directions()
         self._identity = np.eye(hand.nq)
         self._sliding_column = {i: 3 + j for j, i in enumerate(grasp.sliding)}  # contact -> column of S
+        #: Whether the terms come from the compiled kernel.
+        self.compiled = hand.use_kernels(compiled)
+        self._kernel_constants = None if not self.compiled else (
+            hand.kernel_parameters, ik_parameters(hand.fingers),
+            contact_edges([e.xi_origin for e in grasp.edges], [e.xi_direction for e in grasp.edges],
+                          [e.inward_normal for e in grasp.edges]),
+            np.array([self._sliding_column.get(i, -1) for i in range(grasp.m)], dtype=np.int64))
 
     @property
     def f_g(self) -> np.ndarray:
@@ -183,6 +195,8 @@ class ReducedModel:
         (o_2 - o_1) - (\dot q_1 + \dot q_2)^2 (p - o_2)`; M and N come from Pinocchio
         (:meth:`Hand._mass_blocks_and_bias`).
         """
+        if self.compiled:
+            return self._terms_compiled(np.array(s_list), np.array(sd_list))
         grasp, hand, m, n = self.grasp, self.hand, self.grasp.m, self.n
         x, y, beta = s_list[:3]
         vx, vy, omega = sd_list[:3]
@@ -243,6 +257,28 @@ class ReducedModel:
             h_dot_s_dot += (i00 * b0 + i01 * b1, i10 * b0 + i11 * b1)  # Ḣ Ṡ = J^-1 (Ȧ Ṡ - J̇ q̇)
         return _Terms(xi, xi_dot, q, q_dot, tips, tip_velocities, a_rows, np.array(h_rows), h_dot_s_dot, jacobians,
                       inverses, masses, nonlinear, jdv, frames)
+
+    def _terms_compiled(self, s: np.ndarray, sd: np.ndarray) -> "_Terms":
+        """:meth:`_terms` from the compiled kernel (:func:`~regrasp.kernels.reduced.reduced_terms`)."""
+        fingers, iks, edges, columns = self._kernel_constants
+        hand = self.hand
+        (status, bad, distance, xi, xi_dot, q, q_dot, tips, tip_vel, a_rows, h_rows, h_dot, jac, inv, mass, nonlinear,
+         jdv, frames, conds) = reduced_terms(fingers, iks, edges, hand.gravity_in_hand, hand.damping_enabled, self.xi,
+                                             columns, s, sd)
+        if status == UNREACHABLE:
+            k = iks[bad]
+            raise UnreachableError(hand.fingers[bad].name, self._contact_point(s, xi, bad),
+                                   float(distance), (float(k["inner"]), float(k["outer"])))
+        q_list, jacobians = q.tolist(), jac.tolist()
+        if not (conds <= hand.singular_threshold).all():  # (NaN too)
+            hand._check_singular_blocks(q_list, jacobians)
+        return _Terms(xi.tolist(), xi_dot.tolist(), q_list, q_dot.tolist(), tips.tolist(), tip_vel.tolist(),
+                      a_rows.tolist(), h_rows, h_dot.tolist(), jacobians, inv.tolist(), mass.tolist(),
+                      nonlinear.tolist(), jdv.tolist(), frames.tolist())
+
+    def _contact_point(self, s: np.ndarray, xi: np.ndarray, i: int) -> np.ndarray:
+        """Contact i's point [m] (hand frame) at the pose of S with the contacts at ``xi``."""
+        return self.grasp.points(s[:3], xi)[i]
 
     def _state_from(self, S: np.ndarray, S_dot: np.ndarray, terms: "_Terms") -> ReducedState:
         """The :class:`ReducedState` of :meth:`_terms` at (S, Ṡ)."""
