@@ -23,7 +23,10 @@ Items and their floors:
   three timed plans, one with ``--quick``), target ≤ 10 s;
 * the rollout of paper trajectory 2 with the palm finger (``paper_trajectory_2_three_fingers.toml``,
   two periods at 1 kHz, or until it fails): real-time factor = simulated time / wall time, with
-  recording off and on (a ``RolloutRecorder`` writing an .rrd to a temporary directory).
+  recording off and on (a ``RolloutRecorder`` writing an .rrd to a temporary directory); and 2 s of it with
+  each policy (scheduled, paper, none), recording off;
+* a study's throughput (``run_study``, 8 runs of 2 s, one schedule planned beforehand): simulated seconds per
+  wall second per worker with 1 and 2 worker processes, and the speed-up of 2 over 1.
 Medians of repeated calls (time.perf_counter); the Pinocchio floors time batches of 1000 calls.
 """
 
@@ -40,7 +43,7 @@ import pinocchio as pin
 from common import ROOT, median_us, parse_args, sliding_hold
 
 from regrasp import (FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario,
-                     plan_regrasps)
+                     plan_regrasps, run_study)
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
 from regrasp.kernels.plant import plant_step
 from regrasp.simulation import sense
@@ -106,6 +109,39 @@ def rollout_realtime(quick: bool) -> dict:
             "simulated_s": simulated, "requested_s": off.duration,
             "outcome": "success" if off.success else f"failed at {off.failure.time:.3f} s: {off.failure.reason}",
             "slides": sum(off.regrasps.values())}
+
+
+def rollout_policies(quick: bool) -> dict:
+    """Real-time factor of the three-finger rollout (recording off) with each policy: the scheduled one (the
+    default), the paper's heuristic and none (a fixed grasp; it fails where the envelopes close)."""
+    sc = load_scenario(THREE)
+    duration = 0.2 if quick else 2.0
+    out = {}
+    for policy in ("scheduled", "paper", "none"):
+        rollout = build_rollout(sc, duration=duration, policy=policy)
+        result = rollout.run()
+        out[policy] = {"realtime_factor": result.realtime_factor, "simulated_s": result.steps * rollout.plant.dt,
+                       "outcome": "success" if result.success else f"failed at {result.failure.time:.3f} s"}
+    return out
+
+
+def study_throughput(quick: bool) -> dict:
+    """A study's throughput, simulated seconds per wall second per worker, with 1 and 2 worker processes
+    (the same 8 runs of 2 s, default perturbations, one schedule planned beforehand; the pool's start-up
+    included, the plan not)."""
+    sc = load_scenario(THREE)
+    schedule = plan_regrasps(sc)
+    runs, duration = (2, 0.2) if quick else (8, 2.0)
+    out = {}
+    for workers in (1, 2):
+        result = run_study(sc, runs, seed=0, duration=duration, workers=workers, schedule=schedule)
+        simulated = sum(r.failure_time if r.failure_time is not None else duration for r in result.runs)
+        seconds = result.wall_seconds - result.plan_seconds
+        out[f"workers_{workers}"] = {"simulated_s_per_s_per_worker": simulated / seconds / workers,
+                                     "wall_s": seconds, "simulated_s": simulated}
+    out["speed_up"] = (out["workers_2"]["simulated_s_per_s_per_worker"] * 2
+                       / out["workers_1"]["simulated_s_per_s_per_worker"])
+    return out
 
 
 def regrasp_plan_seconds(quick: bool) -> dict:
@@ -206,13 +242,15 @@ def main() -> None:
     med, floor = supervisor_step_us("urdf", n, track=True)
     results["supervisor_step_urdf_tracked"] = {"median_us": med, "floor_us": floor}
     results["rollout_realtime_factor"] = rollout_realtime(args.quick)
+    results["rollout_policies"] = rollout_policies(args.quick)
+    results["study_throughput"] = study_throughput(args.quick)
     results["regrasp_plan"] = regrasp_plan_seconds(args.quick)
     if args.json:
         print(json.dumps(results))
         return
     print(f"{'item':28s} {'median [us]':>12s} {'floor [us]':>11s} {'ratio':>7s}")
     for key, value in results.items():
-        if key in ("rollout_realtime_factor", "regrasp_plan"):
+        if key in ("rollout_realtime_factor", "regrasp_plan", "rollout_policies", "study_throughput"):
             continue
         med, floor = value["median_us"], value["floor_us"]
         ratio = f"{med / floor:6.1f}x" if floor else "     -"
@@ -221,6 +259,13 @@ def main() -> None:
     rt = results["rollout_realtime_factor"]
     print(f"rollout real-time factor      {rt['recording_off']:6.2f}x recording off, {rt['recording_on']:6.2f}x on "
           f"({rt['simulated_s']:.3f} of {rt['requested_s']:.3f} s simulated; {rt['outcome']})")
+    for policy, value in results["rollout_policies"].items():
+        print(f"rollout, {policy:9s} policy      {value['realtime_factor']:6.2f}x real time ({value['simulated_s']:.3f} s "
+              f"simulated; {value['outcome']})")
+    st = results["study_throughput"]
+    print(f"study throughput              {st['workers_1']['simulated_s_per_s_per_worker']:6.2f} simulated s per s per "
+          f"worker with 1 worker, {st['workers_2']['simulated_s_per_s_per_worker']:6.2f} with 2 "
+          f"({st['speed_up']:.2f}x the throughput)")
     rp = results["regrasp_plan"]
     print(f"regrasp schedule, three fingers  {rp['median_s']:6.2f} s median of {len(rp['runs_s'])} plans "
           f"({rp['slides']} slides per period, fewest possible {rp['slides_lower_bound']}; target <= 10 s)")

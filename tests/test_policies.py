@@ -71,6 +71,31 @@ def test_a_periodic_schedule_repeats_its_slides_every_period():
     assert np.allclose(policy.planned_xi(2.75), policy.planned_xi(0.75))
 
 
+@pytest.mark.parametrize("lead", [0.0, 0.02])
+def test_a_decision_period_issues_the_same_orders_at_the_same_steps(lead):
+    """Deciding every 50 ms (and at slide starts and phase changes) orders what deciding every 1 ms orders,
+    at the same steps: a due slide is never late; a phase change is acted on at the next step."""
+    results = []
+    for period in (0.0, 0.05):
+        policy = ScheduledPolicy(schedule([UP, DOWN]), NAMES, settings=ScheduledSettings(prime_lead=lead,
+                                                                                         decision_period=period))
+        orders = []
+        for j in range(6000):
+            t = round(0.001 * j, 9)
+            phases = (ContactPhase.SETTLING, ContactPhase.FIXED) if 2.47 <= t < 2.53 else FIXED
+            orders += [(t, o.planned_start) for o in policy.propose(meas(t), reading(t), phases, [])]
+        results.append(orders)
+    assert results[0] == results[1] and len(results[0]) == 6
+    assert results[0][2][0] == 2.53  # the third slide waited for its contact
+
+
+def test_a_decision_period_must_be_shorter_than_the_schedule():
+    with pytest.raises(InvalidParameterError, match="decision_period"):
+        ScheduledPolicy(schedule([UP, DOWN]), NAMES, settings=ScheduledSettings(decision_period=2.0))
+    with pytest.raises(InvalidParameterError):
+        ScheduledSettings(decision_period=-0.1)
+
+
 def test_a_slide_waits_for_its_contact_to_be_fixed():
     policy = ScheduledPolicy(schedule([UP]), NAMES, settings=ScheduledSettings(prime_lead=0.0))
     busy = (ContactPhase.SETTLING, ContactPhase.FIXED)

@@ -122,6 +122,10 @@ class ScheduledSettings:
             nearest planned sample) triggers a re-plan [-].
         replan_cooldown: After a re-plan (or a failed one), no margin-triggered re-plan for this long [s].
         max_replans: At most this many re-plans in a run.
+        decision_period: Decide at least this often [s] (default 10 ms; 0: at every step). Between decisions the policy
+            proposes nothing, unless something happened: a slide ended or a contact changed phase (the next
+            step decides), or a scheduled slide is due (the policy decides at its start, never late). What a
+            longer period delays is only the margin-triggered re-plan, by at most the period.
     """
 
     prime_lead: float = 0.0
@@ -130,9 +134,10 @@ class ScheduledSettings:
     margin_fraction: float = 0.5
     replan_cooldown: float = 0.1
     max_replans: int = 10
+    decision_period: float = 0.01
 
     def __post_init__(self):
-        for name in ("prime_lead", "time_tolerance", "xi_tolerance", "replan_cooldown"):
+        for name in ("prime_lead", "time_tolerance", "xi_tolerance", "replan_cooldown", "decision_period"):
             as_positive_float(name, getattr(self, name), allow_zero=True)
         if not 0.0 <= as_finite_float("margin_fraction", self.margin_fraction) < 1.0:
             raise InvalidParameterError("margin_fraction", self.margin_fraction, "a fraction in [0, 1)")
@@ -169,11 +174,17 @@ class ScheduledPolicy:
         if schedule.m != len(self.names):
             raise InvalidParameterError("schedule", schedule.names, f"a schedule of {len(self.names)} contacts")
         self.settings = settings
+        period = schedule.t_end - schedule.t_start
+        if schedule.periodic and settings.decision_period >= period:
+            raise InvalidParameterError("settings.decision_period", settings.decision_period,
+                                        f"a decision period shorter than the schedule's period ({period:.6g} s)")
         self.replan_function = replan
         self.schedules: list[tuple[float, RegraspSchedule]] = []  # (from when, schedule), the last in force
         self.replans = 0
         self._pending: str | None = None     # why a re-plan is due (done once no slide is under way)
         self._cooldown_until = -math.inf
+        self._next_decision = -math.inf      # decide at the first step at or after it (settings.decision_period)
+        self._phases: tuple = ()             # the phases at the last decision
         self._use(schedule, schedule.t_start)
 
     @property
@@ -213,6 +224,31 @@ class ScheduledPolicy:
     def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
                 out: list[Event]) -> list[SlideOrder]:
         t = float(meas.t)
+        if t < self._next_decision and tuple(phases) == self._phases:
+            return []  # nothing happened and nothing is due before the next decision
+        self._phases = tuple(phases)
+        orders = self._decide(meas, reading, phases, out)
+        self._next_decision = self._decision_after(t)
+        return orders
+
+    def _decision_after(self, t: float) -> float:
+        """When the next decision is due after one at time ``t`` [s]: a period later, or at the next
+        unissued slide's priming start (-inf: at the next step)."""
+        period = self.settings.decision_period
+        if period == 0.0:
+            return -math.inf
+        due = t + period
+        lead = self.settings.prime_lead
+        for k, n, slide, offset in self._occurrences(t):  # (this period and the next: period < P)
+            start = slide.start + offset
+            if (k, n) not in self._issued and start >= self._since - 1e-9:
+                due = min(due, start - lead - 1e-9)
+        return due
+
+    def _decide(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
+                out: list[Event]) -> list[SlideOrder]:
+        """:meth:`propose`'s decision."""
+        t = float(meas.t)
         s = self.settings
         idle = all(p is ContactPhase.FIXED for p in phases)
         if self._pending is None and t >= self._cooldown_until and self.replan_function is not None:
@@ -242,6 +278,7 @@ class ScheduledPolicy:
 
     def notify(self, ends: list[SlideEnd], meas: Measurement, out: list[Event]) -> None:
         s = self.settings
+        self._next_decision = -math.inf  # decide at the next step
         for end in ends:
             order = end.order
             if order.planned_end is None or self._pending is not None or self.replan_function is None:

@@ -213,10 +213,13 @@ class SupervisorSettings:
         their cones in ratio (0.05 where no force allows more) and ``cone_margin`` [N] inside where the forces
         allow, the sliders' ξ at 60 rad/s, integral action (0.3 ω³), a priming whose overshoot grows from 0.05
         to 0.25 over 40 ms and lasts until the contact moves the right way at 1 mm/s, the sliders' kinetic
-        friction estimated from the sensed forces (10 ms, from the break-away on), settling with 0.05 N of static margin, and the held contacts' model positions following
-        their sensed ones through a 20 ms filter. ``overrides`` replace any of these (e.g. the hand's
+        friction estimated from the sensed forces (10 ms, from the break-away on), settling with 0.05 N of static
+        margin, the held contacts' model positions following their sensed ones through a 20 ms filter, and the
+        runtime envelopes evaluated every 10th step (100 Hz at 1 kHz; what a stale reading can miss:
+        :mod:`regrasp.monitor`). ``overrides`` replace any of these (e.g. the hand's
         ``actuation_delay``)."""
-        values = dict(geometry=geometry, slide_omega=60.0, integral=0.3, prime_time=0.04, prime_overshoot_max=0.25,
+        values = dict(geometry=geometry, envelope_every=10, slide_omega=60.0, integral=0.3, prime_time=0.04,
+                      prime_overshoot_max=0.25,
                       friction_filter_time=0.01, breakaway_estimate=True, settle_margin=0.05,
                       start_speed=1e-3, hold_filter_time=0.02,
                       internal_force=InternalForceSettings(f_min=0.2, margin=0.1, target_cone_margin=cone_margin,
