@@ -300,14 +300,16 @@ def test_waypoint_inputs_are_copied():
 
 
 def test_a_sample_is_each_derivative_exactly():
-    """``sample`` (one sine and cosine for all three derivatives) equals ``pose``, ``velocity`` and
-    ``acceleration`` bit for bit, for an ellipse and for it repeated, at one time and at many."""
+    """``sample`` (one sine and cosine for all three derivatives; one float: in floats) equals ``pose``,
+    ``velocity`` and ``acceleration``, for an ellipse and for it repeated, at one time and at many."""
     from regrasp.trajectory import EllipseTrajectory, RepeatedTrajectory
 
     base = EllipseTrajectory(cx=0.01, cy=0.12, a=0.02, b=0.01, omega=1.3, beta0=0.1, beta_a=0.2)
     for traj in (base, RepeatedTrajectory(base, base.t_start + 3 * base.period)):
         times = np.linspace(traj.t_start, traj.t_end, 57)
-        for t in (*times.tolist(), times):
+        for t in (*times.tolist(), times):  # (one float: math's sine, to numpy's last bit or one ulp off)
             out = traj.sample(t)
-            assert np.array_equal(out.pose, traj.pose(t)) and np.array_equal(out.velocity, traj.velocity(t))
-            assert np.array_equal(out.acceleration, traj.acceleration(t))
+            for got, want in ((out.pose, traj.pose(t)), (out.velocity, traj.velocity(t)),
+                              (out.acceleration, traj.acceleration(t))):
+                np.testing.assert_allclose(got, want, rtol=1e-15, atol=1e-18)
+            assert out.time is t or np.array_equal(out.time, t)

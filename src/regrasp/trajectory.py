@@ -70,6 +70,10 @@ class Trajectory(ABC):
     def _evaluate(self, t: np.ndarray, order: int) -> np.ndarray:
         """Derivative of order 0, 1 or 2 of the pose at the 1-D times ``t``, shape (n, 3)."""
 
+    def _sample_at(self, t: float) -> "TrajectorySample | None":
+        """:meth:`sample` at one time in the domain, in floats, or None (no such path: the array one)."""
+        return None
+
     def _evaluate_all(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The derivatives of order 0, 1 and 2 at the 1-D times ``t`` (a subclass may share their work)."""
         return self._evaluate(t, 0), self._evaluate(t, 1), self._evaluate(t, 2)
@@ -116,6 +120,10 @@ class Trajectory(ABC):
 
     def sample(self, t: ArrayLike) -> TrajectorySample:
         """Pose, velocity and acceleration at ``t`` (scalar or 1-D array) [s]."""
+        if type(t) is float and self.t_start <= t <= self.t_end:  # one time: the subclass's float path, if any
+            fast = self._sample_at(t)
+            if fast is not None:
+                return fast
         arr, scalar = self._times_in_domain(t)
         pose, vel, acc = self._evaluate_all(arr)
         if scalar:
@@ -199,6 +207,7 @@ class EllipseTrajectory(Trajectory):
         self._t_end = t1
         self._amplitude = np.array([self.a, self.b, self.beta_a])
         self._offset = np.array([self.cx, self.cy, self.beta0])
+        self._floats = (tuple(self._offset.tolist()), tuple(self._amplitude.tolist()))  # (_sample_at)
         w = max(1.0, abs(self.omega))
         for name, amplitude in (("a", self.a), ("b", self.b), ("beta_a", self.beta_a)):
             extent = abs(amplitude) * w * w  # bounds X, X' and X'' (a product overflows to inf, never raises)
@@ -234,6 +243,16 @@ class EllipseTrajectory(Trajectory):
             return self.omega * self._amplitude * basis
         basis = np.stack([-s, -c, -s], axis=-1)
         return self.omega**2 * self._amplitude * basis
+
+    def _sample_at(self, t: float) -> TrajectorySample:
+        """:meth:`_evaluate_all` at one time, in floats (the same arithmetic, ``math``'s sine and cosine)."""
+        (ox, oy, ob), (ax, ay, ab) = self._floats
+        w = self.omega
+        phase = w * t
+        s, c = math.sin(phase), math.cos(phase)
+        wa, w2 = w * self._amplitude, w**2 * self._amplitude
+        return TrajectorySample(t, np.array([ox + ax * s, oy + ay * c, ob + ab * s]),
+                                wa * np.array([c, -s, c]), w2 * np.array([-s, -c, -s]))
 
     def _evaluate_all(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`_evaluate` of orders 0, 1, 2 from one sine and cosine (the same arithmetic)."""
@@ -400,6 +419,12 @@ class RepeatedTrajectory(Trajectory):
         t0 = self.base.t_start
         local = t0 + np.mod(t - t0, self._period)
         return self.base._evaluate(np.clip(local, t0, self.base.t_end), order)
+
+    def _sample_at(self, t: float) -> TrajectorySample | None:
+        t0, base = self.base.t_start, self.base
+        local = min(max(t0 + (t - t0) % self._period, t0), base.t_end)
+        out = base._sample_at(local)
+        return None if out is None else TrajectorySample(t, out.pose, out.velocity, out.acceleration)
 
     def _evaluate_all(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         t0 = self.base.t_start
