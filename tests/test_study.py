@@ -173,7 +173,8 @@ def test_a_sweep_is_one_study_per_size_with_the_same_draws(capsys, tmp_path):
 
 
 def test_the_noise_is_seeded_per_run(in_process):
-    """A run repeated alone from its draw repeats exactly; another seed gives other noise."""
+    """A run repeated alone from its draw repeats exactly (the study's runs used the envelope plan it computed
+    once; alone, the run plans it again); another seed gives other noise."""
     from regrasp.perturbation import RunDraw
     from regrasp.study import run_once
 
@@ -186,6 +187,16 @@ def test_the_noise_is_seeded_per_run(in_process):
                                                         ("mass_scale", "mu_scale", "inertia_scale", "link_mass_scale",
                                                          "mu_kinetic_scale", "xi_offset")])
     assert run_once(sc, other, schedule, 0.15, TARGET).min_cone_margin != first.min_cone_margin
+
+
+def test_a_rollout_refuses_a_plan_of_another_scenario():
+    from regrasp.exceptions import InvalidParameterError
+    from regrasp.planner import plan_scenario
+
+    sc = load_scenario(SCENARIO)
+    two = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
+    with pytest.raises(InvalidParameterError, match="plan"):
+        build_rollout(sc, duration=0.05, plan=plan_scenario(two, samples=11))
 
 
 def test_the_scenario_study_table_sets_the_perturbations_and_flags_override_it(tmp_path, capsys):

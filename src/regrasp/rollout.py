@@ -35,7 +35,7 @@ from .executor import SLIPPING_PHASES, ContactPhase, ExecutorSettings
 from .grasp import Grasp
 from .hand import Hand
 from .plant import Plant, PlantContact
-from .planner import plan_scenario
+from .planner import PlanResult, plan_scenario
 from .policies import NoRegraspPolicy, ScheduledPolicy, ScheduledSettings
 from .policy_paper import PaperPolicy
 from .reduced import ReducedModel
@@ -197,7 +197,7 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
                   sensor_noise: SensorNoise = SensorNoise(), actuator_noise: ActuatorNoise = ActuatorNoise(),
                   seed: int | np.random.SeedSequence | None = None, replan: bool = True,
                   plan_progress: Callable[[int, int], None] | None = None, plant: str = "project",
-                  mujoco_settings: MujocoSettings | None = None) -> Rollout:
+                  mujoco_settings: MujocoSettings | None = None, plan: PlanResult | None = None) -> Rollout:
     """Plant + supervisor for ``scenario``, every contact fixed at the start.
 
     Args:
@@ -211,6 +211,8 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
         regrasp_settings: The schedule planner's settings (``"scheduled"``; default :class:`RegraspSettings`
             with a cone margin of ``DEFAULT_CONE_MARGIN`` = 0.2 N).
         schedule: A schedule planned already (``"scheduled"``; default: planned here).
+        plan: The scenario's envelope plan (:func:`~regrasp.planner.plan_scenario`) computed already (a study
+            plans it once for all its runs; default: planned here).
         scheduled_settings: :class:`~regrasp.policies.ScheduledSettings` (re-plan tolerances).
         dt: Control and plant step [s].
         xi0: Initial contact positions [m] (default: the schedule's start, else the planner's ``initial_xi``).
@@ -285,7 +287,10 @@ def build_rollout(scenario: Scenario, *, duration: float | None = None, periods:
     run_scenario, duration = _run_scenario(scenario, duration, periods)
     traj = run_scenario.trajectory
     m = len(scenario.contacts)
-    plan = plan_scenario(scenario)
+    if plan is None:
+        plan = plan_scenario(scenario)
+    elif not isinstance(plan, PlanResult) or len(plan.fingers) != m:
+        raise InvalidParameterError("plan", plan, f"a PlanResult of this scenario ({m} fingers)")
     if policy == "scheduled" and schedule is None:
         schedule = plan_regrasps(scenario, regrasp_settings, xi0=xi0, progress=plan_progress)
     if xi0 is None:

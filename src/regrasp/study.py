@@ -32,6 +32,7 @@ from .validation import as_finite_float, as_integer, expect_type
 
 if TYPE_CHECKING:
     from .mjcf import MujocoSettings
+    from .planner import PlanResult
     from .rollout import Rollout
     from .scenario import Scenario
     from .schedule import RegraspSchedule
@@ -106,12 +107,13 @@ def _finite_or_none(x: float) -> float | None:
 
 def build_run(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
               perturbation: Perturbation, settings: SupervisorSettings | None = None, plant: str = "project",
-              mujoco_settings: MujocoSettings | None = None) -> Rollout:
+              mujoco_settings: MujocoSettings | None = None, plan: PlanResult | None = None) -> Rollout:
     """One run of a study, ready to run: the rollout of ``scenario`` on a plant (``plant``, ``mujoco_settings``:
     as :func:`~regrasp.rollout.build_rollout` takes them) with ``draw``'s errors and the noise of
     ``perturbation`` seeded by ``draw.seed``, supervised with ``settings`` (None: the rollout's default,
     :meth:`~regrasp.supervisor.SupervisorSettings.robust` told the actuation delay). Run it with a recorder to
-    look at a failed run on a rerun timeline (``regrasp study --replay I --rrd FILE``)."""
+    look at a failed run on a rerun timeline (``regrasp study --replay I --rrd FILE``). ``plan``: the scenario's
+    envelope plan, if computed already (a study computes it once for all its runs)."""
     from .rollout import build_rollout
 
     return build_rollout(scenario, duration=duration, schedule=schedule, settings=settings, plant=plant,
@@ -119,14 +121,14 @@ def build_run(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | Non
                          plant_mu_scale=draw.mu_scale, plant_inertia_scale=draw.inertia_scale,
                          plant_link_mass_scale=draw.link_mass_scale, plant_mu_kinetic_scale=draw.mu_kinetic_scale,
                          plant_xi_offset=draw.xi_offset or None, sensor_noise=perturbation.sensor_noise(),
-                         actuator_noise=perturbation.actuator_noise(), seed=draw.seed)
+                         actuator_noise=perturbation.actuator_noise(), seed=draw.seed, plan=plan)
 
 
 def run_once(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
              perturbation: Perturbation, settings: SupervisorSettings | None = None, plant: str = "project",
-             mujoco_settings: MujocoSettings | None = None) -> RunOutcome:
+             mujoco_settings: MujocoSettings | None = None, plan: PlanResult | None = None) -> RunOutcome:
     """:func:`build_run`'s rollout, run: what it did."""
-    r = build_run(scenario, draw, schedule, duration, perturbation, settings, plant, mujoco_settings).run(
+    r = build_run(scenario, draw, schedule, duration, perturbation, settings, plant, mujoco_settings, plan).run(
         interruptible=False)
     f = r.failure
     return RunOutcome(draw, r.success, None if f is None else f.kind.value, None if f is None else f.time,
@@ -200,6 +202,9 @@ def _init_worker(*shared: object) -> None:
     """A pool worker's shared inputs (``run_once``'s arguments but the draw), handed over once per worker, not
     once per run."""
     _JOB["shared"] = shared
+    from .kernels import warm_up
+
+    warm_up()  # (every kernel loaded before the first run: no run's wall time pays for it)
 
 
 def _pool_run(draw: RunDraw) -> RunOutcome:
@@ -292,7 +297,9 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     _check_offsets(scenario, probe.schedule.at(scenario.trajectory.t_start).xi if probe.schedule else None,
                    perturbation.contact_position)
     plan_seconds = time.perf_counter() - start
-    shared = (scenario, probe.schedule, probe.duration, perturbation, settings, plant, mujoco_settings)
+    # the schedule and the envelope plan are computed once for every run (they depend on the model only)
+    shared = (scenario, probe.schedule, probe.duration, perturbation, settings, plant, mujoco_settings,
+              probe.supervisor.plan)
     source = _on_processes(workers, shared, draws) if ray_address is None else \
         _on_ray(ray_address, workers, shared, draws)
     outcomes: list[RunOutcome] = []

@@ -12,10 +12,13 @@ kernel                                 reference path                           
 :mod:`.plant`: a plant step (RK4,      :class:`~regrasp.plant.Plant` with           ``tests/test_kernels.py``
 fixed and sliding contacts,            ``compiled=False``
 Baumgarte, works, event inputs)
+:mod:`.reduced`: the reduced model's   :class:`~regrasp.reduced.ReducedModel` with  ``tests/test_kernels.py``
+terms (IK, J, H, Ḣ Ṡ, M, N)            ``compiled=False``
 =====================================  ==========================================  ===========================
 
 :func:`warm_up` loads every kernel (compiling it where the cache has none): a compiled
-:class:`~regrasp.plant.Plant` calls it when built, so a rollout's timed loop never pays for it.
+:class:`~regrasp.plant.Plant` and a study's worker call it when built, so a rollout's timed loop never pays
+for it.
 
 Every kernel reads named fields (numpy record dtypes: :data:`FINGER_PARAMETERS`, :data:`FINGER_TERMS`,
 :data:`PLANT_CONTACT`, :data:`PLANT_PARAMETERS`), never positional tuples. Compiled code is cached on disk
@@ -26,9 +29,11 @@ import numpy as np
 
 from .finger import FINGER_PARAMETERS, FINGER_TERMS, finger_parameters, finger_terms, finger_terms_at
 from .plant import FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, plant_evaluate, plant_step
+from .reduced import CONTACT_EDGE, FINGER_IK, reduced_terms
 
-__all__ = ["FINGER_PARAMETERS", "FINGER_TERMS", "FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDING",
-           "finger_parameters", "finger_terms", "finger_terms_at", "plant_evaluate", "plant_step", "warm_up"]
+__all__ = ["CONTACT_EDGE", "FINGER_IK", "FINGER_PARAMETERS", "FINGER_TERMS", "FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS",
+           "SEPARATED", "SLIDING", "finger_parameters", "finger_terms", "finger_terms_at", "plant_evaluate", "plant_step",
+           "reduced_terms", "warm_up"]
 
 _WARM = []
 
@@ -49,4 +54,10 @@ def warm_up() -> None:
     finger_terms(fingers, zeros, zeros, zeros, True)
     plant_evaluate(fingers, plant, contacts, np.zeros(13), zeros)
     plant_step(fingers, plant, contacts, np.zeros(13), zeros, np.full((1, 9), np.nan), np.zeros((1, 2)))
+    iks = np.zeros(1, dtype=FINGER_IK)
+    iks["l1"], iks["l2"], iks["outer"], iks["sigma"] = 1.0, 1.0, 2.0, 1.0
+    edges = np.zeros(1, dtype=CONTACT_EDGE)
+    edges["tx"], edges["ny"] = 1.0, 1.0
+    reduced_terms(fingers, iks, edges, zeros, True, np.zeros(1), np.full(1, -1, dtype=np.int64),
+                  np.array([1.0, 0.0, 0.0]), np.zeros(3))
     _WARM.append(True)
