@@ -8,7 +8,7 @@ Items and their floors:
   Jacobian, and forward kinematics + the classical acceleration for J̇q̇), plus, with the QP,
   the bare solve of the controller's persistent, warm-started ``osqp.OSQP`` object;
 * one plant step, compiled (the default, :mod:`regrasp.kernels.plant`): floor = the bare kernel call
-  (``plant_step``: RK4, the end evaluation and the event inputs, no Python around it); and on the
+  (``plant_step_into``: RK4, the end evaluation and the event inputs, no Python around it); and on the
   reference path (``Plant(compiled=False)``): floor = four times those Pinocchio calls (RK4 evaluates the
   dynamics 4 times);
 * the planner per time sample (``ideal``, ``urdf``): no floor (null);
@@ -45,7 +45,7 @@ from common import ROOT, median_us, parse_args, sliding_hold
 from regrasp import (FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario,
                      plan_regrasps, run_study)
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
-from regrasp.kernels.plant import plant_step
+from regrasp.kernels import FINGER_TERMS, output_size, plant_step_into
 from regrasp.simulation import sense
 from regrasp.supervisor import SupervisorSettings
 
@@ -53,9 +53,11 @@ THREE = ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml
 
 
 def plant_kernel_us(plant, n: int) -> float:
-    """Median of the bare compiled plant step (:func:`regrasp.kernels.plant.plant_step`) at the plant's state."""
-    args = plant.kernel_arguments(np.zeros(plant.hand.nq))
-    return median_us(lambda: plant_step(*args), n)
+    """Median of the bare compiled plant step (:func:`regrasp.kernels.plant.plant_step_into`) at the plant's state."""
+    m = plant.hand.m
+    args = (*plant.kernel_arguments(np.zeros(plant.hand.nq)), np.empty(output_size(m)), np.empty(m, dtype=FINGER_TERMS),
+            np.empty(m, np.bool_), np.empty((m, 7)))
+    return median_us(lambda: plant_step_into(*args), n)
 
 
 def supervisor_step_us(geometry: str, n: int, track: bool = False) -> tuple[float, float]:

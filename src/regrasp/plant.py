@@ -66,7 +66,8 @@ from ._scalar import solve_small as _solve_small
 from .hand import Hand, _condition
 from .kernels.finger import FINGER_TERMS
 from .kernels import warm_up
-from .kernels.plant import FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, plant_evaluate, plant_step
+from .kernels.plant import (FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, output_size, plant_evaluate,
+                             plant_step_into)
 from .polygon import ConvexPolygon
 from .validation import (as_finite_array, as_finite_float, as_flag, as_inertia, as_integer, as_mass, as_positive_float,
                          expect_sequence_of, expect_type)
@@ -77,6 +78,8 @@ __all__ = ["Plant", "PlantContact", "PlantEvent", "PlantState", "PlantStep"]
 # lookup through the enum's metaclass, ~0.3 us; a global is ~20 ns); compared with ``is``
 _MODE_FIXED, _MODE_SLIDING, _MODE_SEPARATED = ContactMode.FIXED, ContactMode.SLIDING, ContactMode.SEPARATED
 _LWA = pin.LOCAL_WORLD_ALIGNED
+#: Where the elbow's two fields sit in :data:`~regrasp.kernels.finger.FINGER_TERMS` (the reference layout has none).
+_ELBOW = FINGER_TERMS.names.index("ex")
 
 
 class _EdgeGeometry(NamedTuple):
@@ -307,6 +310,9 @@ class Plant:
         self._kernel_contacts: tuple | None = None  # (key, records): see _contact_records()
         self._kernel_plant: tuple | None = None  # (key, record): see _plant_record()
         self._no_certificates, self._no_radii = np.full((hand.m, 9), np.nan), np.zeros((hand.m, 2))
+        # the compiled step's outputs: its arrays (fresh each step) and its workspace (read within a step only)
+        self._output_size = output_size(hand.m)
+        self._workspace = (np.empty(hand.m, dtype=FINGER_TERMS), np.empty(hand.m, np.bool_), np.empty((hand.m, 7)))
 
     # ------------------------------------------------------------------ set-up
     def reset(self, q: ArrayLike, v: ArrayLike, X: ArrayLike, V: ArrayLike, t: float = 0.0,
@@ -708,13 +714,13 @@ class Plant:
 
     @staticmethod
     def _terms_as_pass(terms: np.ndarray) -> list[tuple]:
-        """The kernel's terms in :meth:`_pin_pass`'s layout (for the event logic)."""
-        names = [name for name in FINGER_TERMS.names if name not in ("ex", "ey")]
-        return [tuple(float(record[name]) for name in names) for record in terms]
+        """The kernel's terms in :meth:`_pin_pass`'s layout (for the event logic): :data:`FINGER_TERMS`'s fields
+        but the elbow (``ex``, ``ey``), in order."""
+        return [t[:_ELBOW] + t[_ELBOW + 2:] for t in terms.tolist()]
 
     def kernel_arguments(self, tau: ArrayLike) -> tuple:
-        """The arguments :meth:`step` passes to :func:`~regrasp.kernels.plant.plant_step` at the current state
-        with torques ``tau`` [N m] (benchmarks time the bare kernel with them)."""
+        """The arguments :meth:`step` passes to :func:`~regrasp.kernels.plant.plant_step_into` (before its outputs)
+        at the current state with torques ``tau`` [N m] (benchmarks time the bare kernel with them)."""
         if self.state is None:
             raise InvalidParameterError("state", None, "a state: call reset() first")
         return self._kernel_arguments(np.array(self._torques(tau)))
@@ -726,25 +732,30 @@ class Plant:
                 self._link_radii_array if checked else self._no_radii)
 
     def _step_compiled(self, tau) -> PlantStep:
-        """:meth:`step` with the compiled kernel (:func:`~regrasp.kernels.plant.plant_step`)."""
+        """:meth:`step` with the compiled kernel (:func:`~regrasp.kernels.plant.plant_step_into`)."""
         tau = self._torques(tau)
         st, n = self.state, self.hand.nq
         modes = tuple(c.mode for c in self.contacts)
-        checked = self.checkers is not None
-        new, surface, forces, _, terms, xi, xi_dot, err, attention, needs_coal, posture = plant_step(
-            *self._kernel_arguments(np.array(tau)))
-        works = new[2 * n + 6:].tolist()
-        state = PlantState(st.t + self.dt, new[:n], new[n:2 * n], new[2 * n:2 * n + 3], new[2 * n + 3:2 * n + 6],
-                           *works)
+        m, size = self.hand.m, 2 * n + 9
+        out = np.empty(self._output_size)  # (one allocation: the step's arrays are views of it)
+        terms, needs_coal, posture = self._workspace
+        err, attention, any_coal = plant_step_into(*self._kernel_arguments(np.array(tau)), out, terms, needs_coal,
+                                                   posture)
+        state = PlantState(st.t + self.dt, out[:n], out[n:2 * n], out[2 * n:2 * n + 3], out[2 * n + 3:2 * n + 6],
+                           *out[2 * n + 6:size].tolist())
         self.state = state
         self._last_key = (None,) * 4
-        self.max_constraint_error = max(self.max_constraint_error, err)
+        if err > self.max_constraint_error:
+            self.max_constraint_error = err
+        surface = out[size:size + 2 * m].reshape(m, 2)
+        xi, xi_dot = out[size + 6 * m:size + 7 * m], out[size + 7 * m:]
         if attention:
+            forces = out[size + 2 * m:size + 4 * m].reshape(m, 2)
             events, xis = self._events(state, tau, forces.tolist(), self._terms_as_pass(terms))
             xi, xi_dot = np.array([x[0] for x in xis]), np.array([x[1] for x in xis])
         else:
             events = []
-            if checked and needs_coal.any():
+            if any_coal and self.checkers is not None:
                 for i in np.flatnonzero(needs_coal).tolist():
                     self._coal(state, i, tuple(posture[i].tolist()), events)
         return PlantStep(state, surface, xi, xi_dot, modes, err, tuple(events))

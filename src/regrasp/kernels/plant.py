@@ -24,7 +24,8 @@ import numpy as np
 
 from .finger import FINGER_TERMS, _terms_into, condition_2x2
 
-__all__ = ["FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDING", "plant_evaluate", "plant_step"]
+__all__ = ["FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDING", "output_size", "plant_evaluate",
+           "plant_step", "plant_step_into"]
 
 _F8 = np.float64
 
@@ -172,28 +173,52 @@ def _surface(ct, c, s, fx, fy):
             (c * ct.tx - s * ct.ty) * fx + (s * ct.tx + c * ct.ty) * fy)
 
 
+def output_size(m: int) -> int:
+    """The length of :func:`plant_step_into`'s ``out`` for m fingers: the new state (4m + 9), then (m, 2) each
+    of the start's surface forces, the end's forces and the end's surface forces, then (m,) each of ξ and ξ̇."""
+    return 4 * m + 9 + 8 * m
+
+
 @numba.njit(cache=True)
 def plant_step(fingers, plant, contacts, y, tau, certificates, radii):
-    """One RK4 step of ``plant.dt`` from the flat state ``y`` with constant torques ``tau``.
+    """:func:`plant_step_into` with its outputs allocated here, returned as (new state, surface forces at the
+    start, forces, surface forces, terms, ξ, ξ̇, violation, attention, needs coal, postures)."""
+    m = fingers.shape[0]
+    size = y.shape[0]
+    out = np.empty(size + 8 * m)
+    terms = np.empty(m, dtype=FINGER_TERMS)
+    needs_coal = np.empty(m, np.bool_)
+    posture = np.empty((m, 7))
+    worst, attention, _ = plant_step_into(fingers, plant, contacts, y, tau, certificates, radii, out, terms,
+                                          needs_coal, posture)
+    return (out[:size], out[size:size + 2 * m].reshape((m, 2)), out[size + 2 * m:size + 4 * m].reshape((m, 2)),
+            out[size + 4 * m:size + 6 * m].reshape((m, 2)), terms, out[size + 6 * m:size + 7 * m],
+            out[size + 7 * m:], worst, attention, needs_coal, posture)
+
+
+@numba.njit(cache=True)
+def plant_step_into(fingers, plant, contacts, y, tau, certificates, radii, out, terms, needs_coal, posture):
+    """One RK4 step of ``plant.dt`` from the flat state ``y`` with constant torques ``tau``, written into
+    ``out`` (:func:`output_size`: the new state, the surface forces (normal, tangential) at the step's start
+    (its first stage, at the start pose), and at its end the forces on the object (hand frame), their surface
+    components, every contact's ξ [m] and ξ̇ [m/s] on its edge's line), ``terms`` (the fingers' terms at the
+    end), ``needs_coal`` and ``posture``.
 
     ``certificates`` (m, 9) and ``radii`` (m, 2) are the collision check's (see
-    :meth:`regrasp.plant.Plant._collisions`; a NaN row: none): the step tells which fingers still need coal.
+    :meth:`regrasp.plant.Plant._collisions`; a NaN row: none): ``needs_coal`` says which fingers' links may have
+    reached the object since their certificate, ``posture`` each finger's (q_1, q_2, β, joint 1 and the elbow
+    in the object frame: a new certificate's first seven entries).
 
-    Returns the new state, the surface forces (m, 2: normal, tangential) at the step's start (its
-    first stage, at the start pose), and at its end: the forces on the object (m, 2, hand frame), their
-    surface components, the fingers' terms, every contact's ξ [m] and ξ̇ [m/s] on its edge's line,
-    the largest violation [m] of the active constraints, and whether an event may have happened (a
-    contact that separates, slips, may stick or left its edge, or a singular finger: the caller's
-    event logic then runs; collisions are the caller's), which fingers' links may have reached the object
-    since their certificate (coal must look) and every finger's posture (q_1, q_2, β, joint 1 and the
-    elbow in the object frame: a new certificate's first seven entries)."""
+    Returns the largest violation [m] of the active constraints, whether an event may have happened (a contact
+    that separates, slips, may stick or left its edge, or a singular finger: the caller's event logic then
+    runs; collisions are the caller's), and whether any finger needs coal. No array is allocated for the
+    caller (numba's boxing of returned arrays costs more than the step's arithmetic)."""
     m = fingers.shape[0]
     size = y.shape[0]
     n = 2 * m
     h = plant.dt
-    terms = np.empty(m, dtype=FINGER_TERMS)
-    forces0 = np.empty((m, 2))
-    forces = np.empty((m, 2))
+    forces0 = out[size:size + 2 * m].reshape((m, 2))  # (the start's forces, then their surface components)
+    forces = out[size + 2 * m:size + 4 * m].reshape((m, 2))
     k1, k2, k3, k4 = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
     stage = np.empty(size)
     _evaluate(fingers, plant, contacts, y, tau, terms, k1, forces0)
@@ -206,25 +231,25 @@ def plant_step(fingers, plant, contacts, y, tau, certificates, radii):
     for j in range(size):
         stage[j] = y[j] + h * k3[j]
     _evaluate(fingers, plant, contacts, stage, tau, terms, k4, forces)
-    new = np.empty(size)
+    new = out[:size]
     for j in range(size):
         new[j] = y[j] + h * ((k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]) / 6.0)
     _evaluate(fingers, plant, contacts, new, tau, terms, k1, forces)
-    surface0 = np.empty((m, 2))
-    surface = np.empty((m, 2))
-    xi = np.empty(m)
-    xi_dot = np.empty(m)
+    surface0 = forces0  # (rotated in place below)
+    surface = out[size + 4 * m:size + 6 * m].reshape((m, 2))
+    xi = out[size + 6 * m:size + 7 * m]
+    xi_dot = out[size + 7 * m:size + 8 * m]
     c0, s0 = math.cos(y[2 * n + 2]), math.sin(y[2 * n + 2])
     x, yo, beta = new[2 * n], new[2 * n + 1], new[2 * n + 2]
     vx, vy, w = new[2 * n + 3], new[2 * n + 4], new[2 * n + 5]
     c, s = math.cos(beta), math.sin(beta)
     worst = 0.0
     attention = False
-    needs_coal = np.empty(m, np.bool_)
-    posture = np.empty((m, 7))
+    any_coal = False
     for i in range(m):
         _posture(fingers[i], terms[i], new[2 * i], new[2 * i + 1], x, yo, beta, c, s, posture[i])
         needs_coal[i] = not _certified(posture[i], certificates[i], radii[i])
+        any_coal = any_coal or needs_coal[i]
     for i in range(m):
         ct = contacts[i]
         surface0[i, 0], surface0[i, 1] = _surface(ct, c0, s0, forces0[i, 0], forces0[i, 1])
@@ -254,7 +279,7 @@ def plant_step(fingers, plant, contacts, y, tau, certificates, radii):
                 attention = True
             elif ct.mode == SLIDING and xi_dot[i] * ct.sign <= 0.0:
                 attention = True
-    return new, surface0, forces, surface, terms, xi, xi_dot, worst, attention, needs_coal, posture
+    return worst, attention, any_coal
 
 
 @numba.njit(cache=True)
