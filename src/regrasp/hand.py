@@ -158,7 +158,7 @@ class Hand:
         if as_flag("compiled", compiled) and self.kernel_parameters is None:
             raise InvalidParameterError("compiled", compiled, "False for this hand: its compiled kernels disagree "
                                         f"with Pinocchio ({self.kernel_disagreement[1]})")
-        return compiled
+        return bool(compiled)
 
     def set_gravity(self, gravity_in_hand: ArrayLike) -> None:
         """Set the gravity vector [m/s^2] in the hand frame."""
