@@ -28,13 +28,13 @@ Every kernel reads named fields (numpy record dtypes: :data:`FINGER_PARAMETERS`,
 import numpy as np
 
 from .finger import FINGER_PARAMETERS, FINGER_TERMS, finger_parameters, finger_terms, finger_terms_at
-from .plant import (FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, output_size, plant_evaluate, plant_step,
+from .plant import (FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, output_size, plant_evaluate,
                     plant_step_into)
 from .reduced import CONTACT_EDGE, FINGER_IK, reduced_terms
 
 __all__ = ["CONTACT_EDGE", "FINGER_IK", "FINGER_PARAMETERS", "FINGER_TERMS", "FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS",
            "SEPARATED", "SLIDING", "finger_parameters", "finger_terms", "finger_terms_at", "output_size", "plant_evaluate",
-           "plant_step", "plant_step_into", "reduced_terms", "warm_up"]
+           "plant_step_into", "reduced_terms", "warm_up"]
 
 _WARM = []
 
@@ -54,7 +54,6 @@ def warm_up() -> None:
     zeros = np.zeros(2)
     finger_terms(fingers, zeros, zeros, zeros, True)
     plant_evaluate(fingers, plant, contacts, np.zeros(13), zeros)
-    plant_step(fingers, plant, contacts, np.zeros(13), zeros, np.full((1, 9), np.nan), np.zeros((1, 2)))
     plant_step_into(fingers, plant, contacts, np.zeros(13), zeros, np.full((1, 9), np.nan), np.zeros((1, 2)),
                     np.empty(output_size(1)), np.empty(1, dtype=FINGER_TERMS), np.empty(1, np.bool_), np.empty((1, 7)))
     iks = np.zeros(1, dtype=FINGER_IK)

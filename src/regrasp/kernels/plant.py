@@ -25,7 +25,7 @@ import numpy as np
 from .finger import FINGER_TERMS, _terms_into, condition_2x2
 
 __all__ = ["FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDING", "output_size", "plant_evaluate",
-           "plant_step", "plant_step_into"]
+           "plant_step_into"]
 
 _F8 = np.float64
 
@@ -177,23 +177,6 @@ def output_size(m: int) -> int:
     """The length of :func:`plant_step_into`'s ``out`` for m fingers: the new state (4m + 9), then (m, 2) each
     of the start's surface forces, the end's forces and the end's surface forces, then (m,) each of ξ and ξ̇."""
     return 4 * m + 9 + 8 * m
-
-
-@numba.njit(cache=True)
-def plant_step(fingers, plant, contacts, y, tau, certificates, radii):
-    """:func:`plant_step_into` with its outputs allocated here, returned as (new state, surface forces at the
-    start, forces, surface forces, terms, ξ, ξ̇, violation, attention, needs coal, postures)."""
-    m = fingers.shape[0]
-    size = y.shape[0]
-    out = np.empty(size + 8 * m)
-    terms = np.empty(m, dtype=FINGER_TERMS)
-    needs_coal = np.empty(m, np.bool_)
-    posture = np.empty((m, 7))
-    worst, attention, _ = plant_step_into(fingers, plant, contacts, y, tau, certificates, radii, out, terms,
-                                          needs_coal, posture)
-    return (out[:size], out[size:size + 2 * m].reshape((m, 2)), out[size + 2 * m:size + 4 * m].reshape((m, 2)),
-            out[size + 4 * m:size + 6 * m].reshape((m, 2)), terms, out[size + 6 * m:size + 7 * m],
-            out[size + 7 * m:], worst, attention, needs_coal, posture)
 
 
 @numba.njit(cache=True)
