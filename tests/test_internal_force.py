@@ -625,3 +625,42 @@ def test_null_basis_is_orthonormal_and_falls_back_on_rank_deficient_matrices():
     N = _null_basis(A)
     assert N.shape == scipy.linalg.null_space(A.T).shape == (6, 3)
     np.testing.assert_allclose(A.T @ N, 0.0, atol=1e-13)
+
+
+@pytest.mark.parametrize("path", ["persistent", "one-shot"])
+def test_ctrl_c_during_an_osqp_solve_reaches_python(path):
+    """OSQP's C library takes a SIGINT that arrives during its solve (status ``interrupted``; Python never sees
+    it): the solver hands it on. Each trial sends one SIGINT from another thread while solves run back to back
+    (most of the loop's time is inside OSQP); the KeyboardInterrupt must come, every time."""
+    import os
+    import signal
+    import threading
+    import time
+
+    from regrasp.internal_force import InternalForceSolver
+
+    case = random_case("three_sliding" if "three_sliding" in KINDS else next(iter(KINDS)), 1)
+    args = (case["A"], case["f_m"], case["frames"], case["modes"], case["friction"])
+    solver = InternalForceSolver(case["settings"])
+
+    def solve():
+        if path == "persistent":
+            solver.solve(*args)
+        else:
+            qp = build_internal_force_qp(case["A"], case["f_m"], case["frames"], case["modes"], case["friction"],
+                                         case["settings"])
+            solve_internal_force_qp(qp, case["frames"], case["modes"], case["friction"])
+
+    solve()
+    caught = 0
+    for trial in range(20):
+        timer = threading.Timer(0.002 + 0.0007 * trial, os.kill, (os.getpid(), signal.SIGINT))
+        deadline = time.monotonic() + 1.0
+        try:
+            timer.start()
+            while time.monotonic() < deadline:
+                solve()
+        except KeyboardInterrupt:
+            caught += 1
+        timer.join()
+    assert caught == 20

@@ -87,6 +87,51 @@ def test_ctrl_c_ends_an_interruptible_run_with_its_records_intact(rollout):
         simulate(rollout.plant, driver(rollout), 20, consumers=[consumer])
 
 
+@pytest.mark.parametrize("nested", [False, True])
+def test_a_real_sigint_mid_step_ends_the_run_after_that_step_never_inside_a_consumer(rollout, nested):
+    import contextlib
+    import os
+    import signal
+
+    from regrasp.simulation import InterruptAtStepEnd
+
+    previous = signal.getsignal(signal.SIGINT)
+    seen = []
+
+    def first(record):
+        if record.index == 4:
+            os.kill(os.getpid(), signal.SIGINT)  # delivered here, in the middle of the step's consumers
+
+    # nested: as in ``regrasp simulate``, which defers Ctrl-C from before it opens its recording
+    with InterruptAtStepEnd() if nested else contextlib.nullcontext():
+        outcome = simulate(rollout.plant, driver(rollout), 20, consumers=[first, seen.append], interruptible=True)
+    # the step in progress is completed (its later consumers too); the next one never starts
+    assert outcome.failure.kind is FailureKind.INTERRUPTED and outcome.steps == 5 and len(seen) == 5
+    assert signal.getsignal(signal.SIGINT) is previous
+
+
+def test_a_second_sigint_raises_at_once_and_a_nested_deferral_shares_the_outer_request():
+    import os
+    import signal
+
+    from regrasp.simulation import InterruptAtStepEnd
+
+    previous = signal.getsignal(signal.SIGINT)
+    with InterruptAtStepEnd() as outer:
+        with InterruptAtStepEnd() as inner:
+            assert not inner.requested
+            os.kill(os.getpid(), signal.SIGINT)
+            assert inner.requested and outer.requested
+            with pytest.raises(KeyboardInterrupt):
+                os.kill(os.getpid(), signal.SIGINT)
+                for _ in range(1000):  # (the handler runs at the next bytecode boundary)
+                    pass
+        assert signal.getsignal(signal.SIGINT) == outer._handle  # noqa: SLF001 (the inner one left it installed)
+    assert signal.getsignal(signal.SIGINT) is previous
+    with InterruptAtStepEnd(active=False) as off:
+        assert signal.getsignal(signal.SIGINT) is previous and not off.requested
+
+
 def test_plant_events_are_in_the_record_with_their_source():
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
     rollout = build_rollout(sc, duration=0.01, policy="paper")  # finger 1 starts next to its bound: it slides

@@ -202,6 +202,7 @@ def _simulate(args, scenario, common, progress_bar) -> tuple[int, str]:
     """Run the rollout: (exit status, what to print on stdout)."""
     from .rollout import build_rollout
     from .schedule import NoScheduleError, ScheduleLimit
+    from .simulation import InterruptAtStepEnd
 
     quiet = args.json
     try:
@@ -219,18 +220,20 @@ def _simulate(args, scenario, common, progress_bar) -> tuple[int, str]:
             print(f"no schedule beyond t = {exc.latest_time:.3f} s ({exc.reason}); running the partial schedule",
                   file=sys.stderr)
         rollout = build_rollout(scenario, policy=args.policy, schedule=exc.partial, **common)
-    recorder = None
-    if args.rrd is not None or args.spawn or args.connect:
-        from .recording import RolloutRecorder
+    # Ctrl-C from here until the recording is closed ends the run at a step's end (never inside the recorder)
+    with InterruptAtStepEnd():
+        recorder = None
+        if args.rrd is not None or args.spawn or args.connect:
+            from .recording import RolloutRecorder
 
-        recorder = RolloutRecorder(rollout.plant, rrd_path=args.rrd, spawn=args.spawn, connect=args.connect,
-                                   decimation=args.decimate, envelope_geometry=scenario.geometry.value,
-                                   recording_name=f"{scenario.name} ({args.policy})")
-    try:
-        result = rollout.run(recorder=recorder, progress=None if quiet else progress_bar("simulating"))
-    finally:
-        if recorder is not None:
-            recorder.close()
+            recorder = RolloutRecorder(rollout.plant, rrd_path=args.rrd, spawn=args.spawn, connect=args.connect,
+                                       decimation=args.decimate, envelope_geometry=scenario.geometry.value,
+                                       recording_name=f"{scenario.name} ({args.policy})")
+        try:
+            result = rollout.run(recorder=recorder, progress=None if quiet else progress_bar("simulating"))
+        finally:
+            if recorder is not None:
+                recorder.close()
     figures = []
     if args.plot:
         from .rollout_plots import plot_rollout

@@ -47,10 +47,13 @@ so and only reports whether the predicted forces satisfy the constraints.
 
 from __future__ import annotations
 
+import ctypes
+import functools
 import math
+import signal
 import time
 import warnings
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -288,6 +291,36 @@ def _check(qp: InternalForceQP, forces, frames, modes, friction, cone_edge, slac
     return rows.check(C, np.asarray(forces).reshape(-1), slack)
 
 
+_OSQP_INTERRUPTED = "interrupted"
+
+
+@functools.cache
+def _osqp_interrupt_flag() -> Callable[[], int] | None:
+    """OSQP's own record of a Ctrl-C during its last solve (``osqp_is_interrupted`` in its C library, which
+    keeps the flag until the next solve starts), or None where the library does not export it."""
+    try:
+        from osqp import ext_builtin
+
+        flag = ctypes.CDLL(ext_builtin.__file__).osqp_is_interrupted
+    except (ImportError, OSError, AttributeError):
+        return None
+    flag.restype, flag.argtypes = ctypes.c_int, []
+    return flag
+
+
+def _hand_on_ctrl_c(status: str) -> bool:
+    r"""OSQP's C library listens for Ctrl-C while it solves: it takes the SIGINT (Python never sees it) and
+    either ends the solve early (status ``interrupted``) or, when the signal comes after its last check (while
+    it polishes), finishes and forgets it. Either way, hand the signal on to Python's handler (a
+    :class:`KeyboardInterrupt`, or a loop's deferred request, :class:`~regrasp.simulation.InterruptAtStepEnd`)
+    and return whether the caller must solve again (the solve was cut short)."""
+    flag = _osqp_interrupt_flag()
+    if status != _OSQP_INTERRUPTED and (flag is None or not flag()):
+        return False
+    signal.raise_signal(signal.SIGINT)
+    return status == _OSQP_INTERRUPTED
+
+
 def solve_internal_force_qp(
     qp: InternalForceQP,
     surface_frames: np.ndarray,
@@ -306,12 +339,15 @@ def solve_internal_force_qp(
         ok, margin = _check(qp, forces, surface_frames, modes, friction, cone_edge, 1e-9 * scale)
         return InternalForceResult(np.zeros(2 * m), forces, 0, ok, "empty null space",
                                    time.perf_counter() - start, margin)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # OSQP warns on infeasibility; we raise a typed error instead
-        solution = qpsolvers.solve_problem(qp.problem, solver="osqp", eps_abs=tol, eps_rel=tol,
-                                           polishing=True, verbose=False, max_iter=20000)
-    info = solution.extras.get("info") if isinstance(solution.extras, dict) else None
-    status = getattr(info, "status", "unknown")
+    while True:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # OSQP warns on infeasibility; we raise a typed error instead
+            solution = qpsolvers.solve_problem(qp.problem, solver="osqp", eps_abs=tol, eps_rel=tol,
+                                               polishing=True, verbose=False, max_iter=20000)
+        info = solution.extras.get("info") if isinstance(solution.extras, dict) else None
+        status = getattr(info, "status", "unknown")
+        if not _hand_on_ctrl_c(status):
+            break
     if not solution.found or solution.x is None:
         raise InternalForceInfeasibleError(qp, status)
     k = qp.null_basis.shape[1]
@@ -429,6 +465,8 @@ class InternalForceSolver:
             a_t += rows.margin_column  # s's column
         solver = self._osqp(k, rows, np.array(a_t), np.array(lower))
         solver._solver.solve()
+        while _hand_on_ctrl_c(str(solver._solver.info.status)):
+            solver._solver.solve()
         status = str(solver._solver.info.status)
         x = solver._solver.solution.x
         if status in ("solved", "solved inaccurate") and x is not None and all(map(math.isfinite, x.tolist())):

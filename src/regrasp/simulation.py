@@ -11,7 +11,9 @@ and hands one frozen :class:`StepRecord` to each consumer: the rollout's result
 The loop stops at the end, when ``check`` returns a :class:`~regrasp.events.Failure` for a record,
 when the driver's control law fails (:class:`~regrasp.exceptions.RegraspError` or a singular
 model: a ``CONTROL`` failure, never an exception out of the loop), or, with ``interruptible``, on
-Ctrl-C (an ``INTERRUPTED`` failure: the records so far are intact).
+Ctrl-C (an ``INTERRUPTED`` failure: the records so far are intact). The first Ctrl-C is deferred to the
+end of the step in progress (:class:`InterruptAtStepEnd`), so it never lands inside a consumer (a recorder
+half-way through a write) or a compiler; a second one raises at once.
 
 A :class:`~regrasp.disturbance.Disturbance` (optional) stands between the plant and the driver: the driver
 senses its noisy, delayed reading of the truth and the plant gets its delayed, noisy torques. A record keeps
@@ -21,6 +23,8 @@ the results read the truth.
 
 from __future__ import annotations
 
+import signal
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -40,8 +44,8 @@ from .polygon import ConvexPolygon
 from .supervisor import Measurement, SupervisorOutput
 from .trajectory import TrajectorySample
 
-__all__ = ["Command", "Driver", "PlantLike", "SimulationOutcome", "StepRecord", "sense", "sense_projected",
-           "simulate"]
+__all__ = ["Command", "Driver", "InterruptAtStepEnd", "PlantLike", "SimulationOutcome", "StepRecord", "sense",
+           "sense_projected", "simulate"]
 
 
 @runtime_checkable
@@ -199,6 +203,49 @@ def sense_projected(plant: PlantLike, last: PlantStep | None) -> Measurement:
                        friction, normal)
 
 
+class InterruptAtStepEnd:
+    """Defer the first Ctrl-C (SIGINT) to a point the loop chooses: while active, the first SIGINT only sets
+    :attr:`requested` and a second one raises :class:`KeyboardInterrupt` at once (a way out of a step that never
+    ends). With ``active=False`` it does nothing. Installed only from the main thread (elsewhere Python delivers
+    no signals); the previous handler is restored on exit. Nested inside another one (a command that defers
+    Ctrl-C from before it opens its recording until it has closed it), it shares the outer one's request.
+    """
+
+    def __init__(self, active: bool = True) -> None:
+        self.active = active
+        self._requested = False
+        self._outer: InterruptAtStepEnd | None = None
+        self._previous: object = None
+        self._installed = False
+
+    @property
+    def requested(self) -> bool:
+        """Whether Ctrl-C was pressed while this (or the one it is nested in) was active."""
+        return self._outer.requested if self._outer is not None else self._requested
+
+    def _handle(self, signum: int, frame: object) -> None:
+        if self._requested:
+            raise KeyboardInterrupt
+        self._requested = True
+
+    def __enter__(self) -> InterruptAtStepEnd:
+        if not self.active or threading.current_thread() is not threading.main_thread():
+            return self
+        current = signal.getsignal(signal.SIGINT)
+        outer = getattr(current, "__self__", None)
+        if isinstance(outer, InterruptAtStepEnd):
+            self._outer = outer
+        else:
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+            self._installed = True
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._installed:
+            signal.signal(signal.SIGINT, self._previous)  # type: ignore[arg-type]
+            self._installed = False
+
+
 def simulate(plant: PlantLike, driver: Driver, steps: int, *,
              consumers: Sequence[Callable[[StepRecord], None]] = (),
              check: Callable[[StepRecord], Failure | None] | None = None,
@@ -224,43 +271,47 @@ def simulate(plant: PlantLike, driver: Driver, steps: int, *,
     failure: Failure | None = None
     done = 0
     wall0 = time.perf_counter()
-    try:
-        for k in range(steps):
-            if plant.stopped:
-                break
-            truth = sensor(plant, last)
-            meas = truth if disturbance is None else disturbance.measure(truth)
-            try:
-                command = driver.step(meas, dt)
-            except (RegraspError, np.linalg.LinAlgError) as exc:
-                if not control_failures:
-                    raise
-                failure = Failure(float(meas.t), FailureKind.CONTROL, f"control failed: {exc}")
-                break
-            tau = command.tau if disturbance is None else disturbance.actuate(command.tau)
-            t0 = time.perf_counter()
-            step = plant.step(tau)
-            plant_seconds = time.perf_counter() - t0
-            last = step
-            if mus is None:
-                mus = plant.friction
-            forces = step.forces_surface
-            margins = cone_margin(np.array(coefficients(mus, step.modes)), forces[:, 0], forces[:, 1])
-            events = (() if command.supervision is None else command.supervision.events) + tuple(
-                Event(e.time, e.contact, e.kind, e.detail, EventSource.PLANT, e.values) for e in step.events)
-            record = StepRecord(k, float(meas.t), meas, command, step, margins, events, plant_seconds, truth, tau)
-            for consume in consumers:
-                consume(record)
-            done = k + 1
-            if progress is not None and done % 50 == 0:
-                progress(done, steps)
-            if check is not None:
-                failure = check(record)
-                if failure is not None:
+    interrupt = InterruptAtStepEnd(active=interruptible)
+    with interrupt:
+        try:
+            for k in range(steps):
+                if plant.stopped or interrupt.requested:
                     break
-    except KeyboardInterrupt:
-        if not interruptible:
-            raise
+                truth = sensor(plant, last)
+                meas = truth if disturbance is None else disturbance.measure(truth)
+                try:
+                    command = driver.step(meas, dt)
+                except (RegraspError, np.linalg.LinAlgError) as exc:
+                    if not control_failures:
+                        raise
+                    failure = Failure(float(meas.t), FailureKind.CONTROL, f"control failed: {exc}")
+                    break
+                tau = command.tau if disturbance is None else disturbance.actuate(command.tau)
+                t0 = time.perf_counter()
+                step = plant.step(tau)
+                plant_seconds = time.perf_counter() - t0
+                last = step
+                if mus is None:
+                    mus = plant.friction
+                forces = step.forces_surface
+                margins = cone_margin(np.array(coefficients(mus, step.modes)), forces[:, 0], forces[:, 1])
+                events = (() if command.supervision is None else command.supervision.events) + tuple(
+                    Event(e.time, e.contact, e.kind, e.detail, EventSource.PLANT, e.values) for e in step.events)
+                record = StepRecord(k, float(meas.t), meas, command, step, margins, events, plant_seconds, truth, tau)
+                for consume in consumers:
+                    consume(record)
+                done = k + 1
+                if progress is not None and done % 50 == 0:
+                    progress(done, steps)
+                if check is not None:
+                    failure = check(record)
+                    if failure is not None:
+                        break
+        except KeyboardInterrupt:
+            if not interruptible:
+                raise
+            failure = Failure(float(plant.state.t), FailureKind.INTERRUPTED, "interrupted (Ctrl-C)")
+    if interrupt.requested and failure is None:
         failure = Failure(float(plant.state.t), FailureKind.INTERRUPTED, "interrupted (Ctrl-C)")
     if progress is not None:
         progress(done, steps)
