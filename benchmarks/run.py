@@ -3,10 +3,12 @@
 Run: python benchmarks/run.py [--quick] [--json]
 
 Items and their floors:
-* control steps (fixed law and Proposition 1, with and without the internal-force QP): floor =
-  the Pinocchio calls one step needs (per finger: crba, nonLinearEffects, the tip's frame
-  Jacobian, and forward kinematics + the classical acceleration for J̇q̇), plus, with the QP,
-  the bare solve of the controller's persistent, warm-started ``osqp.OSQP`` object;
+* control steps (fixed law and Proposition 1, with and without the internal-force QP; compiled, the default):
+  floor = the bare compiled kernel call (``regrasp.kernels.control.control_step_into`` with the controller's
+  arguments: the reduced terms, the law, the QP's dense solver, no Python around it); and the fixed law with
+  the QP on the reference path (``compiled=False`` and the QP on OSQP): floor = the Pinocchio calls one step
+  needs (per finger: crba, nonLinearEffects, the tip's frame Jacobian, and forward kinematics + the classical
+  acceleration for J̇q̇) plus the bare solve of its persistent, warm-started ``osqp.OSQP`` object;
 * one plant step, compiled (the default, :mod:`regrasp.kernels.plant`): floor = the bare kernel call
   (``plant_step_into``: RK4, the end evaluation and the event inputs, no Python around it); and on the
   reference path (``Plant(compiled=False)``): floor = four times those Pinocchio calls (RK4 evaluates the
@@ -45,11 +47,19 @@ from common import ROOT, median_us, parse_args, sliding_hold
 from regrasp import (FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario,
                      plan_regrasps, run_study)
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
-from regrasp.kernels import FINGER_TERMS, output_size, plant_step_into
+from regrasp.internal_force import InternalForceSolver
+from regrasp.kernels import FINGER_TERMS, control_step_into, output_size, plant_step_into
 from regrasp.simulation import sense
 from regrasp.supervisor import SupervisorSettings
 
 THREE = ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
+
+
+def control_kernel_us(controller, args, n: int) -> float:
+    """The bare compiled control step (``control_step_into``) with ``controller``'s arguments [µs]."""
+    head, tail, _, size = controller._kernel
+    rows, out = np.array(args, dtype=float), np.empty(size)
+    return median_us(lambda: control_step_into(*head, rows[0], rows[1], rows[2], rows[3], rows[4], *tail, out), n)
 
 
 def plant_kernel_us(plant, n: int) -> float:
@@ -209,9 +219,12 @@ def main() -> None:
     fixed_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), friction=0.5)
     fixed_no = FixedContactController(fixed, Gains.critically_damped(20.0, 3), friction=0.5, internal_force=None)
     out = fixed_qp(X, zero3, X, zero3, zero3)
-    # the QP's floor: the controller's persistent osqp.OSQP object solving its (warm-started) problem
-    (raw_osqp,) = [solver for solver in fixed_qp._qp._solvers.values()]
-    assert out.internal is not None
+    assert out.internal is not None and fixed_qp._kernel is not None  # (the compiled step answers)
+    # the reference path: the controller's Python and the QP on OSQP; its floor: the bare OSQP solve
+    fixed_ref = FixedContactController(fixed, Gains.critically_damped(20.0, 3), friction=0.5, compiled=False)
+    fixed_ref._qp = InternalForceSolver(fixed_ref.internal_force, compiled=False)
+    fixed_ref(X, zero3, X, zero3, zero3)
+    (raw_osqp,) = [solver for solver in fixed_ref._qp._solvers.values()]
     osqp_floor = median_us(lambda: raw_osqp.solve(raise_error=False), n)
 
     third = hand.fingers[0].with_placement(base_in_hand=(0.04, -0.02, np.pi / 2), configuration="left",
@@ -229,13 +242,15 @@ def main() -> None:
 
     results = {
         "control_fixed_qp": {"median_us": median_us(lambda: fixed_qp(X, zero3, X, zero3, zero3), n),
-                             "floor_us": floor_dyn + osqp_floor},
+                             "floor_us": control_kernel_us(fixed_qp, (X, zero3, X, zero3, zero3), n)},
         "control_fixed_no_qp": {"median_us": median_us(lambda: fixed_no(X, zero3, X, zero3, zero3), n),
-                                "floor_us": floor_dyn},
+                                "floor_us": control_kernel_us(fixed_no, (X, zero3, X, zero3, zero3), n)},
+        "control_fixed_qp_reference": {"median_us": median_us(lambda: fixed_ref(X, zero3, X, zero3, zero3), n),
+                                       "floor_us": floor_dyn + osqp_floor},
         "control_sliding_m3_qp": {"median_us": median_us(lambda: slide_qp(S3, S3d, S3, S3d, np.zeros(4)), n),
-                                  "floor_us": floor_dyn3 + osqp_floor},
+                                  "floor_us": control_kernel_us(slide_qp, (S3, S3d, S3, S3d, np.zeros(4)), n)},
         "control_sliding_m3_no_qp": {"median_us": median_us(lambda: slide_no(S3, S3d, S3, S3d, np.zeros(4)), n),
-                                     "floor_us": floor_dyn3},
+                                     "floor_us": control_kernel_us(slide_no, (S3, S3d, S3, S3d, np.zeros(4)), n)},
         "plant_step": {"median_us": median_us(setup.plant_step, n), "floor_us": plant_kernel_us(setup.plant, n)},
         "plant_step_reference": {"median_us": median_us(lambda: setup.plant_step(setup.plant_reference), n),
                                  "floor_us": 4 * floor_dyn},

@@ -92,8 +92,21 @@ class _Rows:
             for r in cone:
                 self.margin_column[r] = -1.0
             self.margin_column[self.n_ineq - 1] = 1.0
+        self._arrays: tuple | None = None
         #: per row (2i, α_r, β_r, lo_r) as floats (hot paths)
         self.terms = [(2 * i, *(float(v) for v in coef), float(lo)) for i, coef, lo in ineq + eq]
+
+    def arrays(self) -> tuple:
+        """The rows as the compiled kernel takes them (:func:`regrasp.kernels.force.internal_force_into`, after
+        its first three arguments): coefficients, lower, n_ineq, is_cone, target, margin column, W, δ."""
+        if self._arrays is None:
+            rows = self.n_ineq + self.n_eq
+            is_cone = np.zeros(rows, dtype=np.bool_)
+            is_cone[list(self.cone)] = True
+            margin = np.array(self.margin_column, dtype=float) if self.margin_column else np.zeros(rows)
+            self._arrays = (np.ascontiguousarray(self.coefficients), self.lower.astype(float), self.n_ineq, is_cone,
+                            self.target, margin, MARGIN_WEIGHT, MARGIN_AIM)
+        return self._arrays
 
     def matrix(self, frames_bd: np.ndarray) -> np.ndarray:
         """C (rows, 2m): the rows' left-hand sides are C f for contact forces f (2m,) in the hand frame;

@@ -52,6 +52,7 @@ from ._scalar import solve_small
 from .contact import FrictionLike, as_frictions, coefficients, cone_margin
 from .exceptions import InvalidParameterError, SingularModelError
 from .internal_force import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver, as_cone_edges
+from .kernels.control import CONTROL_OK, control_layout, control_step_into
 from .reduced import ReducedModel, ReducedState
 from .validation import as_finite_array, as_finite_vectors, as_integer, as_positive_float, expect_type
 
@@ -138,13 +139,16 @@ class ComputedTorqueController:
         cone_edge: Put this contact on a cone edge, with the coefficient the
             :class:`~regrasp.internal_force.ConeEdge` carries (the transition before a slide); or a tuple
             of them, on distinct contacts (several transitions at once). Kept as given in ``cone_edge``.
+        compiled: Take the compiled step (:mod:`regrasp.kernels.control`) where it applies: a compiled model, a
+            law whose friction estimate needs no state (the fixed-contact law, Proposition 1) and the QP's
+            compiled solver; anything else it does not settle goes the reference path. None: where it applies.
     """
 
     law = "computed torque"
 
     def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = 0.5, *,
                  internal_force: InternalForceSettings | None = InternalForceSettings(),
-                 cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None):
+                 cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None, compiled: bool | None = None):
         expect_type("model", model, ReducedModel, "a ReducedModel")
         expect_type("gains", gains, Gains, "a Gains")
         if internal_force is not None:
@@ -166,6 +170,26 @@ class ComputedTorqueController:
         self._margin_mu = coefficients(self.friction, self._modes)
         # whether the law's f̂_ξ needs the ReducedState (the base law's is zero)
         self._estimates_friction = type(self).friction_estimate is not ComputedTorqueController.friction_estimate
+        self._kernel = None
+        if compiled is not False and model.compiled and not self._estimates_friction \
+                and type(self)._torque is ComputedTorqueController._torque \
+                and (self._qp is None or self._qp.compiled):
+            self._kernel = self._kernel_arguments()
+
+    def _kernel_arguments(self) -> tuple:
+        """The compiled step's constant arguments (:func:`~regrasp.kernels.control.control_step_into`)."""
+        model, hand, m = self.model, self.model.hand, self.model.grasp.m
+        fingers, iks, edges, columns = model.kernel_constants
+        if self._qp is not None:
+            rows = self._qp.rows_arrays(m, self._modes, self.friction, self._cone_edges or None)
+        else:
+            rows = (np.zeros((0, 2 * m)), np.zeros(0), 0, np.zeros(0, np.bool_), 0.0, np.zeros(0), 1.0, 0.0)
+        head = (fingers, iks, edges, hand.gravity_in_hand, hand.damping_enabled, model.xi, columns)
+        tail = (self.gains.kv, self.gains.ks, np.array(model.m_s_diagonal), float(model.object_mass),
+                np.zeros(model.grasp.p), float(hand.singular_threshold), np.array(self._margin_mu, dtype=float),
+                self._qp is not None, *rows)
+        layout = control_layout(m, model.n)
+        return head, tail, layout, layout["f_c"].stop
 
     def friction_estimate(self, st: ReducedState, command: np.ndarray, friction: ArrayLike | None) -> np.ndarray:
         """f̂_ξ (p,) [N]; the laws override this."""
@@ -181,6 +205,10 @@ class ComputedTorqueController:
         start = time.perf_counter()
         model = self.model
         args = as_finite_vectors(_ARGUMENTS, (S, S_dot, S_d, S_d_dot, S_d_ddot), model.n)
+        if self._kernel is not None:
+            output = self._call_compiled(args, start)
+            if output is not None:
+                return output
         s, s_dot, s_d, s_d_dot, s_d_ddot = args.tolist()
         terms = model._terms(s, s_dot)
         # the law in plain floats (numpy's per-call cost would dominate on these (2m, 3 + p) arrays)
@@ -196,6 +224,23 @@ class ComputedTorqueController:
         margins = [cone_margin(mu, f_n, f_t) for mu, (f_n, f_t) in zip(self._margin_mu, surface)]
         return ControlOutput(np.array(tau), command_array, np.array(error), np.array(error_rate), f_hat, forces,
                              np.array(surface), np.array(margins), internal, time.perf_counter() - start)
+
+    def _call_compiled(self, args: np.ndarray, start: float) -> ControlOutput | None:
+        """The compiled step (:mod:`regrasp.kernels.control`), or None where the reference path must answer."""
+        head, tail, layout, size = self._kernel
+        out = np.empty(size)
+        status, k, margin = control_step_into(*head, args[0], args[1], args[2], args[3], args[4], *tail, out)
+        if status != CONTROL_OK:
+            return None
+        m = self.model.grasp.m
+        forces = out[layout["forces"]].reshape(m, 2)
+        internal = None
+        if self._qp is not None:
+            internal = InternalForceResult(out[layout["f_c"]], forces, k, True, "solved" if k else "empty null space",
+                                           time.perf_counter() - start, margin)
+        return ControlOutput(out[layout["tau"]], out[layout["command"]], out[layout["error"]],
+                             out[layout["error_rate"]], tail[4], forces, out[layout["surface"]].reshape(m, 2),
+                             out[layout["margins"]], internal, time.perf_counter() - start)
 
     def _torque(self, terms, args: np.ndarray, command_array: np.ndarray, friction):
         """(τ (list), f̂_ξ, predicted contact forces (m, 2), the same as a flat list, internal-force

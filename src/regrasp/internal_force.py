@@ -72,6 +72,8 @@ from ._force_rows import (
 )
 from .contact import FrictionLike, ModesLike
 from .exceptions import InvalidParameterError, RegraspError
+from .kernels.force import (FORCE_CHECK_FAILED, FORCE_INFEASIBLE, FORCE_NOT_APPLICABLE, FORCE_NOT_CONVERGED,
+                            FORCE_SOLVED, internal_force_into)
 from .hand import block_diagonal
 from .validation import as_finite_float
 
@@ -292,6 +294,9 @@ def _check(qp: InternalForceQP, forces, frames, modes, friction, cone_edge, slac
 
 
 _OSQP_INTERRUPTED = "interrupted"
+#: the compiled path's failures, as statuses (the reference path's are OSQP's)
+_COMPILED_STATUS = {FORCE_INFEASIBLE: "infeasible (dense solver)", FORCE_NOT_CONVERGED: "not converged (dense solver)",
+                    FORCE_CHECK_FAILED: "solved (dense solver; the solution violates the constraints)"}
 
 
 @functools.cache
@@ -368,8 +373,10 @@ class InternalForceSolver:
     :class:`InternalForceInfeasibleError` carries it, as the one-shot path does.
     """
 
-    def __init__(self, settings: InternalForceSettings = InternalForceSettings()):
+    def __init__(self, settings: InternalForceSettings = InternalForceSettings(), *, compiled: bool | None = None):
         self.settings = settings
+        #: whether the compiled dense solver (:mod:`regrasp.kernels.force`) answers (None: yes); False: OSQP
+        self.compiled = True if compiled is None else bool(compiled)
         self._solvers: dict[tuple[int, int, int, float], osqp.OSQP] = {}
         self._rows: dict[tuple, _Rows] = {}
         self._rows_settings = settings
@@ -401,6 +408,12 @@ class InternalForceSolver:
         if rows is None:
             rows = self._rows[key] = _Rows(m, *contacts, self.settings, as_cone_edges(cone_edge, m))
         return rows
+
+    def rows_arrays(self, m: int, modes: ModesLike, friction: FrictionLike,
+                    cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None) -> tuple:
+        """The QP's rows for these contacts, as :func:`regrasp.kernels.force.internal_force_into` takes them
+        (after its first three arguments: coefficients, lower, n_ineq, is_cone, target, σ, W, δ)."""
+        return self._rows_for(m, modes, friction, cone_edge).arrays()
 
     def _osqp(self, k: int, rows: _Rows, a_t: np.ndarray, lower: np.ndarray) -> osqp.OSQP:
         """The persistent solver of this shape, set up or updated with the numbers of this problem
@@ -448,6 +461,59 @@ class InternalForceSolver:
         (hot paths)."""
         m = len(frames)
         rows = self._rows_for(m, modes, friction, cone_edge)
+        outcome = None
+        if self.compiled:
+            outcome = self._solve_compiled(constraint_matrix, motion_forces, frames, rows, start)
+        if outcome is None:  # (the reference path, or a rank-deficient A)
+            outcome = self._solve_osqp(constraint_matrix, motion_forces, frames, rows, start)
+        if isinstance(outcome, InternalForceResult):
+            return outcome
+        status = outcome
+        if self.settings.fallback_margin is not None:
+            # the friction margin is a preference too: the same problem with the smaller one (its own target
+            # margin, and its own least-squeeze fallback)
+            if self._relaxed is None:
+                self._relaxed = InternalForceSolver(replace(self.settings, margin=self.settings.fallback_margin,
+                                                            fallback_margin=None), compiled=self.compiled)
+            self.relaxations += 1
+            return self._relaxed._solve(constraint_matrix, motion_forces, frames, modes, friction, cone_edge, start)
+        if rows.target > 0.0:
+            # the margin is a preference: where its QP does not converge, the least squeeze that keeps the
+            # constraints (the same feasible set) is the answer
+            if self._plain is None:
+                self._plain = InternalForceSolver(replace(self.settings, target_cone_margin=0.0), compiled=self.compiled)
+            self.fallbacks += 1
+            return self._plain._solve(constraint_matrix, motion_forces, frames, modes, friction, cone_edge, start)
+        surface_frames = np.array([((n_x, t_x), (n_y, t_y)) for n_x, n_y, t_x, t_y in frames])
+        qp = build_internal_force_qp(constraint_matrix, np.array(motion_forces), surface_frames, modes, friction,
+                                     self.settings, cone_edge)
+        raise InternalForceInfeasibleError(qp, status)
+
+    def _solve_compiled(self, constraint_matrix, motion_forces: list, frames: list, rows: _Rows,
+                        start: float) -> InternalForceResult | str | None:
+        """The compiled path (:func:`regrasp.kernels.force.internal_force_into`): the result, the failure's
+        status, or None where the kernel does not apply (a rank-deficient A, a non-finite input: the reference
+        path decides, as it did before the kernel)."""
+        m = len(frames)
+        f_m = np.array(motion_forces, dtype=float)
+        f_c, forces = np.empty(2 * m), np.empty(2 * m)
+        arrays = rows.arrays()
+        status, k, margin = internal_force_into(np.ascontiguousarray(constraint_matrix, dtype=float), f_m,
+                                                np.array(frames, dtype=float), *arrays, f_c, forces)
+        if status == FORCE_NOT_APPLICABLE:
+            return None
+        if k == 0:
+            return InternalForceResult(f_c, forces.reshape(m, 2), 0, status == FORCE_SOLVED, "empty null space",
+                                       time.perf_counter() - start, margin)
+        if status == FORCE_SOLVED:
+            return InternalForceResult(f_c, forces.reshape(m, 2), k, True, "solved", time.perf_counter() - start,
+                                       margin)
+        return _COMPILED_STATUS[status]
+
+    def _solve_osqp(self, constraint_matrix, motion_forces: list, frames: list, rows: _Rows,
+                    start: float) -> InternalForceResult | str:
+        """The reference path (OSQP, warm-started): the result or the failure's status."""
+        m = len(frames)
         null = _null_basis(constraint_matrix)
         k = null.shape[1]
         C = rows.rows_at(frames)
@@ -477,22 +543,4 @@ class InternalForceSolver:
                 return InternalForceResult(f_c, np.array(forces).reshape(m, 2), k, True, status,
                                            time.perf_counter() - start, margin)
             status = f"{status} (solution violates the constraints)"
-        if self.settings.fallback_margin is not None:
-            # the friction margin is a preference too: the same problem with the smaller one (its own target
-            # margin, and its own least-squeeze fallback)
-            if self._relaxed is None:
-                self._relaxed = InternalForceSolver(replace(self.settings, margin=self.settings.fallback_margin,
-                                                            fallback_margin=None))
-            self.relaxations += 1
-            return self._relaxed._solve(constraint_matrix, motion_forces, frames, modes, friction, cone_edge, start)
-        if rows.target > 0.0:
-            # the margin is a preference: where its QP does not converge, the least squeeze that keeps the
-            # constraints (the same feasible set) is the answer
-            if self._plain is None:
-                self._plain = InternalForceSolver(replace(self.settings, target_cone_margin=0.0))
-            self.fallbacks += 1
-            return self._plain._solve(constraint_matrix, motion_forces, frames, modes, friction, cone_edge, start)
-        surface_frames = np.array([((n_x, t_x), (n_y, t_y)) for n_x, n_y, t_x, t_y in frames])
-        qp = build_internal_force_qp(constraint_matrix, np.array(f_m), surface_frames, modes, friction, self.settings,
-                                     cone_edge)
-        raise InternalForceInfeasibleError(qp, status)
+        return status

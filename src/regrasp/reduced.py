@@ -147,6 +147,18 @@ class ReducedModel:
             np.array([self._sliding_column.get(i, -1) for i in range(grasp.m)], dtype=np.int64))
 
     @property
+    def kernel_constants(self) -> tuple | None:
+        """The compiled kernels' constant arguments (finger parameters, inverse kinematics, contact edges,
+        each contact's column of S or -1; :func:`~regrasp.kernels.reduced.reduced_terms`), None when not
+        compiled."""
+        return self._kernel_constants
+
+    @property
+    def m_s_diagonal(self) -> list[float]:
+        """diag(M_s): the object's mass [kg] twice, its inertia [kg m^2], then a zero per slider."""
+        return list(self._m_s_diagonal)
+
+    @property
     def f_g(self) -> np.ndarray:
         """Gravity wrench on the object at its centre of mass [N, N, N m]."""
         gx, gy = self.hand.gravity_in_hand.tolist()

@@ -14,6 +14,11 @@ fixed and sliding contacts,            ``compiled=False``
 Baumgarte, works, event inputs)
 :mod:`.reduced`: the reduced model's   :class:`~regrasp.reduced.ReducedModel` with  ``tests/test_kernels.py``
 terms (IK, J, H, Ḣ Ṡ, M, N)            ``compiled=False``
+:mod:`.force`, :mod:`.qp`: the         ``InternalForceSolver(compiled=False)``      ``tests/test_kernels_qp.py``
+internal-force QP (null basis, rows,   (:mod:`regrasp.internal_force`, OSQP)
+an exact dense QP, the check)
+:mod:`.control`: a computed-torque     the controller with ``compiled=False``       ``tests/test_kernels_control.py``
+control step (fixed law, Prop. 1)
 =====================================  ==========================================  ===========================
 
 :func:`warm_up` loads every kernel (compiling it where the cache has none): a compiled
@@ -25,16 +30,45 @@ Every kernel reads named fields (numpy record dtypes: :data:`FINGER_PARAMETERS`,
 (``cache=True``), so only the first run on a machine pays for the compile.
 """
 
+import hashlib
+from pathlib import Path
+
 import numpy as np
 
+
+from .control import control_layout, control_step_into
 from .finger import FINGER_PARAMETERS, FINGER_TERMS, finger_parameters, finger_terms, finger_terms_at
+from .force import internal_force_into
 from .plant import (FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, output_size, plant_evaluate,
                     plant_step_into)
 from .reduced import CONTACT_EDGE, FINGER_IK, reduced_terms
 
 __all__ = ["CONTACT_EDGE", "FINGER_IK", "FINGER_PARAMETERS", "FINGER_TERMS", "FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS",
-           "SEPARATED", "SLIDING", "finger_parameters", "finger_terms", "finger_terms_at", "output_size", "plant_evaluate",
-           "plant_step_into", "reduced_terms", "warm_up"]
+           "SEPARATED", "SLIDING", "control_layout", "control_step_into", "finger_parameters", "finger_terms",
+           "finger_terms_at", "internal_force_into", "output_size", "plant_evaluate", "plant_step_into", "reduced_terms",
+           "warm_up"]
+
+def _drop_stale_caches() -> None:
+    """numba keys a kernel's disk cache on its own file's time stamp only: a kernel that calls one in another
+    file (the control step calls the reduced terms, the QP) would keep a stale compiled copy after that file
+    changes (an editable install being edited). So the caches here are dropped whenever any kernel source
+    changes (a hash of them all, kept next to the caches; well under a millisecond at import)."""
+    here = Path(__file__).parent
+    digest = hashlib.sha256(b"".join(p.read_bytes() for p in sorted(here.glob("*.py")))).hexdigest()
+    cache = here / "__pycache__"
+    stamp = cache / "kernels.sources.sha256"
+    try:
+        if stamp.is_file() and stamp.read_text() == digest:
+            return
+        for stale in [*cache.glob("*.nbi"), *cache.glob("*.nbc")]:
+            stale.unlink(missing_ok=True)
+        cache.mkdir(exist_ok=True)
+        stamp.write_text(digest)
+    except OSError:  # (a read-only install: its files never change in place)
+        pass
+
+
+_drop_stale_caches()  # (before any kernel runs: numba reads a cache at a kernel's first call)
 
 _WARM = []
 
@@ -62,4 +96,16 @@ def warm_up() -> None:
     edges["tx"], edges["ny"] = 1.0, 1.0
     reduced_terms(fingers, iks, edges, zeros, True, np.zeros(1), np.full(1, -1, dtype=np.int64),
                   np.array([1.0, 0.0, 0.0]), np.zeros(3))
+    # the internal force on a one-contact problem with a one-dimensional null space (a 2 x 1 A)
+    rows = np.zeros((1, 2))
+    rows[0, 0] = 1.0
+    internal_force_into(np.array([[1.0], [0.0]]), zeros, np.array([[1.0, 0.0, 0.0, 1.0]]), rows, np.zeros(1), 1,
+                        np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0, np.empty(2), np.empty(2))
+    # a control step with the argument types a controller passes (its answer here: take the reference path)
+    s = np.zeros((5, 3))
+    s[0, 1] = 1.0
+    control_step_into(fingers, iks, edges, zeros, True, np.zeros(1), np.full(1, -1, dtype=np.int64), s[0], s[1], s[2],
+                      s[3], s[4], np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0), 1e8, np.ones(1), True,
+                      rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0,
+                      np.empty(control_layout(1, 3)["f_c"].stop))
     _WARM.append(True)

@@ -1,0 +1,153 @@
+r"""The computed-torque control step, compiled: :class:`regrasp.control.ComputedTorqueController` in one call.
+
+For the laws whose friction estimate does not depend on the state (the fixed-contact law and Proposition 1,
+:math:`\hat f_\xi` given), one call does what the reference path does in Python around the reduced model's
+terms (:func:`.reduced.reduced_terms`, called from here):
+
+.. math::
+    a = \ddot S_d + K_v \dot E + K_s E, \quad \tau_m = (H^T)^+\left[(H^T M H + M_s) a + N_s
+    - [f_g; -\hat f_\xi]\right],\quad f_m = J^{-T}(\tau_m - M \ddot q - N),
+
+with :math:`\ddot q = H a + \dot H \dot S` (:func:`regrasp.control._computed_torque`, the paper's (3.2.12)
+as corrected in ``docs/derivations.md``), then the internal force (:func:`.force.internal_force_into`),
+:math:`\tau = \tau_m + J^T f_c`, the predicted forces in each surface frame and their cone margins
+:math:`\mu f_n - |f_t|`. Anything but the plain case (an unreachable contact, a finger near a singularity, a
+QP the kernel does not settle) is reported, and the caller takes the reference path, which raises or falls
+back exactly as before. ``tests/test_kernels_control.py`` checks the outputs against the reference path.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from .force import FORCE_SOLVED, internal_force_into
+from .qp import back_substitute, matmul, matvec
+from .reduced import REACHABLE, reduced_terms
+
+__all__ = ["CONTROL_OK", "CONTROL_REFERENCE", "control_layout", "control_step_into"]
+
+#: statuses of :func:`control_step_into`: OK, or REFERENCE (the caller takes the reference path)
+CONTROL_OK, CONTROL_REFERENCE = 0, 1
+
+
+def control_layout(m: int, n: int) -> dict[str, slice]:
+    """Where each output lies in :func:`control_step_into`'s ``out`` (m contacts, n reduced coordinates): τ
+    (2m), the command a, E, Ė (n each), f (2m, hand frame), (f_n, f_t) per contact (2m), the cone margins (m),
+    f_c (2m); the last entry's ``stop`` is the size."""
+    sizes = (("tau", 2 * m), ("command", n), ("error", n), ("error_rate", n), ("forces", 2 * m),
+             ("surface", 2 * m), ("margins", m), ("f_c", 2 * m))
+    layout, start = {}, 0
+    for name, size in sizes:
+        layout[name] = slice(start, start + size)
+        start += size
+    return layout
+
+
+@numba.njit(cache=True)
+def _solve_spd(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a⁻¹ b for a symmetric positive definite a (n, n), by Cholesky in loops; empty if a is not (numerically)
+    positive definite."""
+    n = a.shape[0]
+    low = np.zeros((n, n))
+    for j in range(n):
+        d = a[j, j]
+        for k in range(j):
+            d -= low[j, k] * low[j, k]
+        if not d > 1e-13 * abs(a[j, j]) or d <= 0.0:
+            return np.empty(0)
+        low[j, j] = np.sqrt(d)
+        for i in range(j + 1, n):
+            acc = a[i, j]
+            for k in range(j):
+                acc -= low[i, k] * low[j, k]
+            low[i, j] = acc / low[j, j]
+    y = np.empty(n)
+    for i in range(n):
+        acc = b[i]
+        for k in range(i):
+            acc -= low[i, k] * y[k]
+        y[i] = acc / low[i, i]
+    return back_substitute(low.T, y)
+
+
+@numba.njit(cache=True)
+def control_step_into(fingers, iks, edges, gravity, damped, xi_model, slide_column, s, sd, s_d, s_d_dot, s_d_ddot,
+                      kv, ks, m_s_diagonal, object_mass, f_hat, singular_threshold, margin_mu, use_qp, coefficients,
+                      lower, n_ineq, is_cone, target, margin_column, weight, aim, out):
+    r"""One control step into ``out`` (:func:`control_layout`); returns (status, k, the QP's cone margin [N]).
+
+    ``fingers`` .. ``sd``: :func:`.reduced.reduced_terms`'s arguments; ``s_d``, ``s_d_dot``, ``s_d_ddot``: the
+    desired S and its rates; ``kv``, ``ks``: the gains (n); ``m_s_diagonal``: diag(M_s) (the object's mass,
+    mass, inertia, then zeros); ``f_hat``: :math:`\hat f_\xi` (p) [N]; ``singular_threshold``: the largest
+    finger-Jacobian condition number served here; ``margin_mu``: μ per contact (μ_s fixed, μ_k sliding);
+    ``use_qp`` and the rest: the internal force (:func:`.force.internal_force_into`'s row arguments).
+    """
+    m = fingers.shape[0]
+    n = s.shape[0]
+    m2 = 2 * m
+    (status, _, _, _, _, _, _, _, _, a_rows, h_rows, h_dot, jac, inv, mass, nonlinear, _, frames,
+     conds) = reduced_terms(fingers, iks, edges, gravity, damped, xi_model, slide_column, s, sd)
+    if status != REACHABLE:
+        return CONTROL_REFERENCE, 0, np.nan
+    for i in range(m):
+        if not conds[i] <= singular_threshold:
+            return CONTROL_REFERENCE, 0, np.nan
+    o_tau, o_cmd, o_err, o_rate = 0, m2, m2 + n, m2 + 2 * n
+    o_forces = m2 + 3 * n
+    o_surface, o_margins = o_forces + m2, o_forces + 2 * m2
+    o_fc = o_margins + m
+    command = np.empty(n)
+    for j in range(n):
+        e, r = s_d[j] - s[j], s_d_dot[j] - sd[j]
+        out[o_err + j], out[o_rate + j] = e, r
+        command[j] = s_d_ddot[j] + kv[j] * r + ks[j] * e
+        out[o_cmd + j] = command[j]
+    # the wrench M q̈ + N, q̈ = H a + Ḣ Ṡ (M block diagonal)
+    q_ddot = matvec(h_rows, command)
+    wrench = np.empty(m2)
+    for i in range(m):
+        a0, a1 = q_ddot[2 * i] + h_dot[2 * i], q_ddot[2 * i + 1] + h_dot[2 * i + 1]
+        m00, m01, m11 = mass[i, 0], mass[i, 1], mass[i, 2]
+        wrench[2 * i] = m00 * a0 + m01 * a1 + nonlinear[2 * i]
+        wrench[2 * i + 1] = m01 * a0 + m11 * a1 + nonlinear[2 * i + 1]
+    rhs = matvec(h_rows, wrench, True)
+    for j in range(n):
+        rhs[j] += m_s_diagonal[j] * command[j]
+    rhs[0] -= object_mass * gravity[0]
+    rhs[1] -= object_mass * gravity[1]
+    for j in range(3, n):
+        rhs[j] += f_hat[j - 3]
+    x = _solve_spd(matmul(h_rows, h_rows, True), rhs)
+    if x.size == 0:
+        return CONTROL_REFERENCE, 0, np.nan  # (HᵀH singular: the reference path raises)
+    tau = matvec(h_rows, x)
+    f_m = np.empty(m2)
+    for i in range(m):  # f = J^-T (τ - M q̈ - N)
+        d0, d1 = tau[2 * i] - wrench[2 * i], tau[2 * i + 1] - wrench[2 * i + 1]
+        i00, i01, i10, i11 = inv[i, 0], inv[i, 1], inv[i, 2], inv[i, 3]
+        f_m[2 * i] = i00 * d0 + i10 * d1
+        f_m[2 * i + 1] = i01 * d0 + i11 * d1
+    k, qp_margin = 0, np.nan
+    f_c = np.zeros(m2)
+    forces = f_m.copy()
+    if use_qp:
+        qp_status, k, qp_margin = internal_force_into(a_rows, f_m, frames, coefficients, lower, n_ineq, is_cone,
+                                                      target, margin_column, weight, aim, f_c, forces)
+        if qp_status != FORCE_SOLVED:
+            return CONTROL_REFERENCE, k, qp_margin
+        for i in range(m):  # τ + J^T f_c
+            f0, f1 = f_c[2 * i], f_c[2 * i + 1]
+            tau[2 * i] += jac[i, 0] * f0 + jac[i, 2] * f1
+            tau[2 * i + 1] += jac[i, 1] * f0 + jac[i, 3] * f1
+    for i in range(m):
+        fx, fy = forces[2 * i], forces[2 * i + 1]
+        f_n = frames[i, 0] * fx + frames[i, 1] * fy
+        f_t = frames[i, 2] * fx + frames[i, 3] * fy
+        out[o_surface + 2 * i], out[o_surface + 2 * i + 1] = f_n, f_t
+        out[o_margins + i] = margin_mu[i] * f_n - abs(f_t)
+    for i in range(m2):
+        out[o_tau + i] = tau[i]
+        out[o_forces + i] = forces[i]
+        out[o_fc + i] = f_c[i]
+    return CONTROL_OK, k, qp_margin

@@ -1,0 +1,140 @@
+r"""The internal-force QP of :class:`regrasp.internal_force.InternalForceSolver`, compiled in one call.
+
+What :meth:`InternalForceSolver.solve <regrasp.internal_force.InternalForceSolver.solve>` does around OSQP,
+with the dense solver of :mod:`.qp` in its place: an orthonormal basis :math:`N_c` of
+:math:`\mathrm{null}(A^T)` (Householder QR of A, the last 2m - c columns of Q; a rank-deficient A is reported,
+and the caller takes the reference path's SVD), the rows :math:`C f \ge lo` at the contacts' surface frames
+(``regrasp._force_rows``: row r is :math:`\alpha_r n_i^T f_i + \beta_r t_i^T f_i - \sigma_r s`), the QP in
+:math:`y` (or :math:`(y, s)` with a target cone margin: weight W on :math:`(s - \text{target} - \delta)^2`,
+:math:`0 \le s \le` target), :math:`f_c = N_c y`, and the same check of the predicted forces
+:math:`f_m + f_c` as the reference path (every row to a slack of :math:`10^{-6}\max(1, |f_m|_\infty)` N, or
+:math:`10^{-9}` of it when nothing is chosen, k = 0), with the cone margin: the least residual of the
+static-cone rows. ``f_c`` is basis-independent (the objective is :math:`\tfrac12\|N_c y\|^2 = \tfrac12\|y\|^2`),
+so the answer is the reference's, exact where OSQP's is within its tolerance.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .qp import SOLVED, diagonal_qp, householder_into, matmul, matvec
+
+__all__ = ["FORCE_CHECK_FAILED", "FORCE_INFEASIBLE", "FORCE_NOT_APPLICABLE", "FORCE_NOT_CONVERGED", "FORCE_SOLVED",
+           "internal_force_into", "null_basis"]
+
+#: statuses of :func:`internal_force_into`: NOT_APPLICABLE is a rank-deficient A or a non-finite input (the
+#: caller takes the reference path); CHECK_FAILED a solution whose forces miss a row by more than the slack
+FORCE_SOLVED, FORCE_INFEASIBLE, FORCE_NOT_CONVERGED, FORCE_NOT_APPLICABLE, FORCE_CHECK_FAILED = 0, 1, 2, 3, 4
+
+_EPS = np.finfo(np.float64).eps
+
+
+@numba.njit(cache=True)
+def null_basis(A: np.ndarray, out: np.ndarray) -> int:
+    r"""An orthonormal basis of :math:`\mathrm{null}(A^T)` for A (rows, c), rows >= c, into ``out``
+    (rows, rows - c): Q's last columns in a Householder QR :math:`A = QR` (:func:`.qp.householder_into` on
+    :math:`[A \mid I]` gives :math:`Q^T`). Returns rows - c, or -1 when A is not of full column rank (the
+    reference path's test: :math:`\min|R_{jj}| \le \max|R_{jj}|\,\max(rows, c)\,\epsilon`)."""
+    rows, c = A.shape
+    qt = np.eye(rows)
+    if not householder_into(A.copy(), qt) > max(rows, c) * _EPS:
+        return -1
+    for i in range(rows):
+        for j in range(rows - c):
+            out[i, j] = qt[c + j, i]
+    return rows - c
+
+
+@numba.njit(cache=True)
+def internal_force_into(A: np.ndarray, f_m: np.ndarray, frames: np.ndarray, coefficients: np.ndarray,
+                        lower: np.ndarray, n_ineq: int, is_cone: np.ndarray, target: float,
+                        margin_column: np.ndarray, weight: float, aim: float, f_c: np.ndarray,
+                        forces: np.ndarray) -> tuple[int, int, float]:
+    r"""The internal force of the module docstring into ``f_c`` and ``forces`` (2m,), hand frame.
+
+    Args:
+        A: :math:`[G^T \mid R_f B_v]` or the law's own equations (2m, c); f_c spans null(Aᵀ).
+        f_m: The motion forces (2m,) [N].
+        frames: Per contact (n_x, n_y, t_x, t_y), hand frame (m, 4).
+        coefficients: The rows in surface coordinates (rows, 2m): (α_r, β_r) in contact i's columns.
+        lower: lo_r (rows,); the first ``n_ineq`` rows are inequalities, the rest equalities.
+        is_cone: Whether each row is a static-cone row (rows,).
+        target: The target cone margin [N]; > 0 adds the variable s (``margin_column`` its σ_r, ``weight``
+            W and ``aim`` δ [N] the objective's, :data:`regrasp._force_rows.MARGIN_WEIGHT` and ``MARGIN_AIM``).
+
+    Returns:
+        (status, k, cone margin [N]): ``FORCE_*``; k the null space's dimension; the least static-cone
+        residual at the forces (inf without such rows).
+    """
+    m2, c = A.shape
+    rows = lower.size
+    if not (np.isfinite(A).all() and np.isfinite(f_m).all() and np.isfinite(frames).all()):
+        return FORCE_NOT_APPLICABLE, 0, math.nan
+    # C f: the rows in the hand frame
+    C = np.zeros((rows, m2))
+    for r in range(rows):
+        for i in range(m2 // 2):
+            alpha, beta = coefficients[r, 2 * i], coefficients[r, 2 * i + 1]
+            if alpha != 0.0 or beta != 0.0:
+                C[r, 2 * i] = alpha * frames[i, 0] + beta * frames[i, 2]
+                C[r, 2 * i + 1] = alpha * frames[i, 1] + beta * frames[i, 3]
+    scale = 1.0
+    for i in range(m2):
+        scale = max(scale, abs(f_m[i]))
+    basis = np.empty((m2, max(m2 - c, 0)))
+    k = null_basis(A, basis) if m2 >= c else -1
+    if k < 0:
+        return FORCE_NOT_APPLICABLE, 0, math.nan
+    slack = 1e-9 * scale
+    f_c[:] = 0.0
+    if k > 0:
+        slack = 1e-6 * scale
+        margin_var = target > 0.0
+        n = k + 1 if margin_var else k
+        extra = 1 if margin_var else 0
+        a = np.zeros((rows + extra, n))
+        b = np.empty(rows + extra)
+        cn = matmul(C, basis)
+        cf = matvec(C, f_m)
+        for r in range(rows):
+            out_r = r if r < n_ineq else r + extra  # (s <= target goes after the inequalities)
+            for j in range(k):
+                a[out_r, j] = cn[r, j]
+            if margin_var:
+                a[out_r, k] = margin_column[r]
+            b[out_r] = lower[r] - cf[r]
+        d = np.ones(n)
+        q = np.zeros(n)
+        if margin_var:
+            d[k] = weight
+            q[k] = -weight * (target + aim)
+            a[n_ineq, k] = -1.0  # -s >= -target
+            b[n_ineq] = -target
+        v = np.empty(n)
+        status = diagonal_qp(d, q, a, b, n_ineq + extra, v)
+        if status != SOLVED:
+            return status, k, math.nan  # (INFEASIBLE, NOT_CONVERGED: the same codes)
+        for i in range(m2):
+            acc = 0.0
+            for j in range(k):
+                acc += basis[i, j] * v[j]
+            f_c[i] = acc
+    for i in range(m2):
+        forces[i] = f_m[i] + f_c[i]
+    ok = True  # (the reference path's check, ``regrasp._force_rows._Rows.check_at``, compiled)
+    margin = math.inf
+    for r in range(rows):
+        residual = -lower[r]
+        for i in range(m2):
+            residual += C[r, i] * forces[i]
+        if r < n_ineq:
+            if not residual >= -slack:
+                ok = False
+            if is_cone[r] and residual < margin:
+                margin = residual
+        elif not abs(residual) <= slack:
+            ok = False
+    return (FORCE_SOLVED if ok else FORCE_CHECK_FAILED), k, margin
