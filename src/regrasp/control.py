@@ -52,7 +52,7 @@ from ._scalar import solve_small
 from .contact import FrictionLike, as_frictions, coefficients, cone_margin
 from .exceptions import InvalidParameterError, SingularModelError
 from .internal_force import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver, as_cone_edges
-from .kernels.control import CONTROL_OK, control_layout, control_step_into
+from .kernels.control import CONTROL_OK, control_layout, control_step_into, sliding_step_into
 from .reduced import ReducedModel, ReducedState
 from .validation import as_finite_array, as_finite_vectors, as_integer, as_positive_float, expect_type
 
@@ -189,7 +189,7 @@ class ComputedTorqueController:
                 np.zeros(model.grasp.p), float(hand.singular_threshold), np.array(self._margin_mu, dtype=float),
                 self._qp is not None, *rows)
         layout = control_layout(m, model.n)
-        return head, tail, layout, layout["f_c"].stop
+        return head, tail, layout, layout["f_hat"].stop
 
     def friction_estimate(self, st: ReducedState, command: np.ndarray, friction: ArrayLike | None) -> np.ndarray:
         """f̂_ξ (p,) [N]; the laws override this."""
@@ -232,6 +232,11 @@ class ComputedTorqueController:
         status, k, margin = control_step_into(*head, args[0], args[1], args[2], args[3], args[4], *tail, out)
         if status != CONTROL_OK:
             return None
+        return self._output(out, layout, k, margin, tail[4].copy(), start)
+
+    def _output(self, out: np.ndarray, layout: dict, k: int, margin: float, f_hat: np.ndarray,
+                start: float) -> ControlOutput:
+        """The :class:`ControlOutput` of a compiled step's ``out`` (views into it)."""
         m = self.model.grasp.m
         forces = out[layout["forces"]].reshape(m, 2)
         internal = None
@@ -239,7 +244,7 @@ class ComputedTorqueController:
             internal = InternalForceResult(out[layout["f_c"]], forces, k, True, "solved" if k else "empty null space",
                                            time.perf_counter() - start, margin)
         return ControlOutput(out[layout["tau"]], out[layout["command"]], out[layout["error"]],
-                             out[layout["error_rate"]], tail[4], forces, out[layout["surface"]].reshape(m, 2),
+                             out[layout["error_rate"]], f_hat, forces, out[layout["surface"]].reshape(m, 2),
                              out[layout["margins"]], internal, time.perf_counter() - start)
 
     def _torque(self, terms, args: np.ndarray, command_array: np.ndarray, friction):
@@ -369,12 +374,13 @@ class Proposition3Controller(ComputedTorqueController):
     law = "Proposition 3"
 
     def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = 0.5, *, sample_time: float = 1e-3,
-                 direction: float | Sequence[float] = 1.0, reversible: bool = True, **kwargs: Any):
+                 direction: float | Sequence[float] = 1.0, reversible: bool = True, compiled: bool | None = None,
+                 **kwargs: Any):
         m, p = model.grasp.m, model.grasp.p
         if m < 2 or p < 1 or 2 * m < 3 + p:
             raise InvalidParameterError("model", model.grasp.modes,
                                         "m >= 2 fingers with p >= 1 sliding contacts (p = 1 for m = 2), 2m >= 3 + p")
-        super().__init__(model, gains, friction, **kwargs)
+        super().__init__(model, gains, friction, compiled=compiled, **kwargs)
         if not np.isfinite(sample_time) or sample_time <= 0:
             raise InvalidParameterError("sample_time", sample_time, "a control period > 0 [s]")
         directions = [direction] * p if np.ndim(direction) == 0 else list(direction)
@@ -389,6 +395,12 @@ class Proposition3Controller(ComputedTorqueController):
         self.reversible = reversible
         self._directions = [float(d) for d in directions]
         self._sliders = model.grasp.sliding
+        if compiled is not False and model.compiled and m > 2 and (self._qp is None or self._qp.compiled):
+            head, tail, layout, size = self._kernel_arguments()
+            kinetic = np.array([self.friction[j].kinetic for j in self._sliders], dtype=float)
+            sliding_tail = (tail[0], tail[1], np.diag(model.M_o).copy(), tail[3], np.array(self._sliders, np.int64),
+                            kinetic)
+            self._kernel = (head, sliding_tail, tail[5:], layout, size)
 
     @property
     def directions(self) -> tuple[float, ...]:
@@ -421,6 +433,19 @@ class Proposition3Controller(ComputedTorqueController):
             elif xi_dot != 0.0:
                 self._directions[j] = float(np.sign(xi_dot))
         return tuple(self._directions)
+
+    def _call_compiled(self, args: np.ndarray, start: float) -> ControlOutput | None:
+        """The compiled step (:func:`~regrasp.kernels.control.sliding_step_into`), or None where the reference
+        path must answer (it then decides the directions afresh, from the same ones)."""
+        head, sliding_tail, rest, layout, size = self._kernel
+        out = np.empty(size)
+        directions = np.array(self._directions)
+        status, k, margin = sliding_step_into(*head, args[0], args[1], args[2], args[3], args[4], *sliding_tail,
+                                              directions, self.reversible, self.sample_time, *rest, out)
+        if status != CONTROL_OK:
+            return None
+        self._directions = directions.tolist()
+        return self._output(out, layout, k, margin, out[layout["f_hat"]], start)
 
     def friction_estimate(self, st: ReducedState, command: np.ndarray, friction: ArrayLike | None) -> np.ndarray:
         """m = 2: :math:`P (M_o a_X - f_g)` (3.4.9, the slider's μ_k); otherwise see :meth:`_torque`."""

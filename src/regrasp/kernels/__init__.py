@@ -18,7 +18,8 @@ terms (IK, J, H, Ḣ Ṡ, M, N)            ``compiled=False``
 internal-force QP (null basis, rows,   (:mod:`regrasp.internal_force`, OSQP)
 an exact dense QP, the check)
 :mod:`.control`: a computed-torque     the controller with ``compiled=False``       ``tests/test_kernels_control.py``
-control step (fixed law, Prop. 1)
+control step (fixed law, Prop. 1,
+Prop. 3 with m > 2)
 =====================================  ==========================================  ===========================
 
 :func:`warm_up` loads every kernel (compiling it where the cache has none): a compiled
@@ -36,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 
-from .control import control_layout, control_step_into
+from .control import control_layout, control_step_into, sliding_step_into
 from .finger import FINGER_PARAMETERS, FINGER_TERMS, finger_parameters, finger_terms, finger_terms_at
 from .force import internal_force_into
 from .plant import (FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, output_size, plant_evaluate,
@@ -46,7 +47,7 @@ from .reduced import CONTACT_EDGE, FINGER_IK, reduced_terms
 __all__ = ["CONTACT_EDGE", "FINGER_IK", "FINGER_PARAMETERS", "FINGER_TERMS", "FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS",
            "SEPARATED", "SLIDING", "control_layout", "control_step_into", "finger_parameters", "finger_terms",
            "finger_terms_at", "internal_force_into", "output_size", "plant_evaluate", "plant_step_into", "reduced_terms",
-           "warm_up"]
+           "sliding_step_into", "warm_up"]
 
 def _drop_stale_caches() -> None:
     """numba keys a kernel's disk cache on its own file's time stamp only: a kernel that calls one in another
@@ -107,5 +108,9 @@ def warm_up() -> None:
     control_step_into(fingers, iks, edges, zeros, True, np.zeros(1), np.full(1, -1, dtype=np.int64), s[0], s[1], s[2],
                       s[3], s[4], np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0), 1e8, np.ones(1), True,
                       rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0,
-                      np.empty(control_layout(1, 3)["f_c"].stop))
+                      np.empty(control_layout(1, 3)["f_hat"].stop))
+    sliding_step_into(fingers, iks, edges, zeros, True, np.zeros(1), np.full(1, -1, dtype=np.int64), s[0], s[1], s[2],
+                      s[3], s[4], np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0, np.int64), np.zeros(0),
+                      np.zeros(0), True, 1e-3, 1e8, np.ones(1), True, rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0,
+                      np.zeros(1), 1.0, 0.0, np.empty(control_layout(1, 3)["f_hat"].stop))
     _WARM.append(True)
