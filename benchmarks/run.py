@@ -13,13 +13,16 @@ Items and their floors:
   (``plant_step_into``: RK4, the end evaluation and the event inputs, no Python around it); and on the
   reference path (``Plant(compiled=False)``): floor = four times those Pinocchio calls (RK4 evaluates the
   dynamics 4 times);
-* the planner per time sample (``ideal``, ``urdf``): no floor (null);
+* the planner per time sample (``ideal``: no floor (null); ``urdf``, compiled, the default where the finger's
+  shapes have planar footprints (:mod:`regrasp.kernels.envelope`): floor = the bare kernel call
+  ``envelope_sample_into``; ``urdf`` on the reference path (``FingerEnvelope(compiled=False)``, coal): no floor);
 * one supervisor step (``RegraspSupervisor.step`` minus its control law: the runtime envelopes of
   all fingers at the measured pose, the look-ahead in the plan, the danger test), three fingers of
   ``paper_trajectory_2_three_fingers.toml`` holding still, with the scenario's ``urdf`` envelopes
   and with ``ideal`` ones; floor: one envelope sample per finger (``FingerEnvelope.at``); and with the
   ``urdf`` envelopes followed from step to step (``track_envelopes``, ``EnvelopeTracker``), whose floor
-  is the coal distance calls the tracked steps make (bare ``coal.ComputeDistance`` calls);
+  is the coal distance calls the tracked steps make (bare ``coal.ComputeDistance`` calls; none, so no floor,
+  where the envelopes run compiled);
 * the regrasp schedule of the three-finger scenario (``plan_regrasps``, default settings): the
   median wall time of whole plans (after one warm-up plan that loads numba's compiled kernels;
   three timed plans, one with ``--quick``), target ≤ 10 s;
@@ -46,9 +49,10 @@ from common import ROOT, median_us, parse_args, sliding_hold
 
 from regrasp import (FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario,
                      plan_regrasps, run_study)
+from regrasp import envelope as envelope_module
 from regrasp.control import FixedContactController, Gains, Proposition1Controller
 from regrasp.internal_force import InternalForceSolver
-from regrasp.kernels import FINGER_TERMS, control_step_into, output_size, plant_step_into
+from regrasp.kernels import FINGER_TERMS, control_step_into, envelope_sample_into, output_size, plant_step_into
 from regrasp.simulation import sense
 from regrasp.supervisor import SupervisorSettings
 
@@ -74,8 +78,9 @@ def supervisor_step_us(geometry: str, n: int, track: bool = False) -> tuple[floa
     """Median of the supervisor's own time per step and its floor. Three fingers at t = 0 on the
     middles of their feasible sets; ``regrasp=False``, so each step evaluates the envelopes, the
     look-ahead and the danger test but starts no slide. Floor: one envelope sample per finger at the
-    same pose (``FingerEnvelope.at``); with ``track`` (``EnvelopeTracker``), the coal distance calls
-    the tracked steps made, each at the cost of one bare ``coal.ComputeDistance`` call."""
+    same pose (``FingerEnvelope.at``); with ``track`` (``EnvelopeTracker``), the collision queries
+    the tracked steps made, each at the cost of one bare call: ``tip_is_free`` where the envelopes run
+    compiled, else ``coal.ComputeDistance``."""
     sc = load_scenario(THREE)
     settings = SupervisorSettings(geometry=geometry, regrasp=False, track_envelopes=track)
     rollout = build_rollout(sc, duration=0.01, settings=settings, xi0=[-0.0125, 0.0125, 0.0], policy="paper")
@@ -87,6 +92,8 @@ def supervisor_step_us(geometry: str, n: int, track: bool = False) -> tuple[floa
     if not track:
         floor = sum(median_us(lambda env=env: env.at(meas.X, meas.t), n) for env in sup.monitor.envelopes)
         return float(np.median(times[1:]) * 1e6), floor
+    if all(env.compiled for env in sup.monitor.envelopes):
+        return float(np.median(times[1:]) * 1e6), compiled_queries_us(sup, meas, plant.dt, n)
     calls = [0]
     for env in sup.monitor.envelopes:  # count the coal calls of a few more steps
         def counted(*args, inner=env.checker._link_distance):
@@ -103,6 +110,31 @@ def supervisor_step_us(geometry: str, n: int, track: bool = False) -> tuple[floa
     request, result = checker._request, checker._result
     bare = batch_us(lambda: distance(placement, tf, request, result), 100)
     return float(np.median(times[1:]) * 1e6), calls[0] / n * bare
+
+
+def compiled_queries_us(sup, meas, dt: float, n: int) -> float:
+    """The compiled collision queries (``tip_is_free`` calls) of ``n`` more tracked supervisor steps, per step, each at
+    the cost of one bare call [µs]."""
+    calls, inner = [0], envelope_module.tip_is_free
+
+    def counted(*args):
+        calls[0] += 1
+        return inner(*args)
+
+    envelope_module.tip_is_free = counted
+    try:
+        for _ in range(n):
+            sup.step(meas, dt)
+    finally:
+        envelope_module.tip_is_free = inner
+    env = sup.monitor.envelopes[0]
+    par, shapes, vertices, normals = env.kernel_arguments(meas.X)[:4]
+    x, y, beta = meas.X.tolist()
+    lo, hi = env.at(meas.X).feasible[0]
+    s = 0.5 * (lo + hi) + env.line(meas.X).s0  # (the middle of the feasible set, in line coordinates)
+    nearest = np.empty(2)
+    bare = batch_us(lambda: inner(par, shapes, vertices, normals, x, y, beta, s, nearest), 100)
+    return calls[0] / n * bare
 
 
 def rollout_realtime(quick: bool) -> dict:
@@ -238,7 +270,9 @@ def main() -> None:
 
     env_ideal = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1)
     env_urdf = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1, geometry="urdf")
+    env_urdf_ref = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1, geometry="urdf", compiled=False)
     pose = sc.trajectory.pose(0.3)
+    kernel_args = env_urdf.kernel_arguments(pose)
 
     results = {
         "control_fixed_qp": {"median_us": median_us(lambda: fixed_qp(X, zero3, X, zero3, zero3), n),
@@ -255,10 +289,13 @@ def main() -> None:
         "plant_step_reference": {"median_us": median_us(lambda: setup.plant_step(setup.plant_reference), n),
                                  "floor_us": 4 * floor_dyn},
         "planner_sample_ideal": {"median_us": median_us(lambda: env_ideal.at(pose), n), "floor_us": None},
-        "planner_sample_urdf": {"median_us": median_us(lambda: env_urdf.at(pose), max(5, n // 10)), "floor_us": None},
+        "planner_sample_urdf": {"median_us": median_us(lambda: env_urdf.at(pose), n),
+                                "floor_us": median_us(lambda: envelope_sample_into(*kernel_args), n)},
+        "planner_urdf_reference": {"median_us": median_us(lambda: env_urdf_ref.at(pose), max(5, n // 10)),
+                                          "floor_us": None},
     }
     for geometry in ("urdf", "ideal"):
-        med, floor = supervisor_step_us(geometry, max(5, n // 10) if geometry == "urdf" else n)
+        med, floor = supervisor_step_us(geometry, n)
         results[f"supervisor_step_{geometry}"] = {"median_us": med, "floor_us": floor}
     med, floor = supervisor_step_us("urdf", n, track=True)
     results["supervisor_step_urdf_tracked"] = {"median_us": med, "floor_us": floor}

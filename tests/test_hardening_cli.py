@@ -120,9 +120,12 @@ def test_version_and_ctrl_c():
                              timeout=60)
     assert version.returncode == 0 and re.fullmatch(r"regrasp \d+\.\d+\.\d+\S*\n", version.stdout)
     proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli", "plan",
-                             str(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml"), "--samples", "100000",
-                             "--geometry", "urdf"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(5.0)  # past the imports (about 2 s), well inside the plan (200 000 envelopes, about 15 s)
+                             str(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"), "--samples",
+                             "100000", "--geometry", "ideal", "--regrasp"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    # past the imports (about 2 s), well inside the plan: 300 000 envelopes in Python (the ideal geometry; the
+    # compiled urdf ones take 2 s) and the regrasp schedule, about 9 s here
+    time.sleep(5.0)
     assert proc.poll() is None, proc.communicate()
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)

@@ -16,6 +16,12 @@ Two models of the finger's links:
   :math:`\tan\alpha < r_2/\rho` (the shortened rim dips under the edge), which is a
   real limitation of a flat-ended link of radius :math:`r_2`. As :math:`r_2 \to 0` at
   fixed :math:`\rho` the ``urdf`` envelope converges to the ``ideal`` one.
+
+Where every kept shape is symmetric about the hand plane (a box turned about z, a cylinder or
+capsule with its axis in the plane, a sphere centred in it), its distance to the prism is the planar
+distance of its footprint to the polygon (:mod:`regrasp.kernels.footprint` derives it), and
+:attr:`UrdfCollisionChecker.footprints` gives those footprints for the envelope's compiled path;
+coal stays the reference and the checker of the closed form (``tests/test_kernels_footprint.py``).
 """
 
 from __future__ import annotations
@@ -28,10 +34,16 @@ import pinocchio as pin
 
 from .exceptions import FingerModelError
 from .finger import Finger, LinkShape
+from .kernels.footprint import FOOTPRINT
 from .polygon import ConvexPolygon
-from .validation import as_positive_float, expect_type
+from .validation import as_finite_array, as_positive_float, expect_type
 
-__all__ = ["UrdfCollisionChecker", "checked_link_shapes", "default_tip_clearance", "segment_hits_polygon"]
+__all__ = ["UrdfCollisionChecker", "checked_link_shapes", "default_tip_clearance", "planar_footprint",
+           "segment_hits_polygon"]
+
+#: How far [m, or a unit vector's component] a shape may be from the symmetric placement of
+#: :func:`planar_footprint` (an axis out of the plane, a centre off it) and still count as in it.
+FOOTPRINT_TOLERANCE = 1e-9
 
 #: Safety margin of the certified-free shortcut of :meth:`UrdfCollisionChecker.links_collide`,
 #: as a fraction of the finger's reach l1 + l2.
@@ -124,6 +136,49 @@ def _truncate_distal(shape: LinkShape, tip_in_joint: np.ndarray, clearance: floa
     return LinkShape(link=shape.link, name=shape.name, geometry=new_geom, placement_in_joint=new_placement)
 
 
+def planar_footprint(geometry: object, placement: pin.SE3, plane_z: float, half_thickness: float,
+                     link: int = 0) -> tuple | None:
+    r"""The planar footprint of a collision shape placed at ``placement`` (a frame whose z-axis is the hand's),
+    as a :data:`~regrasp.kernels.footprint.FOOTPRINT` tuple (link, centre, unit axis, half-sides along and
+    across it, dilation radius, largest :math:`|z - z_p|` [m]), or None when the closed form of
+    :mod:`regrasp.kernels.footprint` does not apply: a geometry other than a box, cylinder, capsule or sphere,
+    a shape not symmetric about the plane :math:`z = z_p` (``plane_z``: the object's mid-plane in this frame;
+    the centre off it, a cylinder's or capsule's axis out of it, a box not turned about z only, each beyond
+    :data:`FOOTPRINT_TOLERANCE`), or one reaching beyond the prism's half-height ``half_thickness`` [m]."""
+    rot, trans = np.asarray(placement.rotation), np.asarray(placement.translation)
+    if abs(trans[2] - plane_z) > FOOTPRINT_TOLERANCE:
+        return None
+    center = (float(trans[0]), float(trans[1]))
+    if isinstance(geometry, (coal.Cylinder, coal.Capsule)):
+        axis = rot[:, 2]
+        if abs(axis[2]) > FOOTPRINT_TOLERANCE:
+            return None
+        radius = float(geometry.radius)
+        if isinstance(geometry, coal.Cylinder):
+            sides, rad = (float(geometry.halfLength), radius), 0.0
+        else:
+            sides, rad = (float(geometry.halfLength), 0.0), radius
+        zext = radius
+    elif isinstance(geometry, coal.Box):
+        half = np.asarray(geometry.halfSide, dtype=float)
+        vertical = [j for j in range(3) if abs(abs(rot[2, j]) - 1.0) <= FOOTPRINT_TOLERANCE]
+        if len(vertical) != 1:
+            return None
+        along, across = [j for j in range(3) if j != vertical[0]]
+        axis = rot[:, along]
+        sides, rad, zext = (float(half[along]), float(half[across])), 0.0, float(half[vertical[0]])
+    elif isinstance(geometry, coal.Sphere):
+        axis = np.array([1.0, 0.0, 0.0])
+        sides, rad = (0.0, 0.0), float(geometry.radius)
+        zext = rad
+    else:
+        return None
+    if zext > half_thickness:
+        return None
+    norm = math.hypot(axis[0], axis[1])
+    return (int(link), *center, float(axis[0] / norm), float(axis[1] / norm), *sides, rad, zext)
+
+
 def _reach_in_plane(geometry, placement: pin.SE3) -> float:
     """Largest distance [m] from the z-axis of a point of ``geometry`` placed at ``placement``
     (from the corners of its local bounding box, so an upper bound)."""
@@ -182,10 +237,12 @@ class UrdfCollisionChecker:
         tip_clearance: :math:`\rho` [m] removed from the tip end of the distal shapes.
         half_thickness: Half height [m] of the object's prism; default: the finger's
             reach, far larger than any link radius so the 3-D distance is the planar one.
+        coal_tolerance: Tolerance [m] of coal's GJK and EPA iterations; default: coal's (1e-6), which
+            makes its distances accurate to about 1e-6 m (``tests/test_kernels_footprint.py``).
     """
 
     def __init__(self, finger: Finger, polygon: ConvexPolygon, tip_clearance: float,
-                 half_thickness: float | None = None):
+                 half_thickness: float | None = None, coal_tolerance: float | None = None):
         expect_type("finger", finger, Finger, "a Finger")
         expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
         tip_clearance = as_positive_float("tip_clearance", tip_clearance, allow_zero=True)
@@ -193,10 +250,16 @@ class UrdfCollisionChecker:
         self.tip_clearance = float(tip_clearance)
         self.shapes: tuple[LinkShape, ...] = checked_link_shapes(finger, tip_clearance)
         h = half_thickness if half_thickness is not None else sum(finger.link_lengths)
+        #: Half height [m] of the object's prism.
+        self.half_thickness = float(h)
         self.object_geometry = polygon.to_coal(h)
         self._object_radius = float(np.max(np.hypot(polygon.vertices[:, 0], polygon.vertices[:, 1])))
         self._request = coal.DistanceRequest()
         self._request.enable_signed_distance = True
+        if coal_tolerance is not None:
+            coal_tolerance = as_positive_float("coal_tolerance", coal_tolerance)
+            self._request.gjk_tolerance = coal_tolerance
+            self._request.epa_tolerance = coal_tolerance
         self._result = coal.DistanceResult()
         self._init_planar_kinematics()
 
@@ -229,6 +292,7 @@ class UrdfCollisionChecker:
         # through flat memoryviews), the link's shapes (coal functor, placement A, index) and
         # the largest distance [m] of a shape point from the link's z-axis
         self._links = []
+        footprints = [None] * len(self.shapes)
         for k in (0, 1):
             psi0, frame0 = self._link_frames0[k]
             rot, trans = np.eye(3), np.array([0.0, 0.0, -frame0.translation[2]])
@@ -239,12 +303,30 @@ class UrdfCollisionChecker:
                     shapes.append((coal.ComputeDistance(shape.geometry, self.object_geometry),
                                    coal.Transform3s(a.rotation, a.translation), i))
                     reach = max(reach, _reach_in_plane(shape.geometry, a))
+                    footprints[i] = planar_footprint(shape.geometry, a, trans[2], self.half_thickness, k)
             views = (memoryview(rot).cast("B").cast("d"), memoryview(trans).cast("B").cast("d"))
             self._links.append((rot, trans, *views, coal.Transform3s(), shapes, reach))
         # (the coal functors hold raw pointers to the geometries: self.shapes and
         # self.object_geometry keep them alive)
         self._margin = _CERTIFY_MARGIN * sum(finger.link_lengths)
         self._certificates: list[tuple[float, ...] | None] = [None, None]
+        self._footprints = None
+        if all(fp is not None for fp in footprints):
+            self._footprints = np.array(footprints, dtype=FOOTPRINT)
+            self._footprints.flags.writeable = False
+
+    @property
+    def footprints(self) -> np.ndarray | None:
+        """Every kept shape's planar footprint in its link frame (:data:`~regrasp.kernels.footprint.FOOTPRINT`
+        records, in the order of :attr:`shapes`; read-only), or None when a shape has none
+        (:func:`planar_footprint`): then only coal gives this finger's distances. The link frame of link k
+        has its origin at joint k and its x-axis along the link (joint 1 to joint 2, joint 2 to the tip)."""
+        return self._footprints
+
+    @property
+    def joint1(self) -> tuple[float, float]:
+        """Joint 1's axis (x, y) [m] in the hand frame (link 1's frame origin)."""
+        return tuple(self._joint1)
 
     def set_object_pose(self, x: float, y: float, beta: float) -> None:
         """Object pose (x [m], y [m], beta [rad]) in the hand frame for :meth:`links_collide` (no validation)."""
@@ -359,6 +441,13 @@ class UrdfCollisionChecker:
         c1, s1 = math.cos(psi1), math.sin(psi1)
         ox, oy = self._joint1
         return c1, s1, ox + self._l1 * c1, oy + self._l1 * s1, math.cos(psi2), math.sin(psi2)
+
+    def link_frames(self, q: np.ndarray) -> np.ndarray:
+        """The link frames at joint positions ``q`` [rad] (hand frame): (joint 1 x, y [m], cos psi1, sin psi1,
+        elbow x, y [m], cos psi2, sin psi2), psi_k the direction of link k (the ``posture`` of
+        :func:`~regrasp.kernels.footprint.footprint_distances`)."""
+        c1, s1, x2, y2, c2, s2 = self._posture(as_finite_array("q", q, (2,)))
+        return np.array([*self._joint1, c1, s1, x2, y2, c2, s2])
 
     def _set_object(self, pose_object_in_hand: np.ndarray | pin.SE3) -> None:
         if isinstance(pose_object_in_hand, pin.SE3):

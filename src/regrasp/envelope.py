@@ -46,6 +46,13 @@ points (Example 2.2's "limiting vertex") join the breakpoints, and each piece is
 classified at its midpoint. In ``urdf`` mode the pieces of reachable ∩ edge are sampled
 on a grid (plus the ``ideal`` feasible ends) and every change of coal's verdict is
 bisected to ``1e-4`` of the edge length or finer.
+
+**Compiled path.** When every link shape of the finger has a planar footprint (boxes turned
+about z, cylinders and capsules with their axis in the plane, spheres centred in it:
+:mod:`regrasp.kernels.footprint`, which states why the 3-D distance to the prism is then the
+planar one), a ``urdf`` sample is one call of :func:`~regrasp.kernels.envelope.envelope_sample_into`:
+the same grid, bisection and rules, with closed-form signed distances in place of coal's
+(``compiled=False`` keeps coal; other shapes always do).
 """
 
 from __future__ import annotations
@@ -63,9 +70,12 @@ from .collision import UrdfCollisionChecker, default_tip_clearance, segment_hits
 from .exceptions import InvalidParameterError
 from .finger import Finger
 from .intervals import Intervals, intersect, merge
+from .kernels.envelope import (ENVELOPE_PARAMETERS, envelope_sample_into, feasible_capacity, tip_is_free,
+                               workspace_size)
 from .planar import rotation
 from .polygon import ConvexPolygon
-from .validation import as_finite_array, as_finite_float, as_integer, as_positive_float, as_sign, expect_type
+from .validation import (as_finite_array, as_finite_float, as_flag, as_integer, as_positive_float, as_sign,
+                         expect_type)
 
 __all__ = [
     "Condition",
@@ -105,6 +115,11 @@ def condition_of(d: float, l1: float) -> Condition:
     d, l1 = as_finite_float("d", d), as_finite_float("l1", l1)
     if not l1 > 0.0:
         raise InvalidParameterError("l1", l1, "a link length l1 > 0 [m]")
+    return _condition(d, l1)
+
+
+def _condition(d: float, l1: float) -> Condition:
+    """:func:`condition_of` of finite floats, ``l1`` > 0 (no validation)."""
     if d < -l1:
         return Condition.I
     if d > l1:
@@ -310,6 +325,16 @@ class FingerEnvelope:
             radius, a box's middle half-side).
         urdf_grid: Grid points per piece of reachable ∩ edge in ``urdf`` mode.
         urdf_tolerance: Bisection tolerance in ``urdf`` mode, as a fraction of the edge length.
+        compiled: ``urdf`` mode only: compute a sample with the compiled kernel
+            (:mod:`regrasp.kernels.envelope`, closed-form distances) instead of coal. None: when every
+            link shape has a planar footprint (:attr:`UrdfCollisionChecker.footprints
+            <regrasp.collision.UrdfCollisionChecker.footprints>`); True: it must (else an
+            :class:`~regrasp.exceptions.InvalidParameterError`); False: never.
+        coal_tolerance: ``urdf`` mode: the tolerance [m] of coal's GJK and EPA iterations
+            (:class:`~regrasp.collision.UrdfCollisionChecker`; default: coal's, 1e-6).
+
+    Attributes:
+        compiled: Whether :meth:`at` runs the compiled kernel.
     """
 
     def __init__(
@@ -322,6 +347,8 @@ class FingerEnvelope:
         tip_clearance: float | None = None,
         urdf_grid: int = 33,
         urdf_tolerance: float = 5e-5,
+        compiled: bool | None = None,
+        coal_tolerance: float | None = None,
     ):
         self.finger = expect_type("finger", finger, Finger, "a Finger")
         self.polygon = expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
@@ -344,7 +371,7 @@ class FingerEnvelope:
         if self.geometry is Geometry.URDF:
             if tip_clearance is None:
                 tip_clearance = default_tip_clearance(finger)
-            self.checker = UrdfCollisionChecker(finger, polygon, float(tip_clearance))
+            self.checker = UrdfCollisionChecker(finger, polygon, float(tip_clearance), coal_tolerance=coal_tolerance)
         self.tip_clearance = None if self.checker is None else self.checker.tip_clearance
         # constants of the hot path, as floats
         self._joint1 = tuple(finger.joint1_in_hand.tolist())
@@ -356,6 +383,39 @@ class FingerEnvelope:
         self._l1_sq = self.l1**2
         self._l2_sq = self.l2**2
         self._l1_sq_minus_l2_sq = self.l1**2 - self.l2**2
+        self.compiled = self._use_kernel(compiled)
+        if self.compiled:
+            self._init_kernel()
+
+    def _use_kernel(self, compiled: bool | None) -> bool:
+        """Whether :meth:`at` runs the compiled kernel, given the ``compiled`` argument."""
+        supported = (self.checker is not None and self.checker.footprints is not None
+                     and self.checker.joint1 == self._joint1)
+        if compiled is None:
+            return supported
+        if as_flag("compiled", compiled) and not supported:
+            why = ("the 'ideal' geometry has no compiled path" if self.checker is None else
+                   "a link shape has no planar footprint (see UrdfCollisionChecker.footprints)")
+            raise InvalidParameterError("compiled", compiled, f"False or None for this envelope: {why}")
+        return bool(compiled)
+
+    def _init_kernel(self) -> None:
+        """The compiled path's constants (an :data:`~regrasp.kernels.envelope.ENVELOPE_PARAMETERS` record, the
+        polygon, the footprints) and its preallocated outputs."""
+        par = np.zeros(1, dtype=ENVELOPE_PARAMETERS)
+        l1, l2 = self.l1, self.l2
+        lo_xi, hi_xi = self.edge.xi_range
+        par[0] = (*self._joint1, self._base_angle, l1, l2, self._l1_sq, self._l2_sq, self._l1_sq_minus_l2_sq,
+                   (l1 + l2) ** 2, (l1 - l2) ** 2, float(self.sign), self._eps, *self._edge_normal,
+                   *self._edge_origin, lo_xi, hi_xi, self.urdf_grid, self.urdf_tolerance * self.edge.length,
+                   self.checker.half_thickness)
+        vertices = np.array(self._vertices, dtype=float)
+        normals = np.array(self._normals, dtype=float)
+        self._kernel_inputs = (par, self.checker.footprints, vertices, normals)
+        rows = feasible_capacity(self.urdf_grid, len(self._vertices))
+        self._kernel_outputs = (np.empty(3), np.empty((4, 2)), np.empty((4, 2)), np.empty(4, np.bool_),
+                                np.empty(4, np.int64), np.empty(rows), np.empty((rows, 2)),
+                                np.empty(workspace_size(self.urdf_grid, len(self._vertices))))
 
     # ------------------------------------------------------------------ geometry
     def _line(self, x: float, y: float, beta: float) -> tuple[float, ...]:
@@ -444,7 +504,11 @@ class FingerEnvelope:
         line coordinate ``s`` [m], the object at (x [m], y [m], beta [rad]) and its edge's line at
         distance ``d`` [m] with inward normal (nx, ny). Sets the checker's object pose. With a list
         ``kept`` as second argument, the checker's certificates kept across object poses are used
-        (:meth:`~regrasp.collision.UrdfCollisionChecker.links_collide_kept`)."""
+        (:meth:`~regrasp.collision.UrdfCollisionChecker.links_collide_kept`); on the compiled path the verdict
+        is :func:`~regrasp.kernels.envelope.tip_is_free` and ``kept`` receives each link's smallest signed
+        distance [m] (the last entry of its tuple, as for coal's certificates)."""
+        if self.compiled:
+            return self._compiled_free_test(x, y, beta)
         self.checker.set_object_pose(x, y, beta)
         links_collide = self.checker.links_collide
         links_collide_kept = self.checker.links_collide_kept
@@ -460,6 +524,20 @@ class FingerEnvelope:
             if kept is None:
                 return not links_collide(ex / n1, ey / n1, o1x + ex, o1y + ey, vx / n2, vy / n2)
             return not links_collide_kept(kept, ex / n1, ey / n1, o1x + ex, o1y + ey, vx / n2, vy / n2)
+
+        return free
+
+    def _compiled_free_test(self, x: float, y: float, beta: float):
+        """:meth:`_free_test` on the compiled path, at the object pose (x [m], y [m], beta [rad])."""
+        par, shapes, vertices, normals = self._kernel_inputs
+        nearest = np.empty(2)
+
+        def free(s: float, kept: list | None = None) -> bool:
+            verdict = tip_is_free(par, shapes, vertices, normals, x, y, beta, s, nearest)
+            if kept is not None:
+                near = nearest.tolist()
+                kept[0], kept[1] = (near[0],), (near[1],)
+            return verdict
 
         return free
 
@@ -501,12 +579,55 @@ class FingerEnvelope:
         if type(time) is not float or time - time != 0.0:  # (a finite float passes without a call)
             time = as_finite_float("time", time)
         x, y, beta = _pose_floats(pose_object_in_hand)
+        if self.compiled:
+            return self._at_compiled(x, y, beta, time, t_start)
         frame = self._frame(x, y, beta)
         feasible_s = frame.ideal
         if self.checker is not None and frame.base:
-            ends = self._urdf_ends(frame.base, frame.ideal, self._free_test(x, y, beta, frame.d, frame.nx, frame.ny))
-            feasible_s = _urdf_pieces(frame.base, ends)
+            feasible_s = _urdf_pieces(frame.base, self._frame_ends(frame, x, y, beta))
         return self._sample(frame, feasible_s, time, t_start)
+
+    def kernel_arguments(self, pose_object_in_hand: ArrayLike) -> tuple:
+        """The arguments of the compiled path's one :func:`~regrasp.kernels.envelope.envelope_sample_into` call at an
+        object pose ``(x [m], y [m], beta [rad])`` (its inputs, the pose as floats, its preallocated outputs)."""
+        if not self.compiled:
+            raise InvalidParameterError("compiled", self.compiled, "True: this envelope runs the reference path")
+        return (*self._kernel_inputs, *_pose_floats(pose_object_in_hand), *self._kernel_outputs)
+
+    def _run_kernel(self, x: float, y: float, beta: float) -> tuple[int, int, int]:
+        """One call of :func:`~regrasp.kernels.envelope.envelope_sample_into` at the object pose (x [m], y [m],
+        beta [rad]) into the preallocated outputs; (reachable pieces, pieces of reachable ∩ edge, feasible pieces)."""
+        return envelope_sample_into(*self._kernel_inputs, x, y, beta, *self._kernel_outputs)
+
+    def _at_compiled(self, x: float, y: float, beta: float, time: float, t_start: float) -> EnvelopeSample:
+        """:meth:`at` on the compiled path."""
+        n_reach, n_base, n_feasible = self._run_kernel(x, y, beta)
+        scalars, reach, _, _, _, _, feasible, _ = self._kernel_outputs
+        d, lam, _ = scalars.tolist()
+        return self._make_sample(d, lam, tuple(map(tuple, reach[:n_reach].tolist())), n_base > 0,
+                                 tuple(map(tuple, feasible[:n_feasible].tolist())), time, t_start)
+
+    def urdf_cuts(self, pose_object_in_hand: ArrayLike) -> tuple[tuple[bool, tuple[float, ...]], ...]:
+        """The ``urdf`` cuts of :meth:`at` at an object pose ``(x [m], y [m], beta [rad])``: per piece of reachable ∩
+        edge, whether the tip is free at its start and the free side of every flip of the verdict, in order, in
+        line coordinates s [m] (ξ = s - s0, :class:`EdgeLine`)."""
+        if self.checker is None:
+            raise InvalidParameterError("geometry", self.geometry.value, "'urdf' (the 'ideal' geometry has no cuts)")
+        x, y, beta = _pose_floats(pose_object_in_hand)
+        if self.compiled:
+            _, n_base, _ = self._run_kernel(x, y, beta)
+            _, _, _, starts, counts, flips, _, _ = self._kernel_outputs
+            out, k = [], 0
+            for start, count in zip(starts[:n_base].tolist(), counts[:n_base].tolist()):
+                out.append((start, tuple(flips[k:k + count].tolist())))
+                k += count
+            return tuple(out)
+        frame = self._frame(x, y, beta)
+        return self._frame_ends(frame, x, y, beta) if frame.base else ()
+
+    def _frame_ends(self, frame: _Frame, x: float, y: float, beta: float) -> tuple:
+        """:meth:`_urdf_ends` of ``frame`` (with its ``ideal`` set) at the object pose (x [m], y [m], beta [rad])."""
+        return self._urdf_ends(frame.base, frame.ideal, self._free_test(x, y, beta, frame.d, frame.nx, frame.ny))
 
     def _frame(self, x: float, y: float, beta: float, ideal: bool = True) -> _Frame:
         """The closed-form part of a sample at the object pose (x [m], y [m], beta [rad]) (without the
@@ -520,28 +641,29 @@ class FingerEnvelope:
 
     def _sample(self, frame: _Frame, feasible_s: Intervals, time: float, t_start: float) -> EnvelopeSample:
         """The :class:`EnvelopeSample` of ``frame`` with the feasible pieces ``feasible_s`` (line coordinates)."""
-        if feasible_s:
+        s0 = frame.s0
+        return self._make_sample(frame.d, frame.lam, tuple((a - s0, b - s0) for a, b in frame.reach), bool(frame.base),
+                                 tuple((a - s0, b - s0) for a, b in feasible_s), time, t_start, frame.condition)
+
+    def _make_sample(self, d: float, lam: float, reachable: Intervals, on_edge: bool, feasible: Intervals,
+                     time: float, t_start: float, condition: Condition | None = None) -> EnvelopeSample:
+        """The :class:`EnvelopeSample` with line distance ``d`` [m], angle ``lam`` [rad], the reachable set
+        ``reachable``, whether reachable ∩ edge is not empty, and the feasible set ``feasible`` (both in ξ [m])."""
+        if condition is None:
+            condition = _condition(d, self.l1)
+        if feasible:
             reason = None
-        elif frame.condition is Condition.I:
+        elif condition is Condition.I:
             reason = "condition I"
-        elif not frame.reach:
+        elif not reachable:
             reason = "out of reach"
-        elif not frame.base:
+        elif not on_edge:
             reason = "off the edge"
         else:
             reason = "collision"
-        s0 = frame.s0
-        return EnvelopeSample(
-            time=float(time),
-            d=frame.d,
-            lam=frame.lam,
-            condition=frame.condition,
-            reachable=tuple((a - s0, b - s0) for a, b in frame.reach),
-            edge_range=self.edge.xi_range,
-            feasible=tuple((a - s0, b - s0) for a, b in feasible_s),
-            reason=reason,
-            seconds=_time.perf_counter() - t_start,
-        )
+        return EnvelopeSample(time=float(time), d=d, lam=lam, condition=condition, reachable=reachable,
+                              edge_range=self.edge.xi_range, feasible=feasible, reason=reason,
+                              seconds=_time.perf_counter() - t_start)
 
     def tip_at(self, pose_object_in_hand: ArrayLike, xi: float) -> np.ndarray:
         """Tip position [m] in the hand frame for contact ``xi`` [m] at an object pose."""

@@ -20,7 +20,9 @@ and re-locates each cut near where it was:
    :math:`\tau` this costs two collision queries per cut. The queries use collision certificates
    that outlive the object pose
    (:meth:`~regrasp.collision.UrdfCollisionChecker.links_collide_kept`), so coal runs mostly at
-   the cuts;
+   the cuts. On the compiled path (:attr:`FingerEnvelope.compiled <regrasp.envelope.FingerEnvelope.compiled>`)
+   each query is one closed-form kernel call instead, and a fallback takes ``at``'s cuts from the same
+   kernel (:meth:`~regrasp.envelope.FingerEnvelope.urdf_cuts`);
 3. it falls back to the full ``at`` computation when anything is ambiguous: the first call, a pose
    jump above ``max_pose_step``, any change of the structure, a search that leaves the piece or
    goes farther than one grid step of ``at``, or two cuts closer than one grid step of ``at`` plus
@@ -197,8 +199,11 @@ class EnvelopeTracker:
             outcome = self._follow(cuts, frame.base, free, time)
         if isinstance(outcome, str):
             self.counts[outcome] += 1
-            ideal = env._ideal_feasible(frame.base, x, y, frame.c, frame.s, d, nx, ny)
-            ends = env._urdf_ends(frame.base, ideal, free)
+            if env.compiled:  # at()'s own cuts, from the same kernel call
+                ends = env.urdf_cuts((x, y, beta))
+            else:
+                ideal = env._ideal_feasible(frame.base, x, y, frame.c, frame.s, d, nx, ny)
+                ends = env._urdf_ends(frame.base, ideal, free)
             rates = tuple((0.0,) * len(flips) for _, flips in ends)
             kept = tuple(self._sites(lo, hi, flips, free) for (lo, hi), (_, flips) in zip(frame.base, ends))
         else:
@@ -224,7 +229,7 @@ class EnvelopeTracker:
                 continue
             kept = [None, None]
             verdict = free(s, kept)
-            candidates.append((min(abs(c[8]) for c in kept if c is not None), j, verdict, kept))
+            candidates.append((min(abs(c[-1]) for c in kept if c is not None), j, verdict, kept))
         candidates.sort(key=lambda c: c[0])
         watched = tuple((j, verdict, kept) for _, j, verdict, kept in candidates[:WATCHED])
         return [None, None], [None, None], tuple([None, None] for _ in flips), watched

@@ -20,6 +20,10 @@ an exact dense QP, the check)
 :mod:`.control`: a computed-torque     the controller with ``compiled=False``       ``tests/test_kernels_control.py``
 control step (fixed law, Prop. 1,
 Prop. 3 with m > 2)
+:mod:`.footprint`: link shape–prism    coal (``UrdfCollisionChecker.                ``tests/test_kernels_
+signed distances in closed form        signed_distances``)                          footprint.py``
+:mod:`.envelope`: a ``urdf`` envelope  :class:`~regrasp.envelope.FingerEnvelope`    ``tests/test_kernels_
+sample (grid, bisection)               with ``compiled=False``                      footprint.py``
 =====================================  ==========================================  ===========================
 
 :func:`warm_up` loads every kernel (compiling it where the cache has none): a compiled
@@ -27,7 +31,8 @@ Prop. 3 with m > 2)
 for it.
 
 Every kernel reads named fields (numpy record dtypes: :data:`FINGER_PARAMETERS`, :data:`FINGER_TERMS`,
-:data:`PLANT_CONTACT`, :data:`PLANT_PARAMETERS`), never positional tuples. Compiled code is cached on disk
+:data:`PLANT_CONTACT`, :data:`PLANT_PARAMETERS`, :data:`ENVELOPE_PARAMETERS`, :data:`FOOTPRINT`),
+never positional tuples. Compiled code is cached on disk
 (``cache=True``), so only the first run on a machine pays for the compile.
 """
 
@@ -36,18 +41,21 @@ from pathlib import Path
 
 import numpy as np
 
-
 from .control import control_layout, control_step_into, sliding_step_into
+from .envelope import ENVELOPE_PARAMETERS, envelope_sample_into, feasible_capacity, tip_is_free, workspace_size
 from .finger import FINGER_PARAMETERS, FINGER_TERMS, finger_parameters, finger_terms, finger_terms_at
+from .footprint import FOOTPRINT, footprint_distances
 from .force import internal_force_into
 from .plant import (FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, output_size, plant_evaluate,
                     plant_step_into)
 from .reduced import CONTACT_EDGE, FINGER_IK, reduced_terms
 
-__all__ = ["CONTACT_EDGE", "FINGER_IK", "FINGER_PARAMETERS", "FINGER_TERMS", "FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS",
-           "SEPARATED", "SLIDING", "control_layout", "control_step_into", "finger_parameters", "finger_terms",
-           "finger_terms_at", "internal_force_into", "output_size", "plant_evaluate", "plant_step_into", "reduced_terms",
-           "sliding_step_into", "warm_up"]
+__all__ = ["CONTACT_EDGE", "ENVELOPE_PARAMETERS", "FINGER_IK", "FINGER_PARAMETERS", "FINGER_TERMS", "FIXED",
+           "FOOTPRINT", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDING", "control_layout",
+           "control_step_into", "envelope_sample_into", "feasible_capacity", "finger_parameters", "finger_terms",
+           "finger_terms_at", "footprint_distances", "internal_force_into", "output_size", "plant_evaluate",
+           "plant_step_into", "reduced_terms", "sliding_step_into", "tip_is_free", "warm_up", "workspace_size"]
+
 
 def _drop_stale_caches() -> None:
     """numba keys a kernel's disk cache on its own file's time stamp only: a kernel that calls one in another
@@ -113,4 +121,26 @@ def warm_up() -> None:
                       s[3], s[4], np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0, np.int64), np.zeros(0),
                       np.zeros(0), True, 1e-3, 1e8, np.ones(1), True, rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0,
                       np.zeros(1), 1.0, 0.0, np.empty(control_layout(1, 3)["f_hat"].stop))
+    _warm_envelope()
     _WARM.append(True)
+
+
+def _warm_envelope() -> None:
+    """The envelope kernels on a unit square and a finger below it (read-only footprints, as the library's)."""
+    shapes = np.zeros(1, dtype=FOOTPRINT)
+    shapes["ux"], shapes["hu"], shapes["hv"] = 1.0, 0.5, 0.1
+    shapes.flags.writeable = False
+    params = np.zeros(1, dtype=ENVELOPE_PARAMETERS)
+    for name, value in (("o1y", -2.0), ("l1", 1.0), ("l2", 1.0), ("l1sq", 1.0), ("l2sq", 1.0), ("outer_sq", 4.0),
+                        ("sign", 1.0), ("n0y", 1.0), ("c0y", -0.5), ("xi_lo", -0.5), ("xi_hi", 0.5), ("grid", 2),
+                        ("tol", 0.1), ("half_thickness", 2.0)):
+        params[name] = value
+    vertices = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    normals = np.array([[0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [1.0, 0.0]])
+    rows = feasible_capacity(2, 4)
+    envelope_sample_into(params, shapes, vertices, normals, 0.0, 0.0, 0.0, np.empty(3), np.empty((4, 2)),
+                         np.empty((4, 2)), np.empty(4, np.bool_), np.empty(4, np.int64), np.empty(rows),
+                         np.empty((rows, 2)), np.empty(workspace_size(2, 4)))
+    tip_is_free(params, shapes, vertices, normals, 0.0, 0.0, 0.0, 0.0, np.empty(2))
+    footprint_distances(shapes, vertices, normals, 2.0, np.zeros(3),
+                        np.array([0.0, -2.0, 0.0, 1.0, 0.0, -1.0, 1.0, 0.0]), np.empty(1))
