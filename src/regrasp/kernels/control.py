@@ -140,6 +140,20 @@ def _finish(tau, forces, f_c, frames, margin_mu, n, out):
 
 
 @numba.njit(cache=True)
+def _internal_force(use_qp, A, f_m, frames, coefficients, lower, n_ineq, is_cone, target, margin_column, weight,
+                    aim):
+    """(whether settled, k, the QP's cone margin, f_c, f = f_m + f_c): the internal force of
+    :func:`.force.internal_force_into` in the null space of Aᵀ, or none (f = f_m) without ``use_qp``."""
+    f_c = np.zeros(f_m.size)
+    forces = f_m.copy()
+    if not use_qp:
+        return True, 0, np.nan, f_c, forces
+    status, k, margin = internal_force_into(A, f_m, frames, coefficients, lower, n_ineq, is_cone, target,
+                                            margin_column, weight, aim, f_c, forces)
+    return status == FORCE_SOLVED, k, margin, f_c, forces
+
+
+@numba.njit(cache=True)
 def control_step_into(fingers, iks, edges, gravity, damped, xi_model, slide_column, s, sd, s_d, s_d_dot, s_d_ddot,
                       kv, ks, m_s_diagonal, object_mass, f_hat, singular_threshold, margin_mu, use_qp, coefficients,
                       lower, n_ineq, is_cone, target, margin_column, weight, aim, out):
@@ -175,14 +189,11 @@ def control_step_into(fingers, iks, edges, gravity, damped, xi_model, slide_colu
         d0, d1 = tau[2 * i] - wrench[2 * i], tau[2 * i + 1] - wrench[2 * i + 1]
         f_m[2 * i] = inv[i, 0] * d0 + inv[i, 2] * d1
         f_m[2 * i + 1] = inv[i, 1] * d0 + inv[i, 3] * d1
-    k, qp_margin = 0, np.nan
-    f_c = np.zeros(m2)
-    forces = f_m.copy()
+    solved, k, qp_margin, f_c, forces = _internal_force(use_qp, a_rows, f_m, frames, coefficients, lower, n_ineq,
+                                                        is_cone, target, margin_column, weight, aim)
+    if not solved:
+        return CONTROL_REFERENCE, k, qp_margin
     if use_qp:
-        qp_status, k, qp_margin = internal_force_into(a_rows, f_m, frames, coefficients, lower, n_ineq, is_cone,
-                                                      target, margin_column, weight, aim, f_c, forces)
-        if qp_status != FORCE_SOLVED:
-            return CONTROL_REFERENCE, k, qp_margin
         _add_jt(tau, jac, f_c)
     _finish(tau, forces, f_c, frames, margin_mu, n, out)
     return CONTROL_OK, k, qp_margin
@@ -234,14 +245,10 @@ def sliding_step_into(fingers, iks, edges, gravity, damped, xi_model, slide_colu
     if x.size == 0:
         return CONTROL_REFERENCE, 0, np.nan
     particular = matvec(edge, x)  # the least-norm f_p
-    k, qp_margin = 0, np.nan
-    f_c = np.zeros(m2)
-    forces = particular.copy()
-    if use_qp:
-        qp_status, k, qp_margin = internal_force_into(edge, particular, frames, coefficients, lower, n_ineq, is_cone,
-                                                      target, margin_column, weight, aim, f_c, forces)
-        if qp_status != FORCE_SOLVED:
-            return CONTROL_REFERENCE, k, qp_margin
+    solved, k, qp_margin, f_c, forces = _internal_force(use_qp, edge, particular, frames, coefficients, lower,
+                                                        n_ineq, is_cone, target, margin_column, weight, aim)
+    if not solved:
+        return CONTROL_REFERENCE, k, qp_margin
     tau = _wrench(h_rows, h_dot, mass, nonlinear, command)
     _add_jt(tau, jac, forces)
     _finish(tau, forces, f_c, frames, margin_mu, n, out)
