@@ -27,11 +27,15 @@ Items and their floors:
   median wall time of whole plans (after one warm-up plan that loads numba's compiled kernels;
   three timed plans, one with ``--quick``), target ≤ 10 s;
 * the rollout of paper trajectory 2 with the palm finger (``paper_trajectory_2_three_fingers.toml``,
-  two periods at 1 kHz, or until it fails): real-time factor = simulated time / wall time, with
+  two periods at 1 kHz, or until it fails): real-time factor = simulated time / wall time, with compiled
+  stretches (the default) and on the reference path (every step through the supervisor), with
   recording off and on (a ``RolloutRecorder`` writing an .rrd to a temporary directory, logging every step,
   and every 10th step: ``regrasp simulate --rrd``'s default ``--decimate 10``); and 2 s of it with
   each policy (scheduled, paper, none), recording off;
-* a study's throughput (``run_study``, 24 runs of 2 s, one schedule planned beforehand): simulated seconds per
+* one step inside a compiled stretch (:mod:`regrasp.stretch`: the supervisor's continuous work, the control law
+  and the plant step in :func:`regrasp.kernels.stretch.stretch_into`), per step of 8-step calls on states
+  captured from the rollout below; floor = the bare control and plant kernels at the same state;
+* a study's throughput (``run_study``, 240 runs of 2 s, one schedule planned beforehand): simulated seconds per
   wall second per worker with 1 and 2 worker processes, and the speed-up of 2 over 1.
 Medians of repeated calls (time.perf_counter); the Pinocchio floors time batches of 1000 calls.
 """
@@ -138,6 +142,39 @@ def compiled_queries_us(sup, meas, dt: float, n: int) -> float:
     return calls[0] / n * bare
 
 
+def stretch_step_us(n: int) -> dict:
+    """One step inside a compiled stretch: the arguments of the three-finger rollout's stretches (each 8-step
+    call's, captured as the rollout calls the kernel, once with the fixed law and once with two sliders), re-run
+    from copies; per step. Floor: the bare control and plant kernels on the same states."""
+    import regrasp.stretch as stretch_module
+
+    captured = {}
+    kernel = stretch_module.stretch_into
+
+    def capture(*args):
+        fixed = bool(args[0]["fixed_law"])
+        if fixed not in captured and args[18].size >= 8:
+            captured[fixed] = [a.copy() if isinstance(a, np.ndarray) else a for a in args]
+        return kernel(*args)
+
+    stretch_module.stretch_into = capture
+    try:
+        build_rollout(load_scenario(THREE), duration=1.2).run()
+    finally:
+        stretch_module.stretch_into = kernel
+    per_step = []
+    for args in captured.values():
+        def call(args=args):
+            fresh = [a.copy() if isinstance(a, np.ndarray) else a for a in args]
+            fresh[18], fresh[19] = args[18][:8], args[19][:8]
+            start = time.perf_counter()
+            kernel(*fresh)
+            return (time.perf_counter() - start) / 8
+        per_step.append(float(np.median([call() for _ in range(max(20, n // 10))])) * 1e6)
+    return {"median_us": float(np.mean(per_step)), "floor_us": None, "fixed_law_us": per_step[0],
+            "sliding_us": per_step[-1]}
+
+
 def rollout_realtime(quick: bool) -> dict:
     """Real-time factors of the three-finger rollout of paper trajectory 2 (the scheduled policy, one
     schedule planned for both), recording off and on."""
@@ -145,6 +182,8 @@ def rollout_realtime(quick: bool) -> dict:
     duration = 0.2 if quick else None
     first = build_rollout(sc, duration=duration)
     off = first.run()
+    stretched = first.stretches.steps / off.steps
+    reference = build_rollout(sc, duration=duration, schedule=first.schedule).run(compiled_stretches=False)
     on = {}
     with tempfile.TemporaryDirectory() as tmp:
         for decimation in (1, 10):  # every step, and ``regrasp simulate --rrd``'s default (every 10th)
@@ -154,7 +193,8 @@ def rollout_realtime(quick: bool) -> dict:
                 on[decimation] = rollout.run(recorder=recorder)
     simulated = off.steps * rollout.plant.dt
     return {"recording_off": off.realtime_factor, "recording_on": on[1].realtime_factor,
-            "recording_on_every_10th": on[10].realtime_factor,
+            "recording_on_every_10th": on[10].realtime_factor, "reference_path": reference.realtime_factor,
+            "steps_in_stretches": stretched,
             "simulated_s": simulated, "requested_s": off.duration,
             "outcome": "success" if off.success else f"failed at {off.failure.time:.3f} s: {off.failure.reason}",
             "slides": sum(off.regrasps.values())}
@@ -181,7 +221,7 @@ def study_throughput(quick: bool) -> dict:
     study of thousands of runs approaches)."""
     sc = load_scenario(THREE)
     schedule = plan_regrasps(sc)
-    runs, duration = (2, 0.2) if quick else (24, 2.0)
+    runs, duration = (2, 0.2) if quick else (240, 2.0)
     out = {}
     for workers in (1, 2):
         result = run_study(sc, runs, seed=0, duration=duration, workers=workers, schedule=schedule)
@@ -304,6 +344,7 @@ def main() -> None:
         results[f"supervisor_step_{geometry}"] = {"median_us": med, "floor_us": floor}
     med, floor = supervisor_step_us("urdf", n, track=True)
     results["supervisor_step_urdf_tracked"] = {"median_us": med, "floor_us": floor}
+    results["stretch_step"] = stretch_step_us(n)
     results["rollout_realtime_factor"] = rollout_realtime(args.quick)
     results["rollout_policies"] = rollout_policies(args.quick)
     results["study_throughput"] = study_throughput(args.quick)
@@ -322,7 +363,8 @@ def main() -> None:
     rt = results["rollout_realtime_factor"]
     print(f"rollout real-time factor      {rt['recording_off']:6.2f}x recording off, {rt['recording_on']:6.2f}x on "
           f"(every step), {rt['recording_on_every_10th']:6.2f}x on (every 10th) ({rt['simulated_s']:.3f} of "
-          f"{rt['requested_s']:.3f} s simulated; {rt['outcome']})")
+          f"{rt['requested_s']:.3f} s simulated; {rt['outcome']}; {rt['steps_in_stretches']:.1%} of the steps in "
+          f"compiled stretches); reference path {rt['reference_path']:.2f}x")
     for policy, value in results["rollout_policies"].items():
         print(f"rollout, {policy:9s} policy      {value['realtime_factor']:6.2f}x real time ({value['simulated_s']:.3f} s "
               f"simulated; {value['outcome']})")

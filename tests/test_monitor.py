@@ -116,3 +116,29 @@ def test_bound_speeds_skip_changes_of_shape():
 def test_bad_bound_settings_are_refused(kwargs):
     with pytest.raises(InvalidParameterError):
         EnvelopeMonitor(ENVELOPES, **kwargs)
+
+
+def test_a_fresh_read_on_request_restarts_the_count():
+    """read(fresh=True) evaluates now (the supervisor asks at each decision) and the k reads start again there;
+    held_reads says how many reads the held samples still serve."""
+    monitor = EnvelopeMonitor(ENVELOPES, every=3)
+    assert monitor.held_reads() == 0
+    assert monitor.read(0.5, SC.trajectory.pose(0.5), XI).fresh
+    assert monitor.held_reads() == 2
+    assert not monitor.read(0.501, SC.trajectory.pose(0.501), XI).fresh
+    forced = monitor.read(0.502, SC.trajectory.pose(0.502), XI, fresh=True)
+    assert forced.fresh and forced.age == 0.0
+    assert forced.samples[0].feasible == ENVELOPES[0].at(SC.trajectory.pose(0.502), 0.502).feasible
+    assert monitor.held_reads() == 2
+    assert [monitor.read(t, SC.trajectory.pose(t), XI).fresh for t in (0.503, 0.504, 0.505)] == [False, False, True]
+
+
+def test_the_held_intervals_are_the_samples_feasible_sets():
+    monitor = EnvelopeMonitor(ENVELOPES, every=10)
+    reading = monitor.read(0.5, SC.trajectory.pose(0.5), XI)
+    intervals, counts = monitor.held_intervals()
+    for i, sample in enumerate(reading.samples):
+        assert counts[i] == len(sample.feasible)
+        assert [tuple(r) for r in intervals[i, :counts[i]].tolist()] == list(sample.feasible)
+    with pytest.raises(InvalidParameterError):
+        EnvelopeMonitor(ENVELOPES).held_intervals()  # (nothing read yet)

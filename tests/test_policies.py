@@ -183,3 +183,42 @@ def test_a_slide_order_checks_itself():
         SlideOrder(0, 0, 0.01)
     with pytest.raises(InvalidParameterError):
         SlideOrder(0, 1, math.inf)
+
+
+def test_quiet_until_is_the_next_decision_while_the_phases_stay():
+    """Until quiet_until(phases) propose() returns nothing (compiled stretches run up to it); a phase change
+    makes the next step a decision."""
+    policy = ScheduledPolicy(schedule([UP, DOWN]), NAMES, settings=ScheduledSettings(decision_period=0.01))
+    assert policy.quiet_until(FIXED) == -math.inf  # (nothing decided yet)
+    assert policy.propose(meas(0.1), reading(0.1), FIXED, []) == []
+    quiet = policy.quiet_until(FIXED)
+    assert 0.11 - 2e-9 < quiet < 0.11  # (a period on, less the 1e-9 s that keeps t + k dt from missing it)
+    assert policy.quiet_until((ContactPhase.SLIDING, ContactPhase.FIXED)) == -math.inf
+    for t in np.arange(0.101, quiet, 0.001):
+        assert policy.propose(meas(t), reading(t), FIXED, []) == [] and policy.quiet_until(FIXED) == quiet
+
+
+def test_stretch_terms_say_when_the_next_slide_is_due_and_end_with_the_period():
+    policy = ScheduledPolicy(schedule([UP, DOWN]), NAMES, replan=lambda t, xi: schedule([UP]),
+                             settings=ScheduledSettings(decision_period=0.01, prime_lead=0.02))
+    terms = policy.stretch_terms(0.1)
+    assert terms["slide_due"] == pytest.approx(0.5 - 0.02 - 1e-9, abs=1e-12) and terms["end"] == 2.0
+    assert terms["replan"] and terms["periodic"] and terms["margins"].shape == (101, 2)
+    orders = run_until(policy, 0.6)[0]
+    assert len(orders) == 1 and policy.stretch_terms(0.6)["slide_due"] == pytest.approx(1.2 - 0.02 - 1e-9)
+    assert policy.stretch_terms(2.1)["end"] == 4.0 and policy.stretch_terms(2.1)["slide_due"] == pytest.approx(
+        2.5 - 0.02 - 1e-9)
+    late = SlideEnd(orders[0][1], EventKind.ARRIVED, 1.2, 0.01)  # (0.2 s late: a re-plan is pending)
+    policy.notify([late], meas(1.2), [])
+    assert policy.stretch_terms(1.2) is None
+
+
+def test_planned_xi_series_uses_the_schedule_in_force_at_each_time():
+    policy = ScheduledPolicy(schedule([UP, DOWN]), NAMES, replan=lambda t, xi: schedule([], xi_start=(0.005, 0.01)))
+    times = np.linspace(0.0, 3.0, 31)
+    before = policy.planned_xi_series(times)
+    assert np.array_equal(before, np.array([policy.planned_xi(float(t)) for t in times]))
+    policy._use(schedule([], xi_start=(0.005, 0.01)), 1.5)  # (a re-plan adopted at 1.5 s)
+    after = policy.planned_xi_series(times)
+    assert np.array_equal(after[times < 1.5], before[times < 1.5])
+    assert np.all(after[times >= 1.5, 0] == 0.005)

@@ -191,6 +191,13 @@ class ComputedTorqueController:
         layout = control_layout(m, model.n)
         return head, tail, layout, layout["f_hat"].stop
 
+    @property
+    def compiled_arguments(self) -> tuple | None:
+        """The compiled step's constant arguments (``(head, tail, layout, size)`` for
+        :func:`~regrasp.kernels.control.control_step_into`; Proposition 3 with m > 2: ``(head, sliding_tail, rest,
+        layout, size)`` for :func:`~regrasp.kernels.control.sliding_step_into`), or None: the reference path runs."""
+        return self._kernel
+
     def friction_estimate(self, st: ReducedState, command: np.ndarray, friction: ArrayLike | None) -> np.ndarray:
         """f̂_ξ (p,) [N]; the laws override this."""
         return np.zeros(self.model.grasp.p)
@@ -406,6 +413,13 @@ class Proposition3Controller(ComputedTorqueController):
     def directions(self) -> tuple[float, ...]:
         """The sliders' current sliding directions s_j = ±1 (in the grasp's order of sliding contacts)."""
         return tuple(self._directions)
+
+    @directions.setter
+    def directions(self, values: Sequence[float]) -> None:
+        values = [float(v) for v in values]
+        if len(values) != len(self._directions) or any(v not in (-1.0, 1.0) for v in values):
+            raise InvalidParameterError("directions", values, f"one sign (+1 or -1) per slider ({len(self._directions)})")
+        self._directions = values
 
     @property
     def _direction(self) -> float:

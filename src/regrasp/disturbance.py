@@ -168,6 +168,53 @@ class Disturbance:
                        xi_dot=truth.xi_dot + self._noise(s.xi_dot, (m,)), sliding=self._slips[0],
                        friction=truth.friction + self._noise(s.force, (m,)), normal_force=normal)
 
+    # stretches (regrasp.stretch): the same draws and deques, in compiled code
+    def stretch_layout(self, m: int) -> dict[str, int]:
+        """Where each noise term lies in one step's row of standard normals (-1: not drawn), in the order
+        :meth:`measure` and :meth:`actuate` draw them, and the row's length (``"size"``), for m contacts."""
+        s, a = self.sensor, self.actuator
+        layout, k = {}, 0
+        terms = (("pose", 3, not s.ideal and (s.position > 0.0 or s.angle > 0.0)),
+                 ("twist", 3, not s.ideal and (s.velocity > 0.0 or s.angular_velocity > 0.0)),
+                 ("normal", m, not s.ideal and s.force > 0.0), ("xi", m, not s.ideal and s.xi > 0.0),
+                 ("xi_dot", m, not s.ideal and s.xi_dot > 0.0), ("friction", m, not s.ideal and s.force > 0.0),
+                 ("torque", 2 * m, not a.ideal and a.torque > 0.0))
+        for name, size, drawn in terms:
+            layout[name] = k if drawn else -1
+            k += size if drawn else 0
+        layout["size"] = k
+        return layout
+
+    def stretch_noise(self, m: int, steps: int) -> tuple[np.ndarray, object]:
+        """The standard normals ``steps`` steps would draw, one row a step (:meth:`stretch_layout`), and the
+        generator's state before them (:meth:`take_stretch` rewinds to it)."""
+        size = self.stretch_layout(m)["size"]
+        if size == 0:
+            return np.zeros((steps, 0)), None
+        state = self.rng.bit_generator.state
+        return self.rng.standard_normal((steps, size)), state
+
+    def stretch_deques(self, m: int) -> tuple[np.ndarray, int, np.ndarray, int]:
+        """The slip sensor's readings (d + 1, m) and the commanded torques (delay + 1, 2m), oldest first, with how
+        many each deque holds."""
+        slips = np.zeros((self.sensor.slip_delay + 1, m), np.bool_)
+        for i, reading in enumerate(self._slips):
+            slips[i] = reading
+        commands = np.zeros((self.actuator.delay + 1, 2 * m))
+        for i, command in enumerate(self._commands):
+            commands[i] = command
+        return slips, len(self._slips), commands, len(self._commands)
+
+    def take_stretch(self, steps: int, state: object, size: int, slips: np.ndarray, slip_count: int,
+                     commands: np.ndarray, command_count: int) -> None:
+        """After a compiled stretch of ``steps`` steps: the generator as if it had drawn their noise (rewound to
+        ``state`` and advanced by ``steps`` rows of ``size``), and the deques from the stretch's arrays."""
+        if state is not None:
+            self.rng.bit_generator.state = state
+            self.rng.standard_normal(steps * size)
+        self._slips = deque([row.copy() for row in slips[:slip_count]], maxlen=self._slips.maxlen)
+        self._commands = deque([row.copy() for row in commands[:command_count]], maxlen=self._commands.maxlen)
+
     def actuate(self, tau: np.ndarray) -> np.ndarray:
         """The joint torques [N m] the plant gets during this step when ``tau`` is commanded now."""
         a = self.actuator

@@ -594,6 +594,21 @@ class FingerEnvelope:
             raise InvalidParameterError("compiled", self.compiled, "True: this envelope runs the reference path")
         return (*self._kernel_inputs, *_pose_floats(pose_object_in_hand), *self._kernel_outputs)
 
+    @property
+    def compiled_arguments(self) -> tuple | None:
+        """The compiled path's :func:`~regrasp.kernels.envelope.envelope_sample_into` arguments but the pose: its
+        inputs, then its preallocated outputs (:meth:`sample_from_outputs` reads them); None on the reference path."""
+        return (*self._kernel_inputs, *self._kernel_outputs) if self.compiled else None
+
+    def sample_from(self, scalars: np.ndarray, reachable: np.ndarray, on_edge: bool, feasible: np.ndarray,
+                    time: float) -> EnvelopeSample:
+        """The :class:`EnvelopeSample` of a compiled evaluation's outputs (:func:`~regrasp.kernels.envelope.
+        envelope_sample_into`'s, as :meth:`at` reads them): (d, λ, s0), the reachable set (k, 2) [m], whether
+        reachable ∩ edge is not empty and the feasible set (k, 2) [m], at time ``time`` [s]."""
+        d, lam, _ = np.asarray(scalars, dtype=float).tolist()
+        return self._make_sample(d, lam, tuple(map(tuple, np.asarray(reachable).tolist())), bool(on_edge),
+                                 tuple(map(tuple, np.asarray(feasible).tolist())), float(time), _time.perf_counter())
+
     def _run_kernel(self, x: float, y: float, beta: float) -> tuple[int, int, int]:
         """One call of :func:`~regrasp.kernels.envelope.envelope_sample_into` at the object pose (x [m], y [m],
         beta [rad]) into the preallocated outputs; (reachable pieces, pieces of reachable ∩ edge, feasible pieces)."""

@@ -53,7 +53,8 @@ from .control import ComputedTorqueController, ControlOutput, FixedContactContro
 from .events import Event, EventKind
 from .exceptions import InvalidParameterError
 from .executor_settings import ExecutorSettings
-from .slides import SLIPPING_PHASES, ContactPhase, Reference, SlideEnd, SlideOrder
+from .kernels.stretch import SLIDER
+from .slides import SLIPPING_PHASES, ContactPhase, Reference, SlideEnd, SlideOrder, SlideProfile
 from .grasp import Grasp
 from .hand import Hand
 from .internal_force import ConeEdge, InternalForceInfeasibleError
@@ -278,6 +279,51 @@ class SlideExecutor:
             a.aborted = True
             ends.append(self._end(meas, out, i, EventKind.SLIDE_ABORTED, reason))
         return ends
+
+    # ------------------------------------------------------------------ stretches (regrasp.stretch)
+    def law(self) -> ComputedTorqueController:
+        """The control law the next step runs (the current phases' law; cached while it stays the same)."""
+        return self._law()
+
+    def stretch_state(self) -> tuple | None:
+        """What a compiled stretch (:mod:`regrasp.stretch`) reads and updates of the executor: (held (m,) bool, the
+        law's held positions ξ [m], the filtered sensed positions [m] and ∫(X_d - X) dt, both the executor's own
+        arrays, the sliders as :data:`~regrasp.kernels.stretch.SLIDER` records); None where only the reference
+        path serves: a contact being primed or settling, a slide without a planned profile
+        (:class:`~regrasp.slides.SlideProfile`) or spherical tips."""
+        s = self.settings
+        if s.tip_radius != 0.0:
+            return None
+        sliders = []
+        for i, phase in enumerate(self.phases):
+            if phase is ContactPhase.SLIDING:
+                a = self._active[i]
+                if not isinstance(a.order.reference, SlideProfile):
+                    return None
+                sliders.append(i)
+            elif phase is not ContactPhase.FIXED:
+                return None
+        records = np.zeros(len(sliders), dtype=SLIDER)
+        for c, i in enumerate(sliders):
+            a = self._active[i]
+            o = a.order
+            slide, offset = o.reference.slide, o.reference.offset
+            records[c] = (i, a.slipped, a.mu_hat, self._integral_xi.get(i, 0.0), a.phase_start, o.target,
+                          math.nan if o.planned_end is None else o.planned_end, slide.start, slide.end,
+                          slide.start_xi, slide.end_xi, slide.ramp, slide.speed, float(slide.direction), offset,
+                          self._kinetic(i), self.friction[i].kinetic)
+        held = np.array([p is ContactPhase.FIXED for p in self.phases])
+        return held, self.xi, self._xi_sensed, self._integral_X, records
+
+    def take_stretch(self, sliders: np.ndarray, t: float) -> None:
+        """After a stretch whose last step started at ``t`` [s]: the sliders' slip flags, friction estimates and
+        integrals from its records (:meth:`stretch_state`)."""
+        for record in sliders:
+            a = self._active[int(record["contact"])]
+            a.slipped, a.mu_hat = bool(record["slipped"]), float(record["mu_hat"])
+        if self.settings.integral > 0.0:
+            self._integral_xi = {int(r["contact"]): float(r["integral"]) for r in sliders}
+        self._now = float(t)
 
     # ------------------------------------------------------------------ control
     def _gains(self, n: int) -> Gains:

@@ -5,8 +5,10 @@ At a control step the monitor evaluates every contact's feasible envelope
 one pose) at the *measured* object pose, and reports per contact its margin (the distance of ξ to
 the nearer bound of the feasible interval holding it, negative outside), that interval's bounds,
 and the bounds' rates (finite differences between evaluations; a jump above ``max_bound_step``
-is a change of the set's shape, not a motion, and gets rate 0). ``every`` > 1 evaluates only every
-k-th call and reuses the last samples (the margins are still taken at the current ξ); with
+is a change of the set's shape, not a motion, and gets rate 0). ``every`` > 1 evaluates at most k calls
+apart and reuses the last samples in between (the margins are still taken at the current ξ); a caller may
+ask for a fresh evaluation at any call (``read(..., fresh=True)``: the supervisor does at each of its policy's
+decisions, so that decisions read fresh margins), and the count of k starts again there; with
 ``track`` the ``urdf`` cuts are followed from the last evaluation
 (:class:`~regrasp.envelope_tracker.EnvelopeTracker`).
 
@@ -126,7 +128,8 @@ class EnvelopeMonitor:
         self._sample_time = math.nan
         self.trackers = ([EnvelopeTracker(e) for e in self.envelopes]
                          if track and all(e.geometry is Geometry.URDF for e in self.envelopes) else None)
-        self._calls = 0
+        self._calls = 0  # reads since the last evaluation
+        self._held: tuple | None = None  # (samples, intervals, counts): see held_intervals()
         self._samples: list[EnvelopeSample] | None = None
         self._previous: tuple[float, np.ndarray] | None = None
         self._rates = np.zeros((len(self.envelopes), 2))
@@ -135,9 +138,66 @@ class EnvelopeMonitor:
     def m(self) -> int:
         return len(self.envelopes)
 
-    def read(self, t: float, X: np.ndarray, xi: np.ndarray) -> EnvelopeReading:
-        """The reading at time ``t`` [s], measured object pose ``X`` (x, y, β) and contact positions ``xi`` [m]."""
-        fresh = self._samples is None or self._calls % self.every == 0
+    # stretches (regrasp.stretch): reads served from the held samples, in compiled code
+    def held_reads(self) -> int:
+        """How many of the next reads the held samples serve (0: the next read evaluates the envelopes)."""
+        if self._samples is None:
+            return 0
+        return max(0, self.every - self._calls)
+
+    def held_intervals(self) -> tuple[np.ndarray, np.ndarray]:
+        """The held samples' feasible intervals (m, k, 2) [m] and how many each has (m,)."""
+        if self._samples is None:
+            raise InvalidParameterError("monitor", "no samples", "a monitor that has read once")
+        if self._held is None or self._held[0] is not self._samples:
+            k = max(1, max(len(s.feasible) for s in self._samples))
+            intervals = np.zeros((self.m, k, 2))
+            counts = np.zeros(self.m, np.int64)
+            for i, sample in enumerate(self._samples):
+                counts[i] = len(sample.feasible)
+                if sample.feasible:
+                    intervals[i, :counts[i]] = sample.feasible
+            self._held = (self._samples, intervals, counts)
+        return self._held[1], self._held[2]
+
+    def stretch_arguments(self) -> tuple:
+        """What a compiled stretch (:mod:`regrasp.stretch`) reads and updates of the monitor, as new arrays: the held
+        samples' feasible intervals (m, k, 2) [m] with room for any evaluation's, their counts (m,), the bounds at
+        the last evaluation (m, 2) [m], their rates (m, 2) [m/s], :attr:`bound_speed` (m,) [m/s], the last
+        evaluation's time [s] (NaN: none) and the reads since it."""
+        intervals, counts = self.held_intervals()
+        capacity = max([intervals.shape[1]] + [e.compiled_arguments[10].shape[0] for e in self.envelopes
+                                               if e.compiled])
+        room = np.zeros((self.m, capacity, 2))
+        room[:, :intervals.shape[1]] = intervals
+        previous_time, bounds = (math.nan, np.zeros((self.m, 2))) if self._previous is None else self._previous
+        return (room, counts.copy(), np.array(bounds, dtype=float), self._rates.copy(), self.bound_speed.copy(),
+                float(previous_time), self._calls)
+
+    def take_stretch(self, intervals: np.ndarray, counts: np.ndarray, previous_bounds: np.ndarray, rates: np.ndarray,
+                     bound_speed: np.ndarray, previous_time: float, calls: int, evaluated: bool,
+                     samples: list[EnvelopeSample] | None) -> None:
+        """After a compiled stretch: its reads since the last evaluation and, if it ``evaluated`` the envelopes,
+        that evaluation's bounds, rates and time, and its ``samples`` (None: lost to a later evaluation of a step
+        the stretch handed over; the next read, that step's, then evaluates anew: ``calls`` >= ``every`` or the
+        policy decides there)."""
+        self._calls = int(calls)
+        if not evaluated:
+            return
+        self._sample_time = float(previous_time)
+        self._previous = (float(previous_time), previous_bounds)
+        self._rates = rates
+        self.bound_speed = bound_speed
+        if samples is not None:
+            self._samples = samples
+            self._held = (samples, intervals, counts)
+
+    def read(self, t: float, X: np.ndarray, xi: np.ndarray, fresh: bool = False) -> EnvelopeReading:
+        """The reading at time ``t`` [s], measured object pose ``X`` (x, y, β) and contact positions ``xi`` [m];
+        ``fresh``: evaluate the envelopes now (else only when ``every`` calls have passed since they were)."""
+        fresh = fresh or self._samples is None or self._calls >= self.every
+        if fresh:
+            self._calls = 0
         self._calls += 1
         if fresh:
             if self.trackers is not None:

@@ -312,6 +312,7 @@ class Plant:
         self._no_certificates, self._no_radii = np.full((hand.m, 9), np.nan), np.zeros((hand.m, 2))
         # the compiled step's outputs: its arrays (fresh each step) and its workspace (read within a step only)
         self._output_size = output_size(hand.m)
+        self._no_torques = np.zeros(hand.nq)
         self._workspace = (np.empty(hand.m, dtype=FINGER_TERMS), np.empty(hand.m, np.bool_), np.empty((hand.m, 7)))
 
     # ------------------------------------------------------------------ set-up
@@ -760,6 +761,42 @@ class Plant:
                     self._coal(state, i, tuple(posture[i].tolist()), events)
         return PlantStep(state, surface, xi, xi_dot, modes, err, tuple(events))
 
+    # ------------------------------------------------------------------ stretches (regrasp.stretch)
+    def stretch_arguments(self) -> tuple:
+        """What :func:`~regrasp.kernels.stretch.stretch_into` steps this plant with: (fingers, plant, contacts,
+        the flat state y (a copy), certificates, radii, the step's ``out``, terms, needs_coal, posture)."""
+        fingers, plant, contacts, y, _, certificates, radii = self._kernel_arguments(self._no_torques)
+        terms, needs_coal, posture = self._workspace
+        return (fingers, plant, contacts, y, certificates, radii, np.empty(self._output_size), terms, needs_coal,
+                posture)
+
+    def clear_collisions(self, out: np.ndarray, needs_coal: np.ndarray, posture: np.ndarray) -> bool:
+        """Whether no link of the fingers ``needs_coal`` penetrates the object at the state ``out`` (a kernel
+        step's output), asking coal; their certificates are renewed (as :meth:`step` does). Logs nothing: a
+        stretch hands a colliding step to :meth:`step`, which logs it."""
+        n = self.hand.nq
+        q, X = out[:n], out[2 * n:2 * n + 3]
+        clear = True
+        for i in np.flatnonzero(needs_coal).tolist():
+            dist, _ = self._certify(q, X, i, tuple(posture[i].tolist()))
+            clear = clear and not (dist and min(dist) < 0.0)
+        return clear
+
+    def take_stretch(self, y: np.ndarray, last_out: np.ndarray, t: float, worst: float,
+                     last_error: float) -> PlantStep:
+        """Move to the flat state ``y`` at time ``t`` [s] after a stretch whose largest constraint violation was
+        ``worst`` [m]; the stretch's last step (``last_out``: its kernel output; ``last_error``: its violation)."""
+        n, m = self.hand.nq, self.hand.m
+        size = 2 * n + 9
+        y = y.copy()
+        state = PlantState(t, y[:n], y[n:2 * n], y[2 * n:2 * n + 3], y[2 * n + 3:2 * n + 6], *y[2 * n + 6:].tolist())
+        self.state = state
+        self._last_key = (None,) * 4
+        self.max_constraint_error = max(self.max_constraint_error, worst)
+        out = last_out.copy()
+        return PlantStep(state, out[size:size + 2 * m].reshape(m, 2), out[size + 6 * m:size + 7 * m],
+                         out[size + 7 * m:], tuple(c.mode for c in self.contacts), last_error, ())
+
     def _event(self, t, i, kind, detail, out, **values):
         ev = PlantEvent(t, self.hand.fingers[i].name, EventKind(kind), detail, values)
         out.append(ev)
@@ -836,15 +873,21 @@ class Plant:
     def _coal(self, st: PlantState, i: int, posture, out: list[PlantEvent]) -> None:
         """Finger i's links against the object with coal: a collision event where one penetrates, and the
         finger's new certificate (``posture``: see :meth:`_collisions`)."""
-        dist = self.checkers[i].signed_distances(st.q[2 * i:2 * i + 2], st.X).tolist()
-        nearest = [math.inf, math.inf]
-        for d, shape in zip(dist, self.checkers[i].shapes):
-            nearest[shape.link] = min(nearest[shape.link], d)
-        self._certificates[i] = (*posture, *(d * (1.0 - 1e-3) - 1e-5 for d in nearest))
+        dist, nearest = self._certify(st.q, st.X, i, posture)
         if dist and min(dist) < 0.0:
             link = min(range(2), key=lambda k: nearest[k])
             self._event(st.t, i, "collision", f"link {link + 1} penetrates the object by {-min(dist):.3g} m",
                         out, link=link, depth=-min(dist))
+
+    def _certify(self, q, X, i: int, posture) -> tuple[list[float], list[float]]:
+        """Finger i's links' signed distances to the object (coal) at joints ``q`` (all fingers') and pose ``X``,
+        the nearest per link, and the finger's new certificate."""
+        dist = self.checkers[i].signed_distances(q[2 * i:2 * i + 2], X).tolist()
+        nearest = [math.inf, math.inf]
+        for d, shape in zip(dist, self.checkers[i].shapes):
+            nearest[shape.link] = min(nearest[shape.link], d)
+        self._certificates[i] = (*posture, *(d * (1.0 - 1e-3) - 1e-5 for d in nearest))
+        return dist, nearest
 
     def _switch_mode(self, st: PlantState, tau, i: int, force_surface, xi: float, xi_dot: float, out) -> None:
         """Separation, slip (the static cone) and stick (the static cone) of contact i (module docstring)."""

@@ -8,6 +8,12 @@ monitor (:class:`~regrasp.monitor.EnvelopeMonitor`) watches. Every policy has
 * ``notify(ends, meas, out)``: how the slides it ordered ended;
 * ``planned_xi(t) -> (m,)``: where it plans each contact to be at time t [m] (NaN: no plan).
 
+and may have, for the compiled stretches of a rollout (:mod:`regrasp.stretch`: the steps between decisions
+in one compiled call), ``quiet_until(phases)``: until when ``propose`` is sure to return nothing while the
+phases stay the same; and ``stretch_terms(t)`` / ``take_stretch(next_decision)``: what the compiled code needs
+to take the decisions that order nothing itself (:class:`ScheduledPolicy`'s: no slide due, no re-plan
+pending, every margin above its threshold). A policy without them is asked at every step.
+
 :class:`ScheduledPolicy` follows a :class:`~regrasp.schedule.RegraspSchedule` planned ahead
 (:func:`~regrasp.schedule_planner.plan_regrasps`): it primes each slide ``prime_lead`` before the
 schedule starts it and hands the executor the slide's profile as ξ_d(t). It **re-plans** from the
@@ -33,7 +39,8 @@ from .events import Event, EventKind
 from .exceptions import InvalidParameterError, RegraspError
 from .executor import ContactPhase, SlideEnd, SlideOrder
 from .monitor import EnvelopeReading
-from .schedule import RegraspSchedule, Slide
+from .schedule import RegraspSchedule
+from .slides import SlideProfile
 from .validation import as_finite_float, as_integer, as_positive_float, expect_sequence_of
 
 if TYPE_CHECKING:
@@ -66,6 +73,10 @@ class NoRegraspPolicy:
     def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
                 out: list[Event]) -> list[SlideOrder]:
         return []
+
+    def quiet_until(self, phases: Sequence[ContactPhase]) -> float:
+        """It never proposes: inf (see :meth:`ScheduledPolicy.quiet_until`)."""
+        return math.inf
 
     def notify(self, ends: list[SlideEnd], meas: Measurement, out: list[Event]) -> None:
         pass
@@ -145,13 +156,6 @@ class ScheduledSettings:
             raise InvalidParameterError("max_replans", self.max_replans, "an integer >= 0")
 
 
-def _profile(slide: Slide, offset: float) -> Callable[[float], tuple[float, float, float]]:
-    """t [s] -> (ξ, ξ̇, ξ̈) of ``slide`` shifted by ``offset`` [s]."""
-    def at(t: float) -> tuple[float, float, float]:
-        return slide.profile_at(float(t) - offset)
-    return at
-
-
 class ScheduledPolicy:
     """Follows a regrasp schedule and re-plans it when reality drifts (module docstring).
 
@@ -200,8 +204,21 @@ class ScheduledPolicy:
     def _event(self, out: list, t: float, i: int | None, kind: EventKind, detail: str, **values) -> None:
         out.append(Event(float(t), "" if i is None else self.names[i], kind, detail, values=values))
 
-    def planned_xi(self, t: float) -> np.ndarray:
-        return self.schedule.at(float(t)).xi
+    def planned_xi(self, t: float | np.ndarray) -> np.ndarray:
+        """ξ where the schedule in force puts each contact at time(s) ``t`` [s]: (m,), or (k, m) for k times."""
+        return self.schedule.at(t if isinstance(t, np.ndarray) else float(t)).xi
+
+    def planned_xi_series(self, times: np.ndarray) -> np.ndarray:
+        """:meth:`planned_xi` at each of ``times`` [s] (k,) with the schedule that was in force then (the last
+        one adopted at or before it), (k, m)."""
+        times = np.asarray(times, dtype=float)
+        since = np.array([s for s, _ in self.schedules])
+        which = np.maximum(np.searchsorted(since, times, side="right") - 1, 0)
+        out = np.empty((times.size, len(self.names)))
+        for j in np.unique(which).tolist():
+            at = which == j
+            out[at] = self.schedules[j][1].at(times[at]).xi
+        return out
 
     def _occurrences(self, t: float):
         """(period k, slide index, slide, offset [s]) of the schedule's slides around time t."""
@@ -231,13 +248,48 @@ class ScheduledPolicy:
         self._next_decision = self._decision_after(t)
         return orders
 
+    def quiet_until(self, phases: Sequence[ContactPhase]) -> float:
+        """Until when [s] :meth:`propose` is sure to return nothing while the phases stay ``phases``: the next
+        decision's time (-inf: it decides at the next step). Compiled stretches (:mod:`regrasp.stretch`) end there."""
+        return self._next_decision if tuple(phases) == self._phases else -math.inf
+
+    def stretch_terms(self, t: float) -> dict | None:
+        """What a compiled stretch (:mod:`regrasp.stretch`) from time ``t`` [s] needs to take this policy's decisions
+        where they are sure to order nothing (no slide due, no re-plan pending, the margins above their threshold;
+        any other decision is handed to :meth:`propose`): when the next slide is due [s], when the stretch must end
+        at the latest (the schedule period's end, past which other slides come into view) [s], the re-plan
+        test's terms and the schedule's planned margins; None when a re-plan is pending."""
+        if self._pending is not None:
+            return None
+        sch = self.schedule
+        due = math.inf
+        lead = self.settings.prime_lead
+        for k, n, slide, offset in self._occurrences(t):
+            start = slide.start + offset
+            if (k, n) not in self._issued and start >= self._since - 1e-9:
+                due = min(due, start - lead - 1e-9)
+        end = math.inf
+        if sch.periodic:
+            period = sch.t_end - sch.t_start
+            end = sch.t_start + (math.floor((t - sch.t_start) / period) + 1) * period
+        return {"decision_period": self.settings.decision_period, "slide_due": due, "end": end,
+                "replan": self.replan_function is not None, "cooldown_until": self._cooldown_until,
+                "margin_fraction": self.settings.margin_fraction, "schedule_start": sch.t_start,
+                "schedule_end": sch.t_end, "periodic": sch.periodic, "times": sch.times,
+                "margins": sch.envelope_margin}
+
+    def take_stretch(self, next_decision: float) -> None:
+        """After a compiled stretch that took this policy's decisions (none ordered anything): the next one's
+        time [s]."""
+        self._next_decision = float(next_decision)
+
     def _decision_after(self, t: float) -> float:
         """When the next decision is due after one at time ``t`` [s]: a period later, or at the next
         unissued slide's priming start (-inf: at the next step)."""
         period = self.settings.decision_period
         if period == 0.0:
             return -math.inf
-        due = t + period
+        due = t + period - 1e-9  # (on the plant's clock, t + k dt may fall short of t + period by an ulp)
         lead = self.settings.prime_lead
         for k, n, slide, offset in self._occurrences(t):  # (this period and the next: period < P)
             start = slide.start + offset
@@ -272,7 +324,7 @@ class ScheduledPolicy:
             if phases[i] is not ContactPhase.FIXED:
                 continue  # its previous slide has not settled: the order waits (and will be late)
             self._issued.add((k, n))
-            orders.append(SlideOrder(i, int(slide.direction), float(slide.end_xi), _profile(slide, offset), start,
+            orders.append(SlideOrder(i, int(slide.direction), float(slide.end_xi), SlideProfile(slide, offset), start,
                                      slide.end + offset, why=f"scheduled {start:.3f}-{slide.end + offset:.3f} s"))
         return orders
 

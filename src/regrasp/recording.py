@@ -1187,27 +1187,57 @@ class RolloutRecorder:
 
     def _record_rows(self, record, desired) -> None:
         """A supervised record's rows, from the record alone (module docstring)."""
-        rows = self._writer.scene.rows
         ps, sup, control = record.plant, record.supervision, record.command.control
-        st = ps.state
-        self._append_pose(rows, st.X, st.q, desired)
+        self._supervised_rows(ps.state.X, ps.state.q, desired, ps.forces_surface, control.contact_forces,
+                              control.contact_forces_surface, [e.feasible for e in sup.envelopes], sup.phases, ps.xi,
+                              control.error, record.cone_margins, control.cone_margins, sup.bounds, sup.reference_xi,
+                              sup.planned_xi)
+
+    def _supervised_rows(self, X, q, desired, surface, predicted, predicted_surface, feasible, phases, xi, error,
+                         plant_cone, predicted_cone, bounds, reference_xi, planned_xi) -> None:
+        """A supervised step's rows: the plant's pose X and joints q after it, its forces (at its start), the law's predicted
+        forces (hand and surface frames), error and cone margins, the envelopes' feasible sets, the phases, ξ after
+        it, the plant's cone margins, the bounds, the law's and the plan's ξ."""
+        rows = self._writer.scene.rows
+        self._append_pose(rows, X, q, desired)
         contacts = self.plant.contacts
         modes = [c.mode for c in contacts]
         edges = [c.edge for c in contacts]
         rows["edges"].append(edges)
         rows["modes"].append(modes)
-        surface = np.array(ps.forces_surface, dtype=float)
+        surface = np.array(surface, dtype=float)
         rows["surface"].append(surface)
-        rows["predicted"].append(np.array(control.contact_forces, dtype=float))
-        pred = np.asarray(control.contact_forces_surface, dtype=float)
-        rows["segments"].append(self._segments(enumerate(edges), lambda i, _edge: sup.envelopes[i].feasible))
-        phases = [float(PHASE_CODES.get(ph, math.nan)) for ph in sup.phases]
+        rows["predicted"].append(np.array(predicted, dtype=float))
+        pred = np.asarray(predicted_surface, dtype=float)
+        rows["segments"].append(self._segments(enumerate(edges), lambda i, _edge: feasible[i]))
+        phases = [float(PHASE_CODES.get(ph, math.nan)) for ph in phases]
         self._append_series(
-            rows, st.X, np.asarray(ps.xi, dtype=float).tolist(), modes, desired, self._object_error(control.error),
+            rows, X, np.asarray(xi, dtype=float).tolist(), modes, desired, self._object_error(error),
             surface[:, 0].tolist() + surface[:, 1].tolist() + pred[:, 0].tolist() + pred[:, 1].tolist(),
-            np.asarray(record.cone_margins, dtype=float).tolist() + np.asarray(control.cone_margins, dtype=float).tolist(),
-            np.asarray(sup.bounds, dtype=float).tolist(), np.asarray(sup.reference_xi, dtype=float).tolist(),
-            np.asarray(sup.planned_xi, dtype=float).tolist(), phases)
+            np.asarray(plant_cone, dtype=float).tolist() + np.asarray(predicted_cone, dtype=float).tolist(),
+            np.asarray(bounds, dtype=float).tolist(), np.asarray(reference_xi, dtype=float).tolist(),
+            np.asarray(planned_xi, dtype=float).tolist(), phases)
+
+    def log_stretch_step(self, step: int, t: float, X: np.ndarray, q: np.ndarray, desired_pose: ArrayLike,
+                         surface: np.ndarray, predicted: np.ndarray,
+                         predicted_surface: np.ndarray, feasible: Sequence[Sequence[tuple[float, float]]],
+                         phases: Sequence[ContactPhase], xi: np.ndarray, error: np.ndarray,
+                         plant_cone: np.ndarray, predicted_cone: np.ndarray, bounds: np.ndarray,
+                         reference_xi: np.ndarray, planned_xi: np.ndarray) -> bool:
+        """Log a supervised step that a compiled stretch (:mod:`regrasp.stretch`) took, as :meth:`log_record` logs
+        its record (a stretch's steps have no events): the step ``step`` (``record.index + 1``), the plant's time
+        ``t`` [s], pose ``X`` and joints ``q`` after it, and the record's fields (:meth:`_supervised_rows`)."""
+        self._check_open()
+        step = self._step(step)
+        t = self._time(t)
+        start = _time.perf_counter()
+        self._events_seen = (self.plant.events, len(self.plant.events))
+        if step % self.decimation:
+            return False
+        desired = self._desired(desired_pose)
+        return self._row(step, t, start, lambda: self._supervised_rows(
+            X, q, desired, surface, predicted, predicted_surface, feasible, phases, xi, error, plant_cone,
+            predicted_cone, bounds, reference_xi, planned_xi))
 
     def _log_rows(self, plant: PlantLike, output: ControlOutput | None, desired, plant_step: PlantStep | None) -> None:
         # the step's numbers are computed here; the drawn geometry per block of steps in _Scene.columns

@@ -21,7 +21,7 @@ A failure is a result, not an exception: :class:`RolloutResult` says when and wh
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -45,6 +45,7 @@ from .schedule import RegraspSchedule
 from .schedule_planner import RegraspSettings, plan_regrasps
 from .schedule_problem import trajectory_period
 from .simulation import Command, PlantLike, StepRecord, simulate
+from .stretch import CompiledStretches
 from .supervisor import Measurement, RegraspSupervisor, SupervisorSettings
 from .trajectory import RepeatedTrajectory
 from .validation import MAX_DURATION, as_duration, as_finite_array, as_integer, as_positive_float, expect_type
@@ -103,6 +104,8 @@ class Rollout:
     schedule: RegraspSchedule | None = None
     scenario: Scenario | None = None
     disturbance: Disturbance | None = None
+    #: The last run's compiled stretches (their ``steps`` and ``calls``), or None.
+    stretches: CompiledStretches | None = field(default=None, init=False, repr=False)
 
     def check(self, record: StepRecord) -> Failure | None:
         """The failure a step's events mean, if any (module docstring)."""
@@ -122,7 +125,7 @@ class Rollout:
         return None
 
     def run(self, *, recorder: RolloutRecorder | None = None, progress: Callable[[int, int], None] | None = None,
-            interruptible: bool = True) -> RolloutResult:
+            interruptible: bool = True, compiled_stretches: bool = True) -> RolloutResult:
         """Run to ``duration`` or the first failure.
 
         Args:
@@ -131,6 +134,8 @@ class Rollout:
                 the caller closes it. Or None.
             progress: Called as ``progress(done, total)`` every 50 steps and at the end.
             interruptible: Ctrl-C ends the run with an ``INTERRUPTED`` failure (else it propagates).
+            compiled_stretches: Run the steps between the supervisor's decisions in compiled stretches
+                (:mod:`regrasp.stretch`; the same steps, faster); False: every step on the reference path.
         """
         plant = self.plant
         total = int(round(self.duration / plant.dt))
@@ -142,8 +147,16 @@ class Rollout:
             t_end = trajectory.t_end  # (the last step may end half a step past the run's duration)
             consumers.append(lambda record: recorder.log_record(record, trajectory.pose(min(record.plant.state.t,
                                                                                               t_end))))
+        stretches = None
+        if compiled_stretches:
+            stretches = CompiledStretches(self.supervisor, plant, rows, total, recorder=recorder,
+                                          disturbance=self.disturbance)
         outcome = simulate(plant, _SupervisorDriver(self.supervisor), total, consumers=consumers, check=self.check,
-                           progress=progress, interruptible=interruptible, disturbance=self.disturbance)
+                           progress=progress, interruptible=interruptible, disturbance=self.disturbance,
+                           stretches=stretches)
+        if stretches is not None:
+            stretches.finish()
+        self.stretches = stretches
         if recorder is not None and outcome.failure is not None:
             recorder.log_failure(outcome.failure, plant)
         policy = self.supervisor.policy

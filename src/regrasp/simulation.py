@@ -37,7 +37,7 @@ from .contact import ContactMode, Friction, coefficients, cone_margin
 from .control import ControlOutput
 from .disturbance import Disturbance
 from .events import Event, EventKind, EventSource, Failure, FailureKind
-from .exceptions import RegraspError
+from .exceptions import InvalidParameterError, RegraspError
 from .hand import Hand
 from .plant import PlantContact, PlantEvent, PlantState, PlantStep
 from .polygon import ConvexPolygon
@@ -111,6 +111,10 @@ class Command:
     desired: TrajectorySample
     S_desired: np.ndarray
     supervision: SupervisorOutput | None = None
+
+
+class Stretches(Protocol):
+    def run(self, last: PlantStep | None, k: int, limit: int) -> tuple[int, PlantStep | None]: ...
 
 
 class Driver(Protocol):
@@ -252,7 +256,7 @@ def simulate(plant: PlantLike, driver: Driver, steps: int, *,
              sensor: Callable[[PlantLike, PlantStep | None], Measurement] = sense,
              progress: Callable[[int, int], None] | None = None,
              interruptible: bool = False, control_failures: bool = True,
-             disturbance: Disturbance | None = None) -> SimulationOutcome:
+             disturbance: Disturbance | None = None, stretches: Stretches | None = None) -> SimulationOutcome:
     """Run ``driver`` on ``plant`` for ``steps`` steps (module docstring).
 
     Args:
@@ -264,7 +268,13 @@ def simulate(plant: PlantLike, driver: Driver, steps: int, *,
         control_failures: Turn the driver's errors into a ``CONTROL`` failure (else they propagate).
         disturbance: Sensing noise, a slip sensor and the actuation between the driver and the plant (module
             docstring); None: the driver reads the truth and its torques are applied at once.
+        stretches: Runs stretches of steps in compiled code between the driver's decisions
+            (:class:`~regrasp.stretch.CompiledStretches`: it writes its steps' rows itself, and the consumers
+            see only the other steps), or None; built with ``disturbance`` (it draws the same noise).
     """
+    if stretches is not None and getattr(stretches, "disturbance", None) is not disturbance:
+        raise InvalidParameterError("stretches", stretches, "stretches built with this run's disturbance (they draw "
+                                    "its noise)")
     dt = plant.dt
     mus = None
     last: PlantStep | None = None
@@ -274,9 +284,17 @@ def simulate(plant: PlantLike, driver: Driver, steps: int, *,
     interrupt = InterruptAtStepEnd(active=interruptible)
     with interrupt:
         try:
-            for k in range(steps):
+            k = 0
+            while k < steps:
                 if plant.stopped or interrupt.requested:
                     break
+                if stretches is not None:
+                    taken, last = stretches.run(last, k, steps - k)
+                    if taken:
+                        if progress is not None and (k + taken) // 50 > k // 50:
+                            progress((k + taken) // 50 * 50, steps)
+                        k = done = k + taken
+                        continue
                 truth = sensor(plant, last)
                 meas = truth if disturbance is None else disturbance.measure(truth)
                 try:
@@ -300,7 +318,7 @@ def simulate(plant: PlantLike, driver: Driver, steps: int, *,
                 record = StepRecord(k, float(meas.t), meas, command, step, margins, events, plant_seconds, truth, tau)
                 for consume in consumers:
                     consume(record)
-                done = k + 1
+                k = done = k + 1
                 if progress is not None and done % 50 == 0:
                     progress(done, steps)
                 if check is not None:

@@ -9,12 +9,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 from enum import Enum
 
 from .events import EventKind
 from .exceptions import InvalidParameterError
 
-__all__ = ["SLIPPING_PHASES", "ContactPhase", "Reference", "SlideEnd", "SlideOrder"]
+__all__ = ["SLIPPING_PHASES", "ContactPhase", "Reference", "SlideEnd", "SlideOrder", "SlideProfile"]
 
 #: t [s] -> (ξ_d [m], ξ̇_d [m/s], ξ̈_d [m/s²])
 Reference = Callable[[float], tuple[float, float, float]]
@@ -31,6 +32,19 @@ class ContactPhase(str, Enum):
 
 #: The phases in which a contact slips on purpose.
 SLIPPING_PHASES = frozenset({ContactPhase.PRIMING, ContactPhase.SLIDING, ContactPhase.SETTLING})
+
+
+@dataclass(frozen=True)
+class SlideProfile:
+    """A planned slide's profile as a :data:`Reference`: t [s] -> (ξ, ξ̇, ξ̈) of ``slide``
+    (:class:`~regrasp.schedule.Slide`) at t - ``offset`` [s] (a periodic schedule's later periods). Compiled
+    stretches (:mod:`regrasp.stretch`) read its fields."""
+
+    slide: Any
+    offset: float = 0.0
+
+    def __call__(self, t: float) -> tuple[float, float, float]:
+        return self.slide.profile_at(float(t) - self.offset)
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,8 @@ r"""The regrasp supervisor (paper §4, Figure 4.1): a monitor watches, a policy 
 At every control step :meth:`RegraspSupervisor.step`
 
 1. reads each contact's runtime envelope at the *measured* object pose
-   (:class:`~regrasp.monitor.EnvelopeMonitor`: margins, bounds and their rates); a fixed contact
+   (:class:`~regrasp.monitor.EnvelopeMonitor`: margins, bounds and their rates; evaluated afresh at
+   least every ``envelope_every`` steps and whenever the policy decides); a fixed contact
    outside its feasible set is logged (``LEFT_ENVELOPE``: the rollout fails there);
 2. moves the slides under way on (:meth:`~regrasp.executor.SlideExecutor.advance`: priming,
    sliding, settling) and tells the policy how finished slides ended;
@@ -394,7 +395,9 @@ class RegraspSupervisor:
         """Decide and compute the torques for one control period ``dt`` [s]."""
         start = time.perf_counter()
         out: list[Event] = []
-        reading = self.monitor.read(meas.t, meas.X, meas.xi)
+        quiet = getattr(self.policy, "quiet_until", None)  # (a policy that decides now reads fresh envelopes)
+        deciding = quiet is not None and not float(meas.t) < quiet(self.executor.phases)
+        reading = self.monitor.read(meas.t, meas.X, meas.xi, fresh=deciding)
         ex = self.executor
         for i in range(self.hand.m):
             if reading.margins[i] < 0.0 and ex.phases[i] is ContactPhase.FIXED:

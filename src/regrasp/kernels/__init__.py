@@ -24,6 +24,13 @@ Prop. 3 with m > 2)
 signed distances in closed form        signed_distances``)                          footprint.py``
 :mod:`.envelope`: a ``urdf`` envelope  :class:`~regrasp.envelope.FingerEnvelope`    ``tests/test_kernels_
 sample (grid, bisection)               with ``compiled=False``                      footprint.py``
+:mod:`.stretch`: a rollout's steps     the simulation loop with the supervisor      ``tests/test_stretch.py``
+between discrete decisions (the        (``Rollout.run(compiled_stretches=False)``)
+above, and the supervisor's
+continuous work)
+:mod:`.monitor`, :mod:`.disturbance`:  :class:`~regrasp.monitor.EnvelopeMonitor`,     ``tests/test_stretch.py``
+a reading's margins, the noise, the    :class:`~regrasp.disturbance.Disturbance`
+slip sensor and the actuation delay
 =====================================  ==========================================  ===========================
 
 :func:`warm_up` loads every kernel (compiling it where the cache has none): a compiled
@@ -49,12 +56,16 @@ from .force import internal_force_into
 from .plant import (FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, output_size, plant_evaluate,
                     plant_step_into)
 from .reduced import CONTACT_EDGE, FINGER_IK, reduced_terms
+from .monitor import envelope_arguments
+from .stretch import SLIDER, STRETCH_SETTINGS, STRETCH_STATE, stretch_into, stretch_log
 
 __all__ = ["CONTACT_EDGE", "ENVELOPE_PARAMETERS", "FINGER_IK", "FINGER_PARAMETERS", "FINGER_TERMS", "FIXED",
-           "FOOTPRINT", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDING", "control_layout",
+           "FOOTPRINT", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDER", "SLIDING", "STRETCH_SETTINGS",
+           "STRETCH_STATE", "control_layout",
            "control_step_into", "envelope_sample_into", "feasible_capacity", "finger_parameters", "finger_terms",
            "finger_terms_at", "footprint_distances", "internal_force_into", "output_size", "plant_evaluate",
-           "plant_step_into", "reduced_terms", "sliding_step_into", "tip_is_free", "warm_up", "workspace_size"]
+           "plant_step_into", "reduced_terms", "sliding_step_into", "stretch_into", "tip_is_free", "warm_up",
+           "workspace_size"]
 
 
 def _drop_stale_caches() -> None:
@@ -122,7 +133,28 @@ def warm_up() -> None:
                       np.zeros(0), True, 1e-3, 1e8, np.ones(1), True, rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0,
                       np.zeros(1), 1.0, 0.0, np.empty(control_layout(1, 3)["f_hat"].stop))
     _warm_envelope()
+    _warm_stretch(fingers, plant, iks, edges, rows)
     _WARM.append(True)
+
+
+def _warm_stretch(fingers, plant, iks, edges, rows) -> None:
+    """The stretch kernel with the argument types :class:`regrasp.stretch.CompiledStretches` passes (no step)."""
+    m = 1
+    head = (fingers, iks, edges, np.zeros(2), True, np.zeros(1), np.full(1, -1, dtype=np.int64))
+    contacts = np.zeros(m, dtype=PLANT_CONTACT)
+    size = 4 * m + 9
+    stretch_into(np.zeros((), dtype=STRETCH_SETTINGS)[()], np.zeros(1, dtype=STRETCH_STATE), np.zeros(m, np.bool_),
+                 np.zeros(m), np.zeros(m), np.zeros(3), np.zeros(0, dtype=SLIDER), np.zeros((m, 1, 2)),
+                 np.zeros(m, np.int64), np.zeros((m, 2)), np.zeros((m, 2)), np.zeros(m), *envelope_arguments(None, m),
+                 np.zeros((m, 3), np.int64), np.zeros(1), np.zeros((1, m)), np.zeros(0), np.zeros((0, 9)), head,
+                 np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0), np.zeros(0), False, 0.0, 1e8, np.ones(m), True,
+                 rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0,
+                 np.empty(control_layout(m, 3)["f_hat"].stop), fingers, plant, contacts, np.zeros(size),
+                 np.zeros(output_size(m)), np.full((m, 9), np.nan), np.zeros((m, 2)), np.empty(output_size(m)),
+                 np.empty(m, dtype=FINGER_TERMS), np.empty(m, np.bool_), np.empty((m, 7)), False, np.empty((0, m)),
+                 np.empty((0, m, 2)), np.empty((0, m)), np.empty((0, 3)), np.empty((0, 3)), np.empty((0, 2 * m)),
+                 np.empty((0, m, 2)), np.empty((0, m)), np.ones(m), 0, 0, stretch_log(0, m, 1),
+                 np.zeros((0, 0)), np.zeros((1, m), np.bool_), np.zeros((1, 2 * m)))
 
 
 def _warm_envelope() -> None:
