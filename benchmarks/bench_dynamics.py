@@ -22,7 +22,7 @@ import numpy as np
 from common import ROOT, median_us, parse_args, sliding_hold
 
 from regrasp import Finger, Grasp, Hand, ReducedModel
-from regrasp.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.dynamics.control import FixedContactController, Gains, Proposition1Controller
 
 
 def main() -> None:

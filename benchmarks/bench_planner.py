@@ -60,10 +60,10 @@ from pathlib import Path
 
 import numpy as np
 
-from regrasp.collision import UrdfCollisionChecker
-from regrasp.envelope import FingerEnvelope
-from regrasp.planar import rotation
-from regrasp.scenario import load_scenario
+from regrasp.model.collision import UrdfCollisionChecker
+from regrasp.envelope.finger_envelope import FingerEnvelope
+from regrasp.core.planar import rotation
+from regrasp.model.scenario import load_scenario
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = REPO_ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml"
@@ -224,7 +224,7 @@ def profile_urdf(envs, samples) -> dict:
     q = finger.inverse_kinematics(env.tip_at(pose, 0.5 * (lo + hi)))
     import coal  # noqa: PLC0415
     import pinocchio as pin  # noqa: PLC0415
-    from regrasp.planar import se3_from_planar  # noqa: PLC0415
+    from regrasp.core.planar import se3_from_planar  # noqa: PLC0415
 
     pin.forwardKinematics(finger.model, finger.data, q)
     shape = checker.shapes[0]

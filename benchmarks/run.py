@@ -32,7 +32,7 @@ Items and their floors:
   recording off and on (a ``RolloutRecorder`` writing an .rrd to a temporary directory, logging every step,
   and every 10th step: ``regrasp simulate --rrd``'s default ``--decimate 10``); and 2 s of it with
   each policy (scheduled, paper, none), recording off;
-* one step inside a compiled stretch (:mod:`regrasp.stretch`: the supervisor's continuous work, the control law
+* one step inside a compiled stretch (:mod:`regrasp.rollout.stretch`: the supervisor's continuous work, the control law
   and the plant step in :func:`regrasp.kernels.stretch.stretch_into`), per step of 8-step calls on states
   captured from the rollout below; floor = the bare control and plant kernels at the same state;
 * a study's throughput (``run_study``, 240 runs of 2 s, one schedule planned beforehand): simulated seconds per
@@ -54,12 +54,12 @@ from common import ROOT, median_us, parse_args, sliding_hold
 
 from regrasp import (FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario,
                      plan_regrasps, run_study)
-from regrasp import envelope as envelope_module
-from regrasp.control import FixedContactController, Gains, Proposition1Controller
-from regrasp.internal_force import InternalForceSolver
+import regrasp.envelope.finger_envelope as envelope_module
+from regrasp.dynamics.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.dynamics.internal_force.solver import InternalForceSolver
 from regrasp.kernels import FINGER_TERMS, control_step_into, envelope_sample_into, output_size, plant_step_into
-from regrasp.simulation import sense
-from regrasp.supervisor import SupervisorSettings
+from regrasp.plants.simulation import sense
+from regrasp.supervisor.supervisor import SupervisorSettings
 
 THREE = ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
 
@@ -146,7 +146,7 @@ def stretch_step_us(n: int) -> dict:
     """One step inside a compiled stretch: the arguments of the three-finger rollout's stretches (each 8-step
     call's, captured as the rollout calls the kernel, once with the fixed law and once with two sliders), re-run
     from copies; per step. Floor: the bare control and plant kernels on the same states."""
-    import regrasp.stretch as stretch_module
+    import regrasp.rollout.stretch as stretch_module
 
     captured = {}
     kernel = stretch_module.stretch_into

@@ -9,7 +9,7 @@ import argparse
 from pathlib import Path
 
 from regrasp import load_scenario, plan_scenario
-from regrasp.plotting import write_plan_figures
+from regrasp.envelope.plotting import write_plan_figures
 
 HERE = Path(__file__).resolve().parent
 

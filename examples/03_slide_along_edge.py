@@ -25,10 +25,10 @@ from pathlib import Path
 import numpy as np
 
 from regrasp import FingerEnvelope, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
-from regrasp.closed_loop import run_closed_loop
-from regrasp.control import Gains, Proposition3Controller
-from regrasp.internal_force import InternalForceSettings
-from regrasp.sliding import sliding_feasibility
+from regrasp.plants.closed_loop import run_closed_loop
+from regrasp.dynamics.control import Gains, Proposition3Controller
+from regrasp.dynamics.internal_force.solver import InternalForceSettings
+from regrasp.dynamics.sliding import sliding_feasibility
 
 HERE = Path(__file__).resolve().parent
 FRICTION = [Friction(0.05), Friction(0.8)]  # sliding tip, holding tip (mu_s = mu_k each)

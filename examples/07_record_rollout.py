@@ -5,7 +5,7 @@ Then: rerun rollout.rrd    (the viewer; `pip install rerun-sdk` ships it)
 
 The set-up is examples/03_slide_along_edge.py's: two fingers hold the paper's rectangle, finger 2
 fixed on the right edge, finger 1 sliding up the left edge under Proposition 3 on the independent
-plant. A RolloutRecorder (regrasp.recording) logs every control step: on the left the hand frame
+plant. A RolloutRecorder (regrasp.rollout.recording.recorder) logs every control step: on the left the hand frame
 in mm (the object and its desired pose, the fingers' URDF links, the contact forces, the friction
 cones coloured by contact mode, each contact edge's feasible envelope with its danger zones), on
 the right the tracking errors, each contact's ξ inside its feasible interval, the contact forces,
@@ -21,9 +21,9 @@ import time
 from pathlib import Path
 
 from regrasp import Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
-from regrasp.closed_loop import run_closed_loop
-from regrasp.control import Gains, Proposition3Controller
-from regrasp.recording import RolloutRecorder
+from regrasp.plants.closed_loop import run_closed_loop
+from regrasp.dynamics.control import Gains, Proposition3Controller
+from regrasp.rollout.recording.recorder import RolloutRecorder
 
 HERE = Path(__file__).resolve().parent
 

@@ -20,7 +20,7 @@ import argparse
 from pathlib import Path
 
 from regrasp import NoScheduleError, build_rollout, load_scenario
-from regrasp.rollout_plots import plot_frames, plot_rollout
+from regrasp.rollout.plots import plot_frames, plot_rollout
 
 SCENARIOS = Path(__file__).resolve().parent / "scenarios"
 

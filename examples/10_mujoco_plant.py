@@ -20,8 +20,8 @@ import numpy as np
 from regrasp import (Grasp, Hand, MujocoPlant, MujocoSettings, OrderedSlidesPolicy, Plant, PlantContact, ReducedModel,
                      RegraspSupervisor, SlideOrder, SupervisorSettings, WaypointTrajectory, build_rollout,
                      load_scenario)
-from regrasp.events import EventKind
-from regrasp.rollout import Rollout
+from regrasp.core.events import EventKind
+from regrasp.rollout.build import Rollout
 
 SCENARIOS = Path(__file__).resolve().parent / "scenarios"
 XI0, MU, SPEED, START, END = -0.0075, 0.3, 0.005, 0.02, 0.32  # Figure 3.4: finger 1 7.5 mm below the centre

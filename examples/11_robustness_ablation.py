@@ -30,11 +30,11 @@ from statistics import median
 from pathlib import Path
 
 from regrasp import load_scenario
-from regrasp.internal_force import InternalForceSettings
-from regrasp.rollout import DEFAULT_CONE_MARGIN
-from regrasp.schedule_planner import RegraspSettings, plan_regrasps
-from regrasp.study import Perturbation, run_study
-from regrasp.supervisor import SupervisorSettings
+from regrasp.dynamics.internal_force.solver import InternalForceSettings
+from regrasp.rollout.build import DEFAULT_CONE_MARGIN
+from regrasp.schedule.planner import RegraspSettings, plan_regrasps
+from regrasp.study.study import Perturbation, run_study
+from regrasp.supervisor.supervisor import SupervisorSettings
 
 SCENARIO = Path(__file__).resolve().parent / "scenarios" / "paper_trajectory_2_three_fingers.toml"
 

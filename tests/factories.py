@@ -15,10 +15,10 @@ import numpy as np
 import scipy.optimize
 from scipy.spatial import ConvexHull
 
-from regrasp.exceptions import PolygonError
-from regrasp.finger import Finger
-from regrasp.finger_urdf import planar_2r_urdf
-from regrasp.polygon import ConvexPolygon
+from regrasp.core.exceptions import PolygonError
+from regrasp.model.finger import Finger
+from regrasp.model.finger_urdf import planar_2r_urdf
+from regrasp.core.polygon import ConvexPolygon
 
 
 def rot(beta: float) -> np.ndarray:

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp.cli import main
+from regrasp.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[1]
 T1 = str(ROOT / "examples" / "scenarios" / "paper_trajectory_1.toml")
@@ -57,7 +57,7 @@ def test_bad_input_exits_2_with_a_clear_message(capsys, tmp_path):
 
 
 def test_console_script_runs():
-    proc = subprocess.run([sys.executable, "-m", "regrasp.cli", "plan", T2, "--samples", "21", "--json"],
+    proc = subprocess.run([sys.executable, "-m", "regrasp.cli.main", "plan", T2, "--samples", "21", "--json"],
                           capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["feasible"] is True
@@ -109,7 +109,7 @@ def test_plan_regrasp_bad_margin_exits_2(capsys):
 
 # ---------------------------------------------------------------- regrasp simulate
 def simulate(*args, cwd, timeout=600):
-    return subprocess.run([sys.executable, "-m", "regrasp.cli", "simulate", *args], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "regrasp.cli.main", "simulate", *args], capture_output=True, text=True,
                           cwd=cwd, timeout=timeout, check=False)
 
 
@@ -164,7 +164,7 @@ def test_ctrl_c_ends_a_simulation_with_a_partial_result_and_a_complete_recording
     import signal
     import time
 
-    proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli", "simulate", "--duration", "600",
+    proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli.main", "simulate", "--duration", "600",
                              "--rrd", "run.rrd"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     # the recording is opened once the plan is done, just before the run starts (imports and planning take

@@ -20,12 +20,12 @@ import pytest
 
 from factories import make_case
 from factories import make_finger as make_random_finger
-from regrasp.envelope import Condition, FingerEnvelope
-from regrasp.exceptions import FingerModelError
-from regrasp.finger import Finger
-from regrasp.finger_urdf import planar_2r_urdf
-from regrasp.planar import se3_from_planar
-from regrasp.polygon import ConvexPolygon
+from regrasp.envelope.finger_envelope import Condition, FingerEnvelope
+from regrasp.core.exceptions import FingerModelError
+from regrasp.model.finger import Finger
+from regrasp.model.finger_urdf import planar_2r_urdf
+from regrasp.core.planar import se3_from_planar
+from regrasp.core.polygon import ConvexPolygon
 
 RHO = 0.01  # fixed tip clearance [m]
 RADII = (4e-3, 1e-3, 2.5e-4)  # link radii [m], links ~0.1 m
@@ -359,7 +359,7 @@ def test_default_tip_clearance_for_a_box_distal_link():
     """A box-shaped distal link gets a non-zero default clearance (3 x its middle half-side), so
     its end face does not straddle the edge and the urdf envelope is not empty."""
     from regrasp import ConvexPolygon, Finger, FingerEnvelope
-    from regrasp.finger_urdf import planar_2r_urdf
+    from regrasp.model.finger_urdf import planar_2r_urdf
 
     box = '<geometry><box size="0.045 0.010 0.008"/></geometry>'
     text = planar_2r_urdf(0.12, 0.045, radius1=0.006, radius2=0.005)

@@ -1,4 +1,4 @@
-"""The contact's value types (``regrasp.contact``): ContactMode, Friction, as_frictions, as_modes,
+"""The contact's value types (``regrasp.core.contact``): ContactMode, Friction, as_frictions, as_modes,
 coefficients and cone_margin."""
 
 import math
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import regrasp
-from regrasp.contact import ContactMode, Friction, as_frictions, as_modes, coefficients, cone_margin
-from regrasp.exceptions import InvalidParameterError, RegraspError
+from regrasp.core.contact import ContactMode, Friction, as_frictions, as_modes, coefficients, cone_margin
+from regrasp.core.exceptions import InvalidParameterError, RegraspError
 
 
 def test_contact_mode_members_equal_their_strings():

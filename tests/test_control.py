@@ -13,16 +13,16 @@ import numpy as np
 import pytest
 
 from regrasp import Finger, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
-from regrasp.closed_loop import run_closed_loop
-from regrasp.control import (
+from regrasp.plants.closed_loop import run_closed_loop
+from regrasp.dynamics.control import (
     FixedContactController,
     Gains,
     Proposition1Controller,
     Proposition2Controller,
     Proposition3Controller,
 )
-from regrasp.exceptions import InvalidParameterError
-from regrasp.internal_force import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.dynamics.internal_force.solver import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
 
 ROOT = Path(__file__).resolve().parents[1]
 SC = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
@@ -296,7 +296,7 @@ def test_proposition3_checks_two_m_at_least_three_plus_p():
     refuses a grasp with too many sliders (Grasp itself refuses to build one, Remark 3.2)."""
     from types import SimpleNamespace
 
-    from regrasp.exceptions import SlidingContactCountError
+    from regrasp.core.exceptions import SlidingContactCountError
 
     hand = Hand([c.finger for c in SC.contacts] + [FINGER3], gravity_in_hand=(0.0, -9.81))
     all_sliding = ReducedModel(hand, Grasp(SC.polygon, [1, 3, 2], ["sliding"] * 3), xi=[0.0, 0.0, 0.0])

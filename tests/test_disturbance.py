@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from regrasp import load_scenario
-from regrasp.disturbance import ActuatorNoise, Disturbance, SensorNoise
-from regrasp.exceptions import InvalidParameterError
-from regrasp.rollout import build_rollout
-from regrasp.simulation import simulate
-from regrasp.supervisor import Measurement
+from regrasp.plants.disturbance import ActuatorNoise, Disturbance, SensorNoise
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.rollout.build import build_rollout
+from regrasp.plants.simulation import simulate
+from regrasp.supervisor.supervisor import Measurement
 
 from test_rollout import SCENARIOS
 from test_simulation import driver

@@ -1,7 +1,7 @@
 """Every public entry point, each argument in turn replaced by a bad value (None, a string, NaN, inf, -1, 1e308,
 an object, an empty list, True, 10**400, a complex number, a list with a NaN, a 3-D array).
 
-The outcome is a :class:`~regrasp.exceptions.RegraspError` with a one-line message, or a result without NaN or
+The outcome is a :class:`~regrasp.core.exceptions.RegraspError` with a one-line message, or a result without NaN or
 inf; never another exception from deep inside numpy, Pinocchio or coal. Values no number can be (an object, a
 complex number, a NaN) are never accepted. (``cone_margin`` is left out: it is an arithmetic kernel on floats and
 arrays in the control and plant loops, documented as unchecked.)
@@ -16,10 +16,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import regrasp as R
-from regrasp.exceptions import RegraspError
-from regrasp.hand import Hand
-from regrasp.sphere_tip import sphere_tip_torque
-from regrasp.study import draw_runs, wilson_interval
+from regrasp.core.exceptions import RegraspError
+from regrasp.model.hand import Hand
+from regrasp.model.sphere_tip import sphere_tip_torque
+from regrasp.study.study import draw_runs, wilson_interval
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"
@@ -117,7 +117,7 @@ try:  # the MuJoCo plant's entry points, with the extra installed
 except ImportError:
     pass
 else:
-    from regrasp.mjcf import eroded_vertices
+    from regrasp.plants.mujoco.mjcf import eroded_vertices
     ENTRIES.update({
      "MujocoSettings": (R.MujocoSettings, [], dict(tip_radius=2.5e-4, timestep=1e-4, time_constant=5e-4, impratio=100.0,
                                                    noslip_iterations=0, object_thickness=0.02, contact_depth=1e-6)),

@@ -35,10 +35,10 @@ import pytest
 
 from factories import make_case, make_finger, perp2, rot
 from regrasp import load_scenario
-from regrasp.envelope import Condition, FingerEnvelope
-from regrasp.envelope_tracker import EnvelopeTracker
-from regrasp.exceptions import InvalidParameterError
-from regrasp.polygon import ConvexPolygon
+from regrasp.envelope.finger_envelope import Condition, FingerEnvelope
+from regrasp.envelope.tracker import EnvelopeTracker
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.core.polygon import ConvexPolygon
 
 N_CASES = 200
 N_GRID = 40001  # grid points over the whole annulus window
@@ -465,7 +465,7 @@ def test_closed_form_reachable_set_matches_the_elbow_margin_classifier():
     membership must equal g(midpoint) >= 0, and the ends must be candidates."""
     import math
 
-    from regrasp.envelope import elbow_margin, reachable_on_line
+    from regrasp.envelope.finger_envelope import elbow_margin, reachable_on_line
 
     rng = np.random.default_rng(20261121)
     for _ in range(20000):
@@ -498,8 +498,8 @@ def test_closed_form_reachable_set_matches_the_elbow_margin_classifier():
 # --------------------------------------------------------------------------- float fast paths
 def test_float_helpers_match_numpy():
     """The envelope's float helpers reproduce numpy's linspace and wrap_angle bit for bit."""
-    from regrasp.envelope import _linspace, _wrap
-    from regrasp.planar import wrap_angle
+    from regrasp.envelope.finger_envelope import _linspace, _wrap
+    from regrasp.core.planar import wrap_angle
 
     rng = np.random.default_rng(7)
     for _ in range(2000):
@@ -515,7 +515,7 @@ def test_float_helpers_match_numpy():
 @pytest.mark.parametrize("bad", [[0.0, 0.1], [0.0, np.nan, 0.0], np.array([0.0, 0.1, np.inf]), "abc",
                                  np.zeros((1, 3))])
 def test_pose_is_validated(bad):
-    from regrasp.exceptions import InvalidParameterError
+    from regrasp.core.exceptions import InvalidParameterError
 
     case = make_case(0)
     finger = make_finger(case["l1"], case["l2"], case["base"], "left")

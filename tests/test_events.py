@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from regrasp.events import Event, EventKind, EventSource, Failure, FailureKind
+from regrasp.core.events import Event, EventKind, EventSource, Failure, FailureKind
 
 
 def test_an_event_is_a_value_with_read_only_numbers_and_a_json_form():

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from regrasp import Hand, load_scenario
-from regrasp.contact import ContactMode
-from regrasp.events import EventKind
-from regrasp.exceptions import InvalidParameterError
-from regrasp.executor import ContactPhase, ExecutorSettings, SlideExecutor, SlideOrder
-from regrasp.grasp import Grasp
-from regrasp.internal_force import InternalForceSettings
-from regrasp.supervisor import Measurement
+from regrasp.core.contact import ContactMode
+from regrasp.core.events import EventKind
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.supervisor.executor import ContactPhase, ExecutorSettings, SlideExecutor, SlideOrder
+from regrasp.dynamics.grasp import Grasp
+from regrasp.dynamics.internal_force.solver import InternalForceSettings
+from regrasp.supervisor.supervisor import Measurement
 
 from test_rollout import SCENARIOS
 
@@ -211,7 +211,7 @@ def test_held_contacts_follow_the_sensed_positions_past_the_resolution():
 
 
 def test_spherical_tips_add_their_couple_to_every_laws_torque():
-    from regrasp.sphere_tip import sphere_tip_torque
+    from regrasp.model.sphere_tip import sphere_tip_torque
 
     t = 0.8
     point = command(executor(), t, meas(t), [])[0]

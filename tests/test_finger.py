@@ -1,4 +1,4 @@
-"""Tests of regrasp.finger: loading and validating planar 2R URDFs, FK, Jacobian, IK, copies.
+"""Tests of regrasp.model.finger: loading and validating planar 2R URDFs, FK, Jacobian, IK, copies.
 
 Every expected value is computed here independently of the module (planar homogeneous
 transforms written from the URDF numbers, finite differences, plain geometry).
@@ -17,8 +17,8 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from regrasp.exceptions import FingerModelError, InvalidParameterError, UnreachableError
-from regrasp.finger import Configuration, Finger
+from regrasp.core.exceptions import FingerModelError, InvalidParameterError, UnreachableError
+from regrasp.model.finger import Configuration, Finger
 
 URDF_DIR = Path(__file__).resolve().parents[1] / "urdf"
 SHIPPED = {

@@ -1,4 +1,4 @@
-"""Tests of regrasp.finger_urdf.planar_2r_urdf: what Pinocchio/coal read from the generated text."""
+"""Tests of regrasp.model.finger_urdf.planar_2r_urdf: what Pinocchio/coal read from the generated text."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from regrasp.exceptions import InvalidParameterError
-from regrasp.finger import Finger
-from regrasp.finger_urdf import planar_2r_urdf
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.model.finger import Finger
+from regrasp.model.finger_urdf import planar_2r_urdf
 
 RHO = 0.3 * 2700.0  # default "aluminium tube, 30 % fill" density [kg/m^3]
 

@@ -1,4 +1,4 @@
-"""The force polytope (regrasp.force_polytope) against an independent linear program.
+"""The force polytope (regrasp.schedule.force_polytope) against an independent linear program.
 
 The oracle (tests/factories.py, ``force_lp``) is written from scratch: the contact forces f_i in
 the hand frame (2m unknowns), the object's Newton-Euler equations with the contact points and the
@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 from factories import force_lp, random_polygon, rot
-from regrasp.contact import Friction
-from regrasp.exceptions import InvalidParameterError
-from regrasp.force_polytope import ForceGeometry, ForceLimits, force_system, force_vertices, xi_intervals
+from regrasp.core.contact import Friction
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.schedule.force_polytope import ForceGeometry, ForceLimits, force_system, force_vertices, xi_intervals
 
 
 def _case(rng):

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from regrasp import ConvexPolygon, Friction, InvalidParameterError, SlidingContactCountError
-from regrasp.grasp import Grasp
+from regrasp.dynamics.grasp import Grasp
 
 H_STEP = 1e-6
 

@@ -111,7 +111,7 @@ def test_link_mass_scale_scales_M_and_gravity_but_not_the_callers_model():
 
 
 def test_closed_form_condition_number_matches_numpy():
-    from regrasp.hand import condition_2x2
+    from regrasp.model.hand import condition_2x2
 
     rng = np.random.default_rng(5)
     for _ in range(500):

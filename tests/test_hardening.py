@@ -27,9 +27,9 @@ from regrasp import (
     reachable_on_line,
     sliding_feasibility,
 )
-from regrasp.exceptions import RegraspError
-from regrasp.hand import Hand
-from regrasp.validation import as_finite_float
+from regrasp.core.exceptions import RegraspError
+from regrasp.model.hand import Hand
+from regrasp.core.validation import as_finite_float
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"
@@ -109,8 +109,8 @@ def test_a_bad_input_is_a_typed_one_line_error_or_a_valid_result(case):
 
 def test_a_closed_loop_or_a_rollout_of_a_billion_seconds_is_refused():
     from regrasp import build_rollout, run_closed_loop
-    from regrasp.control import FixedContactController, Gains
-    from regrasp.reduced import ReducedModel
+    from regrasp.dynamics.control import FixedContactController, Gains
+    from regrasp.dynamics.reduced import ReducedModel
 
     sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
     with pytest.raises(RegraspError, match="duration"):
@@ -132,7 +132,7 @@ def test_every_public_name_loads_and_the_command_line_starts_without_the_heavy_l
 
     for name in regrasp.__all__:
         assert getattr(regrasp, name) is not None, name
-    code = ("import sys, regrasp.cli; regrasp.cli.build_parser(); "
+    code = ("import sys, regrasp.cli.main; regrasp.cli.main.build_parser(); "
             "print(sorted(m for m in ('pinocchio', 'coal', 'scipy', 'rerun', 'numba') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=True).stdout
     assert out.strip() == "[]"
@@ -140,7 +140,7 @@ def test_every_public_name_loads_and_the_command_line_starts_without_the_heavy_l
 
 @pytest.mark.parametrize("n, ok", [(252, True), (253, False), (2000, False)])
 def test_a_polygon_coal_cannot_take_is_a_polygon_error_with_the_limit(n, ok):
-    from regrasp.exceptions import PolygonError
+    from regrasp.core.exceptions import PolygonError
 
     a = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
     polygon = ConvexPolygon.from_vertices(0.05 * np.c_[np.cos(a), np.sin(a)], mass=0.1)
@@ -163,7 +163,7 @@ URDF_TEXT = URDF.read_text()
     (URDF_TEXT.replace('<origin xyz="0.045 0 0"', '<origin xyz="1e300 0 0"', 1), "placed 1e+300 m from its joint"),
 ], ids=["empty", "not XML", "negative mass", "NaN mass", "negative inertia", "a distal link 1e300 m long"])
 def test_a_bad_urdf_is_one_line_with_urdfdom_kept_off_stderr(tmp_path, capfd, text, says):
-    from regrasp.exceptions import FingerModelError
+    from regrasp.core.exceptions import FingerModelError
 
     path = tmp_path / "finger.urdf"
     path.write_text(text)
@@ -176,8 +176,8 @@ def test_a_bad_urdf_is_one_line_with_urdfdom_kept_off_stderr(tmp_path, capfd, te
 
 def test_huge_links_and_infinite_positions_are_refused():
     from regrasp import EnvelopeSample  # noqa: F401 (public)
-    from regrasp.envelope import FingerEnvelope
-    from regrasp.exceptions import InvalidParameterError
+    from regrasp.envelope.finger_envelope import FingerEnvelope
+    from regrasp.core.exceptions import InvalidParameterError
 
     with pytest.raises(InvalidParameterError, match="l2"):
         planar_2r_urdf(0.1, 1e300)

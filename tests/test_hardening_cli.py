@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp.cli import main
+from regrasp.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"
@@ -116,10 +116,10 @@ def test_plot_into_a_place_root_cannot_write_either(tmp_path, capfd):
 
 
 def test_version_and_ctrl_c():
-    version = subprocess.run([sys.executable, "-m", "regrasp.cli", "--version"], capture_output=True, text=True,
+    version = subprocess.run([sys.executable, "-m", "regrasp.cli.main", "--version"], capture_output=True, text=True,
                              timeout=60)
     assert version.returncode == 0 and re.fullmatch(r"regrasp \d+\.\d+\.\d+\S*\n", version.stdout)
-    proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli", "plan",
+    proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli.main", "plan",
                              str(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"), "--samples",
                              "100000", "--geometry", "ideal", "--regrasp"], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)

@@ -1,4 +1,4 @@
-"""The internal-force QP (``regrasp.internal_force``, paper §3.3 eq. 3.3.7) against its definition.
+"""The internal-force QP (``regrasp.dynamics.internal_force.solver``, paper §3.3 eq. 3.3.7) against its definition.
 
 Set-up: the hand of ``examples/scenarios/paper_trajectory_2.toml`` holding its 0.10 x 0.04 m,
 0.08 kg rectangle (finger 1 on edge 1 = left side, ξ up; finger 2 on edge 3 = right side, ξ
@@ -38,9 +38,9 @@ import qpsolvers
 import scipy.optimize
 
 from regrasp import ContactMode, Finger, Friction, Grasp, Hand, ReducedModel, load_scenario
-from regrasp.control import FixedContactController, Gains, Proposition1Controller
-from regrasp.exceptions import InvalidParameterError, SingularFingerError, UnreachableError
-from regrasp.internal_force import (
+from regrasp.dynamics.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.core.exceptions import InvalidParameterError, SingularFingerError, UnreachableError
+from regrasp.dynamics.internal_force.solver import (
     ConeEdge,
     InternalForceInfeasibleError,
     InternalForceQP,
@@ -406,7 +406,7 @@ def test_fixed_cones_use_the_static_coefficient_and_a_cone_edge_its_own():
     μ_k = 0.2 that is W / 1.1, not W / 0.3 (μ_k's). A ConeEdge puts finger 1 at the coefficient it
     carries, whatever the contact's friction. The persistent solver's row cache tells frictions and
     modes apart (the same solver, the same geometry, other answers)."""
-    from regrasp.internal_force import InternalForceSolver
+    from regrasp.dynamics.internal_force.solver import InternalForceSolver
 
     model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
     st, A, frames, _ = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
@@ -568,7 +568,7 @@ def test_persistent_solver_matches_the_one_shot_qp():
     """InternalForceSolver (one persistent OSQP per problem shape, warm-started) gives the same f_c
     as build_internal_force_qp + solve_internal_force_qp, and raises the same typed error, across a
     sequence of problems reusing the same solver object."""
-    from regrasp.internal_force import InternalForceSolver
+    from regrasp.dynamics.internal_force.solver import InternalForceSolver
 
     solvers = {}
     compared = raised = 0
@@ -611,7 +611,7 @@ def test_null_basis_is_orthonormal_and_falls_back_on_rank_deficient_matrices():
     a rank-deficient A takes scipy's SVD (numerical rank), a square full-rank one has none."""
     import scipy.linalg
 
-    from regrasp.internal_force import _null_basis
+    from regrasp.dynamics.internal_force.solver import _null_basis
 
     rng = np.random.default_rng(3)
     for rows, cols in ((4, 3), (6, 4), (6, 3), (4, 4)):
@@ -637,7 +637,7 @@ def test_ctrl_c_during_an_osqp_solve_reaches_python(path):
     import threading
     import time
 
-    from regrasp.internal_force import InternalForceSolver
+    from regrasp.dynamics.internal_force.solver import InternalForceSolver
 
     case = random_case("three_sliding" if "three_sliding" in KINDS else next(iter(KINDS)), 1)
     args = (case["A"], case["f_m"], case["frames"], case["modes"], case["friction"])

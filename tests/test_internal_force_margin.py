@@ -1,4 +1,4 @@
-"""The internal-force QP's target cone margin and several cone edges (``regrasp.internal_force``).
+"""The internal-force QP's target cone margin and several cone edges (``regrasp.dynamics.internal_force.solver``).
 
 The random cases are those of ``tests/test_internal_force.py`` (seeded states of m = 2 and m = 3
 grasps, motion forces from a controller or random). With a target cone margin the QP must give
@@ -28,8 +28,8 @@ from test_internal_force import (
 )
 
 from regrasp import Grasp, ReducedModel
-from regrasp.exceptions import InvalidParameterError
-from regrasp.internal_force import (
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.dynamics.internal_force.solver import (
     ConeEdge,
     InternalForceInfeasibleError,
     InternalForceSettings,

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from regrasp.intervals import contains, intersect, merge, total_length, widest
+from regrasp.core.intervals import contains, intersect, merge, total_length, widest
 
 
 def _random_set(rng, n):

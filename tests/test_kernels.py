@@ -11,14 +11,14 @@ import pytest
 
 import regrasp.kernels.finger as kernel_finger
 from regrasp import Hand, load_scenario
-from regrasp.contact import ContactMode, Friction
-from regrasp.exceptions import InvalidParameterError
-from regrasp.finger import Finger
-from regrasp.hand import KERNEL_TOLERANCE, KernelMismatchWarning
+from regrasp.core.contact import ContactMode, Friction
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.model.finger import Finger
+from regrasp.model.hand import KERNEL_TOLERANCE, KernelMismatchWarning
 from regrasp.kernels import finger_parameters, finger_terms_at
 from regrasp.kernels.finger import largest_disagreement, reference_terms
-from regrasp.plant import Plant, PlantContact
-from regrasp.polygon import ConvexPolygon
+from regrasp.plants.project.plant import Plant, PlantContact
+from regrasp.core.polygon import ConvexPolygon
 from pathlib import Path
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
@@ -243,7 +243,7 @@ def test_compiled_reduced_terms_equal_the_reference(modes):
 
 
 def test_compiled_reduced_terms_raise_what_the_reference_raises():
-    from regrasp.exceptions import SingularFingerError, UnreachableError
+    from regrasp.core.exceptions import SingularFingerError, UnreachableError
 
     ref, fast = _models(("fixed", "fixed", "fixed"), [-0.0125, 0.0125, 0.0])
     far = [0.0, 0.5, 0.0]  # the object out of every finger's reach

@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
-from regrasp.contact import Friction
-from regrasp.control import FixedContactController, Gains, Proposition1Controller
-from regrasp.exceptions import SingularFingerError, UnreachableError
-from regrasp.internal_force import InternalForceSettings
-from regrasp.reduced import ReducedModel
+from regrasp.core.contact import Friction
+from regrasp.dynamics.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.core.exceptions import SingularFingerError, UnreachableError
+from regrasp.dynamics.internal_force.solver import InternalForceSettings
+from regrasp.dynamics.reduced import ReducedModel
 from test_internal_force import EDGES, KINDS, Y0, make_hand, polygon
-from regrasp.grasp import Grasp
+from regrasp.dynamics.grasp import Grasp
 
 
 def controllers(kind, seed, **kwargs):
@@ -80,7 +80,7 @@ def test_a_law_that_estimates_friction_or_a_reference_model_takes_the_reference_
 def test_compiled_sliding_step_equals_the_reference_path(kind, qp, reversible):
     """Proposition 3 with three fingers: the same torques, forces, friction estimates and sliding directions
     (which both update, step after step, from the same measured rates), compiled or not."""
-    from regrasp.control import Proposition3Controller
+    from regrasp.dynamics.control import Proposition3Controller
 
     m, modes = KINDS[kind]
     rng = np.random.default_rng(11)

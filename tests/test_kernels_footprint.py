@@ -22,12 +22,12 @@ import pytest
 from factories import make_case, random_polygon
 from factories import make_finger as make_random_finger
 from regrasp import load_scenario
-from regrasp.collision import UrdfCollisionChecker
-from regrasp.envelope import FingerEnvelope
-from regrasp.exceptions import InvalidParameterError
-from regrasp.finger import Finger
+from regrasp.model.collision import UrdfCollisionChecker
+from regrasp.envelope.finger_envelope import FingerEnvelope
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.model.finger import Finger
 from regrasp.kernels.footprint import footprint_distances
-from regrasp.polygon import ConvexPolygon
+from regrasp.core.polygon import ConvexPolygon
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = sorted((ROOT / "examples" / "scenarios").glob("*.toml"))
@@ -241,7 +241,7 @@ def test_tracker_on_the_reference_path_still_matches_fresh_samples():
     """The tracker follows coal's cuts when its envelope runs the reference path (the compiled one is covered by
     tests/test_envelope.py): at every step the pieces of a fresh reference sample, ends within the bisection
     tolerance, and a fallback is bitwise a fresh sample."""
-    from regrasp.envelope_tracker import EnvelopeTracker
+    from regrasp.envelope.tracker import EnvelopeTracker
 
     sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml")
     traj = sc.trajectory
@@ -276,7 +276,7 @@ def test_capsules_and_spheres_match_coal(seed):
     import coal
     import pinocchio as pin
 
-    from regrasp.collision import planar_footprint
+    from regrasp.model.collision import planar_footprint
     from regrasp.kernels.footprint import FOOTPRINT
 
     rng = np.random.default_rng(seed)

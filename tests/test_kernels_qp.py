@@ -10,7 +10,7 @@ import scipy.linalg
 import scipy.optimize
 import scipy.sparse as sp
 
-from regrasp.internal_force import InternalForceInfeasibleError, InternalForceSolver
+from regrasp.dynamics.internal_force.solver import InternalForceInfeasibleError, InternalForceSolver
 from regrasp.kernels.force import null_basis
 from regrasp.kernels.qp import INFEASIBLE, SOLVED, diagonal_qp
 from test_internal_force import KINDS, random_case, worst_violation

@@ -1,4 +1,4 @@
-"""A scenario as a MuJoCo model (:mod:`regrasp.mjcf`): the fingers are the URDFs as Pinocchio reads them (masses,
+"""A scenario as a MuJoCo model (:mod:`regrasp.plants.mujoco.mjcf`): the fingers are the URDFs as Pinocchio reads them (masses,
 centres of mass, inertias, damping, hinge axes, the tip's forward kinematics at random postures, so the link lengths
 and base placements), the object a planar body with the polygon's mass, inertia and shape, the tips' prism eroded by
 the tip radius; the MJCF text loads back; bad settings are typed errors."""
@@ -12,8 +12,8 @@ import pytest
 mujoco = pytest.importorskip("mujoco")
 
 from regrasp import load_scenario  # noqa: E402
-from regrasp.exceptions import InvalidParameterError  # noqa: E402
-from regrasp.mjcf import MujocoSettings, build_mjcf, eroded_vertices, scenario_to_mjcf  # noqa: E402
+from regrasp.core.exceptions import InvalidParameterError  # noqa: E402
+from regrasp.plants.mujoco.mjcf import MujocoSettings, build_mjcf, eroded_vertices, scenario_to_mjcf  # noqa: E402
 
 SC3 = load_scenario(Path(__file__).resolve().parents[1] / "examples" / "scenarios"
                     / "paper_trajectory_2_three_fingers.toml")

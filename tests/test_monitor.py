@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from regrasp import FingerEnvelope, load_scenario
-from regrasp.exceptions import InvalidParameterError
-from regrasp.monitor import EnvelopeMonitor, bound_speeds
-from regrasp.planner import plan_scenario
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.supervisor.monitor import EnvelopeMonitor, bound_speeds
+from regrasp.envelope.planner import plan_scenario
 
 from test_rollout import SCENARIOS
 
@@ -99,7 +99,7 @@ def test_a_stale_reading_misses_at_most_its_bound(geometry):
 
 
 def test_bound_speeds_skip_changes_of_shape():
-    from regrasp.envelope import EnvelopeSample
+    from regrasp.envelope.finger_envelope import EnvelopeSample
 
     def sample(t, feasible):
         base = ENVELOPES[0].at(SC.trajectory.pose(0.5), 0.5)

@@ -1,4 +1,4 @@
-"""MuJoCo as a second plant (:mod:`regrasp.mujoco_plant`; the model is checked in ``test_mjcf.py``).
+"""MuJoCo as a second plant (:mod:`regrasp.plants.mujoco.plant`; the model is checked in ``test_mjcf.py``).
 
 The plant's reports are checked against MuJoCo's raw contact forces and the object's weight; its events
 (a link driven into the object is a collision, a pulled contact separates); and the targets of
@@ -22,18 +22,18 @@ mujoco = pytest.importorskip("mujoco")
 
 from regrasp import (Finger, Grasp, Hand, PlantContact, ReducedModel, RegraspSettings, RegraspSupervisor,  # noqa: E402
                      SupervisorSettings, WaypointTrajectory, build_rollout, load_scenario, plan_regrasps, planar_2r_urdf)
-from regrasp.cli import main  # noqa: E402
-from regrasp.closed_loop import run_closed_loop  # noqa: E402
-from regrasp.control import FixedContactController, Gains, Proposition3Controller  # noqa: E402
-from regrasp.events import EventKind  # noqa: E402
-from regrasp.exceptions import FingerModelError, InvalidParameterError, MissingDependencyError  # noqa: E402
-from regrasp.mjcf import MujocoSettings, build_mjcf, require_mujoco  # noqa: E402
-from regrasp.mujoco_plant import MujocoPlant  # noqa: E402
-from regrasp.plant import Plant  # noqa: E402
-from regrasp.policies import OrderedSlidesPolicy  # noqa: E402
-from regrasp.rollout import Rollout  # noqa: E402
-from regrasp.simulation import PlantLike  # noqa: E402
-from regrasp.slides import SlideOrder  # noqa: E402
+from regrasp.cli.main import main  # noqa: E402
+from regrasp.plants.closed_loop import run_closed_loop  # noqa: E402
+from regrasp.dynamics.control import FixedContactController, Gains, Proposition3Controller  # noqa: E402
+from regrasp.core.events import EventKind  # noqa: E402
+from regrasp.core.exceptions import FingerModelError, InvalidParameterError, MissingDependencyError  # noqa: E402
+from regrasp.plants.mujoco.mjcf import MujocoSettings, build_mjcf, require_mujoco  # noqa: E402
+from regrasp.plants.mujoco.plant import MujocoPlant  # noqa: E402
+from regrasp.plants.project.plant import Plant  # noqa: E402
+from regrasp.supervisor.policies.scheduled import OrderedSlidesPolicy  # noqa: E402
+from regrasp.rollout.build import Rollout  # noqa: E402
+from regrasp.plants.simulation import PlantLike  # noqa: E402
+from regrasp.supervisor.types import SlideOrder  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SC2 = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
@@ -236,7 +236,7 @@ def test_a_tip_radius_needs_the_mujoco_plant(capsys):
 
 
 def test_the_command_lines_help_does_not_import_mujoco():
-    code = "import sys, regrasp.cli\ntry:\n    regrasp.cli.main(['simulate', '--help'])\nexcept SystemExit:\n    pass\n" \
+    code = "import sys, regrasp.cli.main\ntry:\n    regrasp.cli.main.main(['simulate', '--help'])\nexcept SystemExit:\n    pass\n" \
            "print('mujoco' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip().splitlines()[-1] == "False"

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from regrasp import EllipseTrajectory, Finger, FingerContact, load_scenario, plan, plan_scenario
-from regrasp.intervals import contains
+from regrasp.core.intervals import contains
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "examples" / "scenarios"
@@ -135,7 +135,7 @@ def test_json_document_has_the_documented_keys(trajectory_2):
 
 def test_motion_between_samples_is_the_worst_vertex_path_between_two_samples():
     from regrasp import ConvexPolygon, EllipseTrajectory
-    from regrasp.planner import motion_between_samples
+    from regrasp.envelope.planner import motion_between_samples
 
     box = ConvexPolygon.rectangle(0.1, 0.04, mass=0.08)
     traj = EllipseTrajectory(0.0, 0.1, 0.1, 0.05, 2.0, beta_a=1.0)

@@ -1,4 +1,4 @@
-"""The full-coordinate plant (``regrasp.plant``) against physics it must respect.
+"""The full-coordinate plant (``regrasp.plants.project.plant``) against physics it must respect.
 
 Set-up: the two-finger hand of ``examples/scenarios/paper_trajectory_2.toml`` holding its
 0.10 x 0.04 m rectangle, finger 1 on edge 1 (left side, ξ up), finger 2 on edge 3 (right side,
@@ -44,8 +44,8 @@ from regrasp import (
     UrdfCollisionChecker,
     load_scenario,
 )
-from regrasp.exceptions import InvalidParameterError, UnknownEdgeError
-from regrasp.planar import rotation
+from regrasp.core.exceptions import InvalidParameterError, UnknownEdgeError
+from regrasp.core.planar import rotation
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml"
@@ -817,7 +817,7 @@ def test_bad_input():
 
 def test_reset_can_set_contact_modes_and_validates_them():
     from regrasp import Hand, Plant, PlantContact, load_scenario
-    from regrasp.exceptions import InvalidParameterError
+    from regrasp.core.exceptions import InvalidParameterError
 
     root = __import__("pathlib").Path(__file__).resolve().parents[1]
     sc = load_scenario(root / "examples" / "scenarios" / "paper_trajectory_2.toml")

@@ -9,13 +9,13 @@ import math
 import numpy as np
 import pytest
 
-from regrasp.events import EventKind
-from regrasp.exceptions import InvalidParameterError, RegraspError
-from regrasp.executor import ContactPhase, SlideEnd, SlideOrder
-from regrasp.monitor import EnvelopeReading
-from regrasp.policies import NoRegraspPolicy, OrderedSlidesPolicy, ScheduledPolicy, ScheduledSettings
-from regrasp.schedule import RegraspSchedule, Slide, slides_at
-from regrasp.supervisor import Measurement
+from regrasp.core.events import EventKind
+from regrasp.core.exceptions import InvalidParameterError, RegraspError
+from regrasp.supervisor.executor import ContactPhase, SlideEnd, SlideOrder
+from regrasp.supervisor.monitor import EnvelopeReading
+from regrasp.supervisor.policies.scheduled import NoRegraspPolicy, OrderedSlidesPolicy, ScheduledPolicy, ScheduledSettings
+from regrasp.schedule.schedule import RegraspSchedule, Slide, slides_at
+from regrasp.supervisor.supervisor import Measurement
 
 NAMES = ("a", "b")
 FIXED = (ContactPhase.FIXED, ContactPhase.FIXED)

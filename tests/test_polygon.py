@@ -1,4 +1,4 @@
-"""Tests of regrasp.polygon: edges and their ξ parametrisation, mass properties, errors, coal."""
+"""Tests of regrasp.core.polygon: edges and their ξ parametrisation, mass properties, errors, coal."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import ConvexHull
 
-from regrasp.exceptions import InvalidParameterError, PolygonError, UnknownEdgeError
-from regrasp.polygon import ConvexPolygon, Edge
+from regrasp.core.exceptions import InvalidParameterError, PolygonError, UnknownEdgeError
+from regrasp.core.polygon import ConvexPolygon, Edge
 
 W, H = 0.2, 0.1  # rectangle width, height [m]
 

@@ -17,11 +17,11 @@ import rerun as rr
 from rerun.chunk import RrdReader
 
 from regrasp import Friction, Grasp, Hand, Plant, PlantContact, PlantEvent, ReducedModel, load_scenario
-from regrasp.closed_loop import run_closed_loop
-from regrasp.control import Gains, Proposition3Controller
-from regrasp.exceptions import InvalidParameterError, RegraspError, UnknownEdgeError
-from regrasp.events import Failure, FailureKind
-from regrasp.recording import PHASE_CODES, RolloutRecorder
+from regrasp.plants.closed_loop import run_closed_loop
+from regrasp.dynamics.control import Gains, Proposition3Controller
+from regrasp.core.exceptions import InvalidParameterError, RegraspError, UnknownEdgeError
+from regrasp.core.events import Failure, FailureKind
+from regrasp.rollout.recording.recorder import PHASE_CODES, RolloutRecorder
 
 pytestmark = pytest.mark.filterwarnings("error::rerun.error_utils.RerunWarning")
 
@@ -195,7 +195,7 @@ def test_a_failure_inside_the_recorder_keeps_the_steps_before_it(tmp_path, monke
 
 
 def test_log_step_with_plant_steps_and_close_is_idempotent(tmp_path):
-    from regrasp.closed_loop import measure_reduced_state
+    from regrasp.plants.closed_loop import measure_reduced_state
 
     plant, controller = setup()
     path = tmp_path / "manual.rrd"
@@ -272,7 +272,7 @@ def test_bad_input_raises_typed_errors(tmp_path):
 def test_a_buffered_rollout_recording_holds_each_steps_values_at_its_time(tmp_path):
     """Blocks of steps sent with ``send_columns`` read back as the rollout's own numbers, step by
     step, and the same whether the steps go out one at a time or in blocks of any size."""
-    from regrasp.rollout import build_rollout
+    from regrasp.rollout.build import build_rollout
 
     sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml")
     recorded = {}
@@ -353,7 +353,7 @@ THREE = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2_thre
 
 def record_rollout(path: Path, *, policy="paper", duration=0.3, **kwargs):
     """A rollout of the three-finger scenario recorded to ``path``; returns it, its result and its records."""
-    from regrasp.rollout import build_rollout
+    from regrasp.rollout.build import build_rollout
 
     rollout = build_rollout(THREE, duration=duration, policy=policy)
     records = []
@@ -489,7 +489,7 @@ def test_a_schedules_xi_d_is_plotted(tmp_path):
     from dataclasses import replace
 
     _, _, records, _ = record_rollout(tmp_path / "source.rrd", duration=0.005)
-    from regrasp.rollout import build_rollout
+    from regrasp.rollout.build import build_rollout
 
     rollout = build_rollout(THREE, duration=0.005, policy="paper")
     path = tmp_path / "planned.rrd"
@@ -534,7 +534,7 @@ def test_a_collision_is_marked_on_the_colliding_link(tmp_path):
 
 
 def test_a_contact_failure_is_a_circle_at_its_tip(tmp_path):
-    from regrasp.rollout import build_rollout
+    from regrasp.rollout.build import build_rollout
 
     rollout = build_rollout(THREE, duration=0.005, policy="paper")
     path = tmp_path / "separation.rrd"

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from regrasp import ConvexPolygon, Finger, Grasp, Hand, Plant, PlantContact, ReducedModel, SingularFingerError
-from regrasp.contact import Friction
+from regrasp.core.contact import Friction
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from regrasp import ContactMode, FingerEnvelope, Friction, load_scenario
-from regrasp.events import EventKind, EventSource, FailureKind
-from regrasp.exceptions import InvalidParameterError, ScenarioError
-from regrasp.rollout import build_rollout
+from regrasp.core.events import EventKind, EventSource, FailureKind
+from regrasp.core.exceptions import InvalidParameterError, ScenarioError
+from regrasp.rollout.build import build_rollout
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
 
@@ -126,7 +126,7 @@ def test_a_fingertips_friction_comes_from_the_scenario(tmp_path):
 @pytest.fixture(scope="module")
 def three_fingers_schedule():
     from regrasp import RegraspSettings, plan_regrasps
-    from regrasp.rollout import DEFAULT_CONE_MARGIN
+    from regrasp.rollout.build import DEFAULT_CONE_MARGIN
 
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
     return sc, plan_regrasps(sc, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
@@ -188,7 +188,7 @@ def test_without_regrasps_the_three_finger_rollout_fails_and_says_when_and_why(t
 
 
 def test_the_two_finger_scenario_has_no_schedule_and_the_planner_says_why():
-    from regrasp.schedule import NoScheduleError, ScheduleLimit
+    from regrasp.schedule.schedule import NoScheduleError, ScheduleLimit
 
     sc = load_scenario(SCENARIOS / "paper_trajectory_2.toml")
     with pytest.raises(NoScheduleError) as info:
@@ -197,7 +197,7 @@ def test_the_two_finger_scenario_has_no_schedule_and_the_planner_says_why():
 
 
 def test_trajectory_1_runs_its_partial_schedule_until_the_envelope_empties():
-    from regrasp.schedule import NoScheduleError, ScheduleLimit
+    from regrasp.schedule.schedule import NoScheduleError, ScheduleLimit
 
     sc = load_scenario(SCENARIOS / "paper_trajectory_1.toml")
     with pytest.raises(NoScheduleError) as info:
@@ -227,9 +227,9 @@ def test_a_one_step_delay_slips_issue_12s_supervisor_and_not_todays(three_finger
     robust settings (a settling margin in newtons, the slide held until the torques in flight are its own) hold."""
     from dataclasses import replace as swap
 
-    from regrasp.disturbance import ActuatorNoise
-    from regrasp.internal_force import InternalForceSettings
-    from regrasp.supervisor import SupervisorSettings
+    from regrasp.plants.disturbance import ActuatorNoise
+    from regrasp.dynamics.internal_force.solver import InternalForceSettings
+    from regrasp.supervisor.supervisor import SupervisorSettings
 
     sc, schedule = three_fingers_schedule
     plant = dict(plant_mass_scale=1.0796, plant_inertia_scale=1.058, plant_mu_scale=0.8697,

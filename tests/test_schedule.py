@@ -1,4 +1,4 @@
-"""The schedule value types (regrasp.schedule): slide profiles and schedule evaluation."""
+"""The schedule value types (regrasp.schedule.schedule): slide profiles and schedule evaluation."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from regrasp.exceptions import InvalidParameterError
-from regrasp.schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide, slides_at
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.schedule.schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide, slides_at
 
 
 def _slide(**kw):

@@ -1,4 +1,4 @@
-"""The lattice dynamic program (regrasp.schedule_lattice) against brute force on small lattices.
+"""The lattice dynamic program (regrasp.schedule.lattice) against brute force on small lattices.
 
 The brute force enumerates every start state and every sequence of move vectors, applies the
 module docstring's admissibility rules written out here in plain Python, and keeps the cheapest
@@ -12,7 +12,7 @@ import itertools
 import numpy as np
 import pytest
 
-from regrasp.schedule_lattice import Lattice, motion_combos, path, run
+from regrasp.schedule.lattice import Lattice, motion_combos, path, run
 
 
 def _random_lattice(rng, m, cells, layers, p_max, breakaway):

@@ -1,4 +1,4 @@
-"""The regrasp schedule planner (regrasp.schedule_planner) on the paper's scenarios.
+"""The regrasp schedule planner (regrasp.schedule.planner) on the paper's scenarios.
 
 Every returned schedule is re-checked here with checks that share no code with the planner:
 
@@ -22,11 +22,11 @@ import pytest
 
 from factories import force_lp
 from regrasp import Friction, load_scenario
-from regrasp.envelope import FingerEnvelope
-from regrasp.exceptions import InvalidParameterError
-from regrasp.force_polytope import ForceLimits
-from regrasp.schedule import NoScheduleError, ScheduleLimit
-from regrasp.schedule_planner import RegraspSettings, plan_regrasps
+from regrasp.envelope.finger_envelope import FingerEnvelope
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.schedule.force_polytope import ForceLimits
+from regrasp.schedule.schedule import NoScheduleError, ScheduleLimit
+from regrasp.schedule.planner import RegraspSettings, plan_regrasps
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
 

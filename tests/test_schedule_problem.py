@@ -1,4 +1,4 @@
-"""The regrasp planner's tables (regrasp.schedule_problem) against independent checks.
+"""The regrasp planner's tables (regrasp.schedule.problem) against independent checks.
 
 Each table entry the lattice program reads (a layer, a move vector, the other contacts' cells,
 the axis contact's cell) is compared with what it claims about real positions and times: the
@@ -18,7 +18,7 @@ import pytest
 
 from factories import force_lp
 from regrasp import Friction, load_scenario
-from regrasp.schedule_problem import RegraspSettings, build_problem, trajectory_period
+from regrasp.schedule.problem import RegraspSettings, build_problem, trajectory_period
 
 SCENARIO = Path(__file__).resolve().parents[1] / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
 
@@ -133,7 +133,7 @@ def test_breakaway_tables_hold_at_the_layer_and_where_it_starts(problem):
 
 
 def test_envelope_tables_keep_the_margin_over_each_window(problem):
-    from regrasp.envelope import FingerEnvelope
+    from regrasp.envelope.finger_envelope import FingerEnvelope
 
     rng = np.random.default_rng(3)
     sc = problem.scenario
@@ -163,7 +163,7 @@ def test_the_period_of_the_paper_trajectories():
 
 
 def test_a_lattice_too_large_for_memory_is_refused_up_front():
-    from regrasp.exceptions import InvalidParameterError
+    from regrasp.core.exceptions import InvalidParameterError
 
     sc = load_scenario(SCENARIO)
     four = dataclasses.replace(sc, contacts=sc.contacts + (dataclasses.replace(sc.contacts[2], edge=0),))

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from regrasp import load_scenario
-from regrasp.events import EventKind, EventSource, Failure, FailureKind
-from regrasp.exceptions import RegraspError
-from regrasp.rollout import build_rollout
-from regrasp.simulation import simulate
+from regrasp.core.events import EventKind, EventSource, Failure, FailureKind
+from regrasp.core.exceptions import RegraspError
+from regrasp.rollout.build import build_rollout
+from regrasp.plants.simulation import simulate
 
 from test_rollout import SCENARIOS
 
@@ -32,7 +32,7 @@ class Driver:
 
 
 def driver(rollout, **kw):
-    from regrasp.rollout import _SupervisorDriver  # noqa: PLC2701 (the test wraps the rollout's own driver)
+    from regrasp.rollout.build import _SupervisorDriver  # noqa: PLC2701 (the test wraps the rollout's own driver)
 
     return Driver(_SupervisorDriver(rollout.supervisor), **kw)
 
@@ -93,7 +93,7 @@ def test_a_real_sigint_mid_step_ends_the_run_after_that_step_never_inside_a_cons
     import os
     import signal
 
-    from regrasp.simulation import InterruptAtStepEnd
+    from regrasp.plants.simulation import InterruptAtStepEnd
 
     previous = signal.getsignal(signal.SIGINT)
     seen = []
@@ -114,7 +114,7 @@ def test_a_second_sigint_raises_at_once_and_a_nested_deferral_shares_the_outer_r
     import os
     import signal
 
-    from regrasp.simulation import InterruptAtStepEnd
+    from regrasp.plants.simulation import InterruptAtStepEnd
 
     previous = signal.getsignal(signal.SIGINT)
     with InterruptAtStepEnd() as outer:

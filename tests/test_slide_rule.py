@@ -1,6 +1,6 @@
-"""The two-finger slide rule (regrasp.slide_rule) against the sliding predicate, and its corollaries.
+"""The two-finger slide rule (regrasp.schedule.slide_rule) against the sliding predicate, and its corollaries.
 
-The predicate (regrasp.sliding.sliding_feasibility) solves the object's balance with the slider on
+The predicate (regrasp.dynamics.sliding.sliding_feasibility) solves the object's balance with the slider on
 its kinetic cone edge and the holder inside its static cone; it knows nothing of the rule. On
 random rectangles, orientations, heights and friction pairs, held still against gravity along
 their side edges, the rule's range must say exactly when the predicate allows the slide.
@@ -15,11 +15,11 @@ import pytest
 
 from factories import rot
 from regrasp import Friction, Grasp
-from regrasp.exceptions import InvalidParameterError
-from regrasp.internal_force import InternalForceSettings
-from regrasp.polygon import ConvexPolygon
-from regrasp.slide_rule import two_finger_slide_range
-from regrasp.sliding import sliding_feasibility
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.dynamics.internal_force.solver import InternalForceSettings
+from regrasp.core.polygon import ConvexPolygon
+from regrasp.schedule.slide_rule import two_finger_slide_range
+from regrasp.dynamics.sliding import sliding_feasibility
 
 #: the bare physics: push >= 0, no cone margin, no force limit
 BARE = InternalForceSettings(f_min=0.0, margin=0.0)

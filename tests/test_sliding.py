@@ -1,4 +1,4 @@
-"""When can a contact slide? ``regrasp.sliding.sliding_feasibility`` (paper Remark 3.3).
+"""When can a contact slide? ``regrasp.dynamics.sliding.sliding_feasibility`` (paper Remark 3.3).
 
 The oracle here is written from the physics, not from the library's matrices: contact points,
 surface frames and the grasp matrix are rebuilt from the polygon's edge data (inward normal,
@@ -34,11 +34,11 @@ import scipy.optimize
 
 from factories import random_polygon
 from regrasp import Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
-from regrasp.closed_loop import run_closed_loop
-from regrasp.control import Gains, Proposition3Controller
-from regrasp.exceptions import InvalidParameterError
-from regrasp.internal_force import InternalForceSettings, InternalForceSolver
-from regrasp.sliding import SlideFeasibility, sliding_feasibility
+from regrasp.plants.closed_loop import run_closed_loop
+from regrasp.dynamics.control import Gains, Proposition3Controller
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.dynamics.internal_force.solver import InternalForceSettings, InternalForceSolver
+from regrasp.dynamics.sliding import SlideFeasibility, sliding_feasibility
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml"
@@ -469,8 +469,8 @@ def test_figure_3_4_png(tmp_path):
     import numpy as np
 
     from regrasp import Grasp, load_scenario
-    from regrasp.plotting import plot_slide_feasibility
-    from regrasp.sliding import sliding_feasibility
+    from regrasp.envelope.plotting import plot_slide_feasibility
+    from regrasp.dynamics.sliding import sliding_feasibility
 
     root = __import__("pathlib").Path(__file__).resolve().parents[1]
     sc = load_scenario(root / "examples" / "scenarios" / "paper_trajectory_2.toml")
@@ -494,7 +494,7 @@ def test_two_equal_friction_fingers_cannot_slide_with_gravity_along_trajectory_2
     import numpy as np
 
     from regrasp import Grasp, load_scenario, plan_scenario
-    from regrasp.sliding import sliding_feasibility
+    from regrasp.dynamics.sliding import sliding_feasibility
 
     root = __import__("pathlib").Path(__file__).resolve().parents[1]
     sc = load_scenario(root / "examples" / "scenarios" / "paper_trajectory_2.toml")

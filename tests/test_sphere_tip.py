@@ -1,4 +1,4 @@
-"""The torque a spherical fingertip adds (:mod:`regrasp.sphere_tip`), against finite differences of the contact
+"""The torque a spherical fingertip adds (:mod:`regrasp.model.sphere_tip`), against finite differences of the contact
 point's forward kinematics: the material point of the distal link that sits at p + r n."""
 
 import math
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from regrasp import load_scenario
-from regrasp.exceptions import InvalidParameterError
-from regrasp.sphere_tip import sphere_tip_torque
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.model.sphere_tip import sphere_tip_torque
 
 SC2 = load_scenario(Path(__file__).resolve().parents[1] / "examples" / "scenarios" / "paper_trajectory_2.toml")
 R_TIP = 2.5e-4  # [m]

@@ -1,4 +1,4 @@
-"""Compiled stretches (regrasp.stretch, regrasp.kernels.stretch): a rollout with them takes the same steps as
+"""Compiled stretches (regrasp.rollout.stretch, regrasp.kernels.stretch): a rollout with them takes the same steps as
 one without, and they serve most steps."""
 
 from __future__ import annotations
@@ -144,9 +144,9 @@ def test_warm_up_compiles_the_signature_the_library_passes(both_ways):
 
 
 def test_simulate_refuses_stretches_built_for_another_disturbance(scenario):
-    from regrasp.disturbance import Disturbance
-    from regrasp.exceptions import InvalidParameterError
-    from regrasp.simulation import simulate
+    from regrasp.plants.disturbance import Disturbance
+    from regrasp.core.exceptions import InvalidParameterError
+    from regrasp.plants.simulation import simulate
 
     rollout = build_rollout(scenario, duration=0.01)
     with pytest.raises(InvalidParameterError, match="stretches"):

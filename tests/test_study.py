@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from regrasp import build_rollout, load_scenario
-from regrasp.cli import main
-from regrasp.exceptions import InvalidParameterError, ScenarioError
-from regrasp.study import Perturbation, draw_runs, run_study, wilson_interval
+from regrasp.cli.main import main
+from regrasp.core.exceptions import InvalidParameterError, ScenarioError
+from regrasp.study.study import Perturbation, draw_runs, run_study, wilson_interval
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
@@ -48,8 +48,8 @@ def test_wilson_interval_textbook_values_and_bad_counts():
 def test_the_figures_of_a_study_whose_bins_all_succeed(tmp_path):
     # synthetic outcomes (no rollout): 200 runs, most bins all successes, one failure; once this raised
     # in matplotlib ("yerr must not contain negative values") and lost a 19-minute study
-    from regrasp.study import RunOutcome, StudyResult
-    from regrasp.study_plots import plot_study
+    from regrasp.study.study import RunOutcome, StudyResult
+    from regrasp.study.plots import plot_study
 
     perturbation = Perturbation(mass=0.2, mu=0.2, contact_position=2e-4)
     draws = draw_runs(200, 3, perturbation, contacts=3)
@@ -150,7 +150,7 @@ def test_a_run_replayed_alone_repeats_the_studys_run_and_records_it(in_process, 
 
 
 def test_a_sweep_is_one_study_per_size_with_the_same_draws(capsys, tmp_path):
-    from regrasp.study import sweep_study
+    from regrasp.study.study import sweep_study
 
     sc = load_scenario(SCENARIO)
     schedule = build_rollout(sc, duration=0.1).schedule
@@ -175,8 +175,8 @@ def test_a_sweep_is_one_study_per_size_with_the_same_draws(capsys, tmp_path):
 def test_the_noise_is_seeded_per_run(in_process):
     """A run repeated alone from its draw repeats exactly (the study's runs used the envelope plan it computed
     once; alone, the run plans it again); another seed gives other noise."""
-    from regrasp.perturbation import RunDraw
-    from regrasp.study import run_once
+    from regrasp.model.perturbation import RunDraw
+    from regrasp.study.study import run_once
 
     sc = load_scenario(SCENARIO)
     first = in_process.runs[0]
@@ -190,8 +190,8 @@ def test_the_noise_is_seeded_per_run(in_process):
 
 
 def test_a_rollout_refuses_a_plan_of_another_scenario():
-    from regrasp.exceptions import InvalidParameterError
-    from regrasp.planner import plan_scenario
+    from regrasp.core.exceptions import InvalidParameterError
+    from regrasp.envelope.planner import plan_scenario
 
     sc = load_scenario(SCENARIO)
     two = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from regrasp import Friction, Hand, load_scenario
-from regrasp.exceptions import InvalidParameterError
-from regrasp.planner import plan, plan_scenario
-from regrasp.sliding import sliding_feasibility
-from regrasp.supervisor import ContactPhase, Measurement, RegraspSupervisor, SupervisorSettings
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.envelope.planner import plan, plan_scenario
+from regrasp.dynamics.sliding import sliding_feasibility
+from regrasp.supervisor.supervisor import ContactPhase, Measurement, RegraspSupervisor, SupervisorSettings
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "examples" / "scenarios"
 

@@ -1,4 +1,4 @@
-r"""Tests of regrasp.trajectory: exact derivatives, spline properties, domains and errors.
+r"""Tests of regrasp.core.trajectory: exact derivatives, spline properties, domains and errors.
 
 Finite-difference bound. For a central difference with step h,
 :math:`|(f(t+h) - f(t-h)) / 2h - f'(t)| \le \tfrac{h^2}{6} \max|f'''| + \epsilon \max|f| / h`
@@ -13,8 +13,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from regrasp.exceptions import InvalidParameterError, TrajectoryError
-from regrasp.trajectory import (
+from regrasp.core.exceptions import InvalidParameterError, TrajectoryError
+from regrasp.core.trajectory import (
     EllipseTrajectory,
     Trajectory,
     TrajectorySample,
@@ -302,7 +302,7 @@ def test_waypoint_inputs_are_copied():
 def test_a_sample_is_each_derivative_exactly():
     """``sample`` (one sine and cosine for all three derivatives; one float: in floats) equals ``pose``,
     ``velocity`` and ``acceleration``, for an ellipse and for it repeated, at one time and at many."""
-    from regrasp.trajectory import EllipseTrajectory, RepeatedTrajectory
+    from regrasp.core.trajectory import EllipseTrajectory, RepeatedTrajectory
 
     base = EllipseTrajectory(cx=0.01, cy=0.12, a=0.02, b=0.01, omega=1.3, beta0=0.1, beta_a=0.2)
     for traj in (base, RepeatedTrajectory(base, base.t_start + 3 * base.period)):

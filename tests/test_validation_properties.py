@@ -15,9 +15,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from regrasp import load_scenario
-from regrasp.cli import main
-from regrasp.exceptions import InvalidParameterError, ScenarioError
-from regrasp.validation import as_finite_array, as_finite_float
+from regrasp.cli.main import main
+from regrasp.core.exceptions import InvalidParameterError, ScenarioError
+from regrasp.core.validation import as_finite_array, as_finite_float
 
 ROOT = Path(__file__).resolve().parents[1]
 BASE = (ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml").read_text().replace(
@@ -179,8 +179,8 @@ def test_a_generated_urdf_is_a_one_line_finger_error_or_a_finite_finger(tmp_path
     import pinocchio as pin
 
     from regrasp import Finger
-    from regrasp.collision import checked_link_shapes, default_tip_clearance
-    from regrasp.exceptions import FingerModelError, RegraspError
+    from regrasp.model.collision import checked_link_shapes, default_tip_clearance
+    from regrasp.core.exceptions import FingerModelError, RegraspError
 
     path = tmp_path_factory.mktemp("urdf") / "finger.urdf"
     path.write_text(mutated_urdf(URDF_TEXT, edits))

@@ -14,115 +14,115 @@ __version__ = "0.1.0"
 
 #: Where each public name lives.
 _SOURCES = {
-    "ClosedLoopLog": "closed_loop",
-    "measure_reduced_state": "closed_loop",
-    "run_closed_loop": "closed_loop",
-    "UrdfCollisionChecker": "collision",
-    "default_tip_clearance": "collision",
-    "segment_hits_polygon": "collision",
-    "ContactMode": "contact",
-    "Friction": "contact",
-    "cone_margin": "contact",
-    "ComputedTorqueController": "control",
-    "ControlOutput": "control",
-    "FixedContactController": "control",
-    "Gains": "control",
-    "Proposition1Controller": "control",
-    "Proposition2Controller": "control",
-    "Proposition3Controller": "control",
-    "ActuatorNoise": "disturbance",
-    "Disturbance": "disturbance",
-    "SensorNoise": "disturbance",
-    "Condition": "envelope",
-    "EdgeLine": "envelope",
-    "EnvelopeSample": "envelope",
-    "FingerEnvelope": "envelope",
-    "Geometry": "envelope",
-    "condition_of": "envelope",
-    "reachable_on_line": "envelope",
-    "Event": "events",
-    "EventKind": "events",
-    "Failure": "events",
-    "FailureKind": "events",
-    "FingerModelError": "exceptions",
-    "InvalidParameterError": "exceptions",
-    "MissingDependencyError": "exceptions",
-    "PolygonError": "exceptions",
-    "RegraspError": "exceptions",
-    "ScenarioError": "exceptions",
-    "SingularFingerError": "exceptions",
-    "SlidingContactCountError": "exceptions",
-    "TrajectoryError": "exceptions",
-    "UnknownEdgeError": "exceptions",
-    "UnreachableError": "exceptions",
-    "SlideOrder": "executor",
-    "Configuration": "finger",
-    "Finger": "finger",
-    "LinkShape": "finger",
-    "planar_2r_urdf": "finger_urdf",
-    "Grasp": "grasp",
-    "Hand": "hand",
-    "HandDynamics": "hand",
-    "ConeEdge": "internal_force",
-    "InternalForceInfeasibleError": "internal_force",
-    "InternalForceQP": "internal_force",
-    "InternalForceResult": "internal_force",
-    "InternalForceSettings": "internal_force",
-    "InternalForceSolver": "internal_force",
-    "build_internal_force_qp": "internal_force",
-    "solve_internal_force_qp": "internal_force",
-    "MujocoSettings": "mjcf",
-    "scenario_to_mjcf": "mjcf",
-    "MujocoPlant": "mujoco_plant",
-    "Perturbation": "perturbation",
-    "FingerPlan": "planner",
-    "InfeasibleInterval": "planner",
-    "PlanResult": "planner",
-    "plan": "planner",
-    "plan_scenario": "planner",
-    "Plant": "plant",
-    "PlantContact": "plant",
-    "PlantEvent": "plant",
-    "PlantState": "plant",
-    "PlantStep": "plant",
-    "NoRegraspPolicy": "policies",
-    "OrderedSlidesPolicy": "policies",
-    "ScheduledPolicy": "policies",
-    "ScheduledSettings": "policies",
-    "PaperPolicy": "policy_paper",
-    "ConvexPolygon": "polygon",
-    "Edge": "polygon",
-    "RolloutRecorder": "recording",
-    "ReducedModel": "reduced",
-    "ReducedState": "reduced",
-    "Rollout": "rollout",
-    "RolloutResult": "rollout",
-    "build_rollout": "rollout",
-    "FingerContact": "scenario",
-    "Scenario": "scenario",
-    "load_scenario": "scenario",
-    "NoScheduleError": "schedule",
-    "RegraspSchedule": "schedule",
-    "ScheduleLimit": "schedule",
-    "Slide": "schedule",
-    "RegraspSettings": "schedule_planner",
-    "plan_regrasps": "schedule_planner",
-    "StepRecord": "simulation",
-    "PlantLike": "simulation",
-    "simulate": "simulation",
-    "SlideFeasibility": "sliding",
-    "StudyResult": "study",
-    "run_study": "study",
-    "sliding_feasibility": "sliding",
-    "ContactPhase": "supervisor",
-    "Measurement": "supervisor",
-    "RegraspSupervisor": "supervisor",
-    "SupervisorOutput": "supervisor",
-    "SupervisorSettings": "supervisor",
-    "EllipseTrajectory": "trajectory",
-    "Trajectory": "trajectory",
-    "TrajectorySample": "trajectory",
-    "WaypointTrajectory": "trajectory",
+    "ClosedLoopLog": "plants.closed_loop",
+    "measure_reduced_state": "plants.closed_loop",
+    "run_closed_loop": "plants.closed_loop",
+    "UrdfCollisionChecker": "model.collision",
+    "default_tip_clearance": "model.collision",
+    "segment_hits_polygon": "model.collision",
+    "ContactMode": "core.contact",
+    "Friction": "core.contact",
+    "cone_margin": "core.contact",
+    "ComputedTorqueController": "dynamics.control",
+    "ControlOutput": "dynamics.control",
+    "FixedContactController": "dynamics.control",
+    "Gains": "dynamics.control",
+    "Proposition1Controller": "dynamics.control",
+    "Proposition2Controller": "dynamics.control",
+    "Proposition3Controller": "dynamics.control",
+    "ActuatorNoise": "plants.disturbance",
+    "Disturbance": "plants.disturbance",
+    "SensorNoise": "plants.disturbance",
+    "Condition": "envelope.finger_envelope",
+    "EdgeLine": "envelope.finger_envelope",
+    "EnvelopeSample": "envelope.finger_envelope",
+    "FingerEnvelope": "envelope.finger_envelope",
+    "Geometry": "envelope.finger_envelope",
+    "condition_of": "envelope.finger_envelope",
+    "reachable_on_line": "envelope.finger_envelope",
+    "Event": "core.events",
+    "EventKind": "core.events",
+    "Failure": "core.events",
+    "FailureKind": "core.events",
+    "FingerModelError": "core.exceptions",
+    "InvalidParameterError": "core.exceptions",
+    "MissingDependencyError": "core.exceptions",
+    "PolygonError": "core.exceptions",
+    "RegraspError": "core.exceptions",
+    "ScenarioError": "core.exceptions",
+    "SingularFingerError": "core.exceptions",
+    "SlidingContactCountError": "core.exceptions",
+    "TrajectoryError": "core.exceptions",
+    "UnknownEdgeError": "core.exceptions",
+    "UnreachableError": "core.exceptions",
+    "SlideOrder": "supervisor.executor",
+    "Configuration": "model.finger",
+    "Finger": "model.finger",
+    "LinkShape": "model.finger",
+    "planar_2r_urdf": "model.finger_urdf",
+    "Grasp": "dynamics.grasp",
+    "Hand": "model.hand",
+    "HandDynamics": "model.hand",
+    "ConeEdge": "dynamics.internal_force.solver",
+    "InternalForceInfeasibleError": "dynamics.internal_force.solver",
+    "InternalForceQP": "dynamics.internal_force.solver",
+    "InternalForceResult": "dynamics.internal_force.solver",
+    "InternalForceSettings": "dynamics.internal_force.solver",
+    "InternalForceSolver": "dynamics.internal_force.solver",
+    "build_internal_force_qp": "dynamics.internal_force.solver",
+    "solve_internal_force_qp": "dynamics.internal_force.solver",
+    "MujocoSettings": "plants.mujoco.mjcf",
+    "scenario_to_mjcf": "plants.mujoco.mjcf",
+    "MujocoPlant": "plants.mujoco.plant",
+    "Perturbation": "model.perturbation",
+    "FingerPlan": "envelope.planner",
+    "InfeasibleInterval": "envelope.planner",
+    "PlanResult": "envelope.planner",
+    "plan": "envelope.planner",
+    "plan_scenario": "envelope.planner",
+    "Plant": "plants.project.plant",
+    "PlantContact": "plants.project.plant",
+    "PlantEvent": "plants.project.plant",
+    "PlantState": "plants.project.plant",
+    "PlantStep": "plants.project.plant",
+    "NoRegraspPolicy": "supervisor.policies.scheduled",
+    "OrderedSlidesPolicy": "supervisor.policies.scheduled",
+    "ScheduledPolicy": "supervisor.policies.scheduled",
+    "ScheduledSettings": "supervisor.policies.scheduled",
+    "PaperPolicy": "supervisor.policies.paper",
+    "ConvexPolygon": "core.polygon",
+    "Edge": "core.polygon",
+    "RolloutRecorder": "rollout.recording.recorder",
+    "ReducedModel": "dynamics.reduced",
+    "ReducedState": "dynamics.reduced",
+    "Rollout": "rollout.build",
+    "RolloutResult": "rollout.build",
+    "build_rollout": "rollout.build",
+    "FingerContact": "model.scenario",
+    "Scenario": "model.scenario",
+    "load_scenario": "model.scenario",
+    "NoScheduleError": "schedule.schedule",
+    "RegraspSchedule": "schedule.schedule",
+    "ScheduleLimit": "schedule.schedule",
+    "Slide": "schedule.schedule",
+    "RegraspSettings": "schedule.planner",
+    "plan_regrasps": "schedule.planner",
+    "StepRecord": "plants.simulation",
+    "PlantLike": "plants.simulation",
+    "simulate": "plants.simulation",
+    "SlideFeasibility": "dynamics.sliding",
+    "StudyResult": "study.study",
+    "run_study": "study.study",
+    "sliding_feasibility": "dynamics.sliding",
+    "ContactPhase": "supervisor.supervisor",
+    "Measurement": "supervisor.supervisor",
+    "RegraspSupervisor": "supervisor.supervisor",
+    "SupervisorOutput": "supervisor.supervisor",
+    "SupervisorSettings": "supervisor.supervisor",
+    "EllipseTrajectory": "core.trajectory",
+    "Trajectory": "core.trajectory",
+    "TrajectorySample": "core.trajectory",
+    "WaypointTrajectory": "core.trajectory",
 }
 
 __all__ = [
@@ -252,10 +252,10 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerly
-    from .closed_loop import ClosedLoopLog, measure_reduced_state, run_closed_loop  # noqa: F401
-    from .collision import UrdfCollisionChecker, default_tip_clearance, segment_hits_polygon  # noqa: F401
-    from .contact import ContactMode, Friction, cone_margin  # noqa: F401
-    from .control import (  # noqa: F401
+    from .plants.closed_loop import ClosedLoopLog, measure_reduced_state, run_closed_loop  # noqa: F401
+    from .model.collision import UrdfCollisionChecker, default_tip_clearance, segment_hits_polygon  # noqa: F401
+    from .core.contact import ContactMode, Friction, cone_margin  # noqa: F401
+    from .dynamics.control import (  # noqa: F401
         ComputedTorqueController,
         ControlOutput,
         FixedContactController,
@@ -264,8 +264,8 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
         Proposition2Controller,
         Proposition3Controller,
     )
-    from .disturbance import ActuatorNoise, Disturbance, SensorNoise  # noqa: F401
-    from .envelope import (  # noqa: F401
+    from .plants.disturbance import ActuatorNoise, Disturbance, SensorNoise  # noqa: F401
+    from .envelope.finger_envelope import (  # noqa: F401
         Condition,
         EdgeLine,
         EnvelopeSample,
@@ -274,8 +274,8 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
         condition_of,
         reachable_on_line,
     )
-    from .events import Event, EventKind, Failure, FailureKind  # noqa: F401
-    from .exceptions import (  # noqa: F401
+    from .core.events import Event, EventKind, Failure, FailureKind  # noqa: F401
+    from .core.exceptions import (  # noqa: F401
         FingerModelError,
         InvalidParameterError,
         MissingDependencyError,
@@ -288,12 +288,12 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
         UnknownEdgeError,
         UnreachableError,
     )
-    from .executor import SlideOrder  # noqa: F401
-    from .finger import Configuration, Finger, LinkShape  # noqa: F401
-    from .finger_urdf import planar_2r_urdf  # noqa: F401
-    from .grasp import Grasp  # noqa: F401
-    from .hand import Hand, HandDynamics  # noqa: F401
-    from .internal_force import (  # noqa: F401
+    from .supervisor.executor import SlideOrder  # noqa: F401
+    from .model.finger import Configuration, Finger, LinkShape  # noqa: F401
+    from .model.finger_urdf import planar_2r_urdf  # noqa: F401
+    from .dynamics.grasp import Grasp  # noqa: F401
+    from .model.hand import Hand, HandDynamics  # noqa: F401
+    from .dynamics.internal_force.solver import (  # noqa: F401
         ConeEdge,
         InternalForceInfeasibleError,
         InternalForceQP,
@@ -303,28 +303,28 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, imported eagerl
         build_internal_force_qp,
         solve_internal_force_qp,
     )
-    from .mjcf import MujocoSettings, scenario_to_mjcf  # noqa: F401
-    from .mujoco_plant import MujocoPlant  # noqa: F401
-    from .perturbation import Perturbation  # noqa: F401
-    from .planner import FingerPlan, InfeasibleInterval, PlanResult, plan, plan_scenario  # noqa: F401
-    from .plant import Plant, PlantContact, PlantEvent, PlantState, PlantStep  # noqa: F401
-    from .policies import NoRegraspPolicy, OrderedSlidesPolicy, ScheduledPolicy, ScheduledSettings  # noqa: F401
-    from .policy_paper import PaperPolicy  # noqa: F401
-    from .polygon import ConvexPolygon, Edge  # noqa: F401
-    from .recording import RolloutRecorder  # noqa: F401
-    from .reduced import ReducedModel, ReducedState  # noqa: F401
-    from .rollout import Rollout, RolloutResult, build_rollout  # noqa: F401
-    from .scenario import FingerContact, Scenario, load_scenario  # noqa: F401
-    from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide  # noqa: F401
-    from .schedule_planner import RegraspSettings, plan_regrasps  # noqa: F401
-    from .simulation import PlantLike, StepRecord, simulate  # noqa: F401
-    from .sliding import SlideFeasibility, sliding_feasibility  # noqa: F401
-    from .study import StudyResult, run_study  # noqa: F401
-    from .supervisor import (  # noqa: F401
+    from .plants.mujoco.mjcf import MujocoSettings, scenario_to_mjcf  # noqa: F401
+    from .plants.mujoco.plant import MujocoPlant  # noqa: F401
+    from .model.perturbation import Perturbation  # noqa: F401
+    from .envelope.planner import FingerPlan, InfeasibleInterval, PlanResult, plan, plan_scenario  # noqa: F401
+    from .plants.project.plant import Plant, PlantContact, PlantEvent, PlantState, PlantStep  # noqa: F401
+    from .supervisor.policies.scheduled import NoRegraspPolicy, OrderedSlidesPolicy, ScheduledPolicy, ScheduledSettings  # noqa: F401
+    from .supervisor.policies.paper import PaperPolicy  # noqa: F401
+    from .core.polygon import ConvexPolygon, Edge  # noqa: F401
+    from .rollout.recording.recorder import RolloutRecorder  # noqa: F401
+    from .dynamics.reduced import ReducedModel, ReducedState  # noqa: F401
+    from .rollout.build import Rollout, RolloutResult, build_rollout  # noqa: F401
+    from .model.scenario import FingerContact, Scenario, load_scenario  # noqa: F401
+    from .schedule.schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide  # noqa: F401
+    from .schedule.planner import RegraspSettings, plan_regrasps  # noqa: F401
+    from .plants.simulation import PlantLike, StepRecord, simulate  # noqa: F401
+    from .dynamics.sliding import SlideFeasibility, sliding_feasibility  # noqa: F401
+    from .study.study import StudyResult, run_study  # noqa: F401
+    from .supervisor.supervisor import (  # noqa: F401
         ContactPhase,
         Measurement,
         RegraspSupervisor,
         SupervisorOutput,
         SupervisorSettings,
     )
-    from .trajectory import EllipseTrajectory, Trajectory, TrajectorySample, WaypointTrajectory  # noqa: F401
+    from .core.trajectory import EllipseTrajectory, Trajectory, TrajectorySample, WaypointTrajectory  # noqa: F401

@@ -9,32 +9,32 @@ kernel                                 reference path                           
 =====================================  ==========================================  ===========================
 :mod:`.finger`: M, N, J, J̇q̇, tip      Pinocchio (``crba``, ``nonLinearEffects``,   ``tests/test_kernels.py``
                                        frame Jacobian, classical acceleration)
-:mod:`.plant`: a plant step (RK4,      :class:`~regrasp.plant.Plant` with           ``tests/test_kernels.py``
+:mod:`.plant`: a plant step (RK4,      :class:`~regrasp.plants.project.plant.Plant` with           ``tests/test_kernels.py``
 fixed and sliding contacts,            ``compiled=False``
 Baumgarte, works, event inputs)
-:mod:`.reduced`: the reduced model's   :class:`~regrasp.reduced.ReducedModel` with  ``tests/test_kernels.py``
+:mod:`.reduced`: the reduced model's   :class:`~regrasp.dynamics.reduced.ReducedModel` with  ``tests/test_kernels.py``
 terms (IK, J, H, Ḣ Ṡ, M, N)            ``compiled=False``
 :mod:`.force`, :mod:`.qp`: the         ``InternalForceSolver(compiled=False)``      ``tests/test_kernels_qp.py``
-internal-force QP (null basis, rows,   (:mod:`regrasp.internal_force`, OSQP)
+internal-force QP (null basis, rows,   (:mod:`regrasp.dynamics.internal_force.solver`, OSQP)
 an exact dense QP, the check)
 :mod:`.control`: a computed-torque     the controller with ``compiled=False``       ``tests/test_kernels_control.py``
 control step (fixed law, Prop. 1,
 Prop. 3 with m > 2)
 :mod:`.footprint`: link shape–prism    coal (``UrdfCollisionChecker.                ``tests/test_kernels_
 signed distances in closed form        signed_distances``)                          footprint.py``
-:mod:`.envelope`: a ``urdf`` envelope  :class:`~regrasp.envelope.FingerEnvelope`    ``tests/test_kernels_
+:mod:`.envelope`: a ``urdf`` envelope  :class:`~regrasp.envelope.finger_envelope.FingerEnvelope`    ``tests/test_kernels_
 sample (grid, bisection)               with ``compiled=False``                      footprint.py``
 :mod:`.stretch`: a rollout's steps     the simulation loop with the supervisor      ``tests/test_stretch.py``
 between discrete decisions (the        (``Rollout.run(compiled_stretches=False)``)
 above, and the supervisor's
 continuous work)
-:mod:`.monitor`, :mod:`.disturbance`:  :class:`~regrasp.monitor.EnvelopeMonitor`,     ``tests/test_stretch.py``
-a reading's margins, the noise, the    :class:`~regrasp.disturbance.Disturbance`
+:mod:`.monitor`, :mod:`.disturbance`:  :class:`~regrasp.supervisor.monitor.EnvelopeMonitor`,     ``tests/test_stretch.py``
+a reading's margins, the noise, the    :class:`~regrasp.plants.disturbance.Disturbance`
 slip sensor and the actuation delay
 =====================================  ==========================================  ===========================
 
 :func:`warm_up` loads every kernel (compiling it where the cache has none): a compiled
-:class:`~regrasp.plant.Plant` and a study's worker call it when built, so a rollout's timed loop never pays
+:class:`~regrasp.plants.project.plant.Plant` and a study's worker call it when built, so a rollout's timed loop never pays
 for it.
 
 Every kernel reads named fields (numpy record dtypes: :data:`FINGER_PARAMETERS`, :data:`FINGER_TERMS`,
@@ -138,7 +138,7 @@ def warm_up() -> None:
 
 
 def _warm_stretch(fingers, plant, iks, edges, rows) -> None:
-    """The stretch kernel with the argument types :class:`regrasp.stretch.CompiledStretches` passes (no step)."""
+    """The stretch kernel with the argument types :class:`regrasp.rollout.stretch.CompiledStretches` passes (no step)."""
     m = 1
     head = (fingers, iks, edges, np.zeros(2), True, np.zeros(1), np.full(1, -1, dtype=np.int64))
     contacts = np.zeros(m, dtype=PLANT_CONTACT)

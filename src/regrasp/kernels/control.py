@@ -1,4 +1,4 @@
-r"""The computed-torque control step, compiled: :class:`regrasp.control.ComputedTorqueController` in one call.
+r"""The computed-torque control step, compiled: :class:`regrasp.dynamics.control.ComputedTorqueController` in one call.
 
 For the laws whose friction estimate does not depend on the state (the fixed-contact law and Proposition 1,
 :math:`\hat f_\xi` given), one call does what the reference path does in Python around the reduced model's
@@ -8,7 +8,7 @@ terms (:func:`.reduced.reduced_terms`, called from here):
     a = \ddot S_d + K_v \dot E + K_s E, \quad \tau_m = (H^T)^+\left[(H^T M H + M_s) a + N_s
     - [f_g; -\hat f_\xi]\right],\quad f_m = J^{-T}(\tau_m - M \ddot q - N),
 
-with :math:`\ddot q = H a + \dot H \dot S` (:func:`regrasp.control._computed_torque`, the paper's (3.2.12)
+with :math:`\ddot q = H a + \dot H \dot S` (:func:`regrasp.dynamics.control._computed_torque`, the paper's (3.2.12)
 as corrected in ``docs/derivations.md``), then the internal force (:func:`.force.internal_force_into`),
 :math:`\tau = \tau_m + J^T f_c`, the predicted forces in each surface frame and their cone margins
 :math:`\mu f_n - |f_t|`. Anything but the plain case (an unreachable contact, a finger near a singularity, a
@@ -204,7 +204,7 @@ def sliding_step_into(fingers, iks, edges, gravity, damped, xi_model, slide_colu
                       kv, ks, m_o_diagonal, object_mass, sliders, kinetic, directions, reversible, sample_time,
                       singular_threshold, margin_mu, use_qp, coefficients, lower, n_ineq, is_cone, target,
                       margin_column, weight, aim, out):
-    r"""One step of Proposition 3 with m > 2 (:meth:`regrasp.control.Proposition3Controller._distributed_torque`)
+    r"""One step of Proposition 3 with m > 2 (:meth:`regrasp.dynamics.control.Proposition3Controller._distributed_torque`)
     into ``out`` (:func:`control_layout`); returns (status, k, the QP's cone margin [N]).
 
     The sliders' directions :math:`s_j` (``directions``, updated in place as the reference path does: the sign

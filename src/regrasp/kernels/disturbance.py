@@ -1,5 +1,5 @@
-r"""A run's disturbance in compiled code: :class:`regrasp.disturbance.Disturbance`'s ``measure`` and ``actuate``
-on a step's drawn standard normals (:meth:`~regrasp.disturbance.Disturbance.stretch_noise`), with the slip
+r"""A run's disturbance in compiled code: :class:`regrasp.plants.disturbance.Disturbance`'s ``measure`` and ``actuate``
+on a step's drawn standard normals (:meth:`~regrasp.plants.disturbance.Disturbance.stretch_noise`), with the slip
 sensor's and the actuation delay's deques as arrays, oldest first, for :func:`.stretch.stretch_into`. The same
 arithmetic as the reference (numpy's ``normal(loc, scale)`` is ``loc + scale`` times the next standard normal);
 ``tests/test_stretch.py`` runs noisy rollouts both ways.
@@ -19,7 +19,7 @@ __all__ = ["actuate_into", "measure_into"]
 @numba.njit(cache=True)
 def measure_into(settings, st, contacts, y, last, xi, z, slips, slips_new, X_m, V_m, xi_m, xi_dot_m, fn_m, ft_m,
              slides_m):
-    """What the controller senses (:meth:`regrasp.disturbance.Disturbance.measure`, the same arithmetic): the
+    """What the controller senses (:meth:`regrasp.plants.disturbance.Disturbance.measure`, the same arithmetic): the
     truth plus each drawn term, the slip sensor's oldest reading; the slip deque's new length."""
     m = xi.shape[0]
     size = y.shape[0]
@@ -72,7 +72,7 @@ def measure_into(settings, st, contacts, y, last, xi, z, slips, slips_new, X_m, 
 
 @numba.njit(cache=True)
 def actuate_into(settings, st, tau, z, commands, commands_new, applied):
-    """The torques the plant gets (:meth:`regrasp.disturbance.Disturbance.actuate`: the command of ``delay``
+    """The torques the plant gets (:meth:`regrasp.plants.disturbance.Disturbance.actuate`: the command of ``delay``
     steps ago, plus the drawn noise); the command deque's new length."""
     n2 = tau.shape[0]
     if not settings.delayed:

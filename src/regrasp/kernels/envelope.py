@@ -1,6 +1,6 @@
-r"""One ``urdf`` envelope sample, compiled: :meth:`regrasp.envelope.FingerEnvelope.at` in one call.
+r"""One ``urdf`` envelope sample, compiled: :meth:`regrasp.envelope.finger_envelope.FingerEnvelope.at` in one call.
 
-The same steps and the same arithmetic as the reference path (:mod:`regrasp.envelope`, whose docstring
+The same steps and the same arithmetic as the reference path (:mod:`regrasp.envelope.finger_envelope`, whose docstring
 has the derivations): the edge's line at the object pose (d, λ, s0), the reachable set on it
 (Definition 2.1) merged, its intersection with the edge, the ``ideal`` feasible set (link 1 through a
 vertex, each piece classified at its midpoint), then per piece of reachable ∩ edge the ``urdf`` cuts: the
@@ -9,7 +9,7 @@ the free pieces merged. Only the collision verdict differs in kind: the footprin
 distances (:mod:`.footprint`) instead of coal's, so a verdict can differ only within coal's own tolerance
 of a contact (``tests/test_kernels_footprint.py`` measures both).
 
-Everything is in line coordinates s [m] (:class:`~regrasp.envelope.EdgeLine`; ξ = s - s0). The finger, edge
+Everything is in line coordinates s [m] (:class:`~regrasp.envelope.finger_envelope.EdgeLine`; ξ = s - s0). The finger, edge
 and sampling constants are one :data:`ENVELOPE_PARAMETERS` record; the polygon is given in its own frame
 (vertices and inward edge normals) and the link shapes as :data:`~.footprint.FOOTPRINT` records.
 """
@@ -76,7 +76,7 @@ def _carve(work, grid, n):
 
 @numba.njit(cache=True)
 def _merge(pieces, count, out):
-    """:func:`regrasp.intervals.merge` (gap 0) of ``pieces[:count]`` into ``out`` (``pieces`` is sorted in
+    """:func:`regrasp.core.intervals.merge` (gap 0) of ``pieces[:count]`` into ``out`` (``pieces`` is sorted in
     place by (lo, hi)); returns the count."""
     for i in range(1, count):  # insertion sort: a few dozen pieces at most
         lo, hi = pieces[i, 0], pieces[i, 1]
@@ -101,7 +101,7 @@ def _merge(pieces, count, out):
 
 @numba.njit(cache=True)
 def _reachable(p, d, pieces, out):
-    """:func:`regrasp.envelope.reachable_on_line` into ``out`` (4, 2) (``pieces``: (4, 2) scratch); returns the
+    """:func:`regrasp.envelope.finger_envelope.reachable_on_line` into ``out`` (4, 2) (``pieces``: (4, 2) scratch); returns the
     count."""
     l1, l2 = p.l1, p.l2
     outer2 = p.outer_sq - d * d
@@ -148,7 +148,7 @@ def _tip_and_elbow(p, d, nx, ny, s):
 
 @numba.njit(cache=True)
 def _segment_hits(ax, ay, bx, by, verts, normals, offsets, eps):
-    """:func:`regrasp.collision.segment_hits_halfplanes` against the polygon (:func:`~.footprint.object_in_hand`)."""
+    """:func:`regrasp.model.collision.segment_hits_halfplanes` against the polygon (:func:`~.footprint.object_in_hand`)."""
     n = verts.shape[0]
     t0, t1 = 0.0, 1.0
     for k in range(n):

@@ -1,7 +1,7 @@
 r"""Signed distances between a planar finger's link shapes and the object prism, in closed form (compiled).
 
 **Why the plane suffices.** The ``urdf`` geometry tests each link shape S against the object's prism
-:math:`P = Q \times [-h, h]` (:class:`~regrasp.collision.UrdfCollisionChecker`: Q the polygon in the hand
+:math:`P = Q \times [-h, h]` (:class:`~regrasp.model.collision.UrdfCollisionChecker`: Q the polygon in the hand
 plane z = 0, h the finger's reach). Let :math:`\pi` be the projection onto the plane, and suppose S is
 symmetric about z = 0 and :math:`|z| \le h` on S. Then:
 
@@ -21,7 +21,7 @@ The footprints (:data:`FOOTPRINT`, in the shape's link frame) are a rectangle (h
 unit axis u, ``hv`` across) dilated by a disc of radius ``rad``: a box turned about z only (``rad`` = 0),
 a cylinder whose axis lies in the plane (a ``2 half_length`` by ``2 radius`` rectangle), a capsule so
 placed (a stadium: ``hv`` = 0), a sphere centred in the plane (a disc: ``hu`` = ``hv`` = 0).
-:meth:`~regrasp.collision.UrdfCollisionChecker.footprints` builds them, and returns None for any other
+:meth:`~regrasp.model.collision.UrdfCollisionChecker.footprints` builds them, and returns None for any other
 shape or placement (an axis out of the plane, a centre off it, another geometry type): the caller then
 keeps coal.
 

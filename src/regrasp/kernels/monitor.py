@@ -1,6 +1,6 @@
 r"""The runtime envelope monitor's arithmetic in compiled code, for :func:`.stretch.stretch_into`: a contact's
-margin and the feasible interval holding (or nearest to) its ξ (:meth:`regrasp.envelope.EnvelopeSample.margin`,
-:func:`regrasp.monitor.interval_of`), and the envelopes' arguments for their evaluation in a stretch
+margin and the feasible interval holding (or nearest to) its ξ (:meth:`regrasp.envelope.finger_envelope.EnvelopeSample.margin`,
+:func:`regrasp.supervisor.monitor.interval_of`), and the envelopes' arguments for their evaluation in a stretch
 (:func:`.envelope.envelope_sample_into` for every finger).
 """
 
@@ -17,7 +17,7 @@ __all__ = ["envelope_arguments", "reading_at"]
 
 def envelope_arguments(arguments: list[tuple] | None, m: int) -> tuple[tuple, tuple, tuple]:
     """The ``geometry``, ``samples`` and ``scratch`` arguments of :func:`stretch_into` for m fingers whose envelopes
-    have the compiled arguments ``arguments`` (:attr:`regrasp.envelope.FingerEnvelope.compiled_arguments`: one
+    have the compiled arguments ``arguments`` (:attr:`regrasp.envelope.finger_envelope.FingerEnvelope.compiled_arguments`: one
     tuple per finger, all on one polygon), or placeholders of the same types for None (the kernel then does not
     evaluate). ``geometry``: the fingers' :data:`.envelope.ENVELOPE_PARAMETERS` (m,), their link footprints one
     after another (read-only) and where each finger's start (m + 1,), the polygon's vertices and inward normals;
@@ -45,7 +45,7 @@ def envelope_arguments(arguments: list[tuple] | None, m: int) -> tuple[tuple, tu
 @numba.njit(cache=True)
 def reading_at(intervals, counts, i, x):
     """Contact i's margin [m] and the interval (lo, hi) holding (or nearest to) ξ = x
-    (:meth:`regrasp.envelope.EnvelopeSample.margin`, :func:`regrasp.monitor.interval_of`)."""
+    (:meth:`regrasp.envelope.finger_envelope.EnvelopeSample.margin`, :func:`regrasp.supervisor.monitor.interval_of`)."""
     best, lo_best, hi_best, gap_best = -np.inf, np.nan, np.nan, np.inf
     for j in range(counts[i]):
         lo, hi = intervals[i, j, 0], intervals[i, j, 1]

@@ -1,4 +1,4 @@
-r"""The full-coordinate plant's step, compiled: the same equations as :class:`~regrasp.plant.Plant`'s
+r"""The full-coordinate plant's step, compiled: the same equations as :class:`~regrasp.plants.project.plant.Plant`'s
 reference path (its module docstring), in one call per step.
 
 Per evaluation: the fingers' terms (:func:`~regrasp.kernels.finger.finger_terms`), every active contact's
@@ -29,7 +29,7 @@ __all__ = ["FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDING",
 
 _F8 = np.float64
 
-#: Contact modes as the kernels' integers (:class:`~regrasp.contact.ContactMode` in Python).
+#: Contact modes as the kernels' integers (:class:`~regrasp.core.contact.ContactMode` in Python).
 FIXED, SLIDING, SEPARATED = 0, 1, 2
 
 #: One contact: its mode, ξ [m] (fixed), s = ±1 (sliding), μ_s and μ_k [-], and its edge (object frame).
@@ -188,7 +188,7 @@ def plant_step_into(fingers, plant, contacts, y, tau, certificates, radii, out, 
     end), ``needs_coal`` and ``posture``.
 
     ``certificates`` (m, 9) and ``radii`` (m, 2) are the collision check's (see
-    :meth:`regrasp.plant.Plant._collisions`; a NaN row: none): ``needs_coal`` says which fingers' links may have
+    :meth:`regrasp.plants.project.plant.Plant._collisions`; a NaN row: none): ``needs_coal`` says which fingers' links may have
     reached the object since their certificate, ``posture`` each finger's (q_1, q_2, β, joint 1 and the elbow
     in the object frame: a new certificate's first seven entries).
 
@@ -277,7 +277,7 @@ def _posture(p, t, q1, q2, x, y, beta, c, s, out):
 def _certified(posture, cert, radii):
     """Whether a finger's links cannot have reached the object since its certificate ``cert`` (a NaN: none):
     each link's points moved relative to the object by less than the distance coal found then, less its
-    margin (:meth:`regrasp.plant.Plant._collisions`)."""
+    margin (:meth:`regrasp.plants.project.plant.Plant._collisions`)."""
     if math.isnan(cert[0]):
         return False
     turn1 = abs(posture[0] - cert[0] - (posture[2] - cert[2]))

@@ -1,6 +1,6 @@
 r"""A small dense QP solver, compiled: the internal-force QP's few variables, solved exactly.
 
-The internal-force QP (:mod:`regrasp.internal_force`) has k <= 2m - 3 variables (plus the margin variable s)
+The internal-force QP (:mod:`regrasp.dynamics.internal_force.solver`) has k <= 2m - 3 variables (plus the margin variable s)
 and a dozen rows; OSQP solves it iteratively to a tolerance in ~10 µs, most of it set-up and the Python
 around it. Its objective has a diagonal Hessian, so it is a *least-distance problem* (Lawson & Hanson,
 *Solving Least Squares Problems*, 1974, ch. 23):

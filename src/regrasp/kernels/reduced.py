@@ -1,15 +1,15 @@
-r"""The reduced model's terms at (S, Ṡ), compiled: :meth:`regrasp.reduced.ReducedModel._terms` in one call.
+r"""The reduced model's terms at (S, Ṡ), compiled: :meth:`regrasp.dynamics.reduced.ReducedModel._terms` in one call.
 
 Per contact i at the object pose (x, y, β) and its ξ: the contact point :math:`p_i = x_o + R(\beta) c_i(\xi_i)`
 (where the tip is), the finger's joint angles there (its inverse kinematics in its configuration, as
-:meth:`regrasp.finger.Finger.inverse_kinematics`), its Jacobian :math:`J_i = [e_z \times (p - o_1),\
+:meth:`regrasp.model.finger.Finger.inverse_kinematics`), its Jacobian :math:`J_i = [e_z \times (p - o_1),\
 e_z \times (p - o_2)]` and inverse, the rows of :math:`A = [G^T \mid R_f B_v]` and of :math:`H = J^{-1} A`
 (eq. 3.1.10), :math:`\dot q = H\dot S`, M and N (:func:`~regrasp.kernels.finger.finger_terms`, the
 Pinocchio-checked terms), :math:`\dot J\dot q` and :math:`\dot H\dot S = J^{-1}(\dot A\dot S - \dot J\dot q)`
 (``docs/derivations.md``; the reference path's docstrings give each formula).
 
 An unreachable contact point is reported, not raised (``status`` 1 with the finger and its distance): the
-caller raises :class:`~regrasp.exceptions.UnreachableError`; the Jacobians' condition numbers are returned
+caller raises :class:`~regrasp.core.exceptions.UnreachableError`; the Jacobians' condition numbers are returned
 for the caller's singularity check.
 """
 
@@ -43,7 +43,7 @@ REACHABLE, UNREACHABLE = 0, 1
 
 
 def ik_parameters(fingers) -> np.ndarray:
-    """The (m,) :data:`FINGER_IK` records of :class:`~regrasp.finger.Finger` s (their public geometry)."""
+    """The (m,) :data:`FINGER_IK` records of :class:`~regrasp.model.finger.Finger` s (their public geometry)."""
     out = np.zeros(len(fingers), dtype=FINGER_IK)
     for i, f in enumerate(fingers):
         l1, l2 = f.link_lengths
@@ -62,7 +62,7 @@ def contact_edges(origins, directions, normals) -> np.ndarray:
 
 @numba.njit(cache=True)
 def _wrap(angle):
-    """An angle [rad] wrapped to (-π, π] (:func:`regrasp.planar.wrap_angle`)."""
+    """An angle [rad] wrapped to (-π, π] (:func:`regrasp.core.planar.wrap_angle`)."""
     wrapped = (angle + math.pi) % (2.0 * math.pi) - math.pi
     return math.pi if wrapped == -math.pi else wrapped
 

@@ -1,17 +1,17 @@
 r"""A stretch of control steps in one call: the supervisor's continuous work between its decisions, compiled.
 
-Between two decisions of the regrasp supervisor (:mod:`regrasp.supervisor`) nothing discrete happens at most
+Between two decisions of the regrasp supervisor (:mod:`regrasp.supervisor.supervisor`) nothing discrete happens at most
 steps: every contact stays in its phase (fixed, or sliding along its planned profile), the law stays the
 same, the monitor holds its last envelope samples and the plant's contacts keep their modes. Such a stretch
-of steps is this kernel: per step it does exactly what the reference loop (:func:`regrasp.simulation.simulate`
-around :meth:`regrasp.supervisor.RegraspSupervisor.step`) does, in the same order and arithmetic:
+of steps is this kernel: per step it does exactly what the reference loop (:func:`regrasp.plants.simulation.simulate`
+around :meth:`regrasp.supervisor.supervisor.RegraspSupervisor.step`) does, in the same order and arithmetic:
 
-1. sense (:func:`regrasp.simulation.sense`): a fixed plant contact's ξ is where it is held, the rest from the
+1. sense (:func:`regrasp.plants.simulation.sense`): a fixed plant contact's ξ is where it is held, the rest from the
    last plant step; the last step's surface forces;
-2. the monitor's margins and bounds from its held samples (:meth:`regrasp.monitor.EnvelopeMonitor.read`);
-3. the executor's advance (:meth:`regrasp.executor.SlideExecutor.advance`): the held contacts' filter, the
+2. the monitor's margins and bounds from its held samples (:meth:`regrasp.supervisor.monitor.EnvelopeMonitor.read`);
+3. the executor's advance (:meth:`regrasp.supervisor.executor.SlideExecutor.advance`): the held contacts' filter, the
    sliders' slip flags and friction estimates;
-4. the sliders' references (:meth:`regrasp.schedule.Slide.profile_at`), the integral action and the control
+4. the sliders' references (:meth:`regrasp.schedule.schedule.Slide.profile_at`), the integral action and the control
    law (:func:`.control.control_step_into` or :func:`.control.sliding_step_into`);
 5. the plant's step (:func:`.plant.plant_step_into`) and the rollout's per-step rows.
 
@@ -53,13 +53,13 @@ STRETCH_DONE, STRETCH_HANDOFF, STRETCH_COAL = 0, 1, 2
 #: [m/s], its longest sliding phase [s], the law's ω of the pose and of a slider [rad/s], the step [s], whether
 #: the fixed law runs (else Proposition 3, m > 2); the monitor's ``every`` and ``max_bound_step`` [m] and whether
 #: the kernel evaluates the envelopes (else it hands such a step over); whether it takes the policy's decisions
-#: (:class:`regrasp.policies.ScheduledPolicy`: else it hands them over), their period [s], when the next slide
+#: (:class:`regrasp.supervisor.policies.scheduled.ScheduledPolicy`: else it hands them over), their period [s], when the next slide
 #: is due [s], whether it re-plans on a low margin, from when [s] and below which fraction of the planned
 #: margin, and the schedule's start, end [s] and whether it repeats; a disturbance
-#: (:class:`regrasp.disturbance.Disturbance`): whether the sensor is not ideal, its slip threshold [m/s] (NaN:
+#: (:class:`regrasp.plants.disturbance.Disturbance`): whether the sensor is not ideal, its slip threshold [m/s] (NaN:
 #: the plant's modes) and standard deviations (pose [m], [rad], twist [m/s], [rad/s], ξ [m], ξ̇ [m/s], forces
 #: [N]), whether the actuator is not ideal and its torque noise [N m]; and where each noise term lies in a
-#: step's row of standard normals (-1: not drawn; :meth:`regrasp.disturbance.Disturbance.stretch_noise`).
+#: step's row of standard normals (-1: not drawn; :meth:`regrasp.plants.disturbance.Disturbance.stretch_noise`).
 STRETCH_SETTINGS = np.dtype([
     ("hold_gain", _F8), ("hold_resolution", _F8), ("integral", _F8), ("friction_gain", _F8),
     ("friction_min_force", _F8), ("friction_resolution", _F8), ("arrive_tolerance", _F8), ("arrive_speed", _F8),
@@ -85,7 +85,7 @@ STRETCH_STATE = np.dtype([
 ], align=True)
 
 #: A sliding contact: its index, slip flag, friction estimate μ̂ (NaN: none yet), sliding phase's start [s],
-#: target [m], planned end [s] (NaN: none), its planned profile (:class:`regrasp.schedule.Slide`: start, end [s],
+#: target [m], planned end [s] (NaN: none), its planned profile (:class:`regrasp.schedule.schedule.Slide`: start, end [s],
 #: ξ from, to [m], ramp [s], cruise speed [m/s], direction ±1, time offset [s]), the μ_k its law uses and the
 #: model's μ_k, and ∫(ξ_d - ξ) dt [m s] of its integral action.
 SLIDER = np.dtype([
@@ -106,7 +106,7 @@ def stretch_log(entries: int, m: int, capacity: int) -> tuple:
 
 @numba.njit(cache=True)
 def _profile(sl, t):
-    """(ξ, ξ̇, ξ̈) of a slider's profile at time t [s] (:meth:`regrasp.schedule.Slide.profile_at` at
+    """(ξ, ξ̇, ξ̈) of a slider's profile at time t [s] (:meth:`regrasp.schedule.schedule.Slide.profile_at` at
     t - offset)."""
     t = t - sl.offset
     T, r, v, s = sl.end - sl.start, sl.ramp, sl.speed, sl.direction
@@ -147,7 +147,7 @@ def stretch_into(settings, state, held, xi_model, xi_sensed, integral_x, sliders
     ``xi_sensed`` (m: the filtered sensed positions), ``integral_x`` (3: ∫E dt of the pose), ``sliders``
     (:data:`SLIDER` records); monitor: ``intervals`` (m, k, 2) and ``counts`` (m) of its held samples' feasible
     intervals, the bounds at its last evaluation (m, 2), their rates (m, 2) and the fastest each contact's bounds
-    moved (m) (:class:`regrasp.monitor.EnvelopeMonitor`'s), ``geometry``, ``samples`` and ``scratch``: the
+    moved (m) (:class:`regrasp.supervisor.monitor.EnvelopeMonitor`'s), ``geometry``, ``samples`` and ``scratch``: the
     envelopes' (:func:`.monitor.envelope_arguments`), ``evaluation_counts`` (m, 3)
     :func:`.envelope.envelope_sample_into`'s answers at the last evaluation; the policy's schedule: its sample
     times and planned envelope margins (times, m); ``times`` the steps' start times [s] and ``desired`` (steps, 9)
@@ -156,7 +156,7 @@ def stretch_into(settings, state, held, xi_model, xi_sensed, integral_x, sliders
     sliders' ``directions``); ``control_out`` its output. Plant: :func:`.plant.plant_step_into`'s arguments,
     ``last`` the last step's ``out`` (its ξ, ξ̇ and surface forces are sensed; updated), ``coal_cleared``: coal
     found no collision at the first step's end. Rows (steps, ...): what
-    :class:`regrasp.rollout_result.RolloutRows` keeps, with
+    :class:`regrasp.rollout.result.RolloutRows` keeps, with
     ``static_mu`` the plant's μ_s per contact. ``log``: what a recorder logs of the steps with
     (``first_index`` + k + 1) % ``log_every`` == 0 (0: none), one entry each in order: the law's predicted forces
     (hand frame and surface frame, (·, m, 2)), its cone margins (·, m), its pose error (·, 3), ξ after the step

@@ -1,0 +1,252 @@
+"""``regrasp simulate``: run a regrasping rollout on the plant, print what happened, record it.
+
+``regrasp simulate [SCENARIO] [--periods N | --duration T] [--policy scheduled|paper|none]
+[--plant project|mujoco [--tip-radius MM]] [--rrd FILE] [--decimate K] [--spawn | --connect ADDR] [--json]
+[--plant-mass-scale S] [--plant-mu-scale S] [--envelope-margin M] [--cone-margin N] [--plot DIR]``
+
+Default: the shipped three-finger trajectory-2 scenario, the scheduled policy, the scenario's
+duration. Exit status: 0 the rollout succeeded, 1 it failed or no schedule exists (the result is
+still printed, with the reason), 2 bad input. Ctrl-C ends the run with a partial result (exit 1)
+and a complete recording.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from .args import number_argument
+from ..core.capture import captured_fd
+from ..core.events import EventKind, FailureKind
+
+if TYPE_CHECKING:
+    from ..rollout.result import RolloutResult
+    from ..model.scenario import Scenario
+    from ..plants.simulation import PlantLike
+
+__all__ = ["DEFAULT_SCENARIO", "add_parser", "add_plant_arguments", "plant_options", "plant_text", "rollout_summary"]
+
+#: The default scenario (in the source tree's examples/).
+DEFAULT_SCENARIO = Path(__file__).resolve().parents[3] / "examples" / "scenarios" / \
+    "paper_trajectory_2_three_fingers.toml"
+
+
+def _positive(kind: type) -> Callable[[str], float]:
+    return number_argument(kind, f"a finite {kind.__name__} > 0", lambda v: 0 < v < float("inf"))
+
+
+def add_plant_arguments(p: argparse.ArgumentParser) -> None:
+    """``--plant`` and ``--tip-radius`` (read back by :func:`plant_options`)."""
+    p.add_argument("--plant", choices=("project", "mujoco"), default="project",
+                   help="project: the full-coordinate plant with point contacts (default); mujoco: MuJoCo with sphere "
+                        "tips and soft contacts (pip install 'regrasp[mujoco]')")
+    p.add_argument("--tip-radius", type=_positive(float), metavar="MM",
+                   help="--plant mujoco: the fingertips' sphere radius [mm] (default 0.25)")
+
+
+def plant_options(args: argparse.Namespace) -> dict:
+    """``build_rollout``'s ``plant`` and ``mujoco_settings`` from ``--plant`` and ``--tip-radius``; a missing
+    ``mujoco`` or a radius without MuJoCo is an error before any work."""
+    from ..core.exceptions import InvalidParameterError
+
+    if args.tip_radius is not None and args.plant != "mujoco":
+        raise InvalidParameterError("--tip-radius", args.tip_radius, "no radius unless --plant mujoco (the project's "
+                                    "plant has point contacts)")
+    if args.plant != "mujoco":
+        return {"plant": args.plant}
+    from ..plants.mujoco.mjcf import MujocoSettings, require_mujoco
+
+    require_mujoco()  # (before planning: say at once that the extra is missing)
+    return {"plant": "mujoco", "mujoco_settings": MujocoSettings() if args.tip_radius is None else
+            MujocoSettings(tip_radius=args.tip_radius * 1e-3)}
+
+
+def add_parser(sub: argparse._SubParsersAction, progress_bar: Callable[[str], Callable[[int, int], None]],
+               nonnegative: Callable[[str], float]) -> None:
+    """Register ``simulate`` on the ``regrasp`` parser's subparsers."""
+    p = sub.add_parser("simulate", help="run a regrasping rollout on the plant (paper §4) and record it",
+                       description="Run a rollout: the supervisor and its policy drive the full-coordinate plant. "
+                                   "Exit status 0: success, 1: failure or no schedule, 2: bad input.")
+    p.add_argument("scenario", nargs="?", default=None,
+                   help=f"scenario file (TOML); default: {DEFAULT_SCENARIO.name} from examples/scenarios")
+    span = p.add_mutually_exclusive_group()
+    span.add_argument("--periods", type=_positive(int), metavar="N",
+                      help="run N periods of a periodic trajectory (past the scenario's t_end)")
+    span.add_argument("--duration", type=_positive(float), metavar="T", help="simulated time [s]")
+    p.add_argument("--policy", choices=("scheduled", "paper", "none"), default="scheduled",
+                   help="scheduled: plan the slides ahead, follow and re-plan them (default); paper: the paper's "
+                        "danger-zone heuristic; none: never slide")
+    add_plant_arguments(p)
+    p.add_argument("--rrd", metavar="FILE", type=Path, help="write a rerun recording to FILE")
+    p.add_argument("--decimate", type=_positive(int), default=10, metavar="K",
+                   help="record every K-th step (events at every step); default 10, a 10 ms row at 1 kHz, about "
+                        "0.17 MB per simulated second; 1 records every step (about 1.5 MB per second)")
+    view = p.add_mutually_exclusive_group()
+    view.add_argument("--spawn", action="store_true", help="stream to a rerun viewer it starts")
+    view.add_argument("--connect", metavar="ADDR", help="stream to a running rerun viewer at this gRPC address")
+    p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
+    p.add_argument("--plant-mass-scale", type=_positive(float), default=1.0, metavar="S",
+                   help="the plant's object mass and inertia are S times the model's (the controllers keep the model)")
+    p.add_argument("--plant-mu-scale", type=_positive(float), default=1.0, metavar="S",
+                   help="the plant's friction coefficients are S times the model's")
+    p.add_argument("--envelope-margin", type=nonnegative, metavar="M",
+                   help="scheduled: the envelope margin [m] the schedule keeps (default 0.001)")
+    p.add_argument("--cone-margin", type=nonnegative, metavar="N",
+                   help="scheduled: the cone margin [N] the schedule and the controllers keep (default 0.2)")
+    p.add_argument("--plot", metavar="DIR", help="write regrasp_rollout.png (per finger: band, planned and actual "
+                                                 "contact against time) into DIR")
+    p.set_defaults(func=lambda args: _cmd_simulate(args, progress_bar))
+
+
+def plant_text(name: str, plant: PlantLike) -> str:
+    """One line on the plant ``name`` (``"project"`` or ``"mujoco"``) built as ``plant``."""
+    if name != "mujoco":
+        return "project (point contacts, rigid)"
+    s = plant.settings
+    return f"mujoco (sphere tips r = {s.tip_radius * 1e3:g} mm, soft contacts, MuJoCo step {s.timestep * 1e3:g} ms)"
+
+
+def rollout_summary(result: RolloutResult, scenario: Scenario, plant_line: str) -> str:
+    """A rollout's result as ``regrasp simulate`` prints it (``plant_line``: :func:`plant_text`'s)."""
+    mm = 1e3
+    lines = [f"regrasp simulate: {scenario.name}" + (f" ({scenario.path})" if scenario.path else ""),
+             f"  plant: {plant_line}",
+             f"  policy: {result.policy}; simulated {result.simulated_seconds:.3f} of {result.duration:.3f} s "
+             f"({result.steps} steps)"]
+    sch = result.schedule
+    if sch is not None:
+        lines.append(f"  schedule: {'periodic' if sch.periodic else 'not periodic'}, {len(sch.slides)} slides"
+                     + (" per period" if sch.periodic else "") + (f" (no fewer possible than {sch.slides_lower_bound})"
+                                                                  if sch.slides_lower_bound is not None else "")
+                     + f"; planned margins {sch.min_envelope_margin * mm:.2f} mm, {sch.min_cone_margin:.3f} N; "
+                       f"planned in {sch.planning_seconds:.2f} s")
+    if result.success:
+        lines.append("  result: SUCCESS")
+    else:
+        f = result.failure
+        lines.append(f"  result: FAILURE at t = {f.time:.3f} s ({f.kind.value}): {f.reason}")
+    width = result.object_width
+    err, rot = result.max_object_error_after_transient, result.max_orientation_error_after_transient
+    rows = [
+        ("object error after 0.5 s", "-" if err != err else f"{err * mm:.4f} mm max ({err / width:.2e} of the "
+                                                              f"object's width), orientation {rot * 1e3:.3f} mrad"),
+        ("slides", ", ".join(f"{n} {c}" for n, c in result.regrasps.items())),
+        ("re-plans", str(result.replans)),
+        ("smallest envelope margin", f"{result.min_envelope_margin * mm:.2f} mm ({result.min_envelope_margin_at[1]}, "
+                                     f"t = {result.min_envelope_margin_at[0]:.3f} s)"),
+        ("smallest cone margin (fixed)", f"{result.min_cone_margin:.3f} N ({result.min_cone_margin_at[1]}, "
+                                         f"t = {result.min_cone_margin_at[0]:.3f} s)"),
+        ("plant events", ", ".join(f"{k} {v}" for k, v in sorted(result.plant_event_counts().items())) or "none"),
+        ("wall time", f"{result.wall_seconds:.2f} s ({result.realtime_factor:.2f}x real time)"),
+    ]
+    w = max(len(k) for k, _ in rows)
+    lines += [f"  {k:<{w}}  {v}" for k, v in rows]
+    replans = [e for e in result.events if e.kind in (EventKind.REPLAN, EventKind.REPLAN_FAILED)]
+    for e in replans[:5]:
+        lines.append(f"  {e.kind.value} at t = {e.time:.3f} s: {e.detail}")
+    if result.rrd:
+        lines.append(f"  recording: {result.rrd} - open it with `rerun {result.rrd}` "
+                     f"(or `rerun --web-viewer {result.rrd}` on a machine without a display)")
+    return "\n".join(lines)
+
+
+def _no_schedule_text(error, scenario) -> str:
+    lines = [f"regrasp simulate: {scenario.name}" + (f" ({scenario.path})" if scenario.path else ""),
+             f"  result: NO SCHEDULE ({error.limit.value}) - {error.reason}"]
+    if error.rule:
+        lines.append(f"    {error.rule}")
+    lines.append(f"  the latest time any admissible state survives: t = {error.latest_time:.3f} s; "
+                 "try --policy paper or --policy none to run anyway")
+    return "\n".join(lines)
+
+
+def _cmd_simulate(args, progress_bar) -> int:
+    from ..core.exceptions import InvalidParameterError
+    from ..rollout.build import DEFAULT_CONE_MARGIN
+    from ..model.scenario import load_scenario
+    from ..schedule.planner import RegraspSettings
+    from ..supervisor.supervisor import SupervisorSettings
+
+    path = args.scenario if args.scenario is not None else DEFAULT_SCENARIO
+    if args.scenario is None and not DEFAULT_SCENARIO.is_file():
+        raise InvalidParameterError("scenario", None, f"a scenario file (the default {DEFAULT_SCENARIO} is not "
+                                    "here: regrasp is not installed from its source tree)")
+    scenario = load_scenario(path)
+    if args.plot:
+        from .main import output_directory
+
+        output_directory("--plot", args.plot)
+    plant = plant_options(args)
+    tips = {"tip_radius": plant["mujoco_settings"].tip_radius} if "mujoco_settings" in plant else {}  # (the laws
+    # know the tips' radius)
+    cone = DEFAULT_CONE_MARGIN if args.cone_margin is None else args.cone_margin
+    options = {"cone_margin": cone}
+    if args.envelope_margin is not None:
+        options["envelope_margin"] = args.envelope_margin
+    regrasp_settings = RegraspSettings(**options)
+    settings = SupervisorSettings.robust(scenario.geometry.value, cone, **tips)
+    common = dict(periods=args.periods, duration=args.duration, settings=settings, regrasp_settings=regrasp_settings,
+                  plant_mass_scale=args.plant_mass_scale, plant_mu_scale=args.plant_mu_scale, **plant)
+    # OSQP's C library prints "Polishing not needed" on fd 1 even with verbose=False: keep stdout for the result
+    with captured_fd(1):
+        code, output = _simulate(args, scenario, common, progress_bar)
+    sys.stdout.write(output + "\n")
+    return code
+
+
+def _simulate(args, scenario, common, progress_bar) -> tuple[int, str]:
+    """Run the rollout: (exit status, what to print on stdout)."""
+    from ..rollout.build import build_rollout
+    from ..schedule.schedule import NoScheduleError, ScheduleLimit
+    from ..plants.simulation import InterruptAtStepEnd
+
+    quiet = args.json
+    try:
+        rollout = build_rollout(scenario, policy=args.policy, **common,
+                                plan_progress=None if quiet else progress_bar("planning regrasps"))
+    except NoScheduleError as exc:
+        if exc.limit is not ScheduleLimit.ENVELOPE or exc.partial is None:
+            if args.json:
+                return 1, json.dumps({"success": False, "policy": args.policy, "schedule": exc.to_json_dict(),
+                                      "failure": {"time": exc.latest_time, "kind": FailureKind.NO_SCHEDULE.value,
+                                                  "reason": str(exc), "contact": ", ".join(exc.contacts)}})
+            return 1, _no_schedule_text(exc, scenario)
+        # the envelope empties: run the best schedule up to then, and fail where the physics says so
+        if not quiet:
+            print(f"no schedule beyond t = {exc.latest_time:.3f} s ({exc.reason}); running the partial schedule",
+                  file=sys.stderr)
+        rollout = build_rollout(scenario, policy=args.policy, schedule=exc.partial, **common)
+    # Ctrl-C from here until the recording is closed ends the run at a step's end (never inside the recorder)
+    with InterruptAtStepEnd():
+        recorder = None
+        if args.rrd is not None or args.spawn or args.connect:
+            from ..rollout.recording.recorder import RolloutRecorder
+
+            recorder = RolloutRecorder(rollout.plant, rrd_path=args.rrd, spawn=args.spawn, connect=args.connect,
+                                       decimation=args.decimate, envelope_geometry=scenario.geometry.value,
+                                       recording_name=f"{scenario.name} ({args.policy})")
+        try:
+            result = rollout.run(recorder=recorder, progress=None if quiet else progress_bar("simulating"))
+        finally:
+            if recorder is not None:
+                recorder.close()
+    figures = []
+    if args.plot:
+        from ..rollout.plots import plot_rollout
+
+        figures.append(str(plot_rollout(result, Path(args.plot) / "regrasp_rollout.png")))
+    code = 0 if result.success else 1
+    if args.json:
+        doc = result.to_json_dict()
+        doc["plant"] = args.plant
+        doc["figures"] = figures
+        return code, json.dumps(doc)
+    lines = [rollout_summary(result, scenario, plant_text(args.plant, rollout.plant))] + [f"  figure: {f}" for f in figures]
+    if result.failure is not None and result.failure.kind is FailureKind.INTERRUPTED:
+        lines.append("  (interrupted: the result and the recording cover the run so far)")
+    return code, "\n".join(lines)
+

@@ -1,0 +1,264 @@
+"""``regrasp study``: many seeded rollouts under model errors and noise; the success rate and why runs failed.
+
+``regrasp study [SCENARIO] --runs N [--seed S] [--workers K] [--ray [ADDRESS]] [--plant project|mujoco]
+[--periods P | --duration T] [--mass H] [--mu H] ... [--delay STEPS] [--json] [--plot DIR]
+[--sweep NAME=V1,V2,... | --replay I [--rrd FILE]]``
+
+The perturbations default to the scenario's ``[study]`` table; a flag overrides its key.
+Exit status: 0 the study ran (whatever its success rate), 2 bad input; with ``--replay``, 0 or 1 as the run
+succeeded or failed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from dataclasses import asdict, replace
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from .args import number_argument
+
+if TYPE_CHECKING:
+    from ..study.study import StudyResult
+
+__all__ = ["add_study_parser"]
+
+
+def _count(least: int) -> Callable[[str], int]:
+    return number_argument(int, f"an integer >= {least}", lambda v: v >= least)
+
+
+def _at_most(limit: float, unit: str) -> Callable[[str], float]:
+    return number_argument(float, f"a number in [0, {limit:g}] [{unit}]", lambda v: 0.0 <= v <= limit)
+
+
+_half_width = number_argument(float, "a relative half-width in [0, 1)", lambda v: 0.0 <= v < 1.0)
+_seconds = number_argument(float, "a finite duration > 0 [s]", lambda v: 0.0 < v < float("inf"))
+
+#: Each perturbation's flag: (metavar, help, argument type); the bounds are the library's.
+_FLAGS = {
+    "mass": ("H", "the plant's object mass: the model's times U(1-H, 1+H)", _half_width),
+    "inertia": ("H", "the plant's object inertia: the model's times U(1-H, 1+H), drawn on its own", _half_width),
+    "mu": ("H", "the plant's mu_s and mu_k: the model's times U(1-H, 1+H)", _half_width),
+    "mu_kinetic": ("H", "the plant's mu_k alone, times U(1-H, 1+H) more (at most the plant's mu_s)", _half_width),
+    "link_mass": ("H", "the plant's finger link masses and inertias: the URDFs' times U(1-H, 1+H)", _half_width),
+    "contact_position": ("M", "each fingertip placed U(-M, M) [m] off its planned xi (the supervisor believes the "
+                              "plan)", _at_most(0.01, "m")),
+    "position_noise": ("M", "object position sensing noise, standard deviation [m]", _at_most(0.1, "m")),
+    "angle_noise": ("RAD", "object angle sensing noise [rad]", _at_most(3.2, "rad")),
+    "velocity_noise": ("M/S", "object velocity sensing noise [m/s]", _at_most(10.0, "m/s")),
+    "angular_velocity_noise": ("RAD/S", "object angular velocity sensing noise [rad/s]", _at_most(100.0, "rad/s")),
+    "xi_noise": ("M", "contact position (xi) sensing noise [m]", _at_most(0.1, "m")),
+    "xi_dot_noise": ("M/S", "contact rate sensing noise [m/s]", _at_most(10.0, "m/s")),
+    "force_noise": ("N", "contact force sensing noise [N]", _at_most(100.0, "N")),
+    "slip_threshold": ("M/S", "the slip sensor reports sliding above this |xi_dot| [m/s] (default: a perfect "
+                              "slip sensor)", _at_most(10.0, "m/s")),
+    "slip_delay": ("STEPS", "the slip sensor's delay [control steps]", _count(0)),
+    "torque_noise": ("NM", "joint torque noise, standard deviation [N m]", _at_most(10.0, "N m")),
+    "delay": ("STEPS", "actuation delay: each torque is applied STEPS control steps late", _count(0)),
+}
+
+
+def _sweep(text: str) -> tuple[str, tuple[float, ...]]:
+    """``NAME=V1,V2,...`` as (the Perturbation field, the sizes); argparse turns an error into exit 2."""
+    name, _, values = text.partition("=")
+    name = name.strip().lstrip("-").replace("-", "_")
+    if name not in _FLAGS or not values:
+        raise argparse.ArgumentTypeError(f"expected NAME=V1,V2,... with NAME one of {', '.join(_FLAGS)}, got {text!r}")
+    _, _, kind = _FLAGS[name]
+    try:
+        sizes = tuple(kind(v.strip()) for v in values.split(","))
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"--sweep {name}: {exc}") from None
+    if len(sizes) > 100:
+        raise argparse.ArgumentTypeError(f"expected at most 100 sizes, got {len(sizes)}")
+    return name, sizes
+
+
+def add_study_parser(sub: argparse._SubParsersAction,
+                     progress_bar: Callable[[str], Callable[[int, int], None]]) -> None:
+    """Register ``study`` on the ``regrasp`` parser's subparsers."""
+    from .simulate import DEFAULT_SCENARIO, add_plant_arguments
+
+    p = sub.add_parser("study", help="a robustness study: many seeded rollouts under model errors and noise",
+                       description="Plan the regrasp schedule once, then run seeded rollouts on plants whose model "
+                                   "errors are drawn around the model's, with sensing noise, torque noise and delays. "
+                                   "Prints the success rate with a Wilson 95 % interval, the failures by kind and "
+                                   "time and the margins. The perturbations default to the scenario's [study] table; "
+                                   "a flag overrides its key. Exit status 0: the study ran, 2: bad input.")
+    p.add_argument("scenario", nargs="?", default=None,
+                   help=f"scenario file (TOML); default: {DEFAULT_SCENARIO.name} from examples/scenarios")
+    p.add_argument("--runs", type=_count(1), default=20, metavar="N", help="number of runs (default 20)")
+    p.add_argument("--seed", type=_count(0), default=0, metavar="S", help="the study's seed (default 0)")
+    p.add_argument("--workers", type=_count(1), default=None, metavar="K",
+                   help="worker processes (default: one per core); the results do not depend on it")
+    p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
+                   help="run on Ray: a local cluster of --workers CPUs, or the cluster at ADDRESS (ray.init's "
+                        "address); the results are the same as on processes")
+    add_plant_arguments(p)
+    span = p.add_mutually_exclusive_group()
+    span.add_argument("--periods", type=_count(1), metavar="P", help="each run: P periods of the trajectory")
+    span.add_argument("--duration", type=_seconds, metavar="T", help="each run: T seconds")
+    for name, (metavar, text, kind) in _FLAGS.items():
+        p.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None, metavar=metavar, help=text)
+    p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
+    p.add_argument("--plot", metavar="DIR", help="write the study's figures (PNG) and study.json into DIR")
+    p.add_argument("--sweep", type=_sweep, metavar="NAME=V1,V2,...",
+                   help="one study per size of one perturbation (a flag's name, e.g. xi-noise=0,1e-4,2e-4), the others "
+                        "as given: the success rate against that size (--plot: study_sweep.png)")
+    p.add_argument("--replay", type=_count(0), metavar="I",
+                   help="run only run I of this study (the same seed and perturbations) and print its rollout; exit "
+                        "status 0 if it succeeds, 1 if it fails")
+    p.add_argument("--rrd", metavar="FILE", type=Path, help="with --replay: write the run to a rerun recording")
+    p.set_defaults(func=lambda args: _cmd_study(args, progress_bar))
+
+
+def _summary(result: StudyResult) -> str:
+    import numpy as np
+
+    lo, hi = result.interval
+    runs = result.runs
+    lines = [f"regrasp study: {Path(result.scenario).name} on the {result.plant} plant, {len(runs)} runs of "
+             f"{result.duration:.4g} s, seed "
+             f"{result.seed}: {result.perturbation.describe()}",
+             f"  success: {result.successes}/{len(runs)} = {result.success_rate:.1%} (Wilson 95 %: "
+             f"[{lo:.1%}, {hi:.1%}])"]
+    for kind, count in sorted(result.failures.items()):
+        times = sorted(r.failure_time for r in runs if r.failure_kind == kind)
+        lines.append(f"  failed, {kind}: {count} (at t = {', '.join(f'{t:.3f}' for t in times[:8])}"
+                     f"{', ...' if len(times) > 8 else ''} s)")
+    cone = np.array([r.min_cone_margin for r in runs])
+    env = np.array([r.min_envelope_margin for r in runs]) * 1e3
+    errors = np.array([r.max_object_error for r in runs if r.max_object_error is not None]) * 1e3
+    lines.append(f"  smallest cone margin [N]: min {cone.min():.3f}, median {np.median(cone):.3f}")
+    lines.append(f"  smallest envelope margin [mm]: min {env.min():.2f}, median {np.median(env):.2f}")
+    if errors.size:
+        lines.append(f"  largest object error after 0.5 s [mm]: median {np.median(errors):.3f}, max {errors.max():.3f}")
+    lines.append(f"  wall time: {result.wall_seconds:.1f} s ({result.plan_seconds:.1f} s planning) on "
+                 f"{result.workers} {'Ray CPU' if result.backend == 'ray' else 'worker'}(s)")
+    return "\n".join(lines)
+
+
+def _replay(args: argparse.Namespace, scenario, perturbation, plant: dict,
+            progress_bar: Callable[[str], Callable[[int, int], None]]) -> int:
+    """``--replay I``: run I of the study alone, printed as ``regrasp simulate`` prints a rollout (and recorded)."""
+    from .simulate import plant_text, rollout_summary
+    from ..rollout.build import DEFAULT_CONE_MARGIN, build_rollout
+    from ..schedule.planner import RegraspSettings, plan_regrasps
+    from ..study.study import build_run, draw_runs
+
+    draw = draw_runs(args.replay + 1, args.seed, perturbation, len(scenario.contacts))[args.replay]
+    schedule = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN),
+                             progress=None if args.json else progress_bar("planning regrasps"))
+    duration = build_rollout(scenario, duration=args.duration, periods=args.periods, schedule=schedule, **plant).duration
+    rollout = build_run(scenario, draw, schedule, duration, perturbation, **plant)
+    recorder = None
+    if args.rrd is not None:
+        from ..rollout.recording.recorder import RolloutRecorder
+
+        recorder = RolloutRecorder(rollout.plant, rrd_path=args.rrd, envelope_geometry=scenario.geometry.value,
+                                   recording_name=f"{scenario.name}, study seed {args.seed}, run {args.replay}")
+    try:
+        result = rollout.run(recorder=recorder, progress=None if args.json else progress_bar("simulating"))
+    finally:
+        if recorder is not None:
+            recorder.close()
+    if args.json:
+        doc = result.to_json_dict()
+        doc.update(plant=plant["plant"], run=args.replay, seed=args.seed, draw={**asdict(draw), "entropy": list(draw.entropy),
+                                                                                "xi_offset": list(draw.xi_offset)})
+        json.dump(doc, sys.stdout)
+        sys.stdout.write("\n")
+    else:
+        factors = (f"mass x{draw.mass_scale:.3f}, inertia x{draw.inertia_scale:.3f}, mu x{draw.mu_scale:.3f}, "
+                   f"placement {', '.join(f'{x * 1e3:+.3f}' for x in draw.xi_offset)} mm")
+        print(f"run {args.replay} of seed {args.seed} ({perturbation.describe()}): {factors}")
+        print(rollout_summary(result, scenario, plant_text(plant["plant"], rollout.plant)))
+    return 0 if result.success else 1
+
+
+def _sweep_study(args: argparse.Namespace, scenario, perturbation, plant: dict,
+                 progress_bar: Callable[[str], Callable[[int, int], None]]) -> int:
+    """``--sweep NAME=V1,...``: one study per size, a line each (and study_sweep.png, study_sweep.json)."""
+    from .main import output_directory
+    from ..study.study import sweep_study
+    from ..study.plots import plot_sweep
+
+    name, values = args.sweep
+    directory = output_directory("--plot", args.plot) if args.plot else None
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    results = sweep_study(scenario, args.runs, name, values, perturbation=perturbation, seed=args.seed,
+                          duration=args.duration, periods=args.periods, workers=min(workers, args.runs),
+                          ray_address=args.ray, progress=None if args.json else progress_bar(
+                              f"{len(values)} x {args.runs} runs"), **plant)
+    doc = {"sweep": name, "values": list(values), "studies": [r.to_json_dict() for r in results]}
+    if directory is not None:
+        (directory / "study_sweep.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")  # results first
+        doc["figures"] = [str(plot_sweep(name, results, directory / "study_sweep.png"))]
+        (directory / "study_sweep.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")
+    if args.json:
+        json.dump(doc, sys.stdout)
+        sys.stdout.write("\n")
+        return 0
+    print(f"regrasp study --sweep {name}: {len(values)} studies of {args.runs} runs, seed {args.seed}; besides "
+          f"{name}: {replace(perturbation, **{name: type(perturbation).__dataclass_fields__[name].default}).describe()}")
+    for value, r in zip(values, results):
+        lo, hi = r.interval
+        failures = ", ".join(f"{k} {v}" for k, v in sorted(r.failures.items())) or "none"
+        print(f"  {name} = {value:<10g} success {r.successes}/{len(r.runs)} (Wilson 95 %: [{lo:.1%}, {hi:.1%}]); "
+              f"failures: {failures}")
+    for f in doc.get("figures", []):
+        print(f"  figure: {f}")
+    return 0
+
+
+def _perturbation(args: argparse.Namespace, scenario) -> object:
+    """The scenario's [study] perturbation with the flags given on the command line."""
+    given = {name: getattr(args, name) for name in _FLAGS if getattr(args, name) is not None}
+    return replace(scenario.study, **given)
+
+
+def _cmd_study(args: argparse.Namespace, progress_bar: Callable[[str], Callable[[int, int], None]]) -> int:
+    from .main import output_directory
+    from .simulate import DEFAULT_SCENARIO, plant_options
+    from ..model.scenario import load_scenario
+    from ..core.exceptions import InvalidParameterError
+    from ..study.study import run_study
+    from ..study.plots import plot_study
+
+    path = Path(args.scenario) if args.scenario is not None else DEFAULT_SCENARIO
+    scenario = load_scenario(path)  # a bad file is exit 2 before any work
+    perturbation = _perturbation(args, scenario)
+    plant = plant_options(args)
+    if args.rrd is not None and args.replay is None:
+        raise InvalidParameterError("--rrd", str(args.rrd), "--replay I (a study records no run; replay one)")
+    if args.replay is not None:
+        if args.sweep is not None:
+            raise InvalidParameterError("--replay", args.replay, "a run of one study (not with --sweep)")
+        return _replay(args, scenario, perturbation, plant, progress_bar)
+    if args.sweep is not None:
+        return _sweep_study(args, scenario, perturbation, plant, progress_bar)
+    directory = output_directory("--plot", args.plot) if args.plot else None
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    result = run_study(scenario, args.runs, seed=args.seed, perturbation=perturbation, duration=args.duration,
+                       periods=args.periods, workers=min(workers, args.runs), ray_address=args.ray, **plant,
+                       progress=None if args.json else progress_bar(f"{args.runs} runs"))
+    doc = result.to_json_dict()
+    figures = []
+    if directory is not None:
+        # the results first: a long study is never lost to a figure
+        (directory / "study.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")
+        figures = plot_study(result, directory)
+        doc["figures"] = [str(f) for f in figures]
+        (directory / "study.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")
+    if args.json:
+        json.dump(doc, sys.stdout)
+        sys.stdout.write("\n")
+    else:
+        print(_summary(result) + "".join(f"\n  figure: {f}" for f in figures)
+              + (f"\n  results: {directory / 'study.json'}" if directory is not None else ""))
+    return 0

@@ -1,0 +1,1 @@
+"""regrasp.core."""

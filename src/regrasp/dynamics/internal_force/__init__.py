@@ -1,0 +1,1 @@
+"""regrasp.dynamics.internal_force."""

@@ -1,0 +1,1 @@
+"""regrasp.envelope.finger_envelope."""

@@ -1,0 +1,410 @@
+r"""Scenario files (TOML): the object, its trajectory, the fingers and planner settings.
+
+All lengths are in metres, angles in radians, masses in kilograms, times in seconds.
+Unknown keys are errors (they are usually typos). Every error is a
+:class:`~regrasp.core.exceptions.ScenarioError` naming the file, the key and what was expected.
+
+.. code-block:: toml
+
+    name = "paper_trajectory_2"          # optional, default: the file's stem
+    description = "..."                  # optional
+
+    [object]                             # a convex polygon in the object frame (origin = centre of mass)
+    vertices = [[0.05, 0.02], [-0.05, 0.02], [-0.05, -0.02], [0.05, -0.02]]
+    # or: width = 0.10  and  height = 0.04  (a rectangle, vertices CCW from the top-right corner)
+    mass = 0.1                           # [kg]; with inertia [kg m^2], or density [kg/m^2] alone
+    inertia = 9.67e-5
+
+    [trajectory]                         # object pose (x, y, beta) in the hand frame
+    type = "ellipse"                     # x = cx + a sin(w t), y = cy + b cos(w t), beta = beta0 + beta_a sin(w t)
+    cx = 0.0
+    cy = 0.12
+    a = 0.09
+    b = 0.05
+    omega = 2.0
+    beta0 = 0.0                          # optional, default 0
+    beta_a = 0.0                         # optional, default 0
+    t_start = 0.0                        # optional, default 0
+    t_end = 3.141592653589793            # optional, default one period
+    # or: type = "waypoints", times = [...], poses = [[x, y, beta], ...],
+    #     boundary = "natural" | "clamped" | "periodic", unwrap_angle = false
+
+    [hand]                               # optional
+    gravity = [0.0, -9.81]               # [m/s^2] in the hand frame
+    mu = 0.5                             # optional: Coulomb friction of every fingertip [-] (mu_s = mu_k),
+    # or: mu_static = 0.8 and mu_kinetic = 0.4 together (0 <= mu_kinetic <= mu_static); default mu = 0.5
+
+    [[fingers]]                          # one table per finger
+    name = "finger1"
+    urdf = "../../urdf/planar_2r_finger.urdf"   # relative to the scenario file
+    base = [-0.05, 0.0, 1.5707963267948966]     # base pose (x, y, theta) in the hand frame
+    configuration = "left"               # "left" (-pi < theta2 < 0) or "right"
+    edge = 1                             # edge k runs from vertex k to vertex k+1 (0-based, CCW order)
+    tip_clearance = 0.015                # optional, [m], 'urdf' geometry only
+    mu = 0.8                             # optional: this fingertip's friction, overriding [hand]'s;
+    # or: mu_static and mu_kinetic together, as in [hand]
+
+    [planner]                            # optional
+    samples = 401                        # time samples over the trajectory's domain
+    geometry = "ideal"                   # "ideal" or "urdf"
+
+    [study]                              # optional: the perturbations of `regrasp study` (regrasp.model.perturbation)
+    mass = 0.2                           # relative half-widths: mass, inertia, mu, mu_kinetic, link_mass
+    contact_position = 0.0002            # [m] half-width of each fingertip's placement error
+    position_noise = 0.0001              # [m]; also angle_noise [rad], velocity_noise, angular_velocity_noise,
+    delay = 1                            # xi_noise, xi_dot_noise, force_noise, slip_threshold, slip_delay,
+                                         # torque_noise [N m]; delay and slip_delay in control steps
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..core.contact import Friction
+from ..envelope.finger_envelope import Geometry
+from ..core.exceptions import (FingerModelError, InvalidParameterError, PolygonError, RegraspError, ScenarioError,
+                         short_repr)
+from ..core.validation import MAX_SAMPLES, as_finite_array, as_positive_float, file_problem
+from .finger import Finger
+from .perturbation import Perturbation
+from ..core.polygon import ConvexPolygon
+from ..core.trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
+
+__all__ = ["FingerContact", "Scenario", "load_scenario"]
+
+#: The friction when neither a finger nor [hand] gives one.
+_DEFAULT_FRICTION = Friction(0.5)
+
+
+@dataclass(frozen=True)
+class FingerContact:
+    """A finger and the object edge it touches.
+
+    Attributes:
+        finger: The finger (URDF, base pose, configuration).
+        edge: Index of the contact edge.
+        tip_clearance: Tip clearance [m] for the ``urdf`` geometry, or None for the default.
+        friction: Coulomb friction of the fingertip on the object (μ_s, μ_k [-]; used by rollouts).
+    """
+
+    finger: Finger
+    edge: int
+    tip_clearance: float | None = None
+    friction: Friction = _DEFAULT_FRICTION
+
+    def __post_init__(self):
+        if not isinstance(self.finger, Finger):
+            raise InvalidParameterError("finger", self.finger, "a Finger (Finger.from_urdf)")
+        if isinstance(self.edge, bool) or not isinstance(self.edge, (int, np.integer)) or self.edge < 0:
+            raise InvalidParameterError("edge", self.edge, "an edge index (an integer >= 0)")
+        object.__setattr__(self, "edge", int(self.edge))
+        if self.tip_clearance is not None:
+            object.__setattr__(self, "tip_clearance", as_positive_float("tip_clearance", self.tip_clearance,
+                                                                        allow_zero=True))
+        if not isinstance(self.friction, Friction):
+            raise InvalidParameterError("friction", self.friction, "a Friction (regrasp.Friction)")
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Everything a scenario file describes, built and validated."""
+
+    path: Path | None
+    name: str
+    description: str
+    polygon: ConvexPolygon
+    trajectory: Trajectory
+    contacts: tuple[FingerContact, ...]
+    gravity_in_hand: np.ndarray = field(default_factory=lambda: np.array([0.0, -9.81]))
+    samples: int = 401
+    geometry: Geometry = Geometry.IDEAL
+    study: Perturbation = Perturbation()
+
+    def check_geometry(self, geometry: Geometry | str) -> Geometry:
+        """``geometry`` as a :class:`~regrasp.envelope.finger_envelope.Geometry` every finger of this scenario can be planned
+        with: for ``urdf``, each finger's collision shapes (:func:`~regrasp.model.collision.checked_link_shapes`),
+        else a :class:`~regrasp.core.exceptions.ScenarioError` naming the finger's ``urdf`` key."""
+        try:
+            geometry = Geometry(geometry)
+        except ValueError:
+            raise InvalidParameterError("geometry", geometry, "'ideal' or 'urdf'") from None
+        if geometry is Geometry.URDF:
+            from .collision import checked_link_shapes, default_tip_clearance
+
+            try:
+                self.polygon.to_coal(1.0)
+            except PolygonError as exc:
+                raise ScenarioError(self.path or "<scenario>", "object.vertices",
+                                    f"{exc} (needed by the 'urdf' geometry)") from exc
+
+            for i, c in enumerate(self.contacts):
+                clearance = default_tip_clearance(c.finger) if c.tip_clearance is None else c.tip_clearance
+                try:
+                    checked_link_shapes(c.finger, clearance)
+                except FingerModelError as exc:
+                    raise ScenarioError(self.path or "<scenario>", f"fingers[{i}].urdf",
+                                        f"{exc} (needed by the 'urdf' geometry)") from exc
+        return geometry
+
+    @property
+    def friction(self) -> tuple[Friction, ...]:
+        """Each fingertip's friction (μ_s, μ_k [-]), in finger order."""
+        return tuple(c.friction for c in self.contacts)
+
+
+def _finite(value: int | float) -> bool:
+    """Whether a TOML number is a finite float (an integer too large for a float is not)."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
+class _Reader:
+    """Typed access to one TOML table with error messages that name the key."""
+
+    def __init__(self, path: Path, table: dict, prefix: str):
+        self.path, self.table, self.prefix = path, table, prefix
+        self.used: set[str] = set()
+
+    def key(self, name: str) -> str:
+        return f"{self.prefix}{name}"
+
+    def fail(self, name: str | None, expected: str) -> ScenarioError:
+        return ScenarioError(self.path, self.key(name) if name else self.prefix.rstrip(".") or None, expected)
+
+    def has(self, name: str) -> bool:
+        return name in self.table
+
+    def get(self, name: str, default: Any = ...) -> Any:
+        self.used.add(name)
+        if name not in self.table:
+            if default is ...:
+                near = difflib.get_close_matches(name, [k for k in self.table if isinstance(k, str)], n=1)
+                raise self.fail(name, "this key is required" + (f" (the table has {near[0]!r}: a typo?)" if near else ""))
+            return default
+        return self.table[name]
+
+    def number(self, name: str, default: Any = ...) -> float:
+        value = self.get(name, default)
+        if value is None:
+            return value
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not _finite(value):
+            raise self.fail(name, f"expected a finite number, got {short_repr(value)}")
+        return float(value)
+
+    def integer(self, name: str, default: Any = ...) -> int:
+        value = self.get(name, default)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.fail(name, f"expected an integer, got {value!r}")
+        return value
+
+    def string(self, name: str, default: Any = ..., choices: tuple[str, ...] | None = None) -> str:
+        value = self.get(name, default)
+        if not isinstance(value, str):
+            raise self.fail(name, f"expected a string, got {value!r}")
+        if choices is not None and value not in choices:
+            raise self.fail(name, f"expected one of {', '.join(repr(c) for c in choices)}, got {value!r}")
+        return value
+
+    def array(self, name: str, shape: tuple[int, ...], default: Any = ...) -> np.ndarray:
+        value = self.get(name, default)
+        want = "x".join("n" if s == -1 else str(s) for s in shape)
+        try:
+            arr = as_finite_array(self.key(name), value)
+        except InvalidParameterError as exc:
+            raise self.fail(name, f"expected an array of finite numbers of shape ({want}), got {short_repr(value)} "
+                                  f"({exc.expected})") from None
+        if arr.ndim != len(shape) or any(s not in (-1, a) for s, a in zip(shape, arr.shape)):
+            raise self.fail(name, f"expected an array of numbers of shape ({want}), got {short_repr(value)}")
+        return arr
+
+    def finish(self) -> None:
+        extra = sorted(set(self.table) - self.used)
+        if extra:
+            raise ScenarioError(self.path, self.key(extra[0]), "unknown key (check its spelling and section)")
+
+
+def _wrap(reader: _Reader, name: str | None, build):
+    """Run ``build()`` and turn a library error into a ScenarioError naming the key."""
+    try:
+        return build()
+    except ScenarioError:
+        raise
+    except RegraspError as exc:
+        param = getattr(exc, "name", None)
+        if isinstance(exc, InvalidParameterError) and param in reader.table:
+            name = param  # e.g. a negative mass is reported at object.mass
+        raise reader.fail(name, str(exc)) from exc
+
+
+def _object(path: Path, table: Any) -> ConvexPolygon:
+    if not isinstance(table, dict):
+        raise ScenarioError(path, "object", "expected a table [object]")
+    r = _Reader(path, table, "object.")
+    mass = r.number("mass", None)
+    inertia = r.number("inertia", None)
+    density = r.number("density", None)
+    if r.has("vertices"):
+        vertices = r.array("vertices", (-1, 2))
+        polygon = _wrap(r, "vertices", lambda: ConvexPolygon.from_vertices(
+            vertices, mass=mass, inertia=inertia, density=density))
+    elif r.has("width") or r.has("height"):
+        width, height = r.number("width"), r.number("height")
+        polygon = _wrap(r, "width", lambda: ConvexPolygon.rectangle(
+            width, height, mass=mass, inertia=inertia, density=density))
+    else:
+        raise r.fail("vertices", "expected 'vertices' (a list of [x, y]) or 'width' and 'height'")
+    r.finish()
+    return polygon
+
+
+def _trajectory(path: Path, table: Any) -> Trajectory:
+    if not isinstance(table, dict):
+        raise ScenarioError(path, "trajectory", "expected a table [trajectory]")
+    r = _Reader(path, table, "trajectory.")
+    kind = r.string("type", choices=("ellipse", "waypoints"))
+    if kind == "ellipse":
+        args = {k: r.number(k) for k in ("cx", "cy", "a", "b", "omega")}
+        args.update(beta0=r.number("beta0", 0.0), beta_a=r.number("beta_a", 0.0),
+                    t_start=r.number("t_start", 0.0), t_end=r.number("t_end", None))
+        traj = _wrap(r, None, lambda: EllipseTrajectory(**args))
+    else:
+        times = r.array("times", (-1,))
+        poses = r.array("poses", (-1, 3))
+        boundary = r.string("boundary", "natural", choices=("natural", "clamped", "periodic"))
+        unwrap = r.get("unwrap_angle", False)
+        if not isinstance(unwrap, bool):
+            raise r.fail("unwrap_angle", f"expected true or false, got {unwrap!r}")
+        traj = _wrap(r, "poses", lambda: WaypointTrajectory(times, poses, boundary=boundary, unwrap_angle=unwrap))
+    r.finish()
+    return traj
+
+
+def _friction(r: _Reader, default: Friction) -> Friction:
+    """A table's friction keys: ``mu`` (both coefficients), or ``mu_static`` and ``mu_kinetic``
+    together; ``default`` when it has none."""
+    has_mu, has_static, has_kinetic = r.has("mu"), r.has("mu_static"), r.has("mu_kinetic")
+    if has_mu and (has_static or has_kinetic):
+        raise r.fail("mu", "expected either 'mu' (both coefficients) or 'mu_static' and 'mu_kinetic', not both")
+    if has_static != has_kinetic:
+        given, missing = ("mu_static", "mu_kinetic") if has_static else ("mu_kinetic", "mu_static")
+        raise r.fail(given, f"expected '{given}' and '{missing}' together (or 'mu' for both)")
+    if not (has_mu or has_static):
+        return default
+    names = ("mu",) if has_mu else ("mu_static", "mu_kinetic")
+    values = [r.number(name) for name in names]
+    for name, value in zip(names, values):
+        if not value >= 0.0:
+            raise r.fail(name, f"expected a friction coefficient >= 0, got {value!r}")
+    if len(values) == 2 and values[1] > values[0]:
+        raise r.fail("mu_kinetic", f"expected a kinetic coefficient <= mu_static = {values[0]:g}, got {values[1]!r}")
+    return Friction(*values)
+
+
+def _fingers(path: Path, tables: Any, polygon: ConvexPolygon, friction: Friction) -> tuple[FingerContact, ...]:
+    if not isinstance(tables, list) or not tables or not all(isinstance(t, dict) for t in tables):
+        raise ScenarioError(path, "fingers", "expected one or more [[fingers]] tables")
+    contacts = []
+    names = set()
+    for i, table in enumerate(tables):
+        r = _Reader(path, table, f"fingers[{i}].")
+        name = r.string("name", f"finger{i + 1}")
+        if name in names:
+            raise r.fail("name", f"finger names must be unique; '{name}' is repeated")
+        names.add(name)
+        urdf = Path(r.string("urdf"))
+        if not urdf.is_absolute():
+            urdf = (path.parent / urdf).resolve()
+        problem = file_problem(urdf, "URDF file")
+        if problem is not None:
+            raise r.fail("urdf", f"{problem}: {urdf}")
+        base = r.array("base", (3,))
+        configuration = r.string("configuration", choices=("left", "right"))
+        edge = r.integer("edge")
+        if not 0 <= edge < polygon.n_vertices:
+            raise r.fail("edge", f"edge {edge} does not exist: the object has edges 0..{polygon.n_vertices - 1}")
+        clearance = r.number("tip_clearance", None)
+        if clearance is not None and clearance < 0.0:
+            raise r.fail("tip_clearance", f"expected a length >= 0 [m], got {clearance!r}")
+        own = _friction(r, friction)
+        finger = _wrap(r, "urdf", lambda: Finger.from_urdf(
+            urdf, base_in_hand=base, configuration=configuration, name=name))
+        r.finish()
+        contacts.append(FingerContact(finger, edge, clearance, own))
+    return tuple(contacts)
+
+
+def _study(path: Path, table: Any) -> Perturbation:
+    """The ``[study]`` table: a :class:`~regrasp.model.perturbation.Perturbation`'s fields by name."""
+    from dataclasses import fields
+
+    if not isinstance(table, dict):
+        raise ScenarioError(path, "study", "expected a table [study]")
+    r = _Reader(path, table, "study.")
+    values = {}
+    for f in fields(Perturbation):
+        if r.has(f.name):
+            values[f.name] = r.integer(f.name) if f.name in ("delay", "slip_delay") else r.number(f.name)
+    r.finish()
+    return _wrap(r, None, lambda: Perturbation(**values))
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario file; raises ScenarioError naming the file and key."""
+    if not isinstance(path, (str, Path)):
+        raise InvalidParameterError("path", path, "a scenario file's path (str or pathlib.Path)")
+    path = Path(path)
+    problem = file_problem(path, "scenario file")
+    if problem is not None:
+        raise ScenarioError(path, None, problem)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ScenarioError(path, None, f"not valid TOML: {exc}") from exc
+    top = _Reader(path, data, "")
+    name = top.string("name", path.stem)
+    description = top.string("description", "")
+    polygon = _object(path, top.get("object"))
+    trajectory = _trajectory(path, top.get("trajectory"))
+    hand_table = top.get("hand", {})
+    if not isinstance(hand_table, dict):
+        raise ScenarioError(path, "hand", "expected a table [hand]")
+    hand = _Reader(path, hand_table, "hand.")
+    gravity = hand.array("gravity", (2,), [0.0, -9.81])
+    friction = _friction(hand, _DEFAULT_FRICTION)
+    hand.finish()
+    contacts = _fingers(path, top.get("fingers"), polygon, friction)
+
+    planner_table = top.get("planner", {})
+    if not isinstance(planner_table, dict):
+        raise ScenarioError(path, "planner", "expected a table [planner]")
+    planner = _Reader(path, planner_table, "planner.")
+    samples = planner.integer("samples", 401)
+    if not 2 <= samples <= MAX_SAMPLES:
+        raise planner.fail("samples", f"expected an integer in [2, {MAX_SAMPLES}], got {short_repr(samples)}")
+    geometry = Geometry(planner.string("geometry", "ideal", choices=("ideal", "urdf")))
+    planner.finish()
+    study = _study(path, top.get("study", {}))
+    top.finish()
+    scenario = Scenario(
+        path=path,
+        name=name,
+        description=description,
+        polygon=polygon,
+        trajectory=trajectory,
+        contacts=contacts,
+        gravity_in_hand=gravity,
+        samples=samples,
+        geometry=geometry,
+        study=study,
+    )
+    scenario.check_geometry(geometry)
+    return scenario

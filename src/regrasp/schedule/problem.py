@@ -1,0 +1,330 @@
+r"""The regrasp planner's problem: its settings, and the lattice built from a scenario.
+
+:func:`build_problem` samples each contact's feasible envelope on a fine time grid, turns it into
+the lattice's envelope tables (admissible cells over each layer's window, with the planning buffer,
+and the proximity cost), and computes the force tables of every move vector from the force
+polytope (:mod:`regrasp.schedule.force_polytope`), as :mod:`regrasp.schedule.lattice` reads them. The
+method and its buffers are described in :mod:`regrasp.schedule.planner` and ``docs/derivations.md``
+("§4, planned ahead").
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..envelope.finger_envelope import FingerEnvelope, Geometry
+from ..core.exceptions import InvalidParameterError
+from .force_polytope import ForceGeometry, ForceLimits, force_vertices, xi_intervals
+from ..model.scenario import Scenario
+from .lattice import Lattice, motion_combos
+from ..core.validation import as_finite_array, as_positive_float
+
+if TYPE_CHECKING:
+    from ..core.contact import Friction
+    from ..core.trajectory import Trajectory
+
+__all__ = ["Problem", "RegraspSettings", "build_problem", "slide_ratios", "trajectory_period"]
+
+#: The largest force tables a problem may build [bytes] (four float32 tables per layer, cell of the
+#: other contacts and move vector: about 80 MiB for the three-finger paper scenario)
+_TABLE_BUDGET = 2 * 2**30
+
+
+@dataclass(frozen=True)
+class RegraspSettings:
+    """What the regrasp planner guarantees, and its resolution.
+
+    Attributes:
+        envelope_margin: Every contact stays this far inside its feasible set [m] (≥ half the
+            ``xi_resolution``, so that a one-cell move stays inside too).
+        cone_margin: Every fixed contact keeps μ_s f_n - |f_t| ≥ this [N].
+        f_min, f_max: Every contact's normal force within [f_min, f_max] [N].
+        max_slide_speed: Fastest slide [m/s]; with ``xi_resolution`` it sets the time step.
+        max_slide_acceleration: Largest slide acceleration [m/s²] (≥ max_slide_speed² /
+            xi_resolution: a slide's ramps fit in one time step).
+        xi_resolution: Cell size of the contact grid [m].
+        max_sliders: Most contacts sliding at once (None: min(m - 1, 2m - 3)).
+        comfort_margin: Envelope margin [m] above which a contact costs nothing (the objective's
+            third term; None: ``envelope_margin`` + 4 mm).
+        envelope_substeps: Envelope sub-samples per time step in the lattice's windows.
+        verify_substeps: Samples per time step of the planner's own verification.
+        periodic: Plan a periodic schedule (None: when the trajectory is periodic and its domain
+            covers a period).
+        geometry: Envelope geometry, ``"ideal"`` or ``"urdf"`` (None: the scenario's).
+        max_repairs: Re-plans after a failed verification before giving up.
+        period_candidates: Start states tried for a periodic schedule, in order: the middle and the end of
+            the best two-period path, then the free program's best end state.
+    """
+
+    envelope_margin: float = 1e-3
+    cone_margin: float = 0.1
+    f_min: float = 0.2
+    f_max: float = 20.0
+    max_slide_speed: float = 0.05
+    max_slide_acceleration: float = 5.0
+    xi_resolution: float = 1e-3
+    max_sliders: int | None = None
+    comfort_margin: float | None = None
+    envelope_substeps: int = 4
+    verify_substeps: int = 8
+    periodic: bool | None = None
+    geometry: str | None = None
+    max_repairs: int = 8
+    period_candidates: int = 3
+
+    def __post_init__(self):
+        for name in ("max_slide_speed", "max_slide_acceleration", "xi_resolution", "f_min", "f_max"):
+            as_positive_float(name, getattr(self, name))
+        for name in ("envelope_margin", "cone_margin"):
+            as_positive_float(name, getattr(self, name), allow_zero=True)
+        if self.comfort_margin is None:
+            object.__setattr__(self, "comfort_margin", self.envelope_margin + 4e-3)
+        as_positive_float("comfort_margin", self.comfort_margin)
+        ForceLimits(self.f_min, self.f_max, self.cone_margin)
+        if self.envelope_margin < 0.5 * self.xi_resolution:
+            raise InvalidParameterError("envelope_margin", self.envelope_margin,
+                                        f">= xi_resolution / 2 = {0.5 * self.xi_resolution:g} m")
+        if self.comfort_margin <= self.envelope_margin:
+            raise InvalidParameterError("comfort_margin", self.comfort_margin,
+                                        f"> envelope_margin = {self.envelope_margin:g} m")
+        if self.ramp > self.time_step * (1 + 1e-9):
+            raise InvalidParameterError(
+                "max_slide_acceleration", self.max_slide_acceleration,
+                f">= max_slide_speed^2 / xi_resolution = {self.max_slide_speed ** 2 / self.xi_resolution:g} m/s^2")
+        for name, least in (("envelope_substeps", 1), ("verify_substeps", 1), ("max_repairs", 0),
+                            ("period_candidates", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < least:
+                raise InvalidParameterError(name, value, f"an integer >= {least}")
+        if self.max_sliders is not None and (isinstance(self.max_sliders, bool) or not isinstance(self.max_sliders, int)
+                                             or self.max_sliders < 1):
+            raise InvalidParameterError("max_sliders", self.max_sliders, "an integer >= 1, or None")
+        if self.periodic not in (None, True, False):
+            raise InvalidParameterError("periodic", self.periodic, "True, False or None")
+        if self.geometry is not None:
+            try:
+                Geometry(self.geometry)
+            except ValueError:
+                raise InvalidParameterError("geometry", self.geometry, "'ideal', 'urdf' or None") from None
+
+    @property
+    def time_step(self) -> float:
+        """The lattice's nominal time step [s]: one cell at the fastest slide."""
+        return self.xi_resolution / self.max_slide_speed
+
+    @property
+    def ramp(self) -> float:
+        """A slide's acceleration time [s]."""
+        return self.max_slide_speed / self.max_slide_acceleration
+
+
+def trajectory_period(trajectory: Trajectory) -> float | None:
+    """The trajectory's period [s] if it is periodic (an ellipse, or waypoints with a periodic
+    boundary), else None."""
+    period = getattr(trajectory, "period", None)
+    if period is not None and math.isfinite(period) and period > 0:
+        return float(period)
+    if getattr(trajectory, "boundary", None) == "periodic":
+        return trajectory.t_end - trajectory.t_start
+    return None
+
+
+@dataclass(eq=False)
+class Problem:
+    """A scenario's planning problem on its lattice (built by :func:`build_problem`).
+
+    Attributes (besides the scenario's): ``times`` the layers [s], ``dt`` the step [s], ``grids``
+    the contact cells [m], ``envelopes`` per contact, ``sub_samples`` its envelope samples at the
+    sub-sample times ``sub_times``, ``lattice``, ``limits`` (the planning limits, with buffers).
+    """
+
+    scenario: Scenario
+    settings: RegraspSettings
+    names: tuple
+    friction: tuple
+    periodic: bool
+    times: np.ndarray
+    dt: float
+    grids: list
+    envelopes: list
+    sub_times: np.ndarray
+    sub_samples: list
+    geometry: ForceGeometry
+    limits: ForceLimits
+    envelope_buffer: float
+    lattice: Lattice
+    start_cells: np.ndarray | None
+
+
+def _cell_margins(sample, grid: np.ndarray) -> np.ndarray:
+    """Each cell's envelope margin [m] in one sample (EnvelopeSample.margin, vectorised)."""
+    out = np.full(len(grid), -np.inf)
+    for lo, hi in sample.feasible:
+        out = np.maximum(out, np.minimum(grid - lo, hi - grid))
+    return out
+
+
+def slide_ratios(direction: Iterable[int], friction: Iterable[Friction], breaking: int | None = None
+                 ) -> list[float | None]:
+    """Per contact None (fixed) or the signed force ratio τ/λ = s μ_k (s μ_s for ``breaking``)."""
+    return [None if d == 0 else d * (f.static if i == breaking else f.kinetic)
+            for i, (d, f) in enumerate(zip(direction, friction))]
+
+
+def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: float | None = None,
+                  xi0: ArrayLike | None = None, t_end: float | None = None) -> Problem:
+    """The lattice of the module docstring for ``scenario`` (``xi0``: start positions [m], which then
+    lie on the grid; ``start_time``/``t_end``: the horizon [s], default the trajectory's domain or,
+    periodic, its first period)."""
+    traj = scenario.trajectory
+    contacts = scenario.contacts
+    m = len(contacts)
+    if m < 2:
+        raise InvalidParameterError("scenario", scenario.name, "at least two fingers (2m >= 3 + p)")
+    t0 = traj.t_start if start_time is None else as_finite_array("start_time", start_time, ()).item()
+    t1 = traj.t_end if t_end is None else as_finite_array("t_end", t_end, ()).item()
+    if not traj.t_start <= t0 < t1 <= traj.t_end + 1e-9:
+        raise InvalidParameterError("start_time", (t0, t1), f"a horizon inside [{traj.t_start}, {traj.t_end}] s")
+    period = trajectory_period(traj)
+    periodic = settings.periodic
+    if periodic is None:
+        periodic = period is not None and t1 - t0 >= period - 1e-9
+    if periodic:
+        if period is None or t1 - t0 < period - 1e-9:
+            raise InvalidParameterError("periodic", True, "a periodic trajectory whose domain covers a period")
+        t1 = t0 + period
+    n_steps = max(2, int(math.floor((t1 - t0) / settings.time_step + 1e-9)))
+    dt = (t1 - t0) / n_steps
+    times = t0 + dt * np.arange(n_steps + 1)
+    h = settings.xi_resolution
+    edges = [scenario.polygon.edge(c.edge) for c in contacts]
+    start = None if xi0 is None else as_finite_array("xi0", xi0, (m,))
+    grids = []
+    for i, e in enumerate(edges):
+        anchor = 0.0 if start is None else float(start[i])
+        lo, hi = e.xi_range
+        if start is not None and not lo - 1e-12 <= anchor <= hi + 1e-12:
+            raise InvalidParameterError("xi0", start.tolist(), f"positions on the edges ({contacts[i].finger.name}: "
+                                        f"[{lo:.6g}, {hi:.6g}] m)")
+        cells = np.arange(math.ceil((lo - anchor) / h - 1e-9), math.floor((hi - anchor) / h + 1e-9) + 1)
+        grids.append(anchor + h * cells)
+    start_cells = None if start is None else np.array([int(np.argmin(np.abs(g - x))) for g, x in zip(grids, start)])
+    geometry = scenario.check_geometry(settings.geometry or scenario.geometry.value)
+    envelopes = [FingerEnvelope(c.finger, scenario.polygon, c.edge, geometry=geometry, tip_clearance=c.tip_clearance)
+                 for c in contacts]
+    q = settings.envelope_substeps
+    sub_times = t0 + (dt / q) * np.arange(n_steps * q + 1)
+    poses = traj.pose(np.clip(sub_times, traj.t_start, traj.t_end))
+    sub_samples = [[env.at(pose, float(t)) for t, pose in zip(sub_times, poses)] for env in envelopes]
+    friction = tuple(c.friction for c in contacts)
+    p_max = min(m - 1, 2 * m - 3) if settings.max_sliders is None else min(settings.max_sliders, m - 1, 2 * m - 3)
+    combos = motion_combos(m, p_max)
+    sizes = sorted(len(g) for g in grids)
+    table_bytes = 4 * 4 * (n_steps + 1) * int(np.prod(sizes[:-1])) * len(combos)  # lo, hi, mid lo, mid hi
+    if table_bytes > _TABLE_BUDGET:
+        raise InvalidParameterError(
+            "scenario", scenario.name,
+            f"a lattice whose force tables fit in {_TABLE_BUDGET / 2**30:.0f} GiB: {m} contacts with "
+            f"{' x '.join(map(str, sizes))} cells and {len(combos)} move vectors over {n_steps + 1} layers need "
+            f"{table_bytes / 2**30:.1f} GiB (coarsen xi_resolution, or lower max_sliders)")
+    ramp = settings.ramp
+    speed = h / dt
+    envelope_buffer = speed * ramp / 8.0 + 1e-5
+    lattice_env, proximity = _envelope_tables(sub_samples, grids, q, n_steps, settings, envelope_buffer, periodic)
+    geo = ForceGeometry.of(scenario.polygon, [c.edge for c in contacts], mass=scenario.polygon.mass,
+                           inertia=scenario.polygon.inertia, gravity=scenario.gravity_in_hand)
+    sample = traj.sample(np.clip(times, traj.t_start, traj.t_end))
+    jerk = np.abs(np.diff(sample.acceleration[:, :2], axis=0)).max(initial=0.0)
+    limits = ForceLimits(settings.f_min, settings.f_max,
+                         settings.cone_margin * 1.02 + geo.mass * jerk + 1e-4)
+    axis = int(np.argmax([len(g) for g in grids]))
+    middle = traj.sample(np.clip(np.append(times[0], 0.5 * (times[1:] + times[:-1])), traj.t_start, traj.t_end))
+    early = traj.sample(np.clip(times - 0.5 * ramp, traj.t_start, traj.t_end))
+    lo, hi, blo, bhi, slots, mid_lo, mid_hi = _force_tables(geo, sample, middle, early, 0.5 * ramp / dt, combos,
+                                                            friction, limits, grids, axis)
+    rest_only = np.zeros(n_steps + 1, dtype=bool)
+    rest_only[[0, 1, n_steps]] = True
+    move_cost = 0.05
+    lattice = Lattice(times, grids, combos, lattice_env, proximity, axis, lo, hi, mid_lo, mid_hi, blo, bhi, slots,
+                      rest_only,
+                      slide_cost=1.0 + (n_steps + 1) * m * (1.0 + move_cost), move_cost=move_cost)
+    return Problem(scenario, settings, tuple(c.finger.name for c in contacts), friction, bool(periodic), times, dt,
+                   grids, envelopes, sub_times, sub_samples, geo, limits, envelope_buffer, lattice, start_cells)
+
+
+def _envelope_tables(sub_samples, grids, q, n_steps, settings, buffer, periodic: bool):
+    """(admissible, proximity) per layer, contact and cell over each layer's window [t_{k-1}, t_{k+1}]
+    (wrapped around the period's ends when ``periodic``: the first and the last layer are one time)."""
+    m, n_max = len(grids), max(len(g) for g in grids)
+    ok = np.zeros((n_steps + 1, m, n_max), dtype=bool)
+    proximity = np.ones((n_steps + 1, m, n_max))
+    em, comfort = settings.envelope_margin, settings.comfort_margin
+    for i, grid in enumerate(grids):
+        margins = np.array([_cell_margins(s, grid) for s in sub_samples[i]])  # (sub-samples, cells)
+        windows = [margins[max(0, (k - 1) * q):min(n_steps * q, (k + 1) * q) + 1].min(axis=0)
+                   for k in range(n_steps + 1)]
+        if periodic:
+            windows[0] = windows[n_steps] = np.minimum(windows[0], windows[n_steps])
+        for k, window in enumerate(windows):
+            ok[k, i, :len(grid)] = window >= em + buffer
+            proximity[k, i, :len(grid)] = np.clip((comfort - window) / (comfort - em), 0.0, 1.0)
+    return ok, proximity
+
+
+def _force_tables(geo, sample, middle, early, lead: float, combos, friction, limits, grids, axis):
+    """The lattice's interval tables (float32): the modes at the layers; for two or more sliders at
+    each interval's middle (``middle``: the trajectory there, layer k's entry for the interval ending
+    at it) with the sliders half a cell back; and where μ_s > μ_k the break-away of each starting
+    contact, both at the layer and where it really starts, ``early`` (the trajectory half a ramp
+    before the layer) with the other sliders ``lead`` cells back."""
+    m = len(grids)
+    n_layers = len(sample.pose)
+    others = np.array(list(itertools.product(*[grids[i] for i in range(m) if i != axis]))).reshape(-1, m - 1)
+    mu_s = np.array([f.static for f in friction])
+    M = len(combos)
+    h = grids[0][1] - grids[0][0] if len(grids[0]) > 1 else 0.0
+    columns = [i for i in range(m) if i != axis]
+
+    def table(ratios, smp=sample, shift=None):
+        """(lo, hi) per layer and cell of the others, with the positions ``shift`` [m] (m,) back."""
+        grid = others if shift is None else others - np.array([shift[i] for i in columns])
+        fv = force_vertices(geo, smp.pose[:, 2], smp.acceleration, ratios, mu_s, limits)
+        out = np.empty((2, n_layers, len(others)), dtype=np.float32)
+        back = 0.0 if shift is None else shift[axis]  # the axis position x - back must be inside
+        for k in range(n_layers):
+            lo, hi = xi_intervals(*fv.at(k), axis, grid)
+            out[0, k], out[1, k] = lo + back, hi + back
+        return out
+
+    lo = np.empty((n_layers, len(others), M), dtype=np.float32)
+    hi = np.empty_like(lo)
+    mid_lo = np.full_like(lo, -np.inf)
+    mid_hi = np.full_like(lo, np.inf)
+    for mu, d in enumerate(combos):
+        lo[:, :, mu], hi[:, :, mu] = table(slide_ratios(d, friction))
+        if np.count_nonzero(d) >= 2:
+            mid_lo[:, :, mu], mid_hi[:, :, mu] = table(slide_ratios(d, friction), middle, 0.5 * h * np.asarray(d))
+    needs = np.array([[d[i] != 0 and friction[i].static > friction[i].kinetic + 1e-12 for i in range(m)]
+                      for d in combos])
+    slots = np.full((M, m), -1, dtype=np.int64)
+    blo = bhi = None
+    if needs.any():
+        pairs = list(zip(*np.nonzero(needs)))
+        blo = np.empty((n_layers, len(others), len(pairs)), dtype=np.float32)
+        bhi = np.empty_like(blo)
+        for slot, (mu, i) in enumerate(pairs):
+            slots[mu, i] = slot
+            ratios = slide_ratios(combos[mu], friction, breaking=int(i))
+            at_layer = table(ratios)
+            others_back = lead * h * np.where(np.arange(m) == i, 0, combos[mu])
+            real = table(ratios, early, others_back)
+            blo[:, :, slot] = np.maximum(at_layer[0], real[0])
+            bhi[:, :, slot] = np.minimum(at_layer[1], real[1])
+    return lo, hi, blo, bhi, slots, mid_lo, mid_hi

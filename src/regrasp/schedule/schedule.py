@@ -1,0 +1,327 @@
+r"""A regrasp schedule: where each contact is, and which slides take it there, over a trajectory.
+
+The planner (:func:`~regrasp.schedule.planner.plan_regrasps`) returns a :class:`RegraspSchedule`:
+each contact's desired position :math:`\xi_d(t)`, :math:`\dot\xi_d`, :math:`\ddot\xi_d` on its edge,
+the slides that move it (:class:`Slide`), and along it, per sample, each contact's envelope margin,
+cone margin and normal force. Between slides a contact is fixed (at rest on the object).
+
+**A slide's profile** moves a contact from ``start_xi`` to ``end_xi`` in one direction with a
+trapezoidal speed: from rest, a constant acceleration :math:`v/r` for the ramp time r, a cruise at
+:math:`v = |\Delta\xi| / (T - r)`, and the mirror-image stop, at rest again at ``end``
+(T = ``end - start``). Position and velocity are continuous; the speed never exceeds v and the
+acceleration never exceeds :math:`v / r`. With :math:`u = t - t_{start}` and s the direction:
+
+.. math:: \xi(t) = \xi_0 + s \begin{cases} v u^2 / (2r) & u < r \\ v (u - r/2) & r \le u \le T - r \\
+          |\Delta\xi| - v (T - u)^2 / (2r) & u > T - r \end{cases}
+
+A **periodic** schedule covers one period of a periodic trajectory and ends where it starts, so
+:meth:`RegraspSchedule.at` repeats it for any number of periods.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..core.exceptions import InvalidParameterError, RegraspError
+
+__all__ = ["NoScheduleError", "RegraspSchedule", "ScheduleLimit", "ScheduleSample", "Slide", "slides_at"]
+
+
+@dataclass(frozen=True)
+class Slide:
+    """One slide of one contact.
+
+    Attributes:
+        contact: Index of the contact (finger order).
+        name: Its finger's name.
+        direction: +1 (along the edge's ξ) or -1.
+        start: When the contact starts moving [s].
+        end: When it is at rest again [s].
+        start_xi: ξ at ``start`` [m].
+        end_xi: ξ at ``end`` [m].
+        ramp: Acceleration and deceleration time r [s] (the profile of the module docstring).
+    """
+
+    contact: int
+    name: str
+    direction: int
+    start: float
+    end: float
+    start_xi: float
+    end_xi: float
+    ramp: float
+
+    @property
+    def duration(self) -> float:
+        """end - start [s]."""
+        return self.end - self.start
+
+    @property
+    def speed(self) -> float:
+        """Cruise speed v [m/s]."""
+        return abs(self.end_xi - self.start_xi) / (self.duration - self.ramp)
+
+    @property
+    def acceleration(self) -> float:
+        """Largest |ξ̈| [m/s²] (during the ramps)."""
+        return self.speed / self.ramp
+
+    def profile(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(ξ, ξ̇, ξ̈) at times ``t`` [s] (arrays); constant outside [start, end]."""
+        t = np.asarray(t, dtype=float)
+        T, r, v, s = self.duration, self.ramp, self.speed, float(self.direction)
+        u = np.clip(t - self.start, 0.0, T)
+        distance = abs(self.end_xi - self.start_xi)
+        ramp_up, ramp_down = u < r, u > T - r
+        travelled = np.where(ramp_up, v * u * u / (2 * r),
+                             np.where(ramp_down, distance - v * (T - u) ** 2 / (2 * r), v * (u - r / 2)))
+        speed = np.where(ramp_up, v * u / r, np.where(ramp_down, v * (T - u) / r, v))
+        accel = np.where(ramp_up, v / r, np.where(ramp_down, -v / r, 0.0))
+        moving = (t > self.start) & (t < self.end)
+        return self.start_xi + s * travelled, np.where(moving, s * speed, 0.0), np.where(moving, s * accel, 0.0)
+
+    def profile_at(self, t: float) -> tuple[float, float, float]:
+        """:meth:`profile` at one time ``t`` [s], in floats (hot paths: numpy's per-call cost dominates)."""
+        T, r, v, s = self.duration, self.ramp, self.speed, float(self.direction)
+        u = min(max(t - self.start, 0.0), T)
+        if u < r:
+            travelled, speed, accel = v * u * u / (2 * r), v * u / r, v / r
+        elif u > T - r:
+            distance = abs(self.end_xi - self.start_xi)
+            travelled, speed, accel = distance - v * (T - u) ** 2 / (2 * r), v * (T - u) / r, -v / r
+        else:
+            travelled, speed, accel = v * (u - r / 2), v, 0.0
+        if self.start < t < self.end:
+            return self.start_xi + s * travelled, s * speed, s * accel
+        return self.start_xi + s * travelled, 0.0, 0.0
+
+    def to_json_dict(self) -> dict:
+        return {"contact": self.name, "direction": self.direction, "start": self.start, "end": self.end,
+                "from": self.start_xi, "to": self.end_xi}
+
+
+@dataclass(frozen=True)
+class ScheduleSample:
+    """The schedule at one time or at an array of times (``at``).
+
+    Attributes:
+        xi: ξ_d per contact [m], (m,) or (n, m).
+        xi_dot: ξ̇_d [m/s].
+        xi_ddot: ξ̈_d [m/s²].
+        direction: Sliding direction per contact: 0 fixed, ±1 sliding (int).
+    """
+
+    xi: np.ndarray
+    xi_dot: np.ndarray
+    xi_ddot: np.ndarray
+    direction: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class RegraspSchedule:
+    """A planned regrasp schedule (module docstring).
+
+    Attributes:
+        names: Finger names (contact order).
+        edges: Contact edge of each finger.
+        t_start, t_end: The planned horizon [s] (one period when ``periodic``).
+        periodic: Whether the schedule ends where it starts and repeats with period ``t_end - t_start``.
+        xi_start: Each contact's position at ``t_start`` [m], (m,).
+        slides: The slides, by start time.
+        times: Sample times [s], (k,), over the horizon (the planner's time step).
+        xi, xi_dot, xi_ddot: ξ_d and its rates at the samples, (k, m) [m, m/s, m/s²].
+        sliding: Sliding direction at the samples (0 fixed, ±1), (k, m) int.
+        envelope_margin: Each contact's distance to the nearest bound of its feasible set [m], (k, m).
+        cone_margin: Each fixed contact's μ_s f_n - |f_t| [N] in the force system of ``normal_force``
+            (NaN at sliding contacts, which are on their kinetic cone edge), (k, m).
+        normal_force: Normal forces [N] of the force system that keeps the fixed contacts deepest in
+            their cones (the largest smallest cone margin), with the least squeeze among those, (k, m).
+        required_envelope_margin, required_cone_margin: The margins the planner guaranteed [m], [N].
+        min_envelope_margin: Smallest envelope margin [m] on the planner's verification grid (finer
+            than ``times``), with when [s] and which contact (``min_envelope_margin_at``).
+        min_cone_margin: Smallest cone margin [N] of a fixed contact over ``times``, when and which.
+        planning_seconds: Wall time of planning [s].
+        slides_lower_bound: The fewest slides any schedule over the horizon needs with a free start
+            and end (a periodic schedule can need more), or None.
+    """
+
+    names: tuple[str, ...]
+    edges: tuple[int, ...]
+    t_start: float
+    t_end: float
+    periodic: bool
+    xi_start: np.ndarray
+    slides: tuple[Slide, ...]
+    times: np.ndarray
+    xi: np.ndarray
+    xi_dot: np.ndarray
+    xi_ddot: np.ndarray
+    sliding: np.ndarray
+    envelope_margin: np.ndarray
+    cone_margin: np.ndarray
+    normal_force: np.ndarray
+    required_envelope_margin: float
+    required_cone_margin: float
+    min_envelope_margin: float
+    min_envelope_margin_at: tuple[float, str]
+    min_cone_margin: float
+    min_cone_margin_at: tuple[float, str]
+    planning_seconds: float
+    slides_lower_bound: int | None = None
+
+    @property
+    def m(self) -> int:
+        return len(self.names)
+
+    @property
+    def period(self) -> float | None:
+        """The period [s] of a periodic schedule, else None."""
+        return self.t_end - self.t_start if self.periodic else None
+
+    def slides_per_contact(self) -> dict[str, int]:
+        """Number of slides of each contact over the horizon."""
+        return {name: sum(1 for s in self.slides if s.contact == i) for i, name in enumerate(self.names)}
+
+    def local_time(self, t: np.ndarray) -> np.ndarray:
+        """Times ``t`` [s] mapped into the horizon: modulo the period when periodic, else clipped to it."""
+        if self.periodic:
+            return self.t_start + np.mod(t - self.t_start, self.t_end - self.t_start)
+        return np.clip(t, self.t_start, self.t_end)
+
+    def local_time_at(self, t: float) -> float:
+        """:meth:`local_time` of one time [s], in floats."""
+        if self.periodic:
+            return self.t_start + (t - self.t_start) % (self.t_end - self.t_start)
+        return min(max(t, self.t_start), self.t_end)
+
+    def at(self, t: ArrayLike) -> ScheduleSample:
+        """ξ_d, ξ̇_d, ξ̈_d and the sliding directions at time(s) ``t`` [s]; a periodic schedule repeats
+        past ``t_end``, another holds its last positions (and its first before ``t_start``)."""
+        if type(t) is float and math.isfinite(t):  # one time: in floats (the supervisor's every step)
+            return self._at_scalar(t)
+        arr = np.asarray(t, dtype=float)
+        if arr.ndim > 1 or not np.all(np.isfinite(arr)):
+            raise InvalidParameterError("t", t, "a finite time [s] or a 1-D array of them")
+        if arr.ndim == 0:
+            return self._at_scalar(float(arr))
+        return slides_at(self.xi_start, self.slides, self.local_time(arr))
+
+    def _at_scalar(self, t: float) -> ScheduleSample:
+        """:meth:`at` one finite time, in floats (:func:`slides_at` for one time)."""
+        local = self.local_time_at(t)
+        m = len(self.names)
+        xi, xi_dot, xi_ddot, direction = self.xi_start.tolist(), [0.0] * m, [0.0] * m, [0] * m
+        for s in self.slides:  # the latest slide that has started sets the position
+            if local >= s.start:
+                xi[s.contact], v, a = s.profile_at(local)
+                if s.start < local < s.end:
+                    xi_dot[s.contact], xi_ddot[s.contact], direction[s.contact] = v, a, s.direction
+        return ScheduleSample(np.array(xi), np.array(xi_dot), np.array(xi_ddot), np.array(direction))
+
+    def to_json_dict(self) -> dict:
+        """The ``"schedule"`` object of ``regrasp plan --regrasp --json``."""
+        def num(x):
+            return None if not np.isfinite(x) else float(x)
+
+        return {
+            "found": True,
+            "reason": None,
+            "periodic": self.periodic,
+            "t_start": self.t_start,
+            "t_end": self.t_end,
+            "names": list(self.names),
+            "times": self.times.tolist(),
+            "xi": self.xi.tolist(),
+            "xi_dot": self.xi_dot.tolist(),
+            "xi_ddot": self.xi_ddot.tolist(),
+            "sliding": (self.sliding != 0).tolist(),
+            "direction": self.sliding.tolist(),
+            "slides": [s.to_json_dict() for s in self.slides],
+            "slides_per_contact": self.slides_per_contact(),
+            "envelope_margin": self.envelope_margin.tolist(),
+            "cone_margin": [[num(x) for x in row] for row in self.cone_margin],
+            "normal_force": self.normal_force.tolist(),
+            "required_envelope_margin": self.required_envelope_margin,
+            "required_cone_margin": self.required_cone_margin,
+            "min_envelope_margin": num(self.min_envelope_margin),
+            "min_envelope_margin_at": {"time": self.min_envelope_margin_at[0],
+                                       "contact": self.min_envelope_margin_at[1]},
+            "min_cone_margin": num(self.min_cone_margin),
+            "min_cone_margin_at": {"time": self.min_cone_margin_at[0], "contact": self.min_cone_margin_at[1]},
+            "planning_seconds": self.planning_seconds,
+            "slides_lower_bound": self.slides_lower_bound,
+        }
+
+
+def slides_at(xi_start: np.ndarray, slides: Iterable[Slide], t: np.ndarray) -> ScheduleSample:
+    """The contacts' (ξ, ξ̇, ξ̈, direction) at times ``t`` (n,) [s] from their positions before any
+    slide, ``xi_start`` (m,) [m], and the ``slides`` in start order."""
+    n, m = len(t), len(xi_start)
+    xi = np.tile(np.asarray(xi_start, dtype=float), (n, 1))
+    xi_dot, xi_ddot = np.zeros((n, m)), np.zeros((n, m))
+    direction = np.zeros((n, m), dtype=int)
+    for s in slides:  # the latest slide that has started sets the position
+        started = t >= s.start
+        if not started.any():
+            continue
+        x, v, a = s.profile(t)
+        xi[started, s.contact] = x[started]
+        moving = (t > s.start) & (t < s.end)
+        xi_dot[moving, s.contact] = v[moving]
+        xi_ddot[moving, s.contact] = a[moving]
+        direction[moving, s.contact] = s.direction
+    return ScheduleSample(xi, xi_dot, xi_ddot, direction)
+
+
+class ScheduleLimit(str, Enum):
+    """What ran out when no schedule exists."""
+
+    ENVELOPE = "envelope"    #: a contact's feasible set (less the margin) is empty
+    SPEED = "speed"          #: the feasible sets move faster than slides can follow
+    FORCES = "forces"        #: no force system allows the slides the envelopes require
+    PERIODIC = "periodic"    #: schedules exist, but none ends a period where it starts
+    VERIFICATION = "verification"  #: the planner's schedules keep failing its fine-grid check
+
+
+class NoScheduleError(RegraspError):
+    """No regrasp schedule satisfies the constraints.
+
+    Attributes:
+        latest_time: The latest time [s] any admissible state survives.
+        limit: The constraint that ran out (:class:`ScheduleLimit`).
+        contacts: Names of the contacts concerned.
+        reason: The diagnosis, in words (the message).
+        rule: For two fingers on parallel edges, the slide rule that forbids the needed slide, or None.
+        partial: The best schedule up to ``latest_time`` (not periodic), or None.
+    """
+
+    def __init__(self, latest_time: float, limit: ScheduleLimit, contacts: tuple[str, ...], reason: str,
+                 rule: str | None = None, partial: RegraspSchedule | None = None):
+        self.latest_time = float(latest_time)
+        self.limit = ScheduleLimit(limit)
+        self.contacts = tuple(contacts)
+        self.reason = reason
+        self.rule = rule
+        self.partial = partial
+        super().__init__(f"no regrasp schedule: {reason}" + (f"; {rule}" if rule else ""))
+
+    def to_json_dict(self) -> dict:
+        return {"found": False, "reason": str(self), "limit": self.limit.value, "latest_time": self.latest_time,
+                "contacts": list(self.contacts), "rule": self.rule,
+                "partial": None if self.partial is None else self.partial.to_json_dict()}
+
+
+def first_minimum(values: np.ndarray, times: np.ndarray, names: Sequence[str], mask: np.ndarray | None = None
+                  ) -> tuple[float, tuple[float, str]]:
+    """The smallest entry of ``values`` (k, m) (where ``mask``), and (its time, its contact's name)."""
+    v = np.where(np.isfinite(values) if mask is None else mask & np.isfinite(values), values, np.inf)
+    if not np.isfinite(v).any():
+        return math.inf, (math.nan, "")
+    k, i = np.unravel_index(int(np.argmin(v)), v.shape)
+    return float(v[k, i]), (float(times[k]), names[i])

@@ -1,0 +1,354 @@
+r"""Robustness studies: many seeded rollouts of one scenario under model errors and noise, across processes or Ray.
+
+A study plans the regrasp schedule once (with the model), then runs ``runs`` rollouts. Run :math:`i` draws its
+plant's errors, and seeds its sensor and actuator noise, from ``numpy.random.SeedSequence(seed).spawn(runs)[i]``
+(:func:`~regrasp.model.perturbation.draw_runs`; what is perturbed: :mod:`regrasp.model.perturbation`). The results are
+the same however many workers run them, in whatever order, on processes or on Ray.
+
+Where runs go: this process (``workers=1``), a pool of ``workers`` spawned processes, or a Ray cluster
+(``ray_address``: ``"local"`` starts one on this machine, anything else is handed to ``ray.init(address=...)``).
+A job carries the scenario itself (pickled: the fingers' models, not file paths), so Ray workers on other
+machines need no copy of the files.
+
+The success rate comes with a Wilson score interval (:func:`wilson_interval`).
+"""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import time
+from collections import Counter
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING
+
+from ..core.exceptions import InvalidParameterError, MissingDependencyError
+from ..model.perturbation import MAX_RUNS, Perturbation, RunDraw, draw_runs
+from ..core.validation import as_finite_float, as_integer, expect_type
+
+if TYPE_CHECKING:
+    from ..plants.mujoco.mjcf import MujocoSettings
+    from ..envelope.planner import PlanResult
+    from ..rollout.build import Rollout
+    from ..model.scenario import Scenario
+    from ..schedule.schedule import RegraspSchedule
+    from ..supervisor.supervisor import SupervisorSettings
+
+__all__ = ["MAX_RUNS", "Perturbation", "RunDraw", "RunOutcome", "StudyResult", "build_run", "draw_runs", "run_once",
+           "run_study", "sweep_study", "wilson_interval"]
+
+#: z of a two-sided 95 % interval.
+Z_95 = 1.959963984540054
+
+
+def wilson_interval(successes: int, runs: int, z: float = Z_95) -> tuple[float, float]:
+    r"""The Wilson score interval of a binomial proportion :math:`\hat p = k / n`:
+
+    .. math:: \frac{\hat p + z^2 / 2n \pm z \sqrt{\hat p (1 - \hat p) / n + z^2 / 4n^2}}{1 + z^2 / n}
+
+    (E. B. Wilson, 1927). Unlike the normal approximation it stays inside [0, 1] and is not empty at
+    :math:`k = 0` or :math:`k = n`. The interval always contains :math:`\hat p` (exactly: rounding
+    alone would leave the upper end a hair below 1 at :math:`k = n`, or the lower above 0 at :math:`k = 0`).
+    """
+    k, n = as_integer("successes", successes), as_integer("runs", runs, 1)
+    if n > 2**53:
+        raise InvalidParameterError("runs", runs, "a count of at most 2**53 (exact as a float)")
+    if k > n:
+        raise InvalidParameterError("successes", successes, f"at most runs = {n}")
+    z = as_finite_float("z", z)
+    p = k / n
+    denominator = 1.0 + z * z / n
+    centre = (p + z * z / (2 * n)) / denominator
+    half = z * math.sqrt(p * (1.0 - p) / n + z * z / (4 * n * n)) / denominator
+    return min(p, max(0.0, centre - half)), max(p, min(1.0, centre + half))
+
+
+@dataclass(frozen=True)
+class RunOutcome:
+    """What one run of a study did.
+
+    Attributes:
+        draw: Its seed and drawn model errors.
+        success: It reached the end without a failure.
+        failure_kind: The :class:`~regrasp.core.events.FailureKind` value, or None.
+        failure_time: When it failed [s], or None.
+        failure_contact: The finger the failure names, or None.
+        min_cone_margin: Its smallest cone margin of a contact held fixed [N].
+        min_envelope_margin: Its smallest envelope margin [m].
+        max_object_error: Its largest object position error after the transient [m] (None: the run ended
+            before the transient did).
+        max_orientation_error: Its largest orientation error after the transient [rad] (None: likewise).
+        slides: Its slides, all fingers.
+        replans: Its re-plans.
+        wall_seconds: Its wall time [s].
+    """
+
+    draw: RunDraw
+    success: bool
+    failure_kind: str | None
+    failure_time: float | None
+    failure_contact: str | None
+    min_cone_margin: float
+    min_envelope_margin: float
+    max_object_error: float | None
+    max_orientation_error: float | None
+    slides: int
+    replans: int
+    wall_seconds: float
+
+
+def _finite_or_none(x: float) -> float | None:
+    return None if math.isnan(x) else float(x)
+
+
+def build_run(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
+              perturbation: Perturbation, settings: SupervisorSettings | None = None, plant: str = "project",
+              mujoco_settings: MujocoSettings | None = None, plan: PlanResult | None = None) -> Rollout:
+    """One run of a study, ready to run: the rollout of ``scenario`` on a plant (``plant``, ``mujoco_settings``:
+    as :func:`~regrasp.rollout.build.build_rollout` takes them) with ``draw``'s errors and the noise of
+    ``perturbation`` seeded by ``draw.seed``, supervised with ``settings`` (None: the rollout's default,
+    :meth:`~regrasp.supervisor.supervisor.SupervisorSettings.robust` told the actuation delay). Run it with a recorder to
+    look at a failed run on a rerun timeline (``regrasp study --replay I --rrd FILE``). ``plan``: the scenario's
+    envelope plan, if computed already (a study computes it once for all its runs)."""
+    from ..rollout.build import build_rollout
+
+    return build_rollout(scenario, duration=duration, schedule=schedule, settings=settings, plant=plant,
+                         mujoco_settings=mujoco_settings, plant_mass_scale=draw.mass_scale,
+                         plant_mu_scale=draw.mu_scale, plant_inertia_scale=draw.inertia_scale,
+                         plant_link_mass_scale=draw.link_mass_scale, plant_mu_kinetic_scale=draw.mu_kinetic_scale,
+                         plant_xi_offset=draw.xi_offset or None, sensor_noise=perturbation.sensor_noise(),
+                         actuator_noise=perturbation.actuator_noise(), seed=draw.seed, plan=plan)
+
+
+def run_once(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
+             perturbation: Perturbation, settings: SupervisorSettings | None = None, plant: str = "project",
+             mujoco_settings: MujocoSettings | None = None, plan: PlanResult | None = None) -> RunOutcome:
+    """:func:`build_run`'s rollout, run: what it did."""
+    r = build_run(scenario, draw, schedule, duration, perturbation, settings, plant, mujoco_settings, plan).run(
+        interruptible=False)
+    f = r.failure
+    return RunOutcome(draw, r.success, None if f is None else f.kind.value, None if f is None else f.time,
+                      None if f is None else f.contact, r.min_cone_margin, r.min_envelope_margin,
+                      _finite_or_none(r.max_object_error_after_transient),
+                      _finite_or_none(r.max_orientation_error_after_transient), sum(r.regrasps.values()), r.replans,
+                      r.wall_seconds)
+
+
+@dataclass(frozen=True)
+class StudyResult:
+    """A study's runs and their summary.
+
+    Attributes:
+        scenario: The scenario file (or name).
+        runs: The outcomes, in run order.
+        perturbation: What was perturbed, and by how much.
+        seed: The study's seed.
+        duration: Each run's simulated time [s].
+        workers: The processes that ran it (Ray: the cluster's CPUs).
+        backend: ``"process"`` or ``"ray"``.
+        plant: ``"project"`` or ``"mujoco"``.
+        wall_seconds: The study's wall time [s] (the plan included).
+        plan_seconds: The plan's wall time [s].
+    """
+
+    scenario: str
+    runs: tuple[RunOutcome, ...]
+    perturbation: Perturbation
+    seed: int
+    duration: float
+    workers: int
+    backend: str
+    wall_seconds: float
+    plan_seconds: float
+    plant: str = "project"
+
+    @property
+    def successes(self) -> int:
+        return sum(r.success for r in self.runs)
+
+    @property
+    def success_rate(self) -> float:
+        return self.successes / len(self.runs)
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """The success rate's Wilson 95 % interval."""
+        return wilson_interval(self.successes, len(self.runs))
+
+    @property
+    def failures(self) -> dict[str, int]:
+        """Failed runs per failure kind."""
+        return dict(Counter(r.failure_kind for r in self.runs if not r.success))
+
+    def to_json_dict(self) -> dict:
+        """A JSON-serialisable dict (the ``regrasp study --json`` document)."""
+        lo, hi = self.interval
+        return {"scenario": self.scenario, "seed": self.seed, "duration": self.duration, "workers": self.workers,
+                "backend": self.backend, "plant": self.plant, "perturbation": asdict(self.perturbation), "runs": len(self.runs),
+                "successes": self.successes, "success_rate": self.success_rate, "wilson_95": [lo, hi],
+                "failures": self.failures, "wall_seconds": self.wall_seconds, "plan_seconds": self.plan_seconds,
+                "outcomes": [{**asdict(r), "draw": {**asdict(r.draw), "entropy": list(r.draw.entropy),
+                                                    "xi_offset": list(r.draw.xi_offset)}} for r in self.runs]}
+
+
+_JOB: dict = {}
+
+
+def _init_worker(*shared: object) -> None:
+    """A pool worker's shared inputs (``run_once``'s arguments but the draw), handed over once per worker, not
+    once per run."""
+    _JOB["shared"] = shared
+    from ..kernels import warm_up
+
+    warm_up()  # (every kernel loaded before the first run: no run's wall time pays for it)
+
+
+def _pool_run(draw: RunDraw) -> RunOutcome:
+    scenario, *rest = _JOB["shared"]
+    return run_once(scenario, draw, *rest)
+
+
+def _on_processes(workers: int, shared: tuple, draws: tuple[RunDraw, ...]) -> Iterator[RunOutcome]:
+    if workers == 1:
+        for draw in draws:
+            yield run_once(*shared[:1], draw, *shared[1:])
+        return
+    # "spawn", not Linux's default "fork": the parent has run OpenMP code (planning), and forking such a
+    # process aborts the child ("fork() called from a process already using GNU OpenMP")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                             initializer=_init_worker, initargs=shared) as pool:
+        yield from pool.map(_pool_run, draws)
+
+
+def _require_ray() -> ModuleType:
+    """The ``ray`` module, or a :class:`~regrasp.core.exceptions.MissingDependencyError` naming the extra."""
+    try:
+        import ray
+    except ImportError as exc:
+        raise MissingDependencyError("ray", "ray", "a study on Ray") from exc
+    return ray
+
+
+def _on_ray(address: str, workers: int | None, shared: tuple, draws: tuple[RunDraw, ...]) -> Iterator[RunOutcome]:
+    """The runs as Ray tasks, in run order (the results do not depend on where they ran)."""
+    ray = _require_ray()
+    started = not ray.is_initialized()
+    if started:
+        kwargs = {"num_cpus": workers} if address == "local" and workers is not None else {}
+        ray.init(address=None if address == "local" else address, include_dashboard=False, log_to_driver=False,
+                 logging_level="ERROR", **kwargs)
+    try:
+        task = ray.remote(num_cpus=1)(run_once)
+        refs = [ray.put(x) for x in shared]
+        futures = [task.remote(refs[0], draw, *refs[1:]) for draw in draws]
+        yield from (ray.get(f) for f in futures)
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
+              perturbation: Perturbation = Perturbation(), duration: float | None = None, periods: int | None = None,
+              workers: int = 1, ray_address: str | None = None, schedule: RegraspSchedule | None = None,
+              settings: SupervisorSettings | None = None, plant: str = "project",
+              mujoco_settings: MujocoSettings | None = None,
+              progress: Callable[[int, int], None] | None = None) -> StudyResult:
+    """Plan the schedule once, then run ``runs`` seeded rollouts (module docstring).
+
+    Args:
+        scenario: A scenario file, or a loaded :class:`~regrasp.model.scenario.Scenario`.
+        runs: How many runs (at most ``MAX_RUNS``).
+        seed: The study's seed.
+        perturbation: What is perturbed, and by how much.
+        duration, periods: Each run's length, as in :func:`~regrasp.rollout.build.build_rollout` (default: the
+            trajectory's domain).
+        workers: Processes (1: this one); with Ray, the CPUs of a local cluster.
+        ray_address: None (processes), ``"local"`` (a Ray cluster on this machine) or a cluster's address.
+        schedule: The schedule every run starts with (default: planned here with the model, with the cone margin
+            rollouts keep by default): a planning stack that studies one plan under several perturbations plans
+            it once.
+        settings: The supervisor's settings in every run (None: the rollout's default).
+        plant, mujoco_settings: The plant every run is on (:func:`~regrasp.rollout.build.build_rollout`'s).
+        progress: Called as ``progress(done, runs)`` after each run.
+    """
+    from ..rollout.build import DEFAULT_CONE_MARGIN, build_rollout
+    from ..model.scenario import Scenario, load_scenario
+    from ..schedule.planner import RegraspSettings, plan_regrasps
+
+    start = time.perf_counter()
+    workers = as_integer("workers", workers, 1)
+    expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
+    if ray_address is not None:
+        if not isinstance(ray_address, str) or not ray_address:
+            raise InvalidParameterError("ray_address", ray_address, "'local' or a Ray cluster's address")
+        _require_ray()  # (before planning)
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    name = str(scenario.path) if scenario.path is not None else scenario.name
+    draws = draw_runs(runs, seed, perturbation, len(scenario.contacts))
+    if schedule is None:
+        schedule = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
+    probe = build_rollout(scenario, duration=duration, periods=periods, schedule=schedule, settings=settings,
+                          plant=plant, mujoco_settings=mujoco_settings)
+    _check_offsets(scenario, probe.schedule.at(scenario.trajectory.t_start).xi if probe.schedule else None,
+                   perturbation.contact_position)
+    plan_seconds = time.perf_counter() - start
+    # the schedule and the envelope plan are computed once for every run (they depend on the model only)
+    shared = (scenario, probe.schedule, probe.duration, perturbation, settings, plant, mujoco_settings,
+              probe.supervisor.plan)
+    source = _on_processes(workers, shared, draws) if ray_address is None else \
+        _on_ray(ray_address, workers, shared, draws)
+    outcomes: list[RunOutcome] = []
+    for outcome in source:
+        outcomes.append(outcome)
+        if progress is not None:
+            progress(len(outcomes), len(draws))
+    return StudyResult(name, tuple(outcomes), perturbation, int(seed), probe.duration, workers,
+                       "process" if ray_address is None else "ray", time.perf_counter() - start, plan_seconds, plant)
+
+
+def _check_offsets(scenario: Scenario, xi0, half_width: float) -> None:
+    """Every placement error a study can draw keeps each fingertip on its edge."""
+    if xi0 is None or half_width == 0.0:
+        return
+    for c, x in zip(scenario.contacts, xi0):
+        lo, hi = scenario.polygon.edge(c.edge).xi_range
+        if not (lo <= x - half_width and x + half_width <= hi):
+            raise InvalidParameterError("contact_position", half_width,
+                                        f"a placement error that keeps {c.finger.name} on its edge (xi0 = "
+                                        f"{x * 1e3:.2f} mm on [{lo * 1e3:.2f}, {hi * 1e3:.2f}] mm)")
+
+
+def sweep_study(scenario: str | Path | Scenario, runs: int, name: str, values: Sequence[float], *,
+                perturbation: Perturbation = Perturbation(), progress: Callable[[int, int], None] | None = None,
+                **options: object) -> tuple[StudyResult, ...]:
+    """One study per value of one perturbation (``name``, a :class:`~regrasp.model.perturbation.Perturbation` field),
+    the others as ``perturbation`` gives them: success against that perturbation's size. The schedule is planned
+    once; every study has the same seed, so the k-th runs of two studies differ only in that perturbation.
+    ``options``: :func:`run_study`'s. ``progress(done, total)`` counts runs over all the studies."""
+    from ..model.scenario import Scenario, load_scenario
+
+    if not isinstance(name, str) or name not in {f.name for f in fields(Perturbation)}:
+        raise InvalidParameterError("name", name, "a Perturbation field (" + ", ".join(f.name for f in
+                                                                                     fields(Perturbation)) + ")")
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__") or not 1 <= len(values) <= 100:
+        raise InvalidParameterError("values", values, "1 to 100 sizes")
+    expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
+    perturbations = [replace(perturbation, **{name: v}) for v in values]  # (each checked by Perturbation)
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    if options.get("schedule") is None:
+        from ..rollout.build import DEFAULT_CONE_MARGIN
+        from ..schedule.planner import RegraspSettings, plan_regrasps
+
+        options["schedule"] = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
+    out = []
+    for k, p in enumerate(perturbations):
+        step = None if progress is None else (lambda done, total, k=k: progress(k * total + done,
+                                                                               len(perturbations) * total))
+        out.append(run_study(scenario, runs, perturbation=p, progress=step, **options))
+    return tuple(out)

@@ -1,0 +1,434 @@
+r"""The slide executor: runs the slides a policy orders, phase by phase, and computes the torques.
+
+A :class:`SlideOrder` names a contact, a direction, a target ξ* and how ξ_d moves: along a given
+reference :math:`(\xi_d, \dot\xi_d, \ddot\xi_d)(t)` (a schedule's slide profile), or, without one,
+along a second-order filter towards the target,
+:math:`\ddot\xi_r = \omega_n^2 (\xi^* - \xi_r) - 2\zeta\omega_n\dot\xi_r`. Each ordered contact goes
+through three phases (``docs/derivations.md`` §4, "lessons"):
+
+1. **priming**: the fixed-contact law with the contact's force put just past the edge of its static
+   cone, :math:`\mu_s` + ``prime_overshoot``, in the sliding direction, the overshoot growing linearly
+   to ``prime_overshoot_max`` over ``prime_time`` (the plant's μ_s may exceed the model's), until the
+   contact is sensed slipping (with ``start_speed``: and moving in the sliding direction faster than that), or
+   for at most ``prime_time``. Switching to the sliding law while the contact is still stuck makes the plant
+   redistribute the forces for a step and can slip another contact; with an actuation delay, a contact that
+   has just broken away is still stuck one step later unless the priming has set it moving;
+2. **sliding**: the sliding law (:class:`~regrasp.dynamics.control.Proposition3Controller`, every slider on
+   its kinetic cone edge, p ≥ 1) tracking ξ_d, until the contact is at the target and slow
+   (*arrived*), sticks before it (*stuck*), or runs out of ``max_slide_time`` (*timed out*);
+3. **settling**: a contact that ends its slide still sliding gets the fixed law with its force just
+   inside its kinetic cone in the sliding direction, :math:`\mu_k - u` with the undershoot
+   :math:`u = \max(` ``settle_undershoot``, ``settle_margin`` :math:`/ f_n)` (:math:`f_n` the sensed normal
+   force when the slide ends), until the plant's contact sticks: it slows down gently. The margin in newtons
+   is what a torque applied late (an actuation delay) needs: a contact that sticks before the settling
+   torque arrives gets that torque as a fixed contact, with :math:`u f_n` of static margin against the
+   force errors of the model.
+
+**An actuation delay** of :math:`d` = ``actuation_delay`` control steps means that the torques of the
+:math:`d` steps after a phase change were computed for the phase before. A slide therefore ends in the
+settling phase even when the contact is sensed stuck, and settling ends only after :math:`d + 1` steps in a
+row sensed stuck: until the torques in flight were all computed for a stuck contact, a slip is still the
+slide's (the sliding law's torque, applied to a contact that stuck a step before, can break it away again).
+While it is sensed stuck, a settling contact gets the plain fixed-contact law (its static cone, with the cone
+margin the internal force seeks), no cone edge.
+
+Contacts being primed or settled are fixed in the model with a cone edge each; the sliders are
+sliding in the model; all of them share one control law per step. When no internal force keeps
+the slides within their cones (the QP is infeasible), the slides are aborted: the contacts settle
+or are held with the fixed law. The executor decides nothing about *which* slides to run: that is
+the policy's (:mod:`regrasp.supervisor.policies.scheduled`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..core.contact import ContactMode, Friction
+from ..dynamics.control import ComputedTorqueController, ControlOutput, FixedContactController, Gains, Proposition3Controller
+from ..core.events import Event, EventKind
+from ..core.exceptions import InvalidParameterError
+from .settings import ExecutorSettings
+from ..kernels.stretch import SLIDER
+from .types import SLIPPING_PHASES, ContactPhase, Reference, SlideEnd, SlideOrder, SlideProfile
+from ..dynamics.grasp import Grasp
+from ..model.hand import Hand
+from ..dynamics.internal_force.solver import ConeEdge, InternalForceInfeasibleError
+from ..dynamics.reduced import ReducedModel
+from ..model.sphere_tip import sphere_tip_torque
+
+if TYPE_CHECKING:
+    from .supervisor import Measurement
+    from ..core.trajectory import TrajectorySample
+
+__all__ = ["SLIPPING_PHASES", "ContactPhase", "ExecutorSettings", "Reference", "SlideEnd", "SlideExecutor",
+           "SlideOrder"]
+
+@dataclass
+class _Active:
+    order: SlideOrder
+    phase_start: float
+    slipped: bool = False
+    aborted: bool = False
+    reprimes: int = 0
+    mu_hat: float = math.nan  # the slider's kinetic friction ratio, estimated while it slides
+    settle_sign: float = 0.0
+    settle_undershoot: float = 0.0  # u of the settling phase (module docstring)
+    still: int = 0  # steps in a row the settling contact was sensed stuck
+    filter: list = field(default_factory=lambda: [0.0, 0.0])
+
+
+class SlideExecutor:
+    """Runs slides on a hand (module docstring).
+
+    Args:
+        hand: The fingers (finger i touches contact i).
+        grasp: The contacts (edges; the modes are the executor's).
+        xi: Initial contact positions [m], all fixed.
+        friction: What the controllers assume: one :class:`~regrasp.core.contact.Friction` per contact.
+        object_mass, object_inertia: What the controllers assume [kg], [kg m²].
+        settings: :class:`ExecutorSettings`.
+    """
+
+    def __init__(self, hand: Hand, grasp: Grasp, xi: ArrayLike, friction: tuple[Friction, ...], *, object_mass: float,
+                 object_inertia: float, settings: ExecutorSettings = ExecutorSettings()):
+        self.hand = hand
+        self.grasp = grasp
+        self.friction = tuple(friction)
+        self.object_mass = object_mass
+        self.object_inertia = object_inertia
+        self.settings = settings
+        self.names = tuple(f.name for f in hand.fingers)
+        self.xi = np.array(xi, dtype=float)
+        self._xi_sensed = self.xi.copy()  # the sensed positions, the held ones filtered (hold_filter_time)
+        self.phases = [ContactPhase.FIXED] * hand.m
+        self.regrasps = [0] * hand.m
+        self._active: dict[int, _Active] = {}
+        self._controller: ComputedTorqueController | None = None
+        self._key = None
+        self._now = 0.0
+        self._integral_X = np.zeros(3)          # ∫(X_d - X) dt
+        self._integral_xi: dict[int, float] = {}  # ∫(ξ_d - ξ) dt per slider
+
+    # ------------------------------------------------------------------ state
+    @property
+    def active(self) -> tuple[int, ...]:
+        """The contacts with a slide under way (priming, sliding or settling)."""
+        return tuple(sorted(self._active))
+
+    def order_of(self, i: int) -> SlideOrder | None:
+        a = self._active.get(i)
+        return None if a is None else a.order
+
+    def _event(self, out: list, t: float, i: int, kind: EventKind, detail: str, **values) -> None:
+        out.append(Event(float(t), self.names[i], kind, detail, values=values))
+
+    # ------------------------------------------------------------------ orders
+    def start(self, order: SlideOrder, meas: Measurement, out: list) -> None:
+        """Prime ``order``'s contact (it must be fixed)."""
+        i = order.contact
+        if self.phases[i] is not ContactPhase.FIXED:
+            raise InvalidParameterError("order", order, f"a slide of a fixed contact ({self.names[i]} is "
+                                        f"{self.phases[i].value})")
+        self._active[i] = _Active(order, float(meas.t))
+        self.phases[i] = ContactPhase.PRIMING
+        self.xi = self._sensed()
+        self._event(out, meas.t, i, EventKind.PRIME, f"to slide {'+' if order.direction > 0 else '-'}xi from "
+                    f"{meas.xi[i] * 1e3:.2f} mm to {order.target * 1e3:.2f} mm" + (f" ({order.why})" if order.why else ""),
+                    xi=float(meas.xi[i]), target=order.target, direction=order.direction)
+
+    def _sense_held(self, meas: Measurement) -> None:
+        """Filter the held contacts' sensed positions (``hold_filter_time``; the others are taken as sensed)
+        and move their model positions there where they drifted by more than ``hold_resolution`` (a rolling
+        fingertip)."""
+        s = self.settings
+        gain = 1.0 if s.hold_filter_time is None else min(1.0, s.control_period / s.hold_filter_time)
+        sensed = self._xi_sensed
+        for i, phase in enumerate(self.phases):
+            if phase is ContactPhase.FIXED and not meas.sliding[i]:
+                sensed[i] += gain * (meas.xi[i] - sensed[i])
+                if s.hold_resolution is not None and abs(sensed[i] - self.xi[i]) > s.hold_resolution:
+                    self.xi[i] = sensed[i]
+            else:
+                sensed[i] = meas.xi[i]
+
+    def _sensed(self) -> np.ndarray:
+        """Every contact's sensed position for the model (the held ones filtered)."""
+        return self._xi_sensed.copy()
+
+    def advance(self, meas: Measurement, out: list) -> list[SlideEnd]:
+        """Move every slide's phase on; the slides whose sliding phase ended at this step."""
+        s = self.settings
+        ends = []
+        self._sense_held(meas)
+        for i in list(self._active):
+            a = self._active[i]
+            phase = self.phases[i]
+            t, xi, xi_dot, sliding = float(meas.t), float(meas.xi[i]), float(meas.xi_dot[i]), bool(meas.sliding[i])
+            target = a.order.target
+            started = sliding and (s.start_speed is None or xi_dot * a.order.direction > s.start_speed)
+            if phase is ContactPhase.PRIMING and (started or t - a.phase_start >= s.prime_time - 1e-12):
+                self.phases[i] = ContactPhase.SLIDING
+                a.phase_start, a.slipped, a.filter = t, sliding, [xi, xi_dot]
+                if s.breakaway_estimate:
+                    # the first estimate: the force ratio at which it broke away, μ_s >= μ_k of the plant (the
+                    # sliding law then starts with no less friction than the plant's: a slider whose law
+                    # expects less friction than it gets reverses within a step and sticks again)
+                    self._estimate_friction(a, i, meas)
+                self.xi = self._sensed()
+                self._event(out, t, i, EventKind.SLIDE, f"sliding law, target {target * 1e3:.2f} mm"
+                            + ("" if sliding else " (not yet slipping)"), xi=xi, target=target)
+            elif phase is ContactPhase.SLIDING:
+                a.slipped = a.slipped or sliding  # the plant reports the slip one step after the law starts
+                self._estimate_friction(a, i, meas)
+                near = abs(xi - target) < s.arrive_tolerance
+                if near and abs(xi_dot) < s.arrive_speed and (a.order.reference is None or not sliding
+                                                              or a.order.planned_end is None
+                                                              or t >= a.order.planned_end):
+                    ends.append(self._end(meas, out, i, EventKind.ARRIVED, f"xi = {xi * 1e3:.2f} mm after "
+                                          f"{t - a.phase_start:.3f} s"))
+                elif a.slipped and not sliding:
+                    if (a.order.reference is not None and a.reprimes < s.max_reprimes
+                            and (a.order.planned_end is None or t < a.order.planned_end)):
+                        # a planned slide goes on: break the contact away again (more friction than the
+                        # model's stopped it) and keep tracking the plan
+                        a.reprimes += 1
+                        self.phases[i] = ContactPhase.PRIMING
+                        a.phase_start, a.slipped = t, False
+                        self.xi = self._sensed()
+                        self._event(out, t, i, EventKind.STUCK, f"stuck at {xi * 1e3:.2f} mm on the way (target "
+                                    f"{target * 1e3:.2f} mm)", xi=xi, target=target, reprime=a.reprimes)
+                        self._event(out, t, i, EventKind.PRIME, f"again ({a.reprimes} of {s.max_reprimes}) to slide "
+                                    f"{'+' if a.order.direction > 0 else '-'}xi to {target * 1e3:.2f} mm", xi=xi,
+                                    target=target, direction=a.order.direction, reprime=a.reprimes)
+                        continue
+                    ends.append(self._end(meas, out, i, EventKind.STUCK, f"stuck at {xi * 1e3:.2f} mm (target "
+                                          f"{target * 1e3:.2f} mm)"))
+                elif t - a.phase_start > s.max_slide_time:
+                    ends.append(self._end(meas, out, i, EventKind.TIMED_OUT, f"stopped after max_slide_time at "
+                                          f"{xi * 1e3:.2f} mm (target {target * 1e3:.2f} mm)"))
+            elif phase is ContactPhase.SETTLING:
+                a.still = 0 if sliding else a.still + 1
+                if a.still > s.actuation_delay:
+                    self._finish(meas, out, i)
+        return ends
+
+    def _estimate_friction(self, a: _Active, i: int, meas) -> None:
+        """Update the slider's kinetic friction ratio from the sensed forces (``friction_filter_time``)."""
+        s = self.settings
+        if s.friction_filter_time is None or meas.normal_force is None or not meas.sliding[i]:
+            return
+        fn, ft = float(meas.normal_force[i]), float(meas.friction[i])
+        if not fn > s.friction_min_force:
+            return
+        ratio = abs(ft) / fn
+        if math.isnan(a.mu_hat):
+            a.mu_hat = ratio
+        else:
+            a.mu_hat += min(1.0, s.control_period / s.friction_filter_time) * (ratio - a.mu_hat)
+
+    def _kinetic(self, i: int) -> float:
+        """The kinetic friction ratio the laws use for contact i: the estimate while it slides, rounded to
+        ``friction_resolution``, else the model's."""
+        a = self._active.get(i)
+        mu = self.friction[i].kinetic
+        if a is None or math.isnan(a.mu_hat):
+            return mu
+        r = self.settings.friction_resolution
+        return max(0.0, round(a.mu_hat / r) * r)
+
+    def _end(self, meas, out: list, i: int, kind: EventKind, detail: str) -> SlideEnd:
+        """End contact i's sliding phase where it is: settle if it still slides, else fix it."""
+        a = self._active[i]
+        t, xi = float(meas.t), float(meas.xi[i])
+        self._event(out, t, i, kind, detail, xi=xi, target=a.order.target,
+                    **({} if a.order.planned_end is None else {"planned_end": a.order.planned_end}))
+        self.xi = self._sensed()
+        if meas.sliding[i] or self.settings.actuation_delay > 0:
+            self.phases[i] = ContactPhase.SETTLING
+            a.still = 0 if meas.sliding[i] else 1
+            moving = float(meas.xi_dot[i])
+            a.settle_sign = math.copysign(1.0, moving) if moving else float(a.order.direction)
+            fn = math.nan if meas.normal_force is None else float(meas.normal_force[i])
+            s = self.settings
+            a.settle_undershoot = s.settle_undershoot if not fn > s.friction_min_force else \
+                max(s.settle_undershoot, s.settle_margin / fn)
+        else:
+            self._finish(meas, out, i)
+        return SlideEnd(a.order, kind, t, xi)
+
+    def _finish(self, meas, out: list, i: int) -> None:
+        a = self._active.pop(i)
+        self.phases[i] = ContactPhase.FIXED
+        self.xi = self._sensed()
+        if not a.aborted:  # an aborted slide that settles is not a regrasp
+            self.regrasps[i] += 1
+        self._event(out, meas.t, i, EventKind.SETTLED, f"fixed at {meas.xi[i] * 1e3:.2f} mm", xi=float(meas.xi[i]))
+
+    def abort(self, meas: Measurement, out: list, reason: str) -> list[SlideEnd]:
+        """Abort every slide being primed or slid (the QP found no forces for them)."""
+        ends = []
+        for i in list(self._active):
+            if self.phases[i] not in (ContactPhase.PRIMING, ContactPhase.SLIDING):
+                continue
+            a = self._active[i]
+            a.aborted = True
+            ends.append(self._end(meas, out, i, EventKind.SLIDE_ABORTED, reason))
+        return ends
+
+    # ------------------------------------------------------------------ stretches (regrasp.rollout.stretch)
+    def law(self) -> ComputedTorqueController:
+        """The control law the next step runs (the current phases' law; cached while it stays the same)."""
+        return self._law()
+
+    def stretch_state(self) -> tuple | None:
+        """What a compiled stretch (:mod:`regrasp.rollout.stretch`) reads and updates of the executor: (held (m,) bool, the
+        law's held positions ξ [m], the filtered sensed positions [m] and ∫(X_d - X) dt, both the executor's own
+        arrays, the sliders as :data:`~regrasp.kernels.stretch.SLIDER` records); None where only the reference
+        path serves: a contact being primed or settling, a slide without a planned profile
+        (:class:`~regrasp.supervisor.types.SlideProfile`) or spherical tips."""
+        s = self.settings
+        if s.tip_radius != 0.0:
+            return None
+        sliders = []
+        for i, phase in enumerate(self.phases):
+            if phase is ContactPhase.SLIDING:
+                a = self._active[i]
+                if not isinstance(a.order.reference, SlideProfile):
+                    return None
+                sliders.append(i)
+            elif phase is not ContactPhase.FIXED:
+                return None
+        records = np.zeros(len(sliders), dtype=SLIDER)
+        for c, i in enumerate(sliders):
+            a = self._active[i]
+            o = a.order
+            slide, offset = o.reference.slide, o.reference.offset
+            records[c] = (i, a.slipped, a.mu_hat, self._integral_xi.get(i, 0.0), a.phase_start, o.target,
+                          math.nan if o.planned_end is None else o.planned_end, slide.start, slide.end,
+                          slide.start_xi, slide.end_xi, slide.ramp, slide.speed, float(slide.direction), offset,
+                          self._kinetic(i), self.friction[i].kinetic)
+        held = np.array([p is ContactPhase.FIXED for p in self.phases])
+        return held, self.xi, self._xi_sensed, self._integral_X, records
+
+    def take_stretch(self, sliders: np.ndarray, t: float) -> None:
+        """After a stretch whose last step started at ``t`` [s]: the sliders' slip flags, friction estimates and
+        integrals from its records (:meth:`stretch_state`)."""
+        for record in sliders:
+            a = self._active[int(record["contact"])]
+            a.slipped, a.mu_hat = bool(record["slipped"]), float(record["mu_hat"])
+        if self.settings.integral > 0.0:
+            self._integral_xi = {int(r["contact"]): float(r["integral"]) for r in sliders}
+        self._now = float(t)
+
+    # ------------------------------------------------------------------ control
+    def _gains(self, n: int) -> Gains:
+        s = self.settings
+        omega = np.array([s.control_omega] * 3 + [s.slide_omega] * (n - 3))
+        return Gains(2.0 * omega, omega**2)
+
+    def _law(self) -> ComputedTorqueController:
+        """The control law of the current phases (cached while they and the held positions stay)."""
+        s = self.settings
+        edges = []
+        for i, a in sorted(self._active.items()):
+            if self.phases[i] is ContactPhase.PRIMING:
+                ramp = min(1.0, (self._now - a.phase_start) / s.prime_time)
+                overshoot = s.prime_overshoot + ramp * (s.prime_overshoot_max - s.prime_overshoot)
+                edges.append(ConeEdge(i, a.order.direction, self.friction[i].static + overshoot))
+            elif self.phases[i] is ContactPhase.SETTLING and a.still == 0:  # (stuck: the fixed law's own cone)
+                kinetic = self._kinetic(i)
+                edges.append(ConeEdge(i, a.settle_sign, kinetic - min(a.settle_undershoot, 0.5 * kinetic)))
+        sliders = [i for i in range(self.hand.m) if self.phases[i] is ContactPhase.SLIDING]
+        friction = tuple(Friction(max(f.static, k), k) if k != f.kinetic else f
+                         for f, k in zip(self.friction, (self._kinetic(i) for i in range(self.hand.m))))
+        key = (tuple(self.phases), tuple(edges), self.xi.tobytes(), friction)
+        if key == self._key:
+            return self._controller
+        modes = [ContactMode.SLIDING if i in sliders else ContactMode.FIXED for i in range(self.hand.m)]
+        model = ReducedModel(self.hand, self.grasp.with_modes(modes), self.xi, object_mass=self.object_mass,
+                             object_inertia=self.object_inertia)
+        cone_edge = None if not edges else (edges[0] if len(edges) == 1 else tuple(edges))
+        if sliders:
+            directions = [self._active[i].order.direction for i in sliders]
+            # a planned slide (a reference from rest to rest) never reverses; a filtered one may overshoot
+            planned = all(self._active[i].order.reference is not None for i in sliders)
+            law = Proposition3Controller(model, self._gains(3 + len(sliders)), friction,
+                                         direction=directions if len(directions) > 1 else directions[0],
+                                         reversible=not planned, internal_force=s.internal_force, cone_edge=cone_edge)
+        else:
+            law = FixedContactController(model, self._gains(3), friction, internal_force=s.internal_force,
+                                         cone_edge=cone_edge)
+        self._controller, self._key = law, key
+        return law
+
+    def _slider_reference(self, i: int, t: float, dt: float) -> tuple[float, float, float]:
+        a = self._active[i]
+        if a.order.reference is not None:
+            return a.order.reference(t)
+        w, z = self.settings.omega_n, self.settings.zeta
+        x, v = a.filter
+        acc = w * w * (a.order.target - x) - 2.0 * z * w * v
+        v = v + acc * dt
+        x = x + v * dt
+        a.filter = [x, v]
+        return x, v, w * w * (a.order.target - x) - 2.0 * z * w * v
+
+    def _integrate(self, S_d: np.ndarray, S: np.ndarray, sliders: list, dt: float) -> np.ndarray:
+        """S_d shifted by (K_i / K_s) ∫E dt (``ExecutorSettings.integral``); a slider's integral starts at
+        its sliding phase and ends with it."""
+        s = self.settings
+        error = S_d - S
+        self._integral_X += error[:3] * dt
+        self._integral_xi = {i: self._integral_xi.get(i, 0.0) + float(e) * dt for i, e in zip(sliders, error[3:])}
+        omega = np.array([s.control_omega] * 3 + [s.slide_omega] * len(sliders))
+        integral = np.concatenate([self._integral_X, [self._integral_xi[i] for i in sliders]])
+        return S_d + s.integral * omega * integral  # (K_i / K_s) = integral · ω
+
+    def command(self, meas: Measurement, desired: TrajectorySample, dt: float,
+                out: list) -> tuple[ControlOutput, str, np.ndarray, list[SlideEnd]]:
+        """(the law's output, the law's name, ξ_d per contact (NaN where not sliding), slides aborted at
+        this step) for the measurement ``meas`` and the desired object state ``desired``
+        (a :class:`~regrasp.core.trajectory.TrajectorySample`)."""
+        m = self.hand.m
+        self._now = float(meas.t)
+        law = self._law()
+        reference = np.full(m, np.nan)
+        sliders = [i for i in range(m) if self.phases[i] is ContactPhase.SLIDING]
+        refs = [self._slider_reference(i, float(meas.t), dt) for i in sliders]
+        for i, r in zip(sliders, refs):
+            reference[i] = r[0]
+        S = np.concatenate([meas.X, meas.xi[sliders]])
+        S_dot = np.concatenate([meas.V, meas.xi_dot[sliders]])
+        S_d = np.concatenate([desired.pose, [r[0] for r in refs]])
+        if self.settings.integral > 0.0:
+            S_d = self._integrate(S_d, S, sliders, dt)
+        S_d_dot = np.concatenate([desired.velocity, [r[1] for r in refs]])
+        S_d_ddot = np.concatenate([desired.acceleration, [r[2] for r in refs]])
+        try:
+            return self._tipped(law(S, S_dot, S_d, S_d_dot, S_d_ddot), meas), _name(law), reference, []
+        except InternalForceInfeasibleError as exc:
+            if not any(self.phases[i] in (ContactPhase.PRIMING, ContactPhase.SLIDING) for i in self._active):
+                raise
+            ends = self.abort(meas, out, f"no internal force keeps the slide in its cones ({exc.status})")
+        law = self._law()
+        output = law(meas.X, meas.V, desired.pose, desired.velocity, desired.acceleration)
+        return self._tipped(output, meas), _name(law), np.full(m, np.nan), ends
+
+    def _tipped(self, output: ControlOutput, meas: Measurement) -> ControlOutput:
+        """``output`` with the spherical tips' couple added to its torque (``tip_radius``)."""
+        r = self.settings.tip_radius
+        if r == 0.0:
+            return output
+        c, s = math.cos(meas.X[2]), math.sin(meas.X[2])
+        normals = np.array([e.inward_normal for e in self.grasp.edges])
+        return replace(output, tau=output.tau + sphere_tip_torque(normals @ np.array([[c, s], [-s, c]]),
+                                                                   output.contact_forces, r))
+
+
+def _name(law: ComputedTorqueController) -> str:
+    return law.law + (" (cone edge)" if law.cone_edge is not None else "")

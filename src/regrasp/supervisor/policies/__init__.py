@@ -1,0 +1,1 @@
+"""regrasp.supervisor.supervisor.policies."""
