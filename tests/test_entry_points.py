@@ -143,8 +143,9 @@ def finite(value, depth: int = 0) -> bool:
         return bool(np.isfinite(value).all())
     if isinstance(value, (tuple, list)):
         return all(finite(v, depth + 1) for v in value)
-    if hasattr(value, "__dataclass_fields__"):
-        return all(finite(getattr(value, k), depth + 1) for k in value.__dataclass_fields__)
+    if hasattr(value, "__dataclass_fields__"):  # (an InternalForceSettings' f_max is inf by default: no upper bound)
+        return all(finite(getattr(value, k), depth + 1) for k in value.__dataclass_fields__
+                   if not (type(value).__name__ == "InternalForceSettings" and k == "f_max"))
     return True
 
 

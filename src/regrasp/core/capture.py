@@ -12,6 +12,7 @@ import contextlib
 import os
 import sys
 import tempfile
+from collections.abc import Iterator
 
 __all__ = ["captured_fd"]
 
@@ -23,7 +24,7 @@ class Captured:
 
 
 @contextlib.contextmanager
-def captured_fd(fd: int):
+def captured_fd(fd: int) -> Iterator[Captured]:
     """Redirect file descriptor ``fd`` (1 or 2) to a temporary file while the block runs; yields a
     :class:`Captured` whose ``text`` holds what was written. Where the descriptor cannot be duplicated
     (an embedded interpreter), nothing is captured."""

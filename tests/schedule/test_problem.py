@@ -1,0 +1,172 @@
+"""The regrasp planner's tables (regrasp.schedule.problem) against independent checks.
+
+Each table entry the lattice program reads (a layer, a move vector, the other contacts' cells,
+the axis contact's cell) is compared with what it claims about real positions and times: the
+force tables with an independent LP (tests/factories.force_lp) at the layer's time, the middle's
+tables half a step earlier with the sliders half a cell back, the break-away tables at the layer
+and half a ramp earlier with the other sliders that far back; the envelope tables with
+``FingerEnvelope.at`` over the layer's window.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from factories import force_lp
+from regrasp import Friction, load_scenario
+from regrasp.schedule.problem import RegraspSettings, build_problem, trajectory_period
+
+SCENARIO = Path(__file__).resolve().parents[2] / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
+
+
+@pytest.fixture(scope="module")
+def problem():
+    sc = load_scenario(SCENARIO)
+    sc = dataclasses.replace(sc, contacts=tuple(dataclasses.replace(c, friction=Friction(0.6, 0.45))
+                                                for c in sc.contacts))
+    return build_problem(sc, RegraspSettings())
+
+
+def _cells(problem, other: int) -> list[int]:
+    """The other contacts' cells of a flat 'others' index (C order, the axis left out)."""
+    lat = problem.lattice
+    sizes = [len(problem.grids[i]) for i in range(len(problem.grids)) if i != lat.axis]
+    return list(np.unravel_index(other, sizes))
+
+
+def _check(problem, rng, table_lo, table_hi, when, positions, ratios, samples=150):
+    """Compare random entries of one kind of table with the LP; returns the verdicts seen."""
+    sc = problem.scenario
+    lat = problem.lattice
+    traj = sc.trajectory
+    edges = [c.edge for c in sc.contacts]
+    mu_s = [f.static for f in problem.friction]
+    seen = []
+    for _ in range(samples):
+        k, column = when(rng)
+        other = int(rng.integers(0, table_lo.shape[1]))
+        cells = _cells(problem, other)
+        axis_cell = int(rng.integers(0, len(problem.grids[lat.axis])))
+        full = cells[:lat.axis] + [axis_cell] + cells[lat.axis:]
+        t, xi = positions(k, column, np.array([g[c] for g, c in zip(problem.grids, full)]))
+        x_axis = problem.grids[lat.axis][axis_cell]
+        lo, hi = float(table_lo[k, other, column]), float(table_hi[k, other, column])
+        if min(abs(x_axis - lo), abs(x_axis - hi)) < 1e-6:
+            continue  # on a bound
+        smp = traj.sample(float(np.clip(t, traj.t_start, traj.t_end)))
+        expected = force_lp(sc.polygon, edges, smp.pose, smp.acceleration, xi, ratios(k, column), mu_s,
+                            problem.limits, sc.gravity_in_hand)
+        assert (lo <= x_axis <= hi) == expected, (k, column, full, lo, hi)
+        seen.append(expected)
+    return seen
+
+
+def test_force_tables_say_what_the_lp_says(problem):
+    rng = np.random.default_rng(0)
+    lat = problem.lattice
+    combos = lat.combos
+
+    def ratios(k, mu):
+        return [None if d == 0 else d * f.kinetic for d, f in zip(combos[mu], problem.friction)]
+
+    seen = _check(problem, rng, lat.lo, lat.hi, lambda r: (int(r.integers(0, lat.layers)), int(r.integers(0, len(combos)))),
+                  lambda k, mu, xi: (problem.times[k], xi), ratios)
+    assert 0.1 < np.mean(seen) < 0.95
+
+
+def test_middle_tables_hold_the_middle_of_two_slider_moves(problem):
+    rng = np.random.default_rng(1)
+    lat = problem.lattice
+    combos = lat.combos
+    two = [mu for mu, d in enumerate(combos) if np.count_nonzero(d) >= 2]
+    h = problem.settings.xi_resolution
+
+    def ratios(k, mu):
+        return [None if d == 0 else d * f.kinetic for d, f in zip(combos[mu], problem.friction)]
+
+    def positions(k, mu, xi):  # half a step before layer k, the sliders half a cell back
+        return 0.5 * (problem.times[k - 1] + problem.times[k]), xi - 0.5 * h * combos[mu]
+
+    seen = _check(problem, rng, lat.mid_lo, lat.mid_hi,
+                  lambda r: (int(r.integers(1, lat.layers)), int(r.choice(two))), positions, ratios)
+    assert 0.05 < np.mean(seen) < 0.95
+
+
+def test_breakaway_tables_hold_at_the_layer_and_where_it_starts(problem):
+    rng = np.random.default_rng(2)
+    lat = problem.lattice
+    combos = lat.combos
+    slots = {int(s): (mu, i) for (mu, i), s in np.ndenumerate(lat.breakaway_slot) if s >= 0}
+    assert len(slots) == sum(np.count_nonzero(d) for d in combos)  # every slider may start (mu_s > mu_k)
+    h, ramp, dt = problem.settings.xi_resolution, problem.settings.ramp, problem.dt
+    mu_s = [f.static for f in problem.friction]
+    edges = [c.edge for c in problem.scenario.contacts]
+    traj = problem.scenario.trajectory
+    seen = []
+    for _ in range(120):
+        k, slot = int(rng.integers(0, lat.layers)), int(rng.choice(list(slots)))
+        mu, i = slots[slot]
+        other = int(rng.integers(0, lat.break_lo.shape[1]))
+        cells = _cells(problem, other)
+        axis_cell = int(rng.integers(0, len(problem.grids[lat.axis])))
+        full = cells[:lat.axis] + [axis_cell] + cells[lat.axis:]
+        xi = np.array([g[c] for g, c in zip(problem.grids, full)])
+        lo, hi = float(lat.break_lo[k, other, slot]), float(lat.break_hi[k, other, slot])
+        x_axis = xi[lat.axis]
+        if min(abs(x_axis - lo), abs(x_axis - hi)) < 1e-6:
+            continue
+        ratios = [None if d == 0 else d * (f.static if j == i else f.kinetic)
+                  for j, (d, f) in enumerate(zip(combos[mu], problem.friction))]
+        back = 0.5 * ramp / dt * h * np.where(np.arange(len(xi)) == i, 0, combos[mu])
+        both = True
+        for t, pos in ((problem.times[k], xi), (problem.times[k] - 0.5 * ramp, xi - back)):
+            smp = traj.sample(float(np.clip(t, traj.t_start, traj.t_end)))
+            both &= force_lp(problem.scenario.polygon, edges, smp.pose, smp.acceleration, pos, ratios, mu_s,
+                             problem.limits, problem.scenario.gravity_in_hand)
+        assert (lo <= x_axis <= hi) == both
+        seen.append(both)
+    assert 0.05 < np.mean(seen) < 0.95
+
+
+def test_envelope_tables_keep_the_margin_over_each_window(problem):
+    from regrasp.envelope.finger_envelope import FingerEnvelope
+
+    rng = np.random.default_rng(3)
+    sc = problem.scenario
+    lat = problem.lattice
+    em = problem.settings.envelope_margin
+    envs = [FingerEnvelope(c.finger, sc.polygon, c.edge, geometry=sc.geometry, tip_clearance=c.tip_clearance)
+            for c in sc.contacts]
+    for _ in range(40):
+        k = int(rng.integers(1, lat.layers - 1))
+        i = int(rng.integers(0, len(envs)))
+        c = int(rng.integers(0, len(problem.grids[i])))
+        x = problem.grids[i][c]
+        window = np.linspace(problem.times[k - 1], problem.times[k + 1], 33)
+        margins = [envs[i].at(sc.trajectory.pose(t), float(t)).margin(x) for t in window]
+        if lat.env_ok[k, i, c]:
+            assert min(margins) >= em - 1e-9  # admissible: the margin holds over the whole window
+        elif min(margins) > em + problem.envelope_buffer + 1e-4:
+            pytest.fail(f"cell {x} of contact {i} refused at layer {k} with margins >= {min(margins)}")
+
+
+def test_the_period_of_the_paper_trajectories():
+    sc = load_scenario(SCENARIO)
+    assert trajectory_period(sc.trajectory) == pytest.approx(np.pi)
+    problem = build_problem(sc, RegraspSettings(periodic=False), t_end=1.0)
+    assert not problem.periodic and problem.times[-1] == pytest.approx(1.0)
+    assert problem.dt >= RegraspSettings().time_step - 1e-12  # never faster than the speed limit
+
+
+def test_a_lattice_too_large_for_memory_is_refused_up_front():
+    from regrasp.core.exceptions import InvalidParameterError
+
+    sc = load_scenario(SCENARIO)
+    four = dataclasses.replace(sc, contacts=sc.contacts + (dataclasses.replace(sc.contacts[2], edge=0),))
+    with pytest.raises(InvalidParameterError) as info:
+        build_problem(four, RegraspSettings())
+    assert "GiB" in str(info.value) and "xi_resolution" in str(info.value)

@@ -1,0 +1,249 @@
+"""The slide executor on synthetic measurements: its phases, its laws and its cone edges.
+
+The measurements are made up by the test (no plant): the executor's decisions and the forces its
+laws predict are checked against what the phases ask for.
+"""
+
+import math
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from regrasp import Hand, load_scenario
+from regrasp.core.contact import ContactMode
+from regrasp.core.events import EventKind
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.supervisor.executor import ContactPhase, ExecutorSettings, SlideExecutor, SlideOrder
+from regrasp.dynamics.grasp import Grasp
+from regrasp.dynamics.internal_force.solver import InternalForceSettings
+from regrasp.supervisor.supervisor import Measurement
+
+SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
+
+
+SC = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
+XI = np.array([-0.014, 0.014, -0.001])
+
+
+def executor(friction=None, **settings) -> SlideExecutor:
+    hand = Hand([c.finger for c in SC.contacts], gravity_in_hand=SC.gravity_in_hand)
+    grasp = Grasp(SC.polygon, [c.edge for c in SC.contacts], [ContactMode.FIXED] * 3)
+    return SlideExecutor(hand, grasp, XI, SC.friction if friction is None else friction, object_mass=SC.polygon.mass,
+                         object_inertia=SC.polygon.inertia, settings=ExecutorSettings(**settings))
+
+
+def meas(t, xi=XI, xi_dot=(0.0, 0.0, 0.0), sliding=(False, False, False), normal=None, tangential=(0.0, 0.0, 0.0)):
+    pose = SC.trajectory.pose(t)
+    return Measurement(t, pose, SC.trajectory.velocity(t), np.array(xi, float), np.array(xi_dot, float),
+                       np.array(sliding), np.array(tangential, float), None if normal is None else np.array(normal))
+
+
+def command(ex, t, m, out):
+    return ex.command(m, SC.trajectory.sample(t), 1e-3, out)
+
+
+def test_two_slides_prime_on_their_cone_edges_then_slide_on_their_kinetic_edges():
+    ex = executor()
+    out = []
+    t = 0.8
+    for i, d in ((0, 1), (1, -1)):
+        ex.start(SlideOrder(i, d, 0.0, reference=lambda t, i=i: (XI[i], 0.0, 0.0)), meas(t), out)
+    assert [e.kind for e in out] == [EventKind.PRIME, EventKind.PRIME]
+    control, law, reference, aborted = command(ex, t, meas(t), out)
+    assert law == "fixed contacts (cone edge)" and not aborted and np.isnan(reference).all()
+    (fn1, ft1), (fn2, ft2) = control.contact_forces_surface[:2]
+    assert ft1 == pytest.approx(0.55 * fn1, rel=1e-9) and ft2 == pytest.approx(-0.55 * fn2, rel=1e-9)
+    # both sensed slipping: both slide, Proposition 3 with p = 2
+    m = meas(t + 1e-3, xi_dot=(0.001, -0.001, 0.0), sliding=(True, True, False))
+    ex.advance(m, out)
+    assert ex.phases[:2] == [ContactPhase.SLIDING, ContactPhase.SLIDING]
+    control, law, reference, _ = command(ex, t + 1e-3, m, out)
+    assert law == "Proposition 3" and reference[:2].tolist() == XI[:2].tolist() and math.isnan(reference[2])
+    (fn1, ft1), (fn2, ft2), (fn3, ft3) = control.contact_forces_surface
+    assert ft1 == pytest.approx(0.5 * fn1, rel=1e-9) and ft2 == pytest.approx(-0.5 * fn2, rel=1e-9)
+    assert abs(ft3) < 0.5 * fn3  # the palm inside its cone
+
+
+def test_a_slide_arrives_settles_inside_its_kinetic_cone_and_counts_once_fixed():
+    ex = executor()
+    out = []
+    ex.start(SlideOrder(0, 1, -0.010), meas(0.0), out)  # a filtered slide (no reference)
+    ex.advance(meas(0.001, sliding=(True, False, False), xi_dot=(0.001, 0, 0)), out)
+    assert ex.phases[0] is ContactPhase.SLIDING
+    arrived = meas(0.2, xi=(-0.0101, XI[1], XI[2]), xi_dot=(0.001, 0, 0), sliding=(True, False, False))
+    (end,) = ex.advance(arrived, out)
+    assert end.kind is EventKind.ARRIVED and ex.phases[0] is ContactPhase.SETTLING and ex.regrasps[0] == 0
+    control, law, _, _ = command(ex, 0.2, arrived, out)
+    fn, ft = control.contact_forces_surface[0]
+    assert law == "fixed contacts (cone edge)" and ft == pytest.approx(0.45 * fn, rel=1e-9)  # μ_k - 0.05
+    ex.advance(meas(0.201, xi=(-0.0101, XI[1], XI[2])), out)
+    assert ex.phases[0] is ContactPhase.FIXED and ex.regrasps[0] == 1 and out[-1].kind is EventKind.SETTLED
+
+
+def test_a_planned_slide_that_sticks_on_the_way_is_primed_again():
+    ex = executor(max_reprimes=1)
+    out = []
+    order = SlideOrder(0, 1, 0.010, reference=lambda t: (-0.014 + 0.05 * t, 0.05, 0.0), planned_start=0.0,
+                       planned_end=0.5)
+    ex.start(order, meas(0.0), out)
+    ex.advance(meas(0.001, sliding=(True, False, False), xi_dot=(0.01, 0, 0)), out)
+    assert ex.advance(meas(0.1, xi=(-0.012, XI[1], XI[2])), out) == []  # stuck: primed again
+    stuck, prime = out[-2:]
+    assert ex.phases[0] is ContactPhase.PRIMING and stuck.kind is EventKind.STUCK and prime.kind is EventKind.PRIME
+    assert stuck.values["reprime"] == prime.values["reprime"] == 1
+    ex.advance(meas(0.101, sliding=(True, False, False), xi_dot=(0.01, 0, 0)), out)
+    (end,) = ex.advance(meas(0.2, xi=(-0.009, XI[1], XI[2])), out)  # stuck again: the last re-prime is used
+    assert end.kind is EventKind.STUCK and ex.phases[0] is ContactPhase.FIXED
+
+
+def test_the_sliders_kinetic_friction_is_estimated_from_the_sensed_forces():
+    ex = executor(friction_filter_time=0.01)
+    out = []
+    ex.start(SlideOrder(0, 1, 0.0, reference=lambda t: (-0.014, 0.0, 0.0)), meas(0.0), out)
+    for k in range(1, 60):  # the plant's μ_k is 0.6 (the model's: 0.5)
+        m = meas(k * 1e-3, sliding=(True, False, False), xi_dot=(0.01, 0, 0), normal=(1.0, 1.0, 1.0),
+                 tangential=(0.6, 0.0, 0.0))
+        ex.advance(m, out)
+    control, law, _, _ = command(ex, 0.06, m, out)
+    fn, ft = control.contact_forces_surface[0]
+    assert law == "Proposition 3" and ft == pytest.approx(0.6 * fn, rel=1e-9)  # on the estimated kinetic edge
+
+
+def test_the_first_friction_estimate_is_the_ratio_the_contact_broke_away_at():
+    """Sensed slipping at the end of its priming, the slider's law starts on the kinetic edge of the force ratio
+    the sensor read when it broke away (0.58 here, against the model's 0.5), not on the model's."""
+    ex = executor(friction_filter_time=0.01, breakaway_estimate=True)
+    out = []
+    ex.start(SlideOrder(0, 1, 0.0, reference=lambda t: (-0.014, 0.0, 0.0)), meas(0.0), out)
+    m = meas(0.001, sliding=(True, False, False), xi_dot=(0.0, 0, 0), normal=(1.0, 1.0, 1.0),
+             tangential=(0.58, 0.0, 0.0))
+    ex.advance(m, out)
+    control, law, _, _ = command(ex, 0.001, m, out)
+    fn, ft = control.contact_forces_surface[0]
+    assert law == "Proposition 3" and ft == pytest.approx(0.58 * fn, rel=1e-9)
+
+
+def test_with_a_start_speed_the_priming_lasts_until_the_contact_moves_the_right_way():
+    ex = executor(start_speed=1e-3)
+    out = []
+    ex.start(SlideOrder(0, -1, -0.02), meas(0.0), out)
+    for xi_dot in (0.0, 0.002, -0.0005):  # broke away, but not moving down yet (or moving up)
+        ex.advance(meas(0.001, sliding=(True, False, False), xi_dot=(xi_dot, 0, 0)), out)
+        assert ex.phases[0] is ContactPhase.PRIMING
+    ex.advance(meas(0.002, sliding=(True, False, False), xi_dot=(-0.0015, 0, 0)), out)
+    assert ex.phases[0] is ContactPhase.SLIDING and out[-1].kind is EventKind.SLIDE
+
+
+def test_a_settling_contact_keeps_a_margin_in_newtons_on_a_light_touch():
+    """f_n = 0.25 N: the 0.05 undershoot would leave 0.0125 N; settle_margin = 0.05 N asks for μ_k f_n - 0.05 N."""
+    ex = executor(settle_margin=0.05)
+    out = []
+    ex.start(SlideOrder(0, 1, -0.010), meas(0.0), out)
+    ex.advance(meas(0.001, sliding=(True, False, False), xi_dot=(0.001, 0, 0)), out)
+    arrived = meas(0.2, xi=(-0.0101, XI[1], XI[2]), xi_dot=(0.001, 0, 0), sliding=(True, False, False),
+                   normal=(0.25, 1.0, 1.0), tangential=(0.125, 0.0, 0.0))
+    ex.advance(arrived, out)
+    control, law, _, _ = command(ex, 0.2, arrived, out)
+    fn, ft = control.contact_forces_surface[0]
+    assert law == "fixed contacts (cone edge)" and ft == pytest.approx((0.5 - 0.05 / 0.25) * fn, rel=1e-9)
+    heavy = executor(settle_margin=0.05)  # f_n = 2 N: the undershoot's 0.1 N is the larger margin
+    heavy.start(SlideOrder(0, 1, -0.010), meas(0.0), out)
+    heavy.advance(meas(0.001, sliding=(True, False, False), xi_dot=(0.001, 0, 0)), out)
+    heavy.advance(meas(0.2, xi=(-0.0101, XI[1], XI[2]), xi_dot=(0.001, 0, 0), sliding=(True, False, False),
+                       normal=(2.0, 1.0, 1.0), tangential=(1.0, 0.0, 0.0)), out)
+    fn, ft = command(heavy, 0.2, arrived, out)[0].contact_forces_surface[0]
+    assert ft == pytest.approx(0.45 * fn, rel=1e-9)
+
+
+def test_with_an_actuation_delay_a_stuck_slide_settles_until_the_torques_in_flight_are_its_own():
+    ex = executor(actuation_delay=1)
+    out = []
+    ex.start(SlideOrder(0, 1, -0.010), meas(0.0), out)
+    ex.advance(meas(0.001, sliding=(True, False, False), xi_dot=(0.001, 0, 0)), out)
+    still = meas(0.2, xi=(-0.0101, XI[1], XI[2]))  # arrived and already stuck
+    (end,) = ex.advance(still, out)
+    assert end.kind is EventKind.ARRIVED and ex.phases[0] is ContactPhase.SETTLING
+    control, law, _, _ = command(ex, 0.2, still, out)
+    assert law == "fixed contacts"  # stuck: its own static cone, no cone edge
+    ex.advance(meas(0.201, xi=(-0.0101, XI[1], XI[2]), sliding=(True, False, False)), out)  # the last
+    assert ex.phases[0] is ContactPhase.SETTLING  # sliding law's torque broke it away: still the slide's
+    ex.advance(meas(0.202, xi=(-0.0101, XI[1], XI[2])), out)
+    assert ex.phases[0] is ContactPhase.SETTLING  # stuck for one step: one torque in flight was not its own
+    ex.advance(meas(0.203, xi=(-0.0101, XI[1], XI[2])), out)
+    assert ex.phases[0] is ContactPhase.FIXED and ex.regrasps[0] == 1
+
+
+def test_an_infeasible_slide_is_aborted_and_the_contact_held():
+    # a priming that asks finger 1 for |f_t| = 3.5 f_n: no squeeze balances that with the others in their cones
+    ex = executor(prime_overshoot=3.0, prime_overshoot_max=3.0, internal_force=InternalForceSettings(f_min=0.2, f_max=5.0))
+    out = []
+    ex.start(SlideOrder(0, 1, 0.0), meas(0.8), out)
+    control, law, _, aborted = command(ex, 0.8, meas(0.8), out)
+    (end,) = aborted
+    assert end.kind is EventKind.SLIDE_ABORTED and law == "fixed contacts" and ex.phases[0] is ContactPhase.FIXED
+    assert np.isfinite(control.tau).all() and ex.regrasps[0] == 0
+
+
+def test_orders_and_settings_are_checked():
+    ex = executor()
+    ex.start(SlideOrder(0, 1, 0.0), meas(0.0), [])
+    with pytest.raises(InvalidParameterError):
+        ex.start(SlideOrder(0, 1, 0.0), meas(0.0), [])  # not fixed
+    for bad in (dict(integral=2.0), dict(prime_overshoot_max=0.01), dict(max_reprimes=-1), dict(slide_omega=0.0),
+                dict(settle_margin=-0.1), dict(actuation_delay=-1), dict(actuation_delay=0.5), dict(start_speed=-1e-3),
+                dict(start_speed=math.nan)):
+        with pytest.raises(InvalidParameterError):
+            ExecutorSettings(**bad)
+
+
+def test_held_contacts_follow_the_sensed_positions_past_the_resolution():
+    """A fingertip that rolls moves along its edge while held: the laws' model follows it once it has moved more
+    than ``hold_resolution`` (and never a contact being slid, nor with None)."""
+    out = []
+    for resolution, drift, follows in ((2e-6, 1e-5, True), (2e-6, 1e-6, False), (None, 1e-5, False)):
+        ex = executor(hold_resolution=resolution)
+        xi = XI + np.array([drift, -drift, drift])
+        ex.advance(meas(0.1, xi=xi), out)
+        np.testing.assert_array_equal(ex.xi, xi if follows else XI)
+    ex = executor()
+    ex.start(SlideOrder(0, 1, 0.0), meas(0.0), out)
+    ex.advance(meas(0.001, xi=XI + 1e-5), out)  # contact 0 is being primed: its position is set by its phases
+    assert ex.phases[0] is ContactPhase.PRIMING and ex.xi[0] == XI[0] and ex.xi[1] == XI[1] + 1e-5
+
+
+def test_spherical_tips_add_their_couple_to_every_laws_torque():
+    from regrasp.model.sphere_tip import sphere_tip_torque
+
+    t = 0.8
+    point = command(executor(), t, meas(t), [])[0]
+    sphere = command(executor(tip_radius=5e-4), t, meas(t), [])[0]
+    beta = SC.trajectory.pose(t)[2]
+    rot = np.array([[math.cos(beta), -math.sin(beta)], [math.sin(beta), math.cos(beta)]])
+    normals = [rot @ SC.polygon.edge(c.edge).inward_normal for c in SC.contacts]
+    np.testing.assert_allclose(sphere.contact_forces, point.contact_forces, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(sphere.tau - point.tau, sphere_tip_torque(normals, point.contact_forces, 5e-4),
+                               rtol=0, atol=1e-12)
+    assert np.abs(sphere.tau - point.tau).max() > 1e-5
+
+
+def test_held_positions_follow_a_noisy_sensor_through_the_filter_and_rarely_rebuild_the_law():
+    """A held contact sensed 0.3 mm from where the model holds it, with 0.2 mm of noise: filtered (20 ms) at a
+    0.1 mm resolution the model moves there in a few steps and then stays; unfiltered at 2 um it moves every step."""
+    rng = np.random.default_rng(4)
+    truth = XI + np.array([3e-4, 0.0, 0.0])
+    readings = [truth + rng.normal(0.0, 2e-4, 3) for _ in range(300)]
+    for settings, most_moves in ((dict(hold_filter_time=0.02, hold_resolution=1e-4), 10),
+                                 (dict(hold_filter_time=None, hold_resolution=2e-6), None)):
+        ex = executor(**settings)
+        moves, last = 0, ex.xi.copy()
+        for k, xi in enumerate(readings):
+            ex.advance(meas(k * 1e-3, xi=xi), [])
+            moves += not np.array_equal(ex.xi, last)
+            last = ex.xi.copy()
+        if most_moves is None:
+            assert moves > 250  # the noise moves the model at nearly every step
+        else:
+            assert moves <= most_moves
+            np.testing.assert_allclose(ex.xi, truth, rtol=0, atol=1.5e-4)  # (the filtered noise: 0.03 mm)
