@@ -18,7 +18,6 @@ from __future__ import annotations
 import json
 
 import numpy as np
-
 from common import ROOT, median_us, parse_args, sliding_hold
 
 from regrasp import Finger, Grasp, Hand, ReducedModel

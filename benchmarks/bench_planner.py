@@ -60,9 +60,9 @@ from pathlib import Path
 
 import numpy as np
 
-from regrasp.model.collision import UrdfCollisionChecker
-from regrasp.envelope.finger_envelope import FingerEnvelope
 from regrasp.core.planar import rotation
+from regrasp.envelope.finger_envelope import FingerEnvelope
+from regrasp.model.collision import UrdfCollisionChecker
 from regrasp.model.scenario import load_scenario
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -224,6 +224,7 @@ def profile_urdf(envs, samples) -> dict:
     q = finger.inverse_kinematics(env.tip_at(pose, 0.5 * (lo + hi)))
     import coal  # noqa: PLC0415
     import pinocchio as pin  # noqa: PLC0415
+
     from regrasp.core.planar import se3_from_planar  # noqa: PLC0415
 
     pin.forwardKinematics(finger.model, finger.data, q)

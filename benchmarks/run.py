@@ -49,17 +49,26 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
-
 from common import ROOT, median_us, parse_args, sliding_hold
 
-from regrasp import (FingerEnvelope, Grasp, Hand, ReducedModel, RolloutRecorder, build_rollout, load_scenario,
-                     plan_regrasps, run_study)
 import regrasp.envelope.finger_envelope as envelope_module
+from regrasp import (
+    FingerEnvelope,
+    Grasp,
+    Hand,
+    ReducedModel,
+    RolloutRecorder,
+    RunSpec,
+    build_rollout,
+    load_scenario,
+    plan_regrasps,
+    run_study,
+)
 from regrasp.dynamics.control import FixedContactController, Gains, Proposition1Controller
 from regrasp.dynamics.internal_force.solver import InternalForceSolver
 from regrasp.kernels import FINGER_TERMS, control_step_into, envelope_sample_into, output_size, plant_step_into
 from regrasp.plants.simulation import sense
-from regrasp.supervisor.supervisor import SupervisorSettings
+from regrasp.supervisor.settings import MonitorSettings, PaperSettings, SupervisorSettings
 
 THREE = ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
 
@@ -87,8 +96,9 @@ def supervisor_step_us(geometry: str, n: int, track: bool = False) -> tuple[floa
     the tracked steps made, each at the cost of one bare call: ``tip_is_free`` where the envelopes run
     compiled, else ``coal.ComputeDistance``."""
     sc = load_scenario(THREE)
-    settings = SupervisorSettings(geometry=geometry, regrasp=False, track_envelopes=track)
-    rollout = build_rollout(sc, duration=0.01, settings=settings, xi0=[-0.0125, 0.0125, 0.0], policy="paper")
+    settings = SupervisorSettings(monitor=MonitorSettings(geometry=geometry, track=track),
+                                  paper=PaperSettings(regrasp=False))
+    rollout = build_rollout(sc, RunSpec(duration=0.01, xi0=[-0.0125, 0.0125, 0.0]), settings=settings, policy="paper")
     sup, plant = rollout.supervisor, rollout.plant
     meas = sense(plant, None)
     times = []
@@ -159,7 +169,7 @@ def stretch_step_us(n: int) -> dict:
 
     stretch_module.stretch_into = capture
     try:
-        build_rollout(load_scenario(THREE), duration=1.2).run()
+        build_rollout(load_scenario(THREE), RunSpec(duration=1.2)).run()
     finally:
         stretch_module.stretch_into = kernel
     per_step = []
@@ -180,14 +190,14 @@ def rollout_realtime(quick: bool) -> dict:
     schedule planned for both), recording off and on."""
     sc = load_scenario(THREE)
     duration = 0.2 if quick else None
-    first = build_rollout(sc, duration=duration)
+    first = build_rollout(sc, RunSpec(duration=duration))
     off = first.run()
     stretched = first.stretches.steps / off.steps
-    reference = build_rollout(sc, duration=duration, schedule=first.schedule).run(compiled_stretches=False)
+    reference = build_rollout(sc, RunSpec(duration=duration), schedule=first.schedule).run(compiled_stretches=False)
     on = {}
     with tempfile.TemporaryDirectory() as tmp:
         for decimation in (1, 10):  # every step, and ``regrasp simulate --rrd``'s default (every 10th)
-            rollout = build_rollout(sc, duration=duration, schedule=first.schedule)
+            rollout = build_rollout(sc, RunSpec(duration=duration), schedule=first.schedule)
             with RolloutRecorder(rollout.plant, rrd_path=Path(tmp) / f"bench{decimation}.rrd",
                                  decimation=decimation) as recorder:
                 on[decimation] = rollout.run(recorder=recorder)
@@ -207,7 +217,7 @@ def rollout_policies(quick: bool) -> dict:
     duration = 0.2 if quick else 2.0
     out = {}
     for policy in ("scheduled", "paper", "none"):
-        rollout = build_rollout(sc, duration=duration, policy=policy)
+        rollout = build_rollout(sc, RunSpec(duration=duration), policy=policy)
         result = rollout.run()
         out[policy] = {"realtime_factor": result.realtime_factor, "simulated_s": result.steps * rollout.plant.dt,
                        "outcome": "success" if result.success else f"failed at {result.failure.time:.3f} s"}

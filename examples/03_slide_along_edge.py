@@ -25,10 +25,10 @@ from pathlib import Path
 import numpy as np
 
 from regrasp import FingerEnvelope, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
-from regrasp.plants.closed_loop import run_closed_loop
 from regrasp.dynamics.control import Gains, Proposition3Controller
 from regrasp.dynamics.internal_force.solver import InternalForceSettings
 from regrasp.dynamics.sliding import sliding_feasibility
+from regrasp.plants.closed_loop import run_closed_loop
 
 HERE = Path(__file__).resolve().parent
 FRICTION = [Friction(0.05), Friction(0.8)]  # sliding tip, holding tip (mu_s = mu_k each)
@@ -44,7 +44,7 @@ def slide_range(sc, grasp):
     envelope = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1, geometry="urdf").at(X0)
     lo, hi = max(envelope.feasible, key=lambda iv: iv[1] - iv[0])
     lo, hi = lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo)
-    settings = InternalForceSettings(f_min=0.3, margin=0.05, f_max=6.0)
+    settings = InternalForceSettings(f_min=0.3, friction_margin=0.05, f_max=6.0)
     both = [x for x in np.arange(lo, hi + 1e-12, 5e-4)
             if all(sliding_feasibility(grasp, X0, [x, XI_HOLD], np.zeros(3), 0, s, FRICTION, object_mass=sc.polygon.mass,
                                        object_inertia=sc.polygon.inertia, gravity_in_hand=sc.gravity_in_hand,

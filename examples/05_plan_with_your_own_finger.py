@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from regrasp import ConvexPolygon, Finger, FingerContact, WaypointTrajectory, plan
+from regrasp import ConvexPolygon, Finger, WaypointTrajectory, plan
+from regrasp.model import FingerContact
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -19,7 +19,7 @@ the README's figures use 3).
 import argparse
 from pathlib import Path
 
-from regrasp import NoScheduleError, build_rollout, load_scenario
+from regrasp import NoScheduleError, RunSpec, build_rollout, load_scenario
 from regrasp.rollout.plots import plot_frames, plot_rollout
 
 SCENARIOS = Path(__file__).resolve().parent / "scenarios"
@@ -51,13 +51,13 @@ def main() -> None:
 
     print(f"Figure 4.3: trajectory 2, three fingers, gravity down, {args.periods} period(s)")
     three = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
-    scheduled = build_rollout(three, periods=args.periods)
+    scheduled = build_rollout(three, RunSpec(periods=args.periods))
     start = scheduled.schedule.xi_start
     print(header)
     results = {}
     for policy, rollout in (("scheduled", scheduled),
-                            ("paper", build_rollout(three, periods=args.periods, policy="paper", xi0=start)),
-                            ("none", build_rollout(three, periods=args.periods, policy="none", xi0=start))):
+                            ("paper", build_rollout(three, RunSpec(periods=args.periods, xi0=start), policy="paper")),
+                            ("none", build_rollout(three, RunSpec(periods=args.periods, xi0=start), policy="none"))):
         results[policy] = result = rollout.run()
         print(row(f"{policy} policy", result))
         if policy == "scheduled":
@@ -68,7 +68,7 @@ def main() -> None:
 
     print("\nFigure 4.4: trajectory 2, gravity up, a third finger on top")
     up = load_scenario(SCENARIOS / "paper_trajectory_2_gravity_up.toml")
-    rollout = build_rollout(up, periods=args.periods)
+    rollout = build_rollout(up, RunSpec(periods=args.periods))
     result = rollout.run()
     print(header)
     print(row("scheduled policy", result))

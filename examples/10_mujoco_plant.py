@@ -17,11 +17,26 @@ from pathlib import Path
 
 import numpy as np
 
-from regrasp import (Grasp, Hand, MujocoPlant, MujocoSettings, OrderedSlidesPolicy, Plant, PlantContact, ReducedModel,
-                     RegraspSupervisor, SlideOrder, SupervisorSettings, WaypointTrajectory, build_rollout,
-                     load_scenario)
+from regrasp import (
+    Grasp,
+    Hand,
+    MujocoSettings,
+    Plant,
+    PlantContact,
+    PlantSpec,
+    ReducedModel,
+    RegraspSupervisor,
+    RunSpec,
+    SupervisorSettings,
+    WaypointTrajectory,
+    build_rollout,
+    load_scenario,
+)
 from regrasp.core.events import EventKind
+from regrasp.plants.mujoco import MujocoPlant
 from regrasp.rollout.build import Rollout
+from regrasp.supervisor import SlideOrder
+from regrasp.supervisor.policies import OrderedSlidesPolicy
 
 SCENARIOS = Path(__file__).resolve().parent / "scenarios"
 XI0, MU, SPEED, START, END = -0.0075, 0.3, 0.005, 0.02, 0.32  # Figure 3.4: finger 1 7.5 mm below the centre
@@ -29,8 +44,8 @@ XI0, MU, SPEED, START, END = -0.0075, 0.3, 0.005, 0.02, 0.32  # Figure 3.4: fing
 
 def hold(sc, plant, radius):
     """The two-finger hold on ``plant``: (orientation error [mrad], position error [mm], events)."""
-    options = {} if plant == "project" else dict(plant="mujoco", mujoco_settings=MujocoSettings(tip_radius=radius))
-    r = build_rollout(sc, policy="none", duration=1.0, **options).run()
+    spec = PlantSpec() if plant == "project" else PlantSpec("mujoco", MujocoSettings(tip_radius=radius))
+    r = build_rollout(sc, RunSpec(duration=1.0), policy="none", plant=spec).run()
     return r.max_orientation_error_after_transient * 1e3, r.max_object_error_after_transient * 1e3, r.plant_event_counts()
 
 
@@ -50,8 +65,8 @@ def figure_3_4(sc, plant, radius):
 
     order = SlideOrder(0, 1, planned(END)[0], reference=planned, planned_start=START, planned_end=END)
     # a break-away excess of 0.01 f_n: 0.05 f_n throws MuJoCo's 5 g fingertip to ~25 mm/s in one step, 5x the slide's
-    settings = SupervisorSettings.robust("ideal", 0.2, prime_overshoot=0.01, tip_radius=radius if plant == "mujoco"
-                                         else 0.0)
+    settings = SupervisorSettings.robust("ideal", 0.2, tip_radius=radius if plant == "mujoco" else 0.0)
+    settings = settings.with_executor(prime_overshoot=0.01)
     supervisor = RegraspSupervisor(hand, sc.polygon, [1, 3], WaypointTrajectory([0.0, 1.0], [pose, pose]), [XI0, XI0],
                                    MU, settings=settings, policy=OrderedSlidesPolicy([order], 2))
     r = Rollout(p, supervisor, END, ("finger1", "finger2"), "ordered").run()
@@ -62,8 +77,8 @@ def figure_3_4(sc, plant, radius):
 
 
 def scheduled(sc, plant, radius, seconds):
-    options = {} if plant == "project" else dict(plant="mujoco", mujoco_settings=MujocoSettings(tip_radius=radius))
-    r = build_rollout(sc, duration=seconds, **options).run()
+    spec = PlantSpec() if plant == "project" else PlantSpec("mujoco", MujocoSettings(tip_radius=radius))
+    r = build_rollout(sc, RunSpec(duration=seconds), plant=spec).run()
     outcome = "success" if r.success else f"{r.failure.kind.value} at {r.failure.time:.3f} s"
     slides = sum(r.regrasps.values())
     return (f"{outcome}, {slides} slides, error {r.max_object_error_after_transient * 1e3:.3f} mm / "

@@ -25,16 +25,15 @@ runs of the largest object position and orientation errors after the first 0.5 s
 
 import argparse
 import os
-from dataclasses import replace
-from statistics import median
 from pathlib import Path
+from statistics import median
 
 from regrasp import load_scenario
+from regrasp.core.contact import DEFAULT_CONE_MARGIN
 from regrasp.dynamics.internal_force.solver import InternalForceSettings
-from regrasp.rollout.build import DEFAULT_CONE_MARGIN
 from regrasp.schedule.planner import RegraspSettings, plan_regrasps
 from regrasp.study.study import Perturbation, run_study
-from regrasp.supervisor.supervisor import SupervisorSettings
+from regrasp.supervisor.settings import SupervisorSettings
 
 SCENARIO = Path(__file__).resolve().parent / "scenarios" / "paper_trajectory_2_three_fingers.toml"
 
@@ -47,17 +46,18 @@ def variants(geometry: str, delay: int, hold_resolution: float) -> list[tuple[st
     """The supervisors of the docstring, each the one before plus one change."""
     today = SupervisorSettings.robust(geometry, DEFAULT_CONE_MARGIN, actuation_delay=delay,
                                       hold_resolution=hold_resolution)
-    before = replace(today, settle_margin=0.0, actuation_delay=0, breakaway_estimate=False, start_speed=None,
-                     internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=DEFAULT_CONE_MARGIN),
-                     hold_resolution=None, hold_filter_time=None)
+    now = today.executor
+    before = today.with_executor(settle_margin=0.0, actuation_delay=0, breakaway_estimate=False, start_speed=None,
+                                 internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=DEFAULT_CONE_MARGIN),
+                                 hold_resolution=None, hold_filter_time=None)
     steps = [("0 issue 12's robust settings", before)]
-    steps.append(("1 + settle margin 0.05 N", replace(steps[-1][1], settle_margin=today.settle_margin)))
-    steps.append(("2 + the delay told", replace(steps[-1][1], actuation_delay=today.actuation_delay)))
-    steps.append(("3 + estimate at break-away", replace(steps[-1][1], breakaway_estimate=True)))
-    steps.append(("4 + start speed 1 mm/s", replace(steps[-1][1], start_speed=today.start_speed)))
-    steps.append(("5 + cone ratio margin 0.1", replace(steps[-1][1], internal_force=today.internal_force)))
-    steps.append(("6 + held positions filtered", replace(steps[-1][1], hold_resolution=today.hold_resolution,
-                                                         hold_filter_time=today.hold_filter_time)))
+    steps.append(("1 + settle margin 0.05 N", steps[-1][1].with_executor(settle_margin=now.settle_margin)))
+    steps.append(("2 + the delay told", steps[-1][1].with_executor(actuation_delay=now.actuation_delay)))
+    steps.append(("3 + estimate at break-away", steps[-1][1].with_executor(breakaway_estimate=True)))
+    steps.append(("4 + start speed 1 mm/s", steps[-1][1].with_executor(start_speed=now.start_speed)))
+    steps.append(("5 + cone ratio margin 0.1", steps[-1][1].with_executor(internal_force=now.internal_force)))
+    steps.append(("6 + held positions filtered", steps[-1][1].with_executor(hold_resolution=now.hold_resolution,
+                                                                            hold_filter_time=now.hold_filter_time)))
     if steps[-1][1] != today:
         raise SystemExit("the last variant is not SupervisorSettings.robust: update this example")
     return steps

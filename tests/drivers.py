@@ -17,7 +17,7 @@ class Driver:
 
 
 def driver(rollout, **kw):
-    from regrasp.rollout.build import _SupervisorDriver  # noqa: PLC2701 (the test wraps the rollout's own driver)
+    from regrasp.rollout.build import SupervisorDriver
 
-    return Driver(_SupervisorDriver(rollout.supervisor), **kw)
+    return Driver(SupervisorDriver(rollout.supervisor), **kw)
 

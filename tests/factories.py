@@ -16,9 +16,9 @@ import scipy.optimize
 from scipy.spatial import ConvexHull
 
 from regrasp.core.exceptions import PolygonError
+from regrasp.core.polygon import ConvexPolygon
 from regrasp.model.finger import Finger
 from regrasp.model.finger_urdf import planar_2r_urdf
-from regrasp.core.polygon import ConvexPolygon
 
 
 def rot(beta: float) -> np.ndarray:

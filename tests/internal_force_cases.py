@@ -94,7 +94,7 @@ def constraint_rows(frames, fixed, mu, settings: InternalForceSettings):
         a[2 * i:2 * i + 2] = n
         rows.append((a, settings.f_min))
         if fixed[i]:
-            slope = mu[i] - settings.margin
+            slope = mu[i] - settings.friction_margin
             for sgn in (1.0, -1.0):
                 a = np.zeros(2 * m)
                 a[2 * i:2 * i + 2] = slope * n - sgn * t
@@ -109,7 +109,7 @@ def worst_violation(forces, frames, fixed, mu, settings) -> float:
     for i, (fn, ft) in enumerate(surface):
         worst = max(worst, settings.f_min - fn)
         if fixed[i]:
-            worst = max(worst, abs(ft) - (mu[i] - settings.margin) * fn)
+            worst = max(worst, abs(ft) - (mu[i] - settings.friction_margin) * fn)
     return float(worst)
 
 
@@ -164,7 +164,7 @@ def random_case(kind: str, seed: int):
             continue
         break
     mu = rng.uniform(0.45, 1.0, m)
-    settings = InternalForceSettings(f_min=rng.uniform(0.2, 1.0), margin=rng.uniform(0.0, 0.1))
+    settings = InternalForceSettings(f_min=rng.uniform(0.2, 1.0), friction_margin=rng.uniform(0.0, 0.1))
     if seed % 2 == 0:
         # the motion part of a controller (no internal force): f_m = J^-T (τ_m - M q̈ - N)
         gains = Gains.critically_damped(rng.uniform(5.0, 30.0), model.n)

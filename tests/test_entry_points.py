@@ -7,6 +7,7 @@ complex number, a NaN) are never accepted. (``cone_margin`` is left out: it is a
 arrays in the control and plant loops, documented as unchecked.)
 """
 
+import importlib
 import math
 from pathlib import Path
 
@@ -15,11 +16,30 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import regrasp as R
 from regrasp.core.exceptions import RegraspError
 from regrasp.model.hand import Hand
 from regrasp.model.sphere_tip import sphere_tip_torque
-from regrasp.study.study import draw_runs, wilson_interval
+from regrasp.study.draws import draw_runs
+from regrasp.study.study import wilson_interval
+
+#: Where the public names are: the package and every subpackage's exports.
+PACKAGES = ("regrasp", "regrasp.core", "regrasp.model", "regrasp.envelope", "regrasp.dynamics",
+            "regrasp.dynamics.internal_force", "regrasp.plants", "regrasp.plants.mujoco", "regrasp.schedule",
+            "regrasp.supervisor", "regrasp.supervisor.policies", "regrasp.rollout", "regrasp.study")
+
+
+class _Public:
+    """``R.Name``: the public name from whichever package exports it."""
+
+    def __getattr__(self, name: str):
+        for package in PACKAGES:
+            module = importlib.import_module(package)
+            if name in module.__all__:
+                return getattr(module, name)
+        raise AttributeError(name)
+
+
+R = _Public()
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"
@@ -95,7 +115,18 @@ ENTRIES = {
  "plan": (R.plan, [SC.contacts, BOX, TRAJ], dict(samples=5, geometry="ideal")),
  "plan_scenario": (R.plan_scenario, [SC], dict(samples=5, geometry="ideal")),
  "RegraspSettings": (R.RegraspSettings, [], dict(envelope_margin=0.001, cone_margin=0.1, f_min=0.2, f_max=20.0)),
- "SupervisorSettings": (R.SupervisorSettings, [], dict(danger_fraction=0.1, reaction_time=0.4, omega_n=20.0)),
+ "SupervisorSettings": (R.SupervisorSettings, [], dict(executor=R.ExecutorSettings(), monitor=R.MonitorSettings(),
+                                                      paper=R.PaperSettings(), scheduled=R.ScheduledSettings())),
+ "SupervisorSettings.robust": (R.SupervisorSettings.robust, ["urdf", 0.2], dict(actuation_delay=1, tip_radius=2.5e-4,
+                                                                                hold_resolution=2e-6)),
+ "ExecutorSettings": (R.ExecutorSettings, [], dict(omega_n=20.0, prime_time=0.02, settle_margin=0.05, integral=0.3)),
+ "MonitorSettings": (R.MonitorSettings, [], dict(geometry="ideal", every=10, track=False)),
+ "PaperSettings": (R.PaperSettings, [], dict(danger_fraction=0.1, reaction_time=0.4, path_checks=3)),
+ "ModelErrors": (R.ModelErrors, [], dict(mass_scale=1.1, inertia_scale=0.9, link_mass_scale=1.0, mu_scale=0.9,
+                                        mu_kinetic_scale=1.0, xi_offset=(1e-4, -1e-4))),
+ "PlantSpec": (R.PlantSpec, ["project"], dict(errors=R.ModelErrors(mass_scale=1.1), friction=0.5)),
+ "RunSpec": (R.RunSpec, [], dict(duration=1.0, dt=1e-3, seed=3, xi0=(0.0, 0.01), sensor_noise=R.SensorNoise(xi=1e-4),
+                                actuator_noise=R.ActuatorNoise(delay=1))),
  "ScheduledSettings": (R.ScheduledSettings, [], dict(prime_lead=0.0, time_tolerance=0.05, xi_tolerance=0.001)),
  "sliding_feasibility": (R.sliding_feasibility, [GRASP, X0, [0.0, 0.0], [0.0, 0.0, 0.0], 0, 1.0, 0.5], dict(object_mass=0.08, object_inertia=1e-4)),
  "default_tip_clearance": (R.default_tip_clearance, [F1], {}),

@@ -14,22 +14,22 @@ from regrasp import (
     ConvexPolygon,
     EllipseTrajectory,
     Finger,
-    FingerContact,
     Grasp,
     Plant,
     PlantContact,
+    RunSpec,
     WaypointTrajectory,
-    condition_of,
     build_rollout,
     load_scenario,
     plan,
     planar_2r_urdf,
-    reachable_on_line,
-    sliding_feasibility,
 )
 from regrasp.core.exceptions import RegraspError
-from regrasp.model.hand import Hand
 from regrasp.core.validation import as_finite_float
+from regrasp.dynamics import sliding_feasibility
+from regrasp.envelope import condition_of, reachable_on_line
+from regrasp.model import FingerContact
+from regrasp.model.hand import Hand
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"
@@ -108,15 +108,16 @@ def test_a_bad_input_is_a_typed_one_line_error_or_a_valid_result(case):
 
 
 def test_a_closed_loop_or_a_rollout_of_a_billion_seconds_is_refused():
-    from regrasp import build_rollout, run_closed_loop
+    from regrasp import build_rollout
     from regrasp.dynamics.control import FixedContactController, Gains
     from regrasp.dynamics.reduced import ReducedModel
+    from regrasp.plants import run_closed_loop
 
     sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
     with pytest.raises(RegraspError, match="duration"):
-        build_rollout(sc, policy="paper", duration=1e9)
+        build_rollout(sc, RunSpec(duration=1e9), policy="paper")
     with pytest.raises(RegraspError, match="periods"):
-        build_rollout(sc, policy="paper", periods=10**6)
+        build_rollout(sc, RunSpec(periods=10**6), policy="paper")
     p = plant()
     model = ReducedModel(p.hand, Grasp(BOX, [1, 3], ["fixed", "fixed"]), [0.0, 0.0])
     law = FixedContactController(model, Gains.critically_damped(20.0, 3))
@@ -175,9 +176,8 @@ def test_a_bad_urdf_is_one_line_with_urdfdom_kept_off_stderr(tmp_path, capfd, te
 
 
 def test_huge_links_and_infinite_positions_are_refused():
-    from regrasp import EnvelopeSample  # noqa: F401 (public)
-    from regrasp.envelope.finger_envelope import FingerEnvelope
     from regrasp.core.exceptions import InvalidParameterError
+    from regrasp.envelope.finger_envelope import FingerEnvelope
 
     with pytest.raises(InvalidParameterError, match="l2"):
         planar_2r_urdf(0.1, 1e300)

@@ -179,8 +179,8 @@ def test_a_generated_urdf_is_a_one_line_finger_error_or_a_finite_finger(tmp_path
     import pinocchio as pin
 
     from regrasp import Finger
-    from regrasp.model.collision import checked_link_shapes, default_tip_clearance
     from regrasp.core.exceptions import FingerModelError, RegraspError
+    from regrasp.model.collision import checked_link_shapes, default_tip_clearance
 
     path = tmp_path_factory.mktemp("urdf") / "finger.urdf"
     path.write_text(mutated_urdf(URDF_TEXT, edits))

@@ -17,7 +17,7 @@ def test_contact_mode_members_equal_their_strings():
     assert ContactMode("sliding") is ContactMode.SLIDING
     assert ContactMode.FIXED == "fixed" and hash(ContactMode.FIXED) == hash("fixed")
     assert {"fixed": 0}[ContactMode.FIXED] == 0  # dictionaries keyed by the strings still look up
-    assert regrasp.ContactMode is ContactMode and regrasp.Friction is Friction and regrasp.cone_margin is cone_margin
+    assert regrasp.ContactMode is ContactMode and regrasp.Friction is Friction and regrasp.core.cone_margin is cone_margin
 
 
 def test_as_modes_converts_strings_and_rejects_anything_else():

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from regrasp import Finger, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
-from regrasp.plants.closed_loop import run_closed_loop
+from regrasp.core.exceptions import InvalidParameterError
 from regrasp.dynamics.control import (
     FixedContactController,
     Gains,
@@ -21,8 +21,8 @@ from regrasp.dynamics.control import (
     Proposition2Controller,
     Proposition3Controller,
 )
-from regrasp.core.exceptions import InvalidParameterError
 from regrasp.dynamics.internal_force.solver import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
+from regrasp.plants.closed_loop import run_closed_loop
 
 ROOT = Path(__file__).resolve().parents[2]
 SC = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
@@ -56,7 +56,7 @@ CASES = {
 }
 
 
-def run(name, duration=0.4, dt=1e-3, friction_noise=0.0):
+def run(name, duration=0.4, dt=1e-3, force_noise=0.0):
     law, m, modes, xi, mu, speed = CASES[name]
     fingers = [c.finger for c in SC.contacts] + ([FINGER3] if m == 3 else [])
     edges = [1, 3, 2][:m]
@@ -82,7 +82,7 @@ def run(name, duration=0.4, dt=1e-3, friction_noise=0.0):
     plant = Plant(hand, SC.polygon, contacts, friction=mu, dt=dt)
     plant.reset(st.q, st.q_dot, S0[:3], velocity[:3])
     controller = law(model, Gains.critically_damped(OMEGA, n), friction=mu)
-    log = run_closed_loop(plant, controller, reference, duration, friction_noise=friction_noise,
+    log = run_closed_loop(plant, controller, reference, duration, force_noise=force_noise,
                           rng=np.random.default_rng(0))
     t = log.times
     predicted = (E0[None, :n] + OMEGA * E0[None, :n] * t[:, None]) * np.exp(-OMEGA * t)[:, None]
@@ -126,7 +126,7 @@ def test_proposition1_is_measurably_worse_with_friction():
 
 
 def test_proposition2_tracks_with_noisy_friction_measurements():
-    log, deviation, fixed = run("prop2", friction_noise=0.002)
+    log, deviation, fixed = run("prop2", force_noise=0.002)
     assert log.events == ()
     assert deviation < 0.05
     assert log.cone_margins[:, fixed].min() > 0.0
@@ -191,7 +191,7 @@ def test_proposition3_with_three_fingers_chooses_the_sliders_normal_force():
     the QP's margins, also where Proposition 2 on the cone edge fails because the measured
     friction over μ is below the minimum push."""
     model, S, mu, speed = model_of("prop3_m3")
-    settings = InternalForceSettings(f_min=0.5, margin=0.05)
+    settings = InternalForceSettings(f_min=0.5, friction_margin=0.05)
     rng = np.random.default_rng(4)
     law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), friction=mu, internal_force=settings)
     for _ in range(5):
@@ -207,12 +207,12 @@ def test_proposition3_with_three_fingers_chooses_the_sliders_normal_force():
         assert abs(f_t[0] - mu[0] * f_n[0]) < 1e-9  # sliding in +ξ: friction on the object along +t
         assert abs(out.friction_estimate[0] - f_t[0]) < 1e-9  # f̂_ξ is the slider's predicted friction
         assert f_n.min() >= settings.f_min - 1e-6
-        assert np.all(np.abs(f_t[1:]) <= (mu[1:] - settings.margin) * f_n[1:] + 1e-6)
+        assert np.all(np.abs(f_t[1:]) <= (mu[1:] - settings.friction_margin) * f_n[1:] + 1e-6)
     pinned = Proposition2Controller(model, Gains.critically_damped(OMEGA, 4), friction=mu, internal_force=settings,
                                     cone_edge=ConeEdge(0, 1.0, mu[0]))
     with pytest.raises(InternalForceInfeasibleError):
         pinned(S, np.append(np.zeros(3), speed), S, np.append(np.zeros(3), speed), np.zeros(4),
-               friction=[0.5 * mu[0] * settings.f_min])
+               tangential_force=[0.5 * mu[0] * settings.f_min])
     assert law(S, np.append(np.zeros(3), speed), S, np.append(np.zeros(3), speed), np.zeros(4)).internal.feasible
 
 
@@ -233,7 +233,7 @@ def test_proposition3_puts_the_slider_on_its_kinetic_edge_and_reports_each_modes
     μ_k f_n - |f_t| at the slider (0) and μ_s f_n - |f_t| at the others."""
     law_class, m, modes, xi, friction, speed = CASES[name]
     model, S, _, _ = model_of(name)
-    settings = InternalForceSettings(f_min=0.5, margin=0.05)
+    settings = InternalForceSettings(f_min=0.5, friction_margin=0.05)
     law = Proposition3Controller(model, Gains.critically_damped(OMEGA, 4), friction=friction, internal_force=settings)
     static = np.array([f.static for f in friction])
     rng = np.random.default_rng(8)
@@ -246,7 +246,7 @@ def test_proposition3_puts_the_slider_on_its_kinetic_edge_and_reports_each_modes
         expected = np.concatenate([[friction[0].kinetic * f_n[0] - abs(f_t[0])], static[1:] * f_n[1:] - np.abs(f_t[1:])])
         np.testing.assert_allclose(out.cone_margins, expected, rtol=0, atol=1e-12)
         if m > 2:
-            assert np.all(np.abs(f_t[1:]) <= (static[1:] - settings.margin) * f_n[1:] + 1e-6)
+            assert np.all(np.abs(f_t[1:]) <= (static[1:] - settings.friction_margin) * f_n[1:] + 1e-6)
 
 
 # ---------------------------------------------------------------------------- several sliders, several cone edges

@@ -4,7 +4,8 @@ differences, B_v/B_f/G_f/P against the object's equation solved directly, and Re
 import numpy as np
 import pytest
 
-from regrasp import ConvexPolygon, Friction, InvalidParameterError, SlidingContactCountError
+from regrasp import ConvexPolygon, Friction, InvalidParameterError
+from regrasp.core import SlidingContactCountError
 from regrasp.dynamics.grasp import Grasp
 
 H_STEP = 1e-6

@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import ConvexPolygon, Finger, Grasp, Hand, Plant, PlantContact, ReducedModel, SingularFingerError
+from regrasp import ConvexPolygon, Finger, Grasp, Hand, Plant, PlantContact, ReducedModel
+from regrasp.core import SingularFingerError
 from regrasp.core.contact import Friction
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -34,11 +34,11 @@ import scipy.optimize
 
 from factories import random_polygon
 from regrasp import Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
-from regrasp.plants.closed_loop import run_closed_loop
-from regrasp.dynamics.control import Gains, Proposition3Controller
 from regrasp.core.exceptions import InvalidParameterError
+from regrasp.dynamics.control import Gains, Proposition3Controller
 from regrasp.dynamics.internal_force.solver import InternalForceSettings, InternalForceSolver
 from regrasp.dynamics.sliding import SlideFeasibility, sliding_feasibility
+from regrasp.plants.closed_loop import run_closed_loop
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIO = ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml"
@@ -143,7 +143,7 @@ def random_slide_case(seed: int, m: int):
         settings, f_min, margin = None, 0.0, 0.0  # the default: bare physics
     else:
         f_min, margin = rng.uniform(0.0, 0.5), rng.uniform(0.0, 0.08)
-        settings = InternalForceSettings(f_min=f_min, margin=margin)
+        settings = InternalForceSettings(f_min=f_min, friction_margin=margin)
     # half the cases: kinetic coefficients 30 to 100 % of the static ones (mu); the friction law of the
     # slider uses its μ_k, the fixed contacts' cones their μ_s
     kinetic = mu * rng.uniform(0.3, 1.0, m) if rng.random() < 0.5 else mu.copy()
@@ -371,7 +371,7 @@ def test_persistent_solver_gives_the_one_shot_verdicts():
     for seed in THREE_FINGER_SEEDS:
         c = random_slide_case(seed, 3)
         one_shot = run(c)
-        settings = c["settings"] or InternalForceSettings(f_min=0.0, margin=0.0)  # the predicate's default
+        settings = c["settings"] or InternalForceSettings(f_min=0.0, friction_margin=0.0)  # the predicate's default
         grasp = Grasp(c["polygon"], c["edges"], ["fixed"] * 3)
         fast = sliding_feasibility(grasp, c["pose"], c["xi"], c["acc"], c["j"], c["s"], c["friction"],
                                    object_mass=c["mass"], object_inertia=c["inertia"], gravity_in_hand=c["gravity"],
@@ -469,8 +469,8 @@ def test_figure_3_4_png(tmp_path):
     import numpy as np
 
     from regrasp import Grasp, load_scenario
-    from regrasp.envelope.plotting import plot_slide_feasibility
     from regrasp.dynamics.sliding import sliding_feasibility
+    from regrasp.envelope.plotting import plot_slide_feasibility
 
     root = __import__("pathlib").Path(__file__).resolve().parents[2]
     sc = load_scenario(root / "examples" / "scenarios" / "paper_trajectory_2.toml")

@@ -35,10 +35,10 @@ import pytest
 
 from factories import make_case, make_finger, perp2, rot
 from regrasp import load_scenario
-from regrasp.envelope.finger_envelope import Condition, FingerEnvelope
-from regrasp.envelope.tracker import EnvelopeTracker
 from regrasp.core.exceptions import InvalidParameterError
 from regrasp.core.polygon import ConvexPolygon
+from regrasp.envelope.finger_envelope import Condition, FingerEnvelope
+from regrasp.envelope.tracker import EnvelopeTracker
 
 N_CASES = 200
 N_GRID = 40001  # grid points over the whole annulus window
@@ -498,8 +498,8 @@ def test_closed_form_reachable_set_matches_the_elbow_margin_classifier():
 # --------------------------------------------------------------------------- float fast paths
 def test_float_helpers_match_numpy():
     """The envelope's float helpers reproduce numpy's linspace and wrap_angle bit for bit."""
-    from regrasp.envelope.finger_envelope import _linspace, _wrap
     from regrasp.core.planar import wrap_angle
+    from regrasp.envelope.finger_envelope import _linspace, _wrap
 
     rng = np.random.default_rng(7)
     for _ in range(2000):

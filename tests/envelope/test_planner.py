@@ -5,8 +5,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import EllipseTrajectory, Finger, FingerContact, load_scenario, plan, plan_scenario
+from regrasp import EllipseTrajectory, Finger, load_scenario, plan, plan_scenario
 from regrasp.core.intervals import contains
+from regrasp.model import FingerContact
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = ROOT / "examples" / "scenarios"

@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
+from internal_force_cases import EDGES, KINDS, Y0, make_hand, polygon
 from regrasp.core.contact import Friction
-from regrasp.dynamics.control import FixedContactController, Gains, Proposition1Controller
 from regrasp.core.exceptions import SingularFingerError, UnreachableError
+from regrasp.dynamics.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.dynamics.grasp import Grasp
 from regrasp.dynamics.internal_force.solver import InternalForceSettings
 from regrasp.dynamics.reduced import ReducedModel
-from internal_force_cases import EDGES, KINDS, Y0, make_hand, polygon
-from regrasp.dynamics.grasp import Grasp
 
 
 def controllers(kind, seed, **kwargs):

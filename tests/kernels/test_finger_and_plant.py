@@ -4,22 +4,22 @@ fingers, the hand's check and fallback, the plant's compiled step against its re
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import regrasp.kernels.finger as kernel_finger
-from regrasp import Hand, load_scenario
+from regrasp import Hand, RunSpec, load_scenario
 from regrasp.core.contact import ContactMode, Friction
 from regrasp.core.exceptions import InvalidParameterError
-from regrasp.model.finger import Finger
-from regrasp.model.hand import KERNEL_TOLERANCE, KernelMismatchWarning
+from regrasp.core.polygon import ConvexPolygon
 from regrasp.kernels import finger_parameters, finger_terms_at
 from regrasp.kernels.finger import largest_disagreement, reference_terms
+from regrasp.model.finger import Finger
+from regrasp.model.hand import KERNEL_TOLERANCE, KernelMismatchWarning
 from regrasp.plants.project.plant import Plant, PlantContact
-from regrasp.core.polygon import ConvexPolygon
-from pathlib import Path
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 
@@ -201,7 +201,7 @@ def test_a_scheduled_rollout_is_the_same_on_both_paths():
     sc = load_scenario(EXAMPLES / "paper_trajectory_2_three_fingers.toml")
     runs = []
     for compiled in (False, True):
-        rollout = build_rollout(sc, duration=1.4)
+        rollout = build_rollout(sc, RunSpec(duration=1.4))
         rollout.plant.compiled = compiled
         result = rollout.run()
         runs.append((rollout.plant.state, [(e.kind, e.contact) for e in rollout.plant.events], result.success))

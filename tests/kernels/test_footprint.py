@@ -22,12 +22,12 @@ import pytest
 from factories import make_case, random_polygon
 from factories import make_finger as make_random_finger
 from regrasp import load_scenario
-from regrasp.model.collision import UrdfCollisionChecker
-from regrasp.envelope.finger_envelope import FingerEnvelope
 from regrasp.core.exceptions import InvalidParameterError
-from regrasp.model.finger import Finger
-from regrasp.kernels.footprint import footprint_distances
 from regrasp.core.polygon import ConvexPolygon
+from regrasp.envelope.finger_envelope import FingerEnvelope
+from regrasp.kernels.footprint import footprint_distances
+from regrasp.model.collision import UrdfCollisionChecker
+from regrasp.model.finger import Finger
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = sorted((ROOT / "examples" / "scenarios").glob("*.toml"))
@@ -276,8 +276,8 @@ def test_capsules_and_spheres_match_coal(seed):
     import coal
     import pinocchio as pin
 
-    from regrasp.model.collision import planar_footprint
     from regrasp.kernels.footprint import FOOTPRINT
+    from regrasp.model.collision import planar_footprint
 
     rng = np.random.default_rng(seed)
     polygon = random_polygon(rng, 0.1)

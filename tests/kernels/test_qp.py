@@ -10,10 +10,10 @@ import scipy.linalg
 import scipy.optimize
 import scipy.sparse as sp
 
+from internal_force_cases import KINDS, random_case, worst_violation
 from regrasp.dynamics.internal_force.solver import InternalForceInfeasibleError, InternalForceSolver
 from regrasp.kernels.force import null_basis
 from regrasp.kernels.qp import INFEASIBLE, SOLVED, diagonal_qp
-from internal_force_cases import KINDS, random_case, worst_violation
 
 
 def random_qp(rng, n, n_ineq, n_eq, feasible=True):

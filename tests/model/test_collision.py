@@ -20,12 +20,12 @@ import pytest
 
 from factories import make_case
 from factories import make_finger as make_random_finger
-from regrasp.envelope.finger_envelope import Condition, FingerEnvelope
 from regrasp.core.exceptions import FingerModelError
-from regrasp.model.finger import Finger
-from regrasp.model.finger_urdf import planar_2r_urdf
 from regrasp.core.planar import se3_from_planar
 from regrasp.core.polygon import ConvexPolygon
+from regrasp.envelope.finger_envelope import Condition, FingerEnvelope
+from regrasp.model.finger import Finger
+from regrasp.model.finger_urdf import planar_2r_urdf
 
 RHO = 0.01  # fixed tip clearance [m]
 RADII = (4e-3, 1e-3, 2.5e-4)  # link radii [m], links ~0.1 m

@@ -6,7 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import Finger, Hand, SingularFingerError
+from regrasp import Finger, Hand
+from regrasp.core import SingularFingerError
 
 ROOT = Path(__file__).resolve().parents[2]
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"

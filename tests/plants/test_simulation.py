@@ -5,13 +5,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import load_scenario
+from drivers import driver
+from regrasp import RunSpec, load_scenario
 from regrasp.core.events import EventKind, EventSource, Failure, FailureKind
 from regrasp.core.exceptions import RegraspError
-from regrasp.rollout.build import build_rollout
 from regrasp.plants.simulation import simulate
-
-from drivers import driver
+from regrasp.rollout.build import build_rollout
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 
@@ -19,7 +18,7 @@ SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 @pytest.fixture()
 def rollout():
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
-    return build_rollout(sc, duration=0.05, policy="none", xi0=[-0.0125, 0.0125, 0.0])
+    return build_rollout(sc, RunSpec(duration=0.05, xi0=[-0.0125, 0.0125, 0.0]), policy="none")
 
 
 
@@ -120,7 +119,7 @@ def test_a_second_sigint_raises_at_once_and_a_nested_deferral_shares_the_outer_r
 
 def test_plant_events_are_in_the_record_with_their_source():
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
-    rollout = build_rollout(sc, duration=0.01, policy="paper")  # finger 1 starts next to its bound: it slides
+    rollout = build_rollout(sc, RunSpec(duration=0.01), policy="paper")  # finger 1 starts next to its bound: it slides
     result = rollout.run()
     slips = [e for e in result.events if e.kind is EventKind.SLIP]
     assert slips and all(e.source is EventSource.PLANT for e in slips)

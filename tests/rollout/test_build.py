@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import ContactMode, FingerEnvelope, Friction, load_scenario
+from regrasp import ContactMode, FingerEnvelope, Friction, ModelErrors, PlantSpec, RunSpec, load_scenario
 from regrasp.core.events import EventKind, EventSource, FailureKind
 from regrasp.core.exceptions import InvalidParameterError, ScenarioError
 from regrasp.rollout.build import build_rollout
@@ -17,7 +17,7 @@ SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 @pytest.fixture(scope="module")
 def three_fingers_run():
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
-    rollout = build_rollout(sc, duration=0.6, policy="paper")
+    rollout = build_rollout(sc, RunSpec(duration=0.6), policy="paper")
     return sc, rollout, rollout.run()
 
 
@@ -86,13 +86,17 @@ def test_the_summary_is_json_with_the_documented_keys(two_fingers_run):
     assert result.realtime_factor > 0.0
 
 
-@pytest.mark.parametrize("kwargs", [dict(duration=-1.0), dict(duration=0.0), dict(duration=np.nan), dict(periods=0),
-                                    dict(periods=1.5), dict(periods=2, duration=1.0), dict(policy="greedy"),
-                                    dict(plant_mass_scale=0.0), dict(plant_mu_scale=np.inf)])
-def test_bad_durations_and_options_are_rejected(kwargs):
-    sc = load_scenario(SCENARIOS / "paper_trajectory_2.toml")
+@pytest.mark.parametrize("make", [lambda: RunSpec(duration=-1.0), lambda: RunSpec(duration=0.0),
+                                  lambda: RunSpec(duration=np.nan), lambda: RunSpec(periods=0),
+                                  lambda: RunSpec(periods=1.5), lambda: RunSpec(periods=2, duration=1.0),
+                                  lambda: build_rollout(load_scenario(SCENARIOS / "paper_trajectory_2.toml"),
+                                                        RunSpec(xi0=[-0.01, 0.01]), policy="greedy"),
+                                  lambda: ModelErrors(mass_scale=0.0), lambda: ModelErrors(mu_scale=np.inf),
+                                  lambda: PlantSpec("drake"), lambda: PlantSpec(errors=1.0)])
+def test_bad_durations_and_options_are_rejected(make):
     with pytest.raises(InvalidParameterError):
-        build_rollout(sc, xi0=[-0.01, 0.01], **{"policy": "paper", **kwargs})
+        make()
+
 
 
 def test_a_fingertips_friction_comes_from_the_scenario(tmp_path):
@@ -104,12 +108,11 @@ def test_a_fingertips_friction_comes_from_the_scenario(tmp_path):
     good.write_text(text.replace("edge = 3\n", "edge = 3\nmu_static = 0.8\nmu_kinetic = 0.6\n"))
     sc = load_scenario(good)
     assert sc.friction == (Friction(0.5), Friction(0.8, 0.6))  # 0.5 when unset
-    rollout = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01], policy="paper")
+    rollout = build_rollout(sc, RunSpec(duration=0.01, xi0=[-0.01, 0.01]), policy="paper")
     assert rollout.plant.friction == rollout.supervisor.context.friction == sc.friction
-    other = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01], plant_friction=Friction(0.9, 0.3), policy="paper")
+    other = build_rollout(sc, RunSpec(duration=0.01, xi0=[-0.01, 0.01]), policy="paper", plant=PlantSpec(friction=Friction(0.9, 0.3)))
     assert other.plant.friction == (Friction(0.9, 0.3),) * 2 and other.supervisor.context.friction == sc.friction
-    scaled = build_rollout(sc, duration=0.01, xi0=[-0.01, 0.01], plant_mu_scale=1.1, plant_mass_scale=0.9,
-                           policy="paper")
+    scaled = build_rollout(sc, RunSpec(duration=0.01, xi0=[-0.01, 0.01]), policy="paper", plant=PlantSpec(errors=ModelErrors(mass_scale=0.9, mu_scale=1.1)))
     assert np.allclose([(f.static, f.kinetic) for f in scaled.plant.friction], [(0.55, 0.55), (0.88, 0.66)],
                        rtol=1e-15, atol=0.0)
     assert scaled.plant.mass == pytest.approx(0.9 * sc.polygon.mass)
@@ -126,7 +129,7 @@ def test_a_fingertips_friction_comes_from_the_scenario(tmp_path):
 @pytest.fixture(scope="module")
 def three_fingers_schedule():
     from regrasp import RegraspSettings, plan_regrasps
-    from regrasp.rollout.build import DEFAULT_CONE_MARGIN
+    from regrasp.core.contact import DEFAULT_CONE_MARGIN
 
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
     return sc, plan_regrasps(sc, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
@@ -150,7 +153,7 @@ def test_the_scheduled_three_finger_rollout_runs_three_periods_as_planned(three_
     0.5 s, every side finger regrasped at least once a period, the plant's contacts slipping only where
     the schedule slides them, every fixed contact inside its static cone, no re-plan."""
     sc, schedule = three_fingers_schedule
-    result = build_rollout(sc, periods=3, schedule=schedule).run()
+    result = build_rollout(sc, RunSpec(periods=3), schedule=schedule).run()
     assert result.success, result.failure
     assert result.steps == round(3 * np.pi / 1e-3)
     assert result.max_object_error_after_transient < 1e-3 * result.object_width
@@ -170,7 +173,7 @@ def test_the_scheduled_rollout_survives_a_plant_ten_percent_off_the_model(three_
     periods: the robust settings (margins kept by the internal force, integral action, the sliders'
     friction estimated from the sensed forces) carry the schedule through."""
     sc, schedule = three_fingers_schedule
-    rollout = build_rollout(sc, periods=2, schedule=schedule, plant_mass_scale=mass_scale, plant_mu_scale=mu_scale)
+    rollout = build_rollout(sc, RunSpec(periods=2), schedule=schedule, plant=PlantSpec(errors=ModelErrors(mass_scale=mass_scale, mu_scale=mu_scale)))
     assert rollout.plant.mass == pytest.approx(mass_scale * sc.polygon.mass)
     assert rollout.supervisor.context.object_mass == sc.polygon.mass
     result = rollout.run()
@@ -181,7 +184,7 @@ def test_the_scheduled_rollout_survives_a_plant_ten_percent_off_the_model(three_
 
 def test_without_regrasps_the_three_finger_rollout_fails_and_says_when_and_why(three_fingers_schedule):
     sc, schedule = three_fingers_schedule
-    result = build_rollout(sc, periods=1, policy="none", xi0=schedule.xi_start).run()
+    result = build_rollout(sc, RunSpec(periods=1, xi0=schedule.xi_start), policy="none").run()
     assert not result.success and result.failure.kind in (FailureKind.COLLISION, FailureKind.LEFT_ENVELOPE)
     assert result.failure.contact in ("finger1", "finger2") and 0.5 < result.failure.time < 2.0
     assert result.regrasps == {"finger1": 0, "finger2": 0, "palm": 0}
@@ -212,7 +215,7 @@ def test_trajectory_1_runs_its_partial_schedule_until_the_envelope_empties():
 def test_the_gravity_up_scenario_runs_a_period_as_planned():
     """Figure 4.4's set-up (gravity up, a third finger on top): the same criteria as Figure 4.3, one period."""
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_gravity_up.toml")
-    result = build_rollout(sc, periods=1).run()
+    result = build_rollout(sc, RunSpec(periods=1)).run()
     assert result.success, result.failure
     assert result.max_object_error_after_transient < 1e-3 * result.object_width
     assert result.regrasps["finger1"] >= 1 and result.regrasps["finger2"] >= 1
@@ -225,22 +228,20 @@ def test_a_one_step_delay_slips_issue_12s_supervisor_and_not_todays(three_finger
     fingers end a slide at 1.366 s with 0.24 N of normal force; issue 12's supervisor settles them 0.012 N
     inside their cones, the late settling torque lands on contacts that already stuck, and finger 1 slips. The
     robust settings (a settling margin in newtons, the slide held until the torques in flight are its own) hold."""
-    from dataclasses import replace as swap
-
-    from regrasp.plants.disturbance import ActuatorNoise
     from regrasp.dynamics.internal_force.solver import InternalForceSettings
-    from regrasp.supervisor.supervisor import SupervisorSettings
+    from regrasp.model.noise import ActuatorNoise
+    from regrasp.supervisor.settings import SupervisorSettings
 
     sc, schedule = three_fingers_schedule
-    plant = dict(plant_mass_scale=1.0796, plant_inertia_scale=1.058, plant_mu_scale=0.8697,
-                 actuator_noise=ActuatorNoise(delay=1), duration=1.45, schedule=schedule)
+    run = RunSpec(duration=1.45, actuator_noise=ActuatorNoise(delay=1))
+    plant = PlantSpec(errors=ModelErrors(mass_scale=1.0796, inertia_scale=1.058, mu_scale=0.8697))
     today = SupervisorSettings.robust(sc.geometry.value, 0.2, actuation_delay=1)
-    before = swap(today, settle_margin=0.0, actuation_delay=0, breakaway_estimate=False, start_speed=None,
-                  hold_resolution=None, hold_filter_time=None,
-                  internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=0.2))
-    failed = build_rollout(sc, settings=before, **plant).run()
+    before = today.with_executor(settle_margin=0.0, actuation_delay=0, breakaway_estimate=False, start_speed=None,
+                                 hold_resolution=None, hold_filter_time=None,
+                                 internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=0.2))
+    failed = build_rollout(sc, run, settings=before, plant=plant, schedule=schedule).run()
     assert failed.failure is not None and failed.failure.kind is FailureKind.UNPLANNED_SLIP
     assert failed.failure.contact == "finger1" and 1.36 < failed.failure.time < 1.38
-    held = build_rollout(sc, **plant).run()  # (build_rollout's default: robust, told the delay)
+    held = build_rollout(sc, run, plant=plant, schedule=schedule).run()  # (the default: robust, told the delay)
     assert held.success, held.failure
     assert held.regrasps["finger1"] == held.regrasps["finger2"] >= 1  # the slides that ended at 1.366 s counted

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from regrasp import build_rollout, load_scenario
+from regrasp import RunSpec, build_rollout, load_scenario
 
 THREE = "examples/scenarios/paper_trajectory_2_three_fingers.toml"
 ROWS = ("times", "xi", "bounds", "planned_xi", "object_error", "poses", "joint_positions", "forces_surface")
@@ -21,9 +21,9 @@ def scenario():
 def both_ways(scenario):
     """1.8 s of the three-finger rollout (two rounds of slides: primes, slips, arrivals, settling) on the
     reference path and with stretches, from the same schedule."""
-    first = build_rollout(scenario, duration=1.8)
+    first = build_rollout(scenario, RunSpec(duration=1.8))
     reference = first.run(compiled_stretches=False)
-    fast = build_rollout(scenario, duration=1.8, schedule=first.schedule)
+    fast = build_rollout(scenario, RunSpec(duration=1.8), schedule=first.schedule)
     return reference, fast.run(), fast
 
 
@@ -61,13 +61,12 @@ def test_a_recording_is_the_same_with_stretches(scenario, tmp_path):
     """Every 10th step logged from a stretch (RolloutRecorder.log_stretch_step) reads back as the reference path
     logs it from the step's record: the same entities, steps and values (1.8 s: slides included)."""
     from recordings import read
-
     from regrasp import RolloutRecorder
 
-    first = build_rollout(scenario, duration=1.8)
+    first = build_rollout(scenario, RunSpec(duration=1.8))
     recordings = []
     for compiled in (False, True):
-        rollout = build_rollout(scenario, duration=1.8, schedule=first.schedule)
+        rollout = build_rollout(scenario, RunSpec(duration=1.8), schedule=first.schedule)
         path = tmp_path / f"{compiled}.rrd"
         with RolloutRecorder(rollout.plant, rrd_path=path, decimation=10) as recorder:
             rollout.run(recorder=recorder, compiled_stretches=compiled)
@@ -99,13 +98,13 @@ def test_a_noisy_rollout_is_the_same_with_stretches(scenario):
     to 1e-12, the same events, and the generator where the reference path leaves it."""
     from regrasp import ActuatorNoise, SensorNoise
 
-    first = build_rollout(scenario, duration=1.8)
-    noise = dict(sensor_noise=SensorNoise(position=1e-4, angle=1e-3, velocity=1e-3, xi=2e-4, force=0.01,
-                                          slip_threshold=0.002, slip_delay=1),
-                 actuator_noise=ActuatorNoise(delay=1, torque=1e-4), seed=5)
+    first = build_rollout(scenario, RunSpec(duration=1.8))
+    noisy = RunSpec(duration=1.8, sensor_noise=SensorNoise(position=1e-4, angle=1e-3, velocity=1e-3, xi=2e-4,
+                                                           force=0.01, slip_threshold=0.002, slip_delay=1),
+                    actuator_noise=ActuatorNoise(delay=1, torque=1e-4), seed=5)
     runs = []
     for compiled in (False, True):
-        rollout = build_rollout(scenario, duration=1.8, schedule=first.schedule, **noise)
+        rollout = build_rollout(scenario, noisy, schedule=first.schedule)
         runs.append((rollout.run(compiled_stretches=compiled), rollout))
     (reference, ref_rollout), (fast, rollout) = runs
     assert reference.success and fast.steps == reference.steps == 1800
@@ -144,10 +143,10 @@ def test_warm_up_compiles_the_signature_the_library_passes(both_ways):
 
 
 def test_simulate_refuses_stretches_built_for_another_disturbance(scenario):
-    from regrasp.plants.disturbance import Disturbance
     from regrasp.core.exceptions import InvalidParameterError
+    from regrasp.plants.disturbance import Disturbance
     from regrasp.plants.simulation import simulate
 
-    rollout = build_rollout(scenario, duration=0.01)
+    rollout = build_rollout(scenario, RunSpec(duration=0.01))
     with pytest.raises(InvalidParameterError, match="stretches"):
         simulate(rollout.plant, None, 1, stretches=object(), disturbance=Disturbance())

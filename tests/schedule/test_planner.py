@@ -22,11 +22,11 @@ import pytest
 
 from factories import force_lp
 from regrasp import Friction, load_scenario
-from regrasp.envelope.finger_envelope import FingerEnvelope
 from regrasp.core.exceptions import InvalidParameterError
+from regrasp.envelope.finger_envelope import FingerEnvelope
 from regrasp.schedule.force_polytope import ForceLimits
-from regrasp.schedule.schedule import NoScheduleError, ScheduleLimit
 from regrasp.schedule.planner import RegraspSettings, plan_regrasps
+from regrasp.schedule.schedule import NoScheduleError, ScheduleLimit
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 

@@ -16,13 +16,13 @@ import pytest
 from factories import rot
 from regrasp import Friction, Grasp
 from regrasp.core.exceptions import InvalidParameterError
-from regrasp.dynamics.internal_force.solver import InternalForceSettings
 from regrasp.core.polygon import ConvexPolygon
-from regrasp.schedule.slide_rule import two_finger_slide_range
+from regrasp.dynamics.internal_force.solver import InternalForceSettings
 from regrasp.dynamics.sliding import sliding_feasibility
+from regrasp.schedule.slide_rule import two_finger_slide_range
 
 #: the bare physics: push >= 0, no cone margin, no force limit
-BARE = InternalForceSettings(f_min=0.0, margin=0.0)
+BARE = InternalForceSettings(f_min=0.0, friction_margin=0.0)
 
 
 def _height(edge: int, xi: float) -> float:

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import build_rollout, load_scenario
+from regrasp import ModelErrors, PlantSpec, RunSpec, build_rollout, load_scenario
 from regrasp.cli.main import main
 from regrasp.core.exceptions import InvalidParameterError, ScenarioError
 from regrasp.study.study import Perturbation, draw_runs, run_study, wilson_interval
@@ -48,8 +48,8 @@ def test_wilson_interval_textbook_values_and_bad_counts():
 def test_the_figures_of_a_study_whose_bins_all_succeed(tmp_path):
     # synthetic outcomes (no rollout): 200 runs, most bins all successes, one failure; once this raised
     # in matplotlib ("yerr must not contain negative values") and lost a 19-minute study
-    from regrasp.study.study import RunOutcome, StudyResult
     from regrasp.study.plots import plot_study
+    from regrasp.study.study import RunOutcome, StudyResult
 
     perturbation = Perturbation(mass=0.2, mu=0.2, contact_position=2e-4)
     draws = draw_runs(200, 3, perturbation, contacts=3)
@@ -67,20 +67,20 @@ def test_draws_are_seeded_per_run_and_inside_the_half_widths():
     assert draw_runs(50, 11, Perturbation(mass=0.2, mu=0.1)) == draws
     assert draw_runs(20, 11, Perturbation(mass=0.2, mu=0.1)) == draws[:20]  # run i's seed is the i-th child
     assert draw_runs(50, 12, Perturbation(mass=0.2, mu=0.1)) != draws
-    mass = np.array([d.mass_scale for d in draws])
-    mu = np.array([d.mu_scale for d in draws])
+    mass = np.array([d.errors.mass_scale for d in draws])
+    mu = np.array([d.errors.mu_scale for d in draws])
     assert 0.8 <= mass.min() and mass.max() <= 1.2 and 0.9 <= mu.min() and mu.max() <= 1.1
     assert mass.std() > 0.05 and abs(np.corrcoef(mass, mu)[0, 1]) < 0.4  # spread, and drawn independently
-    assert all(d.mass_scale == d.mu_scale == d.inertia_scale == d.link_mass_scale == 1.0
+    assert all(d.errors.mass_scale == d.errors.mu_scale == d.errors.object_inertia_scale == d.errors.link_mass_scale == 1.0
                for d in draw_runs(3, 0, Perturbation()))
     full = draw_runs(200, 3, Perturbation(mass=0.2, mu=0.2, inertia=0.2, link_mass=0.2))
-    factors = np.array([[d.mass_scale, d.mu_scale, d.inertia_scale, d.link_mass_scale] for d in full])
+    factors = np.array([[d.errors.mass_scale, d.errors.mu_scale, d.errors.object_inertia_scale, d.errors.link_mass_scale] for d in full])
     assert (factors >= 0.8).all() and (factors <= 1.2).all()
     assert np.abs(np.corrcoef(factors.T) - np.eye(4)).max() < 0.25  # four independent draws
-    offsets = np.array([d.xi_offset for d in draw_runs(300, 4, Perturbation(contact_position=2e-4), contacts=3)])
+    offsets = np.array([d.errors.xi_offset for d in draw_runs(300, 4, Perturbation(contact_position=2e-4), contacts=3)])
     assert offsets.shape == (300, 3) and np.abs(offsets).max() <= 2e-4 and offsets.std() > 1e-4
     assert np.abs(np.corrcoef(offsets.T) - np.eye(3)).max() < 0.2  # one independent error per fingertip
-    kinetic = np.array([d.mu_kinetic_scale for d in draw_runs(100, 4, Perturbation(mu_kinetic=0.1))])
+    kinetic = np.array([d.errors.mu_kinetic_scale for d in draw_runs(100, 4, Perturbation(mu_kinetic=0.1))])
     assert 0.9 <= kinetic.min() and kinetic.max() <= 1.1 and kinetic.std() > 0.03
     for bad in (dict(mass=1.0), dict(mu=-0.1), dict(mass=math.nan), dict(mu="0.1"), dict(contact_position=0.02),
                 dict(delay=-1), dict(xi_noise=math.inf), dict(slip_threshold=-1.0)):
@@ -107,8 +107,8 @@ def same_runs(local, doc):
     assert doc["runs"] == 4 and doc["successes"] == local.successes
     assert doc["wilson_95"] == pytest.approx(list(local.interval))
     for mine, theirs in zip(local.runs, doc["outcomes"]):
-        assert theirs["draw"]["mass_scale"] == mine.draw.mass_scale and theirs["draw"]["mu_scale"] == mine.draw.mu_scale
-        assert theirs["draw"]["xi_offset"] == list(mine.draw.xi_offset)
+        assert theirs["draw"]["mass_scale"] == mine.draw.errors.mass_scale and theirs["draw"]["mu_scale"] == mine.draw.errors.mu_scale
+        assert theirs["draw"]["xi_offset"] == list(mine.draw.errors.xi_offset)
         for key in ("success", "failure_kind", "failure_time", "min_cone_margin", "min_envelope_margin", "slides",
                     "max_orientation_error"):
             assert theirs[key] == getattr(mine, key), key
@@ -120,7 +120,7 @@ def test_a_study_gives_the_same_runs_on_one_process_and_on_two(in_process, capsy
     doc = json.loads(capsys.readouterr().out)
     assert doc["workers"] == 2 and doc["backend"] == "process"
     same_runs(in_process, doc)
-    assert len({r.draw.mass_scale for r in in_process.runs}) == 4  # the runs do differ
+    assert len({r.draw.errors.mass_scale for r in in_process.runs}) == 4  # the runs do differ
     assert len({r.min_cone_margin for r in in_process.runs}) == 4
     names = ("study_success.png", "study_failure_times.png", "study_margins.png")
     assert all((tmp_path / name).stat().st_size > 1000 for name in names)
@@ -142,7 +142,7 @@ def test_a_run_replayed_alone_repeats_the_studys_run_and_records_it(in_process, 
                  "--json"])
     doc = json.loads(capsys.readouterr().out)
     run = in_process.runs[2]
-    assert code == (0 if run.success else 1) and doc["run"] == 2 and doc["draw"]["xi_offset"] == list(run.draw.xi_offset)
+    assert code == (0 if run.success else 1) and doc["run"] == 2 and doc["draw"]["xi_offset"] == list(run.draw.errors.xi_offset)
     assert doc["min_cone_margin"] == run.min_cone_margin and doc["min_envelope_margin"] == run.min_envelope_margin
     assert rrd.stat().st_size > 10_000
     assert main(["study", str(SCENARIO), "--rrd", str(rrd)]) == 2  # a recording needs --replay
@@ -153,7 +153,7 @@ def test_a_sweep_is_one_study_per_size_with_the_same_draws(capsys, tmp_path):
     from regrasp.study.study import sweep_study
 
     sc = load_scenario(SCENARIO)
-    schedule = build_rollout(sc, duration=0.1).schedule
+    schedule = build_rollout(sc, RunSpec(duration=0.1)).schedule
     results = sweep_study(sc, 2, "xi_noise", [0.0, 4e-4], perturbation=Perturbation(mass=0.2, delay=1), seed=3,
                           duration=0.1, schedule=schedule)
     assert [r.perturbation.xi_noise for r in results] == [0.0, 4e-4]
@@ -175,17 +175,15 @@ def test_a_sweep_is_one_study_per_size_with_the_same_draws(capsys, tmp_path):
 def test_the_noise_is_seeded_per_run(in_process):
     """A run repeated alone from its draw repeats exactly (the study's runs used the envelope plan it computed
     once; alone, the run plans it again); another seed gives other noise."""
-    from regrasp.model.perturbation import RunDraw
+    from regrasp.study.draws import RunDraw
     from regrasp.study.study import run_once
 
     sc = load_scenario(SCENARIO)
     first = in_process.runs[0]
-    schedule = build_rollout(sc, duration=0.15).schedule
+    schedule = build_rollout(sc, RunSpec(duration=0.15)).schedule
     alone = run_once(sc, first.draw, schedule, 0.15, TARGET)
     assert alone.min_cone_margin == first.min_cone_margin and alone.max_orientation_error is None
-    other = RunDraw(first.draw.index, (1, 2, 3, 4), *[getattr(first.draw, k) for k in
-                                                        ("mass_scale", "mu_scale", "inertia_scale", "link_mass_scale",
-                                                         "mu_kinetic_scale", "xi_offset")])
+    other = RunDraw(first.draw.index, (1, 2, 3, 4), first.draw.errors)
     assert run_once(sc, other, schedule, 0.15, TARGET).min_cone_margin != first.min_cone_margin
 
 
@@ -196,7 +194,7 @@ def test_a_rollout_refuses_a_plan_of_another_scenario():
     sc = load_scenario(SCENARIO)
     two = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")
     with pytest.raises(InvalidParameterError, match="plan"):
-        build_rollout(sc, duration=0.05, plan=plan_scenario(two, samples=11))
+        build_rollout(sc, RunSpec(duration=0.05), plan=plan_scenario(two, samples=11))
 
 
 def test_the_scenario_study_table_sets_the_perturbations_and_flags_override_it(tmp_path, capsys):
@@ -243,8 +241,7 @@ def test_the_plant_gets_the_drawn_errors_and_the_controllers_keep_the_model():
     from regrasp import build_rollout, load_scenario
 
     sc = load_scenario(SCENARIO)
-    r = build_rollout(sc, policy="none", duration=0.1, plant_mass_scale=1.1, plant_inertia_scale=0.85,
-                      plant_mu_scale=0.9, plant_link_mass_scale=1.2)
+    r = build_rollout(sc, RunSpec(duration=0.1), policy="none", plant=PlantSpec(errors=ModelErrors(mass_scale=1.1, inertia_scale=0.85, link_mass_scale=1.2, mu_scale=0.9)))
     assert r.plant.mass == pytest.approx(1.1 * sc.polygon.mass)
     assert r.plant.inertia == pytest.approx(0.85 * sc.polygon.inertia)
     assert r.plant.friction[0].static == pytest.approx(0.9 * sc.friction[0].static)

@@ -5,7 +5,6 @@ laws predict are checked against what the phases ask for.
 """
 
 import math
-
 from pathlib import Path
 
 import numpy as np
@@ -15,10 +14,12 @@ from regrasp import Hand, load_scenario
 from regrasp.core.contact import ContactMode
 from regrasp.core.events import EventKind
 from regrasp.core.exceptions import InvalidParameterError
-from regrasp.supervisor.executor import ContactPhase, ExecutorSettings, SlideExecutor, SlideOrder
+from regrasp.core.measurement import Measurement
 from regrasp.dynamics.grasp import Grasp
 from regrasp.dynamics.internal_force.solver import InternalForceSettings
-from regrasp.supervisor.supervisor import Measurement
+from regrasp.supervisor.executor import SlideExecutor
+from regrasp.supervisor.settings import ExecutorSettings
+from regrasp.supervisor.types import ContactPhase, SlideOrder
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 

@@ -7,8 +7,8 @@ import pytest
 
 from regrasp import FingerEnvelope, load_scenario
 from regrasp.core.exceptions import InvalidParameterError
-from regrasp.supervisor.monitor import EnvelopeMonitor, bound_speeds
 from regrasp.envelope.planner import plan_scenario
+from regrasp.supervisor.monitor import EnvelopeMonitor, bound_speeds
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 

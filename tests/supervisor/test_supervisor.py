@@ -3,16 +3,21 @@
 Closed-loop behaviour on the independent plant is in tests/test_rollout.py.
 """
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from regrasp import Friction, Hand, load_scenario
+from regrasp import Friction, Hand, RunSpec, load_scenario
 from regrasp.core.exceptions import InvalidParameterError
-from regrasp.envelope.planner import plan, plan_scenario
+from regrasp.core.measurement import Measurement
 from regrasp.dynamics.sliding import sliding_feasibility
-from regrasp.supervisor.supervisor import ContactPhase, Measurement, RegraspSupervisor, SupervisorSettings
+from regrasp.envelope.planner import plan, plan_scenario
+from regrasp.model.collision import Geometry
+from regrasp.supervisor.settings import ExecutorSettings, MonitorSettings, PaperSettings, SupervisorSettings
+from regrasp.supervisor.supervisor import RegraspSupervisor
+from regrasp.supervisor.types import ContactPhase
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 
@@ -22,11 +27,27 @@ def two_fingers():
     return load_scenario(SCENARIOS / "paper_trajectory_2.toml")
 
 
+#: The settings' branches, by field name (a test names a field; the tree holds it once).
+BRANCHES = {**{f.name: ("monitor", f.name) for f in dataclasses.fields(MonitorSettings)},
+            **{f.name: ("paper", f.name) for f in dataclasses.fields(PaperSettings)},
+            **{f.name: ("executor", f.name) for f in dataclasses.fields(ExecutorSettings)}}
+
+
+def settings_of(**values) -> SupervisorSettings:
+    """SupervisorSettings with each named field set on its branch."""
+    branches = {}
+    for name, value in values.items():
+        branch, field = BRANCHES[name]
+        branches.setdefault(branch, {})[field] = value
+    classes = {"monitor": MonitorSettings, "paper": PaperSettings, "executor": ExecutorSettings}
+    return SupervisorSettings(**{b: classes[b](**v) for b, v in branches.items()})
+
+
 def make_supervisor(sc, xi, *, plan=None, friction=None, **settings) -> RegraspSupervisor:
     hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
     return RegraspSupervisor(hand, sc.polygon, [c.edge for c in sc.contacts], sc.trajectory, xi,
                              sc.friction if friction is None else friction, plan=plan,
-                             settings=SupervisorSettings(**settings))
+                             settings=settings_of(**settings))
 
 
 def measurement(sc, t, xi) -> Measurement:
@@ -37,14 +58,27 @@ def measurement(sc, t, xi) -> Measurement:
 
 @pytest.mark.parametrize("name, value", [
     ("danger_fraction", 0.0), ("danger_fraction", 0.5), ("omega_n", -1.0), ("zeta", 0.0), ("prime_time", np.nan),
-    ("reaction_time", -0.1), ("envelope_every", 0), ("envelope_every", 1.5), ("geometry", "mesh"),
+    ("reaction_time", -0.1), ("every", 0), ("every", 1.5), ("geometry", "mesh"),
     ("settle_undershoot", 0.0), ("path_checks", 0), ("path_checks", 2.5), ("enabling_candidates", True),
-    ("enabling_recheck_time", -1.0), ("track_envelopes", 1),
+    ("enabling_recheck_time", -1.0), ("track", 1),
 ])
 def test_settings_reject_bad_values(name, value):
     with pytest.raises(InvalidParameterError) as info:
-        SupervisorSettings(**{name: value})
+        settings_of(**{name: value})
     assert info.value.name == name
+
+
+@pytest.mark.parametrize("branch, value", [("executor", None), ("monitor", "ideal"), ("paper", 1.0),
+                                           ("scheduled", SupervisorSettings())])
+def test_settings_branches_are_their_types(branch, value):
+    with pytest.raises(InvalidParameterError) as info:
+        SupervisorSettings(**{branch: value})
+    assert info.value.name == branch
+
+
+def test_the_geometry_is_one_type():
+    assert settings_of(geometry="urdf").monitor.geometry is Geometry.URDF
+    assert SupervisorSettings.robust("urdf").monitor.geometry is Geometry.URDF
 
 
 def test_a_plan_for_other_fingers_is_rejected(two_fingers):
@@ -104,7 +138,7 @@ def test_a_possible_slide_is_primed_on_the_cone_edge_towards_the_target(two_fing
     assert out.targets[0] == pytest.approx(0.5 * (lo + hi))
     assert out.law == "fixed contacts (cone edge)"
     f_n, f_t = out.control.contact_forces_surface[0]
-    overshoot = sup.settings.prime_overshoot
+    overshoot = sup.settings.executor.prime_overshoot
     assert f_t == pytest.approx((sup.context.friction[0].static + overshoot) * f_n, rel=1e-6)  # + direction: up the edge
 
 
@@ -167,21 +201,21 @@ def test_a_slide_is_asked_about_along_its_path(two_fingers):
     ((lo, hi),) = sample.feasible
     xi = [lo + 0.02 * (hi - lo), 0.012]
     sup = make_supervisor(two_fingers, xi)
-    assert sup.settings.path_checks == 3
+    assert sup.settings.paper.path_checks == 3
     out = sup.step(measurement(two_fingers, 0.0, xi), 1e-3)
     assert out.phases[0] is ContactPhase.FIXED
     (rejected,) = [e for e in out.events if e.kind == "slide_rejected"]
     assert "fixed contact 1 would slip" in rejected.detail and "-12.50 mm on the way" in rejected.detail
     target = 0.5 * (lo + hi)
-    desired = two_fingers.trajectory.sample(min(6.0 / sup.settings.omega_n, two_fingers.trajectory.t_end))
+    desired = two_fingers.trajectory.sample(min(6.0 / sup.settings.executor.omega_n, two_fingers.trajectory.t_end))
     at_target = sliding_feasibility(sup.context.grasp, desired.pose, [target, 0.012], desired.acceleration, 0, 1.0, sup.context.friction,
                                     object_mass=sup.context.object_mass, object_inertia=sup.context.object_inertia,
-                                    gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility)
+                                    gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.paper.feasibility)
     at_start = sliding_feasibility(sup.context.grasp, two_fingers.trajectory.pose(0.0), xi,
                                    two_fingers.trajectory.sample(0.0).acceleration, 0, 1.0, sup.context.friction,
                                    object_mass=sup.context.object_mass, object_inertia=sup.context.object_inertia,
-                                   gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.feasibility,
-                                   edge_mu=sup.context.friction[0].static + sup.settings.prime_overshoot)
+                                   gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.paper.feasibility,
+                                   edge_mu=sup.context.friction[0].static + sup.settings.executor.prime_overshoot)
     assert at_start.possible and not at_target.possible
 
 
@@ -227,9 +261,9 @@ def test_a_rejected_slide_gets_another_contact_to_enable_it():
         c = sup.context
         return sliding_feasibility(c.grasp, desired.pose, [where, xi[1], palm], desired.acceleration, 0, -1.0,
                                    c.friction, object_mass=c.object_mass, object_inertia=c.object_inertia,
-                                   gravity_in_hand=c.hand.gravity_in_hand, settings=sup.settings.feasibility).possible
+                                   gravity_in_hand=c.hand.gravity_in_hand, settings=sup.settings.paper.feasibility).possible
 
-    duration = 6.0 / sup.settings.omega_n
+    duration = 6.0 / sup.settings.executor.omega_n
     path = [(xi[0] + f * (finger1_target - xi[0]), t + duration + f * duration) for f in (0.5, 1.0)]
     assert not all(possible(w, when - duration, xi[2]) for w, when in path)  # with the palm where it is
     assert all(possible(w, when, palm_target) for w, when in path)          # with the palm moved
@@ -241,7 +275,7 @@ def test_a_slide_that_ends_sliding_settles_just_inside_the_cone_and_sticks():
     within a few periods, without slipping any other contact."""
     from regrasp import build_rollout
 
-    rollout = build_rollout(load_scenario(THREE), duration=0.3, policy="paper")
+    rollout = build_rollout(load_scenario(THREE), RunSpec(duration=0.3), policy="paper")
     result = rollout.run()
     assert result.success, result.failure
     kinds = [(e.contact, e.kind) for e in result.events]
@@ -261,10 +295,10 @@ def test_tracked_runtime_envelopes_match_fresh_ones():
     desired one; no slide starts)."""
     sc = load_scenario(THREE)
     xi = [-0.0125, 0.0125, 0.0]
-    tracked = make_supervisor(sc, xi, geometry="urdf", regrasp=False, track_envelopes=True)
+    tracked = make_supervisor(sc, xi, geometry="urdf", regrasp=False, track=True)
     fresh = make_supervisor(sc, xi, geometry="urdf", regrasp=False)
     assert fresh.monitor.trackers is None and len(tracked.monitor.trackers) == 3
-    assert make_supervisor(sc, xi, track_envelopes=True).monitor.trackers is None  # ideal: nothing to track
+    assert make_supervisor(sc, xi, track=True).monitor.trackers is None  # ideal: nothing to track
     for k in range(150):
         meas = measurement(sc, 1e-3 * k, xi)
         a, b = tracked.monitor.read(meas.t, meas.X, meas.xi), fresh.monitor.read(meas.t, meas.X, meas.xi)

@@ -1,1 +1,1 @@
-"""regrasp.cli.main."""
+"""``regrasp.cli``: the command line (``regrasp plan | simulate | study``; :func:`regrasp.cli.main.main`)."""

@@ -1,239 +1,45 @@
-"""The regrasp command line: regrasp plan (the planner) and regrasp simulate (a rollout on the plant).
+"""The regrasp command line: ``regrasp plan`` (:mod:`regrasp.cli.plan`), ``regrasp simulate``
+(:mod:`regrasp.cli.simulate`) and ``regrasp study`` (:mod:`regrasp.cli.study`).
 
-``regrasp simulate`` is in :mod:`regrasp.cli.simulate`.
-
-``regrasp plan SCENARIO [--json] [--plot DIR] [--samples N] [--geometry ideal|urdf]
-[--regrasp [--envelope-margin M] [--cone-margin N]]``
-
-Exit status: 0 when the trajectory is feasible (and, with ``--regrasp``, a regrasp schedule
-exists), 1 when it is not (the result is still printed, with the reason), 2 on bad input (a typed
-error, printed as one line on stderr).
+Exit status: 0 success, 1 a result that says no (infeasible, a failed rollout), 2 bad input (a typed error, one
+line on stderr), 130 interrupted.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import sys
-import time
 from collections.abc import Sequence
-from pathlib import Path
 
-import numpy as np
-
-from .args import number_argument
 from ..core.exceptions import RegraspError
-from ..core.validation import MAX_SAMPLES
+from . import plan, simulate, study
 
-__all__ = ["main"]
-
-
-class _ProgressBar:
-    """A one-line progress bar on stderr (done/total, elapsed and remaining time), drawn only when stderr is a
-    terminal."""
-
-    def __init__(self, label: str, stream=sys.stderr):
-        self.label, self.stream = label, stream
-        self.enabled = stream.isatty()
-        self._last = -1
-        self._start = time.monotonic()
-
-    def __call__(self, done: int, total: int) -> None:
-        if not self.enabled:
-            return
-        pct = int(100 * done / total)
-        if pct != self._last:
-            self._last = pct
-            bar = "#" * (pct // 4) + "." * (25 - pct // 4)
-            elapsed = time.monotonic() - self._start
-            left = f", {elapsed * (total - done) / done:.0f} s left" if 0 < done < total else ""
-            self.stream.write(f"\r{self.label} [{bar}] {pct:3d}% ({done}/{total}, {elapsed:.0f} s{left})  ")
-            if done == total:
-                self.stream.write("\n")
-            self.stream.flush()
-
-
-def _condition_runs(times, finger) -> str:
-    parts, start = [], 0
-    conds = [s.condition.value for s in finger.samples]
-    for k in range(1, len(conds) + 1):
-        if k == len(conds) or conds[k] != conds[start]:
-            parts.append(f"{conds[start]} [{times[start]:.2f}, {times[k - 1]:.2f}]")
-            start = k
-    if len(parts) > 6:
-        parts = parts[:3] + [f"... ({len(parts) - 5} more) ..."] + parts[-2:]
-    return " ".join(parts)
-
-
-def _summary(plan, scenario, figures) -> str:
-    times = plan.times
-    mm = 1000.0
-    lines = [
-        f"regrasp plan: {plan.scenario}" + (f" ({scenario.path})" if scenario.path else ""),
-        f"  object: {plan.polygon.n_vertices}-gon, {plan.polygon.mass:.3g} kg; trajectory t in "
-        f"[{times[0]:.4g}, {times[-1]:.4g}] s, {len(times)} samples; geometry: {plan.geometry.value}",
-        "",
-        "  verdict: " + ("FEASIBLE - every finger has a feasible contact at every sample" if plan.feasible
-                         else "INFEASIBLE - some finger has no feasible contact at some samples"),
-        "",
-    ]
-    for f in plan.fingers:
-        widths = np.array([sum(hi - lo for lo, hi in s.feasible) for s in f.samples]) * mm
-        l1, l2 = f.link_lengths
-        lines.append(f"  {f.name}: edge {f.edge}, {f.configuration} configuration, l1 = {l1 * mm:.1f} mm, "
-                     f"l2 = {l2 * mm:.1f} mm")
-        lines.append(f"    conditions: {_condition_runs(times, f)}")
-        lines.append(f"    feasible width [mm]: min {widths.min():.2f}, median {np.median(widths):.2f}, "
-                     f"max {widths.max():.2f} (edge length {(f.samples[0].edge_range[1] - f.samples[0].edge_range[0]) * mm:.1f})")
-        for iv in f.infeasible_intervals:
-            lines.append(f"    infeasible: t in [{iv.start:.3f}, {iv.end:.3f}] s - {iv.reason}")
-        if f.initial_xi is None:
-            lines.append("    initial contact: none (infeasible at the first sample)")
-        else:
-            lines.append(f"    initial contact: xi = {f.initial_xi * mm:.2f} mm, feasible until "
-                         f"t = {f.initial_xi_feasible_until:.3f} s")
-            if f.fixed_grasp:
-                ivs = ", ".join(f"[{lo * mm:.2f}, {hi * mm:.2f}]" for lo, hi in f.fixed_grasp)
-                lines.append(f"    fixed grasp possible for the whole trajectory: xi in {ivs} mm")
-            else:
-                lines.append("    no fixed grasp survives the whole trajectory: the finger must regrasp (slide)")
-        lines.append("")
-    lines.append(f"  planner: {plan.seconds_per_sample * 1e6:.0f} us per finger per sample (median)")
-    if figures:
-        lines.append("  figures: " + ", ".join(str(p) for p in figures))
-    return "\n".join(lines)
-
-
-def _schedule_summary(schedule, error) -> str:
-    """The ``--regrasp`` lines of the summary."""
-    mm = 1000.0
-    if error is not None:
-        lines = [f"  regrasp schedule: NONE ({error.limit.value}) - {error.reason}"]
-        if error.rule:
-            lines.append(f"    {error.rule}")
-        lines.append(f"    the latest time any admissible state survives: t = {error.latest_time:.3f} s")
-        return "\n".join(lines)
-    per = " per period" if schedule.periodic else ""
-    bound = schedule.slides_lower_bound
-    lines = [f"  regrasp schedule: {'periodic' if schedule.periodic else 'not periodic'}, t in "
-             f"[{schedule.t_start:.3f}, {schedule.t_end:.3f}] s, {len(schedule.slides)} slides{per}"
-             + (f" (no schedule has fewer than {bound})" if bound is not None else "")
-             + f", planned in {schedule.planning_seconds:.2f} s"]
-    for i, name in enumerate(schedule.names):
-        ours = [s for s in schedule.slides if s.contact == i]
-        if not ours:
-            lines.append(f"    {name}: no slide (fixed at xi = {schedule.xi_start[i] * mm:.1f} mm)")
-            continue
-        parts = [f"{'+' if s.direction > 0 else '-'}xi {s.start_xi * mm:.1f} -> {s.end_xi * mm:.1f} mm in "
-                 f"[{s.start:.3f}, {s.end:.3f}] s" for s in ours]
-        lines.append(f"    {name}: {len(ours)} slide{'s' if len(ours) != 1 else ''}: " + "; ".join(parts))
-    t, who = schedule.min_envelope_margin_at
-    lines.append(f"    smallest envelope margin {schedule.min_envelope_margin * mm:.2f} mm ({who}, t = {t:.3f} s; "
-                 f"required {schedule.required_envelope_margin * mm:.2f} mm)")
-    t, who = schedule.min_cone_margin_at
-    lines.append(f"    smallest cone margin {schedule.min_cone_margin:.3f} N ({who}, t = {t:.3f} s; "
-                 f"required {schedule.required_cone_margin:.3f} N)")
-    return "\n".join(lines)
-
-
-def _cmd_plan(args) -> int:
-    from ..envelope.planner import plan_scenario
-    from ..model.scenario import load_scenario
-
-    scenario = load_scenario(args.scenario)
-    if args.plot:  # before the work, not after it
-        output_directory("--plot", args.plot)
-    progress = _ProgressBar(f"planning {scenario.name}") if not args.json else None
-    result = plan_scenario(scenario, samples=args.samples, geometry=args.geometry, progress=progress)
-    if result.sampling_warning is not None:
-        print(f"regrasp plan: warning: {result.sampling_warning}", file=sys.stderr)
-    schedule = error = None
-    if args.regrasp:
-        from ..schedule.schedule import NoScheduleError
-        from ..schedule.planner import RegraspSettings, plan_regrasps
-
-        options = {k: v for k, v in (("envelope_margin", args.envelope_margin), ("cone_margin", args.cone_margin),
-                                     ("geometry", args.geometry)) if v is not None}
-        try:
-            schedule = plan_regrasps(scenario, RegraspSettings(**options),
-                                     progress=_ProgressBar("planning regrasps") if not args.json else None)
-        except NoScheduleError as exc:
-            error = exc
-    figures = []
-    if args.plot:
-        from ..envelope.plotting import plot_schedule, write_plan_figures
-
-        figures = write_plan_figures(result, args.plot)
-        if schedule is not None:
-            figures.append(plot_schedule(result, schedule, Path(args.plot) / "regrasp.png"))
-        elif error is not None and error.partial is not None:
-            figures.append(plot_schedule(result, error.partial, Path(args.plot) / "regrasp.png", failure=error))
-    if args.json:
-        doc = result.to_json_dict()
-        if args.regrasp:
-            doc["schedule"] = schedule.to_json_dict() if schedule is not None else error.to_json_dict()
-        doc["figures"] = [str(p) for p in figures]
-        json.dump(doc, sys.stdout)
-        sys.stdout.write("\n")
-    else:
-        text = _summary(result, scenario, figures)
-        if args.regrasp:
-            text += "\n\n" + _schedule_summary(schedule, error)
-        print(text)
-    return 0 if result.feasible and error is None else 1
-
-
-_nonnegative = number_argument(float, "a finite number >= 0", lambda v: 0.0 <= v < float("inf"))
-_samples = number_argument(int, f"an integer in [2, {MAX_SAMPLES}]", lambda v: 2 <= v <= MAX_SAMPLES)
-
-
-def output_directory(option: str, path: str | os.PathLike[str]) -> Path:
-    """``path`` as a directory figures can be written into (made if missing), or an
-    :class:`~regrasp.core.exceptions.InvalidParameterError` naming ``option``."""
-    from ..core.exceptions import InvalidParameterError
-
-    directory = Path(path)
-    try:
-        if directory.exists() and not directory.is_dir():
-            raise InvalidParameterError(option, str(path), "a directory (it is a file)")
-        directory.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InvalidParameterError(option, str(path), f"a directory that can be made ({exc.strerror or exc})") \
-            from None
-    if not os.access(directory, os.W_OK | os.X_OK):
-        raise InvalidParameterError(option, str(path), "a writable directory")
-    return directory
+__all__ = ["build_parser", "main"]
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``regrasp`` parser and its commands."""
     from .. import __version__
 
-    parser = argparse.ArgumentParser(prog="regrasp", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="regrasp", description="Planar multifingered hands: plan feasible contacts, "
+                                     "control sliding fingertips, regrasp dynamically.")
     parser.add_argument("--version", action="version", version=f"regrasp {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("plan", help="feasibility and contact envelope of an object trajectory (paper §2)",
-                       description="Check a trajectory's feasibility and compute each finger's feasible-contact "
-                                   "envelope. Exit status 0: feasible, 1: infeasible, 2: bad input.")
-    p.add_argument("scenario", help="scenario file (TOML), e.g. examples/scenarios/paper_trajectory_2.toml")
-    p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
-    p.add_argument("--plot", metavar="DIR", help="write d.png, reachable.png and feasible.png into DIR")
-    p.add_argument("--samples", type=_samples, help="number of time samples (default: the scenario's)")
-    p.add_argument("--geometry", choices=("ideal", "urdf"), help="link collision model (default: the scenario's)")
-    p.add_argument("--regrasp", action="store_true",
-                   help="also plan the regrasp schedule: every contact's slides over the trajectory (paper §4); "
-                        "with --json a 'schedule' object, with --plot regrasp.png (paper Fig. 4.3)")
-    p.add_argument("--envelope-margin", type=_nonnegative, metavar="M",
-                   help="with --regrasp: the envelope margin [m] every contact keeps (default 0.001)")
-    p.add_argument("--cone-margin", type=_nonnegative, metavar="N",
-                   help="with --regrasp: the cone margin [N] every fixed contact keeps (default 0.1)")
-    p.set_defaults(func=_cmd_plan)
-    from .simulate import add_parser
-
-    add_parser(sub, _ProgressBar, _nonnegative)
-    from .study import add_study_parser
-
-    add_study_parser(sub, _ProgressBar)
+    plan.configure(sub.add_parser(
+        "plan", help="feasibility and contact envelope of an object trajectory (paper §2)",
+        description="Check a trajectory's feasibility and compute each finger's feasible-contact envelope. Exit "
+                    "status 0: feasible, 1: infeasible, 2: bad input."))
+    simulate.configure(sub.add_parser(
+        "simulate", help="run a regrasping rollout on the plant (paper §4) and record it",
+        description="Run a rollout: the supervisor and its policy drive the full-coordinate plant. Exit status 0: "
+                    "success, 1: failure or no schedule, 2: bad input."))
+    study.configure(sub.add_parser(
+        "study", help="a robustness study: many seeded rollouts under model errors and noise",
+        description="Plan the regrasp schedule once, then run seeded rollouts on plants whose model errors are drawn "
+                    "around the model's, with sensing noise, torque noise and delays. Prints the success rate with a "
+                    "Wilson 95 % interval, the failures by kind and time and the margins. The perturbations default "
+                    "to the scenario's [study] table; a flag overrides its key. Exit status 0: the study ran, 2: bad "
+                    "input."))
     return parser
 
 

@@ -15,83 +15,55 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .args import number_argument
 from ..core.capture import captured_fd
+from ..core.contact import DEFAULT_CONE_MARGIN
 from ..core.events import EventKind, FailureKind
+from ..core.exceptions import InvalidParameterError
+from .common import (
+    DEFAULT_SCENARIO,
+    ProgressBar,
+    add_plant_arguments,
+    nonnegative,
+    output_directory,
+    plant_spec,
+    positive,
+)
 
 if TYPE_CHECKING:
-    from ..rollout.result import RolloutResult
     from ..model.scenario import Scenario
     from ..plants.simulation import PlantLike
+    from ..rollout.result import RolloutResult
 
-__all__ = ["DEFAULT_SCENARIO", "add_parser", "add_plant_arguments", "plant_options", "plant_text", "rollout_summary"]
-
-#: The default scenario (in the source tree's examples/).
-DEFAULT_SCENARIO = Path(__file__).resolve().parents[3] / "examples" / "scenarios" / \
-    "paper_trajectory_2_three_fingers.toml"
+__all__ = ["configure", "plant_text", "rollout_summary"]
 
 
-def _positive(kind: type) -> Callable[[str], float]:
-    return number_argument(kind, f"a finite {kind.__name__} > 0", lambda v: 0 < v < float("inf"))
-
-
-def add_plant_arguments(p: argparse.ArgumentParser) -> None:
-    """``--plant`` and ``--tip-radius`` (read back by :func:`plant_options`)."""
-    p.add_argument("--plant", choices=("project", "mujoco"), default="project",
-                   help="project: the full-coordinate plant with point contacts (default); mujoco: MuJoCo with sphere "
-                        "tips and soft contacts (pip install 'regrasp[mujoco]')")
-    p.add_argument("--tip-radius", type=_positive(float), metavar="MM",
-                   help="--plant mujoco: the fingertips' sphere radius [mm] (default 0.25)")
-
-
-def plant_options(args: argparse.Namespace) -> dict:
-    """``build_rollout``'s ``plant`` and ``mujoco_settings`` from ``--plant`` and ``--tip-radius``; a missing
-    ``mujoco`` or a radius without MuJoCo is an error before any work."""
-    from ..core.exceptions import InvalidParameterError
-
-    if args.tip_radius is not None and args.plant != "mujoco":
-        raise InvalidParameterError("--tip-radius", args.tip_radius, "no radius unless --plant mujoco (the project's "
-                                    "plant has point contacts)")
-    if args.plant != "mujoco":
-        return {"plant": args.plant}
-    from ..plants.mujoco.mjcf import MujocoSettings, require_mujoco
-
-    require_mujoco()  # (before planning: say at once that the extra is missing)
-    return {"plant": "mujoco", "mujoco_settings": MujocoSettings() if args.tip_radius is None else
-            MujocoSettings(tip_radius=args.tip_radius * 1e-3)}
-
-
-def add_parser(sub: argparse._SubParsersAction, progress_bar: Callable[[str], Callable[[int, int], None]],
-               nonnegative: Callable[[str], float]) -> None:
-    """Register ``simulate`` on the ``regrasp`` parser's subparsers."""
-    p = sub.add_parser("simulate", help="run a regrasping rollout on the plant (paper §4) and record it",
-                       description="Run a rollout: the supervisor and its policy drive the full-coordinate plant. "
-                                   "Exit status 0: success, 1: failure or no schedule, 2: bad input.")
+def configure(p: argparse.ArgumentParser) -> None:
+    """``regrasp simulate``'s arguments, on its parser."""
     p.add_argument("scenario", nargs="?", default=None,
                    help=f"scenario file (TOML); default: {DEFAULT_SCENARIO.name} from examples/scenarios")
     span = p.add_mutually_exclusive_group()
-    span.add_argument("--periods", type=_positive(int), metavar="N",
+    span.add_argument("--periods", type=positive(int), metavar="N",
                       help="run N periods of a periodic trajectory (past the scenario's t_end)")
-    span.add_argument("--duration", type=_positive(float), metavar="T", help="simulated time [s]")
+    span.add_argument("--duration", type=positive(float), metavar="T", help="simulated time [s]")
     p.add_argument("--policy", choices=("scheduled", "paper", "none"), default="scheduled",
                    help="scheduled: plan the slides ahead, follow and re-plan them (default); paper: the paper's "
                         "danger-zone heuristic; none: never slide")
     add_plant_arguments(p)
     p.add_argument("--rrd", metavar="FILE", type=Path, help="write a rerun recording to FILE")
-    p.add_argument("--decimate", type=_positive(int), default=10, metavar="K",
+    p.add_argument("--decimate", type=positive(int), default=10, metavar="K",
                    help="record every K-th step (events at every step); default 10, a 10 ms row at 1 kHz, about "
                         "0.17 MB per simulated second; 1 records every step (about 1.5 MB per second)")
     view = p.add_mutually_exclusive_group()
     view.add_argument("--spawn", action="store_true", help="stream to a rerun viewer it starts")
     view.add_argument("--connect", metavar="ADDR", help="stream to a running rerun viewer at this gRPC address")
     p.add_argument("--json", action="store_true", help="print one JSON document on stdout")
-    p.add_argument("--plant-mass-scale", type=_positive(float), default=1.0, metavar="S",
+    p.add_argument("--plant-mass-scale", type=positive(float), default=1.0, metavar="S",
                    help="the plant's object mass and inertia are S times the model's (the controllers keep the model)")
-    p.add_argument("--plant-mu-scale", type=_positive(float), default=1.0, metavar="S",
+    p.add_argument("--plant-mu-scale", type=positive(float), default=1.0, metavar="S",
                    help="the plant's friction coefficients are S times the model's")
     p.add_argument("--envelope-margin", type=nonnegative, metavar="M",
                    help="scheduled: the envelope margin [m] the schedule keeps (default 0.001)")
@@ -99,7 +71,7 @@ def add_parser(sub: argparse._SubParsersAction, progress_bar: Callable[[str], Ca
                    help="scheduled: the cone margin [N] the schedule and the controllers keep (default 0.2)")
     p.add_argument("--plot", metavar="DIR", help="write regrasp_rollout.png (per finger: band, planned and actual "
                                                  "contact against time) into DIR")
-    p.set_defaults(func=lambda args: _cmd_simulate(args, progress_bar))
+    p.set_defaults(func=_cmd_simulate)
 
 
 def plant_text(name: str, plant: PlantLike) -> str:
@@ -164,12 +136,12 @@ def _no_schedule_text(error, scenario) -> str:
     return "\n".join(lines)
 
 
-def _cmd_simulate(args, progress_bar) -> int:
-    from ..core.exceptions import InvalidParameterError
-    from ..rollout.build import DEFAULT_CONE_MARGIN
+def _cmd_simulate(args: argparse.Namespace) -> int:
     from ..model.scenario import load_scenario
+    from ..plants.spec import ModelErrors
+    from ..rollout.spec import RunSpec
     from ..schedule.planner import RegraspSettings
-    from ..supervisor.supervisor import SupervisorSettings
+    from ..supervisor.settings import SupervisorSettings
 
     path = args.scenario if args.scenario is not None else DEFAULT_SCENARIO
     if args.scenario is None and not DEFAULT_SCENARIO.is_file():
@@ -177,37 +149,34 @@ def _cmd_simulate(args, progress_bar) -> int:
                                     "here: regrasp is not installed from its source tree)")
     scenario = load_scenario(path)
     if args.plot:
-        from .main import output_directory
-
         output_directory("--plot", args.plot)
-    plant = plant_options(args)
-    tips = {"tip_radius": plant["mujoco_settings"].tip_radius} if "mujoco_settings" in plant else {}  # (the laws
-    # know the tips' radius)
+    plant = replace(plant_spec(args), errors=ModelErrors(mass_scale=args.plant_mass_scale,
+                                                         mu_scale=args.plant_mu_scale))
     cone = DEFAULT_CONE_MARGIN if args.cone_margin is None else args.cone_margin
     options = {"cone_margin": cone}
     if args.envelope_margin is not None:
         options["envelope_margin"] = args.envelope_margin
-    regrasp_settings = RegraspSettings(**options)
-    settings = SupervisorSettings.robust(scenario.geometry.value, cone, **tips)
-    common = dict(periods=args.periods, duration=args.duration, settings=settings, regrasp_settings=regrasp_settings,
-                  plant_mass_scale=args.plant_mass_scale, plant_mu_scale=args.plant_mu_scale, **plant)
+    # (the laws know the tips' radius)
+    settings = SupervisorSettings.robust(scenario.geometry, cone, tip_radius=plant.tip_radius)
+    common = dict(settings=settings, regrasp_settings=RegraspSettings(**options), plant=plant)
+    run = RunSpec(periods=args.periods, duration=args.duration)
     # OSQP's C library prints "Polishing not needed" on fd 1 even with verbose=False: keep stdout for the result
     with captured_fd(1):
-        code, output = _simulate(args, scenario, common, progress_bar)
+        code, output = _simulate(args, scenario, run, common)
     sys.stdout.write(output + "\n")
     return code
 
 
-def _simulate(args, scenario, common, progress_bar) -> tuple[int, str]:
+def _simulate(args, scenario, run, common) -> tuple[int, str]:
     """Run the rollout: (exit status, what to print on stdout)."""
+    from ..plants.simulation import InterruptAtStepEnd
     from ..rollout.build import build_rollout
     from ..schedule.schedule import NoScheduleError, ScheduleLimit
-    from ..plants.simulation import InterruptAtStepEnd
 
     quiet = args.json
     try:
-        rollout = build_rollout(scenario, policy=args.policy, **common,
-                                plan_progress=None if quiet else progress_bar("planning regrasps"))
+        rollout = build_rollout(scenario, run, policy=args.policy, **common,
+                                plan_progress=None if quiet else ProgressBar("planning regrasps"))
     except NoScheduleError as exc:
         if exc.limit is not ScheduleLimit.ENVELOPE or exc.partial is None:
             if args.json:
@@ -219,7 +188,7 @@ def _simulate(args, scenario, common, progress_bar) -> tuple[int, str]:
         if not quiet:
             print(f"no schedule beyond t = {exc.latest_time:.3f} s ({exc.reason}); running the partial schedule",
                   file=sys.stderr)
-        rollout = build_rollout(scenario, policy=args.policy, schedule=exc.partial, **common)
+        rollout = build_rollout(scenario, run, policy=args.policy, schedule=exc.partial, **common)
     # Ctrl-C from here until the recording is closed ends the run at a step's end (never inside the recorder)
     with InterruptAtStepEnd():
         recorder = None
@@ -227,10 +196,10 @@ def _simulate(args, scenario, common, progress_bar) -> tuple[int, str]:
             from ..rollout.recording.recorder import RolloutRecorder
 
             recorder = RolloutRecorder(rollout.plant, rrd_path=args.rrd, spawn=args.spawn, connect=args.connect,
-                                       decimation=args.decimate, envelope_geometry=scenario.geometry.value,
+                                       decimation=args.decimate, envelope_geometry=scenario.geometry,
                                        recording_name=f"{scenario.name} ({args.policy})")
         try:
-            result = rollout.run(recorder=recorder, progress=None if quiet else progress_bar("simulating"))
+            result = rollout.run(recorder=recorder, progress=None if quiet else ProgressBar("simulating"))
         finally:
             if recorder is not None:
                 recorder.close()

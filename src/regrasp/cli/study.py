@@ -15,17 +15,19 @@ import argparse
 import json
 import os
 import sys
-from dataclasses import asdict, replace
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .args import number_argument
+from ..core.exceptions import InvalidParameterError
+from .common import DEFAULT_SCENARIO, ProgressBar, add_plant_arguments, number_argument, output_directory, plant_spec
 
 if TYPE_CHECKING:
+    from ..plants.spec import PlantSpec
     from ..study.study import StudyResult
 
-__all__ = ["add_study_parser"]
+__all__ = ["configure"]
 
 
 def _count(least: int) -> Callable[[str], int]:
@@ -79,17 +81,8 @@ def _sweep(text: str) -> tuple[str, tuple[float, ...]]:
     return name, sizes
 
 
-def add_study_parser(sub: argparse._SubParsersAction,
-                     progress_bar: Callable[[str], Callable[[int, int], None]]) -> None:
-    """Register ``study`` on the ``regrasp`` parser's subparsers."""
-    from .simulate import DEFAULT_SCENARIO, add_plant_arguments
-
-    p = sub.add_parser("study", help="a robustness study: many seeded rollouts under model errors and noise",
-                       description="Plan the regrasp schedule once, then run seeded rollouts on plants whose model "
-                                   "errors are drawn around the model's, with sensing noise, torque noise and delays. "
-                                   "Prints the success rate with a Wilson 95 % interval, the failures by kind and "
-                                   "time and the margins. The perturbations default to the scenario's [study] table; "
-                                   "a flag overrides its key. Exit status 0: the study ran, 2: bad input.")
+def configure(p: argparse.ArgumentParser) -> None:
+    """``regrasp study``'s arguments, on its parser."""
     p.add_argument("scenario", nargs="?", default=None,
                    help=f"scenario file (TOML); default: {DEFAULT_SCENARIO.name} from examples/scenarios")
     p.add_argument("--runs", type=_count(1), default=20, metavar="N", help="number of runs (default 20)")
@@ -114,7 +107,7 @@ def add_study_parser(sub: argparse._SubParsersAction,
                    help="run only run I of this study (the same seed and perturbations) and print its rollout; exit "
                         "status 0 if it succeeds, 1 if it fails")
     p.add_argument("--rrd", metavar="FILE", type=Path, help="with --replay: write the run to a rerun recording")
-    p.set_defaults(func=lambda args: _cmd_study(args, progress_bar))
+    p.set_defaults(func=_cmd_study)
 
 
 def _summary(result: StudyResult) -> str:
@@ -143,58 +136,55 @@ def _summary(result: StudyResult) -> str:
     return "\n".join(lines)
 
 
-def _replay(args: argparse.Namespace, scenario, perturbation, plant: dict,
-            progress_bar: Callable[[str], Callable[[int, int], None]]) -> int:
+def _replay(args: argparse.Namespace, scenario, perturbation, plant: PlantSpec) -> int:
     """``--replay I``: run I of the study alone, printed as ``regrasp simulate`` prints a rollout (and recorded)."""
+    from ..rollout.spec import RunSpec
+    from ..schedule.planner import plan_regrasps
+    from ..study.draws import draw_runs
+    from ..study.study import build_run
     from .simulate import plant_text, rollout_summary
-    from ..rollout.build import DEFAULT_CONE_MARGIN, build_rollout
-    from ..schedule.planner import RegraspSettings, plan_regrasps
-    from ..study.study import build_run, draw_runs
 
     draw = draw_runs(args.replay + 1, args.seed, perturbation, len(scenario.contacts))[args.replay]
-    schedule = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN),
-                             progress=None if args.json else progress_bar("planning regrasps"))
-    duration = build_rollout(scenario, duration=args.duration, periods=args.periods, schedule=schedule, **plant).duration
-    rollout = build_run(scenario, draw, schedule, duration, perturbation, **plant)
+    schedule = plan_regrasps(scenario, progress=None if args.json else ProgressBar("planning regrasps"))
+    _, duration = RunSpec(duration=args.duration, periods=args.periods).resolve(scenario)
+    rollout = build_run(scenario, draw, schedule, duration, perturbation, plant=plant)
     recorder = None
     if args.rrd is not None:
         from ..rollout.recording.recorder import RolloutRecorder
 
-        recorder = RolloutRecorder(rollout.plant, rrd_path=args.rrd, envelope_geometry=scenario.geometry.value,
+        recorder = RolloutRecorder(rollout.plant, rrd_path=args.rrd, envelope_geometry=scenario.geometry,
                                    recording_name=f"{scenario.name}, study seed {args.seed}, run {args.replay}")
     try:
-        result = rollout.run(recorder=recorder, progress=None if args.json else progress_bar("simulating"))
+        result = rollout.run(recorder=recorder, progress=None if args.json else ProgressBar("simulating"))
     finally:
         if recorder is not None:
             recorder.close()
     if args.json:
         doc = result.to_json_dict()
-        doc.update(plant=plant["plant"], run=args.replay, seed=args.seed, draw={**asdict(draw), "entropy": list(draw.entropy),
-                                                                                "xi_offset": list(draw.xi_offset)})
+        doc.update(plant=plant.kind, run=args.replay, seed=args.seed, draw=draw.to_json_dict())
         json.dump(doc, sys.stdout)
         sys.stdout.write("\n")
     else:
-        factors = (f"mass x{draw.mass_scale:.3f}, inertia x{draw.inertia_scale:.3f}, mu x{draw.mu_scale:.3f}, "
-                   f"placement {', '.join(f'{x * 1e3:+.3f}' for x in draw.xi_offset)} mm")
+        e = draw.errors
+        factors = (f"mass x{e.mass_scale:.3f}, inertia x{e.object_inertia_scale:.3f}, mu x{e.mu_scale:.3f}, "
+                   f"placement {', '.join(f'{x * 1e3:+.3f}' for x in e.xi_offset)} mm")
         print(f"run {args.replay} of seed {args.seed} ({perturbation.describe()}): {factors}")
-        print(rollout_summary(result, scenario, plant_text(plant["plant"], rollout.plant)))
+        print(rollout_summary(result, scenario, plant_text(plant.kind, rollout.plant)))
     return 0 if result.success else 1
 
 
-def _sweep_study(args: argparse.Namespace, scenario, perturbation, plant: dict,
-                 progress_bar: Callable[[str], Callable[[int, int], None]]) -> int:
+def _sweep_study(args: argparse.Namespace, scenario, perturbation, plant: PlantSpec) -> int:
     """``--sweep NAME=V1,...``: one study per size, a line each (and study_sweep.png, study_sweep.json)."""
-    from .main import output_directory
-    from ..study.study import sweep_study
     from ..study.plots import plot_sweep
+    from ..study.study import sweep_study
 
     name, values = args.sweep
     directory = output_directory("--plot", args.plot) if args.plot else None
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     results = sweep_study(scenario, args.runs, name, values, perturbation=perturbation, seed=args.seed,
                           duration=args.duration, periods=args.periods, workers=min(workers, args.runs),
-                          ray_address=args.ray, progress=None if args.json else progress_bar(
-                              f"{len(values)} x {args.runs} runs"), **plant)
+                          ray_address=args.ray, plant=plant,
+                          progress=None if args.json else ProgressBar(f"{len(values)} x {args.runs} runs"))
     doc = {"sweep": name, "values": list(values), "studies": [r.to_json_dict() for r in results]}
     if directory is not None:
         (directory / "study_sweep.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")  # results first
@@ -222,31 +212,28 @@ def _perturbation(args: argparse.Namespace, scenario) -> object:
     return replace(scenario.study, **given)
 
 
-def _cmd_study(args: argparse.Namespace, progress_bar: Callable[[str], Callable[[int, int], None]]) -> int:
-    from .main import output_directory
-    from .simulate import DEFAULT_SCENARIO, plant_options
+def _cmd_study(args: argparse.Namespace) -> int:
     from ..model.scenario import load_scenario
-    from ..core.exceptions import InvalidParameterError
-    from ..study.study import run_study
     from ..study.plots import plot_study
+    from ..study.study import run_study
 
     path = Path(args.scenario) if args.scenario is not None else DEFAULT_SCENARIO
     scenario = load_scenario(path)  # a bad file is exit 2 before any work
     perturbation = _perturbation(args, scenario)
-    plant = plant_options(args)
+    plant = plant_spec(args)
     if args.rrd is not None and args.replay is None:
         raise InvalidParameterError("--rrd", str(args.rrd), "--replay I (a study records no run; replay one)")
     if args.replay is not None:
         if args.sweep is not None:
             raise InvalidParameterError("--replay", args.replay, "a run of one study (not with --sweep)")
-        return _replay(args, scenario, perturbation, plant, progress_bar)
+        return _replay(args, scenario, perturbation, plant)
     if args.sweep is not None:
-        return _sweep_study(args, scenario, perturbation, plant, progress_bar)
+        return _sweep_study(args, scenario, perturbation, plant)
     directory = output_directory("--plot", args.plot) if args.plot else None
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     result = run_study(scenario, args.runs, seed=args.seed, perturbation=perturbation, duration=args.duration,
-                       periods=args.periods, workers=min(workers, args.runs), ray_address=args.ray, **plant,
-                       progress=None if args.json else progress_bar(f"{args.runs} runs"))
+                       periods=args.periods, workers=min(workers, args.runs), ray_address=args.ray, plant=plant,
+                       progress=None if args.json else ProgressBar(f"{args.runs} runs"))
     doc = result.to_json_dict()
     figures = []
     if directory is not None:

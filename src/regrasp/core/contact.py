@@ -26,8 +26,13 @@ import numpy as np
 
 from .exceptions import InvalidParameterError
 
-__all__ = ["ContactMode", "Friction", "FrictionLike", "ModesLike", "as_frictions", "as_modes", "coefficients",
-           "cone_margin"]
+__all__ = ["DEFAULT_CONE_MARGIN", "DEFAULT_FRICTION", "ContactMode", "Friction", "FrictionLike", "ModesLike",
+           "as_frictions", "as_modes", "coefficients", "cone_margin"]
+
+#: The cone margin μ_s f_n - |f_t| [N] the regrasp planner plans with and the supervisor keeps the fixed contacts
+#: inside where the forces allow (``RegraspSettings.cone_margin``, ``SupervisorSettings.robust``): 0.2 N costs no
+#: slide over 0.1 N on the three-finger scenario (4 per period) and leaves room for a plant 10 % off the model.
+DEFAULT_CONE_MARGIN = 0.2
 
 
 class ContactMode(str, Enum):
@@ -115,6 +120,10 @@ class Friction:
 #: What ``friction`` arguments accept (see :func:`as_frictions`): a :class:`Friction` or a coefficient [-] for
 #: every contact, or one of them per contact.
 FrictionLike: TypeAlias = Friction | float | Sequence[Friction | float]
+
+#: A fingertip's friction unless told otherwise: a scenario's default ``mu``, and every ``friction=`` argument's
+#: default (a plant's, a controller's, a supervisor's) [-].
+DEFAULT_FRICTION = Friction(0.5, 0.5)
 
 
 def as_frictions(friction: FrictionLike, m: int) -> tuple[Friction, ...]:

@@ -15,7 +15,6 @@ import numpy as np
 
 from .exceptions import InvalidParameterError
 
-
 _NOT_NUMBERS = (bool, np.bool_, str, bytes, complex, np.complexfloating)
 _NUMBER_KINDS = frozenset("iuf")
 

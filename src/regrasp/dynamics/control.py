@@ -48,13 +48,19 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import lapack
 
-from ..core.scalar import solve_small
-from ..core.contact import FrictionLike, as_frictions, coefficients, cone_margin
+from ..core.contact import DEFAULT_FRICTION, FrictionLike, as_frictions, coefficients, cone_margin
 from ..core.exceptions import InvalidParameterError, SingularModelError
-from .internal_force.solver import ConeEdge, InternalForceResult, InternalForceSettings, InternalForceSolver, as_cone_edges
-from ..kernels.control import CONTROL_OK, control_layout, control_step_into, sliding_step_into
-from .reduced import ReducedModel, ReducedState
+from ..core.scalar import solve_small
 from ..core.validation import as_finite_array, as_finite_vectors, as_integer, as_positive_float, expect_type
+from ..kernels.control import CONTROL_OK, control_layout, control_step_into, sliding_step_into
+from .internal_force.solver import (
+    ConeEdge,
+    InternalForceResult,
+    InternalForceSettings,
+    InternalForceSolver,
+    as_cone_edges,
+)
+from .reduced import ReducedModel, ReducedState
 
 __all__ = [
     "ComputedTorqueController",
@@ -146,7 +152,7 @@ class ComputedTorqueController:
 
     law = "computed torque"
 
-    def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = 0.5, *,
+    def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = DEFAULT_FRICTION, *,
                  internal_force: InternalForceSettings | None = InternalForceSettings(),
                  cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None, compiled: bool | None = None):
         expect_type("model", model, ReducedModel, "a ReducedModel")
@@ -198,16 +204,17 @@ class ComputedTorqueController:
         layout, size)`` for :func:`~regrasp.kernels.control.sliding_step_into`), or None: the reference path runs."""
         return self._kernel
 
-    def friction_estimate(self, st: ReducedState, command: np.ndarray, friction: ArrayLike | None) -> np.ndarray:
+    def friction_estimate(self, st: ReducedState, command: np.ndarray,
+                          tangential_force: ArrayLike | None) -> np.ndarray:
         """f̂_ξ (p,) [N]; the laws override this."""
         return np.zeros(self.model.grasp.p)
 
     def __call__(self, S: ArrayLike, S_dot: ArrayLike, S_d: ArrayLike, S_d_dot: ArrayLike, S_d_ddot: ArrayLike, *,
-                 friction: ArrayLike | None = None) -> ControlOutput:
+                 tangential_force: ArrayLike | None = None) -> ControlOutput:
         """Torques for the measured (S, Ṡ) and the desired (S_d, Ṡ_d, S̈_d).
 
-        ``friction``: the measured friction force at the sliding contacts (p,) [N], for
-        Proposition 2 (not the coefficients: those are the constructor's).
+        ``tangential_force``: the measured friction force at the sliding contacts (p,) [N], for
+        Proposition 2 (not the coefficients: those are the constructor's ``friction``).
         """
         start = time.perf_counter()
         model = self.model
@@ -224,7 +231,7 @@ class ComputedTorqueController:
         command = [a + kv * r + ks * e
                    for a, kv, r, ks, e in zip(s_d_ddot, self.gains.kv.tolist(), error_rate, self.gains.ks.tolist(), error)]
         command_array = np.array(command)
-        tau, f_hat, forces, force_list, internal = self._torque(terms, args, command_array, friction)
+        tau, f_hat, forces, force_list, internal = self._torque(terms, args, command_array, tangential_force)
         # (n_i^T f_i, t_i^T f_i) per contact, and the cone margins μ f_n - |f_t| (μ of the contact's mode)
         surface = [(nx * force_list[2 * i] + ny * force_list[2 * i + 1], tx * force_list[2 * i] + ty * force_list[2 * i + 1])
                    for i, (nx, ny, tx, ty) in enumerate(terms.frames)]
@@ -254,13 +261,13 @@ class ComputedTorqueController:
                              out[layout["error_rate"]], f_hat, forces, out[layout["surface"]].reshape(m, 2),
                              out[layout["margins"]], internal, time.perf_counter() - start)
 
-    def _torque(self, terms, args: np.ndarray, command_array: np.ndarray, friction):
+    def _torque(self, terms, args: np.ndarray, command_array: np.ndarray, tangential_force):
         """(τ (list), f̂_ξ, predicted contact forces (m, 2), the same as a flat list, internal-force
         result) for the commanded S̈ (``args``: the validated (S, Ṡ, ...) rows)."""
         model = self.model
         if self._estimates_friction:
             st = model._state_from(args[0], args[1], terms)
-            f_hat = self.friction_estimate(st, command_array, friction)
+            f_hat = self.friction_estimate(st, command_array, tangential_force)
         else:
             f_hat = np.zeros(model.grasp.p)
         tau, wrench = _computed_torque(model, terms, command_array, np.asarray(f_hat, dtype=float).tolist())
@@ -320,7 +327,7 @@ class FixedContactController(ComputedTorqueController):
 
     law = "fixed contacts"
 
-    def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = 0.5, **kwargs: Any):
+    def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = DEFAULT_FRICTION, **kwargs: Any):
         if expect_type("model", model, ReducedModel, "a ReducedModel").grasp.p != 0:
             raise InvalidParameterError("model", model.grasp.modes, "only fixed contacts (p = 0)")
         super().__init__(model, gains, friction, **kwargs)
@@ -337,10 +344,11 @@ class Proposition2Controller(ComputedTorqueController):
 
     law = "Proposition 2"
 
-    def friction_estimate(self, st: ReducedState, command: np.ndarray, friction: ArrayLike | None) -> np.ndarray:
-        if friction is None:
-            raise InvalidParameterError("friction", None, "the measured friction force at each sliding contact")
-        return as_finite_array("friction", friction, (self.model.grasp.p,))
+    def friction_estimate(self, st: ReducedState, command: np.ndarray,
+                          tangential_force: ArrayLike | None) -> np.ndarray:
+        if tangential_force is None:
+            raise InvalidParameterError("tangential_force", None, "the measured friction force at each sliding contact")
+        return as_finite_array("tangential_force", tangential_force, (self.model.grasp.p,))
 
 
 class Proposition3Controller(ComputedTorqueController):
@@ -380,7 +388,7 @@ class Proposition3Controller(ComputedTorqueController):
 
     law = "Proposition 3"
 
-    def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = 0.5, *, sample_time: float = 1e-3,
+    def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = DEFAULT_FRICTION, *, sample_time: float = 1e-3,
                  direction: float | Sequence[float] = 1.0, reversible: bool = True, compiled: bool | None = None,
                  **kwargs: Any):
         m, p = model.grasp.m, model.grasp.p
@@ -461,15 +469,16 @@ class Proposition3Controller(ComputedTorqueController):
         self._directions = directions.tolist()
         return self._output(out, layout, k, margin, out[layout["f_hat"]], start)
 
-    def friction_estimate(self, st: ReducedState, command: np.ndarray, friction: ArrayLike | None) -> np.ndarray:
+    def friction_estimate(self, st: ReducedState, command: np.ndarray,
+                          tangential_force: ArrayLike | None) -> np.ndarray:
         """m = 2: :math:`P (M_o a_X - f_g)` (3.4.9, the slider's μ_k); otherwise see :meth:`_torque`."""
         direction = self.sliding_direction(float(st.S_dot[3]), float(command[3]))
         P = self.model.grasp.friction_map(st.S[:3], st.xi, [direction], self.friction)
         return P @ (self.model.M_o @ command[:3] - self.model.f_g)
 
-    def _torque(self, terms, args, command_array, friction):
+    def _torque(self, terms, args, command_array, tangential_force):
         if self.model.grasp.m == 2:
-            return super()._torque(terms, args, command_array, friction)
+            return super()._torque(terms, args, command_array, tangential_force)
         directions = self.sliding_directions(args[1][3:].tolist(), command_array[3:].tolist())
         st = self.model._state_from(args[0], args[1], terms)
         tau, f_hat, forces, internal = self._distributed_torque(st, terms, command_array, directions)

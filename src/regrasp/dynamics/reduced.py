@@ -36,13 +36,12 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.contact import FrictionLike, as_frictions
-from ..core.exceptions import InvalidParameterError
-from .grasp import Grasp
-from ..model.hand import Hand, HandDynamics
-from ..core.exceptions import UnreachableError
-from ..kernels.reduced import UNREACHABLE, contact_edges, ik_parameters, reduced_terms
+from ..core.contact import DEFAULT_FRICTION, FrictionLike, as_frictions
+from ..core.exceptions import InvalidParameterError, UnreachableError
 from ..core.validation import as_finite_array, as_finite_vectors, as_inertia, as_mass, expect_type
+from ..kernels.reduced import UNREACHABLE, contact_edges, ik_parameters, reduced_terms
+from ..model.hand import Hand, HandDynamics
+from .grasp import Grasp
 
 __all__ = ["ReducedModel", "ReducedState"]
 
@@ -335,7 +334,7 @@ class ReducedModel:
         out[3:] = -(st.B_v.T @ st.R_f.T @ f)
         return out
 
-    def forward_dynamics(self, st: ReducedState, tau: ArrayLike, friction: FrictionLike = 0.0, *,
+    def forward_dynamics(self, st: ReducedState, tau: ArrayLike, friction: FrictionLike = DEFAULT_FRICTION, *,
                          signs: ArrayLike | None = None,
                          paper_friction_term: bool = False) -> tuple[np.ndarray, np.ndarray]:
         r"""S̈ and the contact forces (m, 2) [N] for joint torques ``tau`` [N m] and Coulomb friction

@@ -32,6 +32,7 @@ from numpy.typing import ArrayLike
 
 from ..core.contact import ContactMode, FrictionLike, as_frictions, cone_margin
 from ..core.exceptions import InvalidParameterError
+from ..core.validation import as_finite_array, as_finite_float, as_inertia, as_integer, as_mass, as_sign, expect_type
 from .grasp import Grasp
 from .internal_force.solver import (
     InternalForceInfeasibleError,
@@ -40,8 +41,6 @@ from .internal_force.solver import (
     build_internal_force_qp,
     solve_internal_force_qp,
 )
-from ..core.validation import (as_finite_array, as_finite_float, as_inertia, as_integer, as_mass, as_sign,
-                         expect_type)
 
 __all__ = ["SlideFeasibility", "SlideObstacle", "sliding_feasibility"]
 
@@ -96,7 +95,7 @@ def sliding_feasibility(
     object_mass: float,
     object_inertia: float,
     gravity_in_hand: ArrayLike = (0.0, -9.81),
-    settings: InternalForceSettings = InternalForceSettings(f_min=0.0, margin=0.0),
+    settings: InternalForceSettings = InternalForceSettings(f_min=0.0, friction_margin=0.0),
     solver: InternalForceSolver | None = None,
     edge_mu: float | None = None,
 ) -> SlideFeasibility:
@@ -190,9 +189,10 @@ def sliding_feasibility(
             obstacle = SlideObstacle.TOO_STRONG
         else:
             obstacle = SlideObstacle.FIXED_SLIP
-            margins = cone_margin(mu - settings.margin, surface[:, 0], surface[:, 1])
+            margins = cone_margin(mu - settings.friction_margin, surface[:, 0], surface[:, 1])
             worst = int(np.argmin(np.where(np.arange(m) != contact, margins, np.inf)))
-            reason = f"fixed contact {worst} would slip (cone margin {margins[worst]:.3g} N with margin {settings.margin})"
+            reason = (f"fixed contact {worst} would slip (cone margin {margins[worst]:.3g} N with friction margin "
+                      f"{settings.friction_margin})")
     margins = cone_margin(mu, surface[:, 0], surface[:, 1])
     return SlideFeasibility(bool(possible), contact, float(direction), surface, surface[:, 0].copy(), margins,
                             reason, obstacle)

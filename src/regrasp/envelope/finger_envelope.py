@@ -66,23 +66,28 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..model.collision import UrdfCollisionChecker, default_tip_clearance, segment_hits_halfplanes
 from ..core.exceptions import InvalidParameterError
-from ..model.finger import Finger
 from ..core.intervals import Intervals, intersect, merge
-from ..kernels.envelope import (ENVELOPE_PARAMETERS, envelope_sample_into, feasible_capacity, tip_is_free,
-                               workspace_size)
 from ..core.planar import rotation
 from ..core.polygon import ConvexPolygon
-from ..core.validation import (as_finite_array, as_finite_float, as_flag, as_integer, as_positive_float, as_sign,
-                         expect_type)
+from ..core.validation import (
+    as_finite_array,
+    as_finite_float,
+    as_flag,
+    as_integer,
+    as_positive_float,
+    as_sign,
+    expect_type,
+)
+from ..kernels.envelope import ENVELOPE_PARAMETERS, envelope_sample_into, feasible_capacity, tip_is_free, workspace_size
+from ..model.collision import Geometry, UrdfCollisionChecker, default_tip_clearance, segment_hits_halfplanes
+from ..model.finger import Finger
 
 __all__ = [
     "Condition",
     "EdgeLine",
     "EnvelopeSample",
     "FingerEnvelope",
-    "Geometry",
     "condition_of",
     "elbow_margin",
     "reachable_on_line",
@@ -102,12 +107,6 @@ class Condition(str, Enum):
     III = "III"
     IV = "IV"
 
-
-class Geometry(str, Enum):
-    """How links are modelled for collision: segments (``ideal``) or URDF shapes (``urdf``)."""
-
-    IDEAL = "ideal"
-    URDF = "urdf"
 
 
 def condition_of(d: float, l1: float) -> Condition:

@@ -26,13 +26,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .finger_envelope import EnvelopeSample, FingerEnvelope, Geometry
 from ..core.exceptions import InvalidParameterError
 from ..core.intervals import Intervals, intersect, widest
 from ..core.polygon import ConvexPolygon
-from ..model.scenario import FingerContact, Scenario
 from ..core.trajectory import Trajectory
 from ..core.validation import MAX_SAMPLES, as_finite_array, as_sample_count, expect_sequence_of, expect_type
+from ..model.collision import Geometry
+from ..model.scenario import FingerContact, Scenario
+from .finger_envelope import EnvelopeSample, FingerEnvelope
 
 __all__ = ["FingerPlan", "InfeasibleInterval", "PlanResult", "motion_between_samples", "plan", "plan_scenario"]
 

@@ -29,10 +29,10 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from ..core.contact import FrictionLike
-    from ..model.finger import Finger
     from ..core.polygon import ConvexPolygon
-    from ..schedule.schedule import NoScheduleError, RegraspSchedule
     from ..dynamics.sliding import SlideFeasibility
+    from ..model.finger import Finger
+    from ..schedule.schedule import NoScheduleError, RegraspSchedule
 
 __all__ = ["plot_conditions", "plot_feasible", "plot_reachable", "plot_schedule", "plot_slide_feasibility",
            "write_plan_figures"]

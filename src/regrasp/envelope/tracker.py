@@ -49,9 +49,9 @@ from typing import NamedTuple
 
 from numpy.typing import ArrayLike
 
-from .finger_envelope import EnvelopeSample, FingerEnvelope, _pose_floats, _urdf_pieces
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import as_positive_float
+from .finger_envelope import EnvelopeSample, FingerEnvelope, _pose_floats, _urdf_pieces
 
 __all__ = ["EnvelopeTracker"]
 

@@ -53,10 +53,18 @@ from .envelope import ENVELOPE_PARAMETERS, envelope_sample_into, feasible_capaci
 from .finger import FINGER_PARAMETERS, FINGER_TERMS, finger_parameters, finger_terms, finger_terms_at
 from .footprint import FOOTPRINT, footprint_distances
 from .force import internal_force_into
-from .plant import (FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, output_size, plant_evaluate,
-                    plant_step_into)
-from .reduced import CONTACT_EDGE, FINGER_IK, reduced_terms
 from .monitor import envelope_arguments
+from .plant import (
+    FIXED,
+    PLANT_CONTACT,
+    PLANT_PARAMETERS,
+    SEPARATED,
+    SLIDING,
+    output_size,
+    plant_evaluate,
+    plant_step_into,
+)
+from .reduced import CONTACT_EDGE, FINGER_IK, reduced_terms
 from .stretch import SLIDER, STRETCH_SETTINGS, STRETCH_STATE, stretch_into, stretch_log
 
 __all__ = ["CONTACT_EDGE", "ENVELOPE_PARAMETERS", "FINGER_IK", "FINGER_PARAMETERS", "FINGER_TERMS", "FIXED",

@@ -27,19 +27,36 @@ coal stays the reference and the checker of the closed form (``tests/test_kernel
 from __future__ import annotations
 
 import math
+from enum import Enum
 
 import coal
 import numpy as np
 import pinocchio as pin
 
-from ..core.exceptions import FingerModelError
-from .finger import Finger, LinkShape
-from ..kernels.footprint import FOOTPRINT
+from ..core.exceptions import FingerModelError, InvalidParameterError
 from ..core.polygon import ConvexPolygon
 from ..core.validation import as_finite_array, as_positive_float, expect_type
+from ..kernels.footprint import FOOTPRINT
+from .finger import Finger, LinkShape
 
-__all__ = ["UrdfCollisionChecker", "checked_link_shapes", "default_tip_clearance", "planar_footprint",
-           "segment_hits_polygon"]
+__all__ = ["Geometry", "UrdfCollisionChecker", "as_geometry", "checked_link_shapes", "default_tip_clearance",
+           "planar_footprint", "segment_hits_polygon"]
+
+
+class Geometry(str, Enum):
+    """How links are modelled for collision: segments (``ideal``) or URDF shapes (``urdf``)."""
+
+    IDEAL = "ideal"
+    URDF = "urdf"
+
+
+def as_geometry(name: str, value: object, expected: str = "'ideal' or 'urdf'") -> Geometry:
+    """``value`` as a :class:`Geometry` (a member or its string), else an error naming ``name``."""
+    try:
+        return Geometry(value)
+    except (ValueError, TypeError):
+        raise InvalidParameterError(name, value, expected) from None
+
 
 #: How far [m, or a unit vector's component] a shape may be from the symmetric placement of
 #: :func:`planar_footprint` (an axis out of the plane, a centre off it) and still count as in it.

@@ -33,9 +33,9 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..core.exceptions import InvalidParameterError, SingularFingerError
-from .finger import Finger
-from ..kernels.finger import condition_2x2 as _compiled_condition
 from ..core.validation import as_finite_array, as_flag, as_positive_float, expect_sequence_of
+from ..kernels.finger import condition_2x2 as _compiled_condition
+from .finger import Finger
 
 __all__ = ["Hand", "HandDynamics", "KERNEL_TOLERANCE", "KernelMismatchWarning"]
 

@@ -16,7 +16,7 @@ factor drawn uniformly from :math:`[1 - h, 1 + h]`; the controllers and the plan
   :math:`\xi_0` along its edge, while the supervisor believes :math:`\xi_0` (a placement or calibration error).
 
 **Noise**, white Gaussian, drawn at every control step (standard deviations; see
-:class:`~regrasp.plants.disturbance.SensorNoise` and :class:`~regrasp.plants.disturbance.ActuatorNoise`): the object's
+:class:`~regrasp.model.noise.SensorNoise` and :class:`~regrasp.model.noise.ActuatorNoise`): the object's
 position [m], angle [rad], velocity [m/s], angular velocity [rad/s], each :math:`\xi` [m] and :math:`\dot\xi`
 [m/s], the contact force sensor [N]; a slip sensor's threshold [m/s] and delay [steps]; torque noise [N m] and
 an actuation delay [steps].
@@ -26,22 +26,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-import numpy as np
-
-from ..plants.disturbance import ActuatorNoise, SensorNoise
 from ..core.exceptions import InvalidParameterError
-from ..core.validation import as_finite_float, as_integer, expect_type
+from ..core.validation import as_finite_float
+from .noise import ActuatorNoise, SensorNoise
 
-__all__ = ["MAX_RUNS", "Perturbation", "RunDraw", "draw_runs"]
+__all__ = ["Perturbation"]
 
-#: The most runs one study takes.
-MAX_RUNS = 100_000
 
 #: The relative model errors (half-widths in [0, 1)), in the order a run draws them.
 RELATIVE = ("mass", "mu", "inertia", "link_mass", "mu_kinetic")
 
-#: The most fingers a study draws placement errors for.
-MAX_CONTACTS = 64
 
 #: The largest contact placement error [m] (a fingertip this far off its plan is another grasp).
 MAX_CONTACT_POSITION = 0.01
@@ -143,56 +137,3 @@ _UNITS = {"contact_position": (1e3, "mm"), "position_noise": (1e3, "mm"), "angle
           "torque_noise": (1e3, "mN m")}
 
 
-@dataclass(frozen=True)
-class RunDraw:
-    """One run's seed and the model errors drawn from it.
-
-    Attributes:
-        index: The run's number in the study (0-based).
-        entropy: The run's seed, as the spawned ``SeedSequence``'s words (to repeat the run alone; its noise is
-            seeded by ``SeedSequence(entropy)``).
-        mass_scale: The plant's object mass over the model's [-].
-        mu_scale: The plant's μ_s over the model's (and μ_k's, with ``mu_kinetic_scale``) [-].
-        inertia_scale: The plant's object inertia over the model's [-].
-        link_mass_scale: The plant's link masses and inertias over the URDFs' [-].
-        mu_kinetic_scale: The plant's μ_k over ``mu_scale`` × the model's, before the cap at the plant's μ_s [-].
-        xi_offset: Each fingertip's placement error along its edge [m].
-    """
-
-    index: int
-    entropy: tuple[int, ...]
-    mass_scale: float
-    mu_scale: float
-    inertia_scale: float = 1.0
-    link_mass_scale: float = 1.0
-    mu_kinetic_scale: float = 1.0
-    xi_offset: tuple[float, ...] = ()
-
-    @property
-    def seed(self) -> np.random.SeedSequence:
-        """The run's noise seed."""
-        return np.random.SeedSequence(list(self.entropy))
-
-
-def draw_runs(runs: int, seed: int, perturbation: Perturbation, contacts: int = 0) -> tuple[RunDraw, ...]:
-    """The ``runs`` draws of a study: run :math:`i` draws from ``SeedSequence(seed).spawn(runs)[i]``, so a run's
-    draw does not depend on how many runs there are or who runs them. ``contacts``: the fingers to draw a
-    placement error for."""
-    runs = as_integer("runs", runs, 1)
-    if runs > MAX_RUNS:
-        raise InvalidParameterError("runs", runs, f"at most {MAX_RUNS} runs")
-    expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
-    contacts = as_integer("contacts", contacts)
-    if contacts > MAX_CONTACTS:
-        raise InvalidParameterError("contacts", contacts, f"at most {MAX_CONTACTS} fingers")
-    p = perturbation
-    out = []
-    for i, child in enumerate(np.random.SeedSequence(as_integer("seed", seed)).spawn(runs)):
-        rng = np.random.default_rng(child)
-        mass, mu, inertia, links = rng.uniform(-1.0, 1.0, 4).tolist()  # (the order of the first studies)
-        kinetic = float(rng.uniform(-1.0, 1.0))
-        offsets = rng.uniform(-1.0, 1.0, contacts) * p.contact_position
-        out.append(RunDraw(i, tuple(int(w) for w in child.generate_state(4)), 1.0 + p.mass * mass, 1.0 + p.mu * mu,
-                           1.0 + p.inertia * inertia, 1.0 + p.link_mass * links, 1.0 + p.mu_kinetic * kinetic,
-                           tuple(offsets.tolist())))
-    return tuple(out)

@@ -67,20 +67,25 @@ from typing import Any
 
 import numpy as np
 
-from ..core.contact import Friction
-from ..envelope.finger_envelope import Geometry
-from ..core.exceptions import (FingerModelError, InvalidParameterError, PolygonError, RegraspError, ScenarioError,
-                         short_repr)
-from ..core.validation import MAX_SAMPLES, as_finite_array, as_positive_float, file_problem
-from .finger import Finger
-from .perturbation import Perturbation
+from ..core.contact import DEFAULT_FRICTION, Friction
+from ..core.exceptions import (
+    FingerModelError,
+    InvalidParameterError,
+    PolygonError,
+    RegraspError,
+    ScenarioError,
+    short_repr,
+)
 from ..core.polygon import ConvexPolygon
 from ..core.trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
+from ..core.validation import MAX_SAMPLES, as_finite_array, as_positive_float, file_problem
+from .collision import Geometry
+from .finger import Finger
+from .perturbation import Perturbation
 
 __all__ = ["FingerContact", "Scenario", "load_scenario"]
 
 #: The friction when neither a finger nor [hand] gives one.
-_DEFAULT_FRICTION = Friction(0.5)
 
 
 @dataclass(frozen=True)
@@ -97,7 +102,7 @@ class FingerContact:
     finger: Finger
     edge: int
     tip_clearance: float | None = None
-    friction: Friction = _DEFAULT_FRICTION
+    friction: Friction = DEFAULT_FRICTION
 
     def __post_init__(self):
         if not isinstance(self.finger, Finger):
@@ -128,7 +133,7 @@ class Scenario:
     study: Perturbation = Perturbation()
 
     def check_geometry(self, geometry: Geometry | str) -> Geometry:
-        """``geometry`` as a :class:`~regrasp.envelope.finger_envelope.Geometry` every finger of this scenario can be planned
+        """``geometry`` as a :class:`~regrasp.model.collision.Geometry` every finger of this scenario can be planned
         with: for ``urdf``, each finger's collision shapes (:func:`~regrasp.model.collision.checked_link_shapes`),
         else a :class:`~regrasp.core.exceptions.ScenarioError` naming the finger's ``urdf`` key."""
         try:
@@ -379,7 +384,7 @@ def load_scenario(path: str | Path) -> Scenario:
         raise ScenarioError(path, "hand", "expected a table [hand]")
     hand = _Reader(path, hand_table, "hand.")
     gravity = hand.array("gravity", (2,), [0.0, -9.81])
-    friction = _friction(hand, _DEFAULT_FRICTION)
+    friction = _friction(hand, DEFAULT_FRICTION)
     hand.finish()
     contacts = _fingers(path, top.get("fingers"), polygon, friction)
 

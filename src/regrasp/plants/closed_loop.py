@@ -14,13 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics.control import ComputedTorqueController, ControlOutput, Proposition2Controller
 from ..core.exceptions import InvalidParameterError
-from .project.plant import PlantEvent
-from ..dynamics.reduced import ReducedModel
-from .simulation import Command, PlantLike, StepRecord, sense_projected, simulate
 from ..core.trajectory import TrajectorySample
 from ..core.validation import as_duration, as_positive_float, expect_type
+from ..dynamics.control import ComputedTorqueController, ControlOutput, Proposition2Controller
+from ..dynamics.reduced import ReducedModel
+from .project.plant import PlantEvent
+from .simulation import Command, PlantLike, StepRecord, sense_projected, simulate
 
 __all__ = ["ClosedLoopLog", "measure_reduced_state", "run_closed_loop"]
 
@@ -40,17 +40,17 @@ def measure_reduced_state(plant: PlantLike, model: ReducedModel) -> tuple[np.nda
     return S, S_dot
 
 
-def _initial_friction_reading(plant: PlantLike, controller, reference: Reference, sliding) -> np.ndarray:
+def _initial_tangential_force(plant: PlantLike, controller, reference: Reference, sliding) -> np.ndarray:
     """The friction sensor's reading before the first step: the plant's tangential force at the
     sliding contacts under the torque the controller would apply (two passes, so the reading and
     the torque are consistent)."""
-    friction = np.zeros(len(sliding))
+    force = np.zeros(len(sliding))
     S, S_dot = measure_reduced_state(plant, controller.model)
     for _ in range(2):
-        out = controller(S, S_dot, *reference(plant.state.t), friction=friction)
+        out = controller(S, S_dot, *reference(plant.state.t), tangential_force=force)
         _, _, forces = plant.accelerations(plant.state, out.tau)
-        friction = plant.surface_forces(plant.state, forces)[sliding, 1].copy()
-    return friction
+        force = plant.surface_forces(plant.state, forces)[sliding, 1].copy()
+    return force
 
 
 @dataclass(frozen=True)
@@ -111,13 +111,13 @@ class ClosedLoopLog:
 class _ControllerDriver:
     """The simulation loop's driver around one control law and its reference."""
 
-    def __init__(self, controller: ComputedTorqueController, reference: Reference, friction0, friction_noise: float,
+    def __init__(self, controller: ComputedTorqueController, reference: Reference, force0, force_noise: float,
                  rng: np.random.Generator):
         self.controller = controller
         self.reference = reference
         self.sliding = list(controller.model.grasp.sliding)
-        self.friction = friction0
-        self.noise = friction_noise
+        self.tangential_force = force0
+        self.noise = force_noise
         self.rng = rng
 
     def step(self, meas, dt: float) -> Command:
@@ -127,9 +127,9 @@ class _ControllerDriver:
         S_d, S_d_dot, S_d_ddot = self.reference(meas.t)
         kwargs = {}
         if isinstance(self.controller, Proposition2Controller):
-            friction = self.friction if self.friction is not None else meas.friction[sliding]
-            self.friction = None  # later steps read the last plant step's friction
-            kwargs["friction"] = friction + (self.noise * self.rng.standard_normal(len(sliding)) if self.noise else 0.0)
+            force = self.tangential_force if self.tangential_force is not None else meas.tangential_force[sliding]
+            self.tangential_force = None  # later steps read the last plant step's friction force
+            kwargs["tangential_force"] = force + (self.noise * self.rng.standard_normal(len(sliding)) if self.noise else 0.0)
         out = self.controller(S, S_dot, S_d, S_d_dot, S_d_ddot, **kwargs)
         S_d = np.asarray(S_d, dtype=float)
         desired = TrajectorySample(float(meas.t), S_d[:3], np.asarray(S_d_dot, dtype=float)[:3],
@@ -143,7 +143,7 @@ def run_closed_loop(
     reference: Reference,
     duration: float,
     *,
-    friction_noise: float = 0.0,
+    force_noise: float = 0.0,
     rng: np.random.Generator | None = None,
     on_step: Callable[[float, ControlOutput], None] | None = None,
 ) -> ClosedLoopLog:
@@ -152,7 +152,7 @@ def run_closed_loop(
 
     Args:
         reference: t -> (S_d, Ṡ_d, S̈_d).
-        friction_noise: Standard deviation [N] of the noise added to the friction measurement
+        force_noise: Standard deviation [N] of the noise added to the measured friction force
             (Proposition 2).
         rng: Random generator for that noise.
         on_step: Called after each control step with (t, output).
@@ -168,14 +168,14 @@ def run_closed_loop(
     if not callable(reference):
         raise InvalidParameterError("reference", reference, "a function t -> (S_d, S_d_dot, S_d_ddot)")
     duration = as_duration("duration", duration)
-    friction_noise = as_positive_float("friction_noise", friction_noise, allow_zero=True)
+    force_noise = as_positive_float("force_noise", force_noise, allow_zero=True)
     model = controller.model
     sliding = list(model.grasp.sliding)
     rng = rng if rng is not None else np.random.default_rng(0)
-    friction0 = None
+    force0 = None
     if isinstance(controller, Proposition2Controller) and sliding:
-        friction0 = _initial_friction_reading(plant, controller, reference, sliding)
-    driver = _ControllerDriver(controller, reference, friction0, friction_noise, rng)
+        force0 = _initial_tangential_force(plant, controller, reference, sliding)
+    driver = _ControllerDriver(controller, reference, force0, force_noise, rng)
     records: list[StepRecord] = []
     consumers = [records.append]
     if on_step is not None:  # after the plant's step, as the recorder's hook expects

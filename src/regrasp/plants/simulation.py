@@ -34,15 +34,16 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.contact import ContactMode, Friction, coefficients, cone_margin
-from ..dynamics.control import ControlOutput
-from .disturbance import Disturbance
 from ..core.events import Event, EventKind, EventSource, Failure, FailureKind
 from ..core.exceptions import InvalidParameterError, RegraspError
-from ..model.hand import Hand
-from .project.plant import PlantContact, PlantEvent, PlantState, PlantStep
+from ..core.measurement import Measurement
 from ..core.polygon import ConvexPolygon
-from ..supervisor.supervisor import Measurement, SupervisorOutput
 from ..core.trajectory import TrajectorySample
+from ..dynamics.control import ControlOutput
+from ..model.hand import Hand
+from ..supervisor.types import SupervisorOutput
+from .disturbance import Disturbance
+from .project.plant import PlantContact, PlantEvent, PlantState, PlantStep
 
 __all__ = ["Command", "Driver", "InterruptAtStepEnd", "PlantLike", "SimulationOutcome", "StepRecord", "sense",
            "sense_projected", "simulate"]

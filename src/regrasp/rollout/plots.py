@@ -17,8 +17,8 @@ import numpy as np
 from ..envelope.plotting import plt, save_figure
 
 if TYPE_CHECKING:
-    from ..model.hand import Hand
     from ..core.polygon import ConvexPolygon
+    from ..model.hand import Hand
     from .result import RolloutResult
 
 __all__ = ["plot_frames", "plot_rollout"]

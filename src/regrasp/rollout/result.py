@@ -11,9 +11,9 @@ import numpy as np
 
 from ..core.contact import ContactMode, Friction, cone_margin
 from ..core.events import Event, EventSource, Failure
-from ..supervisor.executor import ContactPhase
-from ..schedule.schedule import RegraspSchedule
 from ..plants.simulation import SimulationOutcome, StepRecord
+from ..schedule.schedule import RegraspSchedule
+from ..supervisor.types import ContactPhase
 
 __all__ = ["TRANSIENT", "RolloutResult", "RolloutRows"]
 

@@ -30,13 +30,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..dynamics.control import FixedContactController, Proposition3Controller
 from ..core.contact import coefficients, cone_margin
+from ..dynamics.control import FixedContactController, Proposition3Controller
 from ..kernels.monitor import envelope_arguments
 from ..kernels.stretch import STRETCH_COAL, STRETCH_DONE, STRETCH_SETTINGS, STRETCH_STATE, stretch_into, stretch_log
 from ..plants.project.plant import Plant, PlantStep
-from .result import RolloutRows
 from ..supervisor.supervisor import RegraspSupervisor
+from .result import RolloutRows
 
 if TYPE_CHECKING:
     from ..plants.disturbance import Disturbance

@@ -21,14 +21,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .schedule import NoScheduleError, ScheduleLimit
 from .lattice import move_runs, path, run
+from .schedule import NoScheduleError, ScheduleLimit
 from .slide_rule import two_finger_slide_range
 
 if TYPE_CHECKING:
-    from .schedule import RegraspSchedule
     from .lattice import LatticeRun
     from .problem import Problem
+    from .schedule import RegraspSchedule
 
 __all__ = ["diagnose"]
 

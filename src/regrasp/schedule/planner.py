@@ -50,12 +50,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.exceptions import InvalidParameterError
-from .force_polytope import ForceLimits, force_system, force_vertices
 from ..model.scenario import Scenario
-from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide, first_minimum, slides_at
 from .diagnosis import diagnose
+from .force_polytope import ForceLimits, force_system, force_vertices
 from .lattice import cells_of, flat_index, move_runs, path, run
 from .problem import Problem, RegraspSettings, build_problem, slide_ratios
+from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide, first_minimum, slides_at
 
 __all__ = ["RegraspSettings", "plan_regrasps"]
 

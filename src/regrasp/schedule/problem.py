@@ -19,12 +19,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..envelope.finger_envelope import FingerEnvelope, Geometry
+from ..core.contact import DEFAULT_CONE_MARGIN
 from ..core.exceptions import InvalidParameterError
-from .force_polytope import ForceGeometry, ForceLimits, force_vertices, xi_intervals
-from ..model.scenario import Scenario
-from .lattice import Lattice, motion_combos
 from ..core.validation import as_finite_array, as_positive_float
+from ..envelope.finger_envelope import FingerEnvelope
+from ..model.collision import Geometry, as_geometry
+from ..model.scenario import Scenario
+from .force_polytope import ForceGeometry, ForceLimits, force_vertices, xi_intervals
+from .lattice import Lattice, motion_combos
 
 if TYPE_CHECKING:
     from ..core.contact import Friction
@@ -57,14 +59,15 @@ class RegraspSettings:
         verify_substeps: Samples per time step of the planner's own verification.
         periodic: Plan a periodic schedule (None: when the trajectory is periodic and its domain
             covers a period).
-        geometry: Envelope geometry, ``"ideal"`` or ``"urdf"`` (None: the scenario's).
+        geometry: Envelope geometry, a :class:`~regrasp.model.collision.Geometry` or its string (None: the
+            scenario's).
         max_repairs: Re-plans after a failed verification before giving up.
         period_candidates: Start states tried for a periodic schedule, in order: the middle and the end of
             the best two-period path, then the free program's best end state.
     """
 
     envelope_margin: float = 1e-3
-    cone_margin: float = 0.1
+    cone_margin: float = DEFAULT_CONE_MARGIN
     f_min: float = 0.2
     f_max: float = 20.0
     max_slide_speed: float = 0.05
@@ -75,7 +78,7 @@ class RegraspSettings:
     envelope_substeps: int = 4
     verify_substeps: int = 8
     periodic: bool | None = None
-    geometry: str | None = None
+    geometry: Geometry | None = None
     max_repairs: int = 8
     period_candidates: int = 3
 
@@ -109,10 +112,7 @@ class RegraspSettings:
         if self.periodic not in (None, True, False):
             raise InvalidParameterError("periodic", self.periodic, "True, False or None")
         if self.geometry is not None:
-            try:
-                Geometry(self.geometry)
-            except ValueError:
-                raise InvalidParameterError("geometry", self.geometry, "'ideal', 'urdf' or None") from None
+            object.__setattr__(self, "geometry", as_geometry("geometry", self.geometry, "'ideal', 'urdf' or None"))
 
     @property
     def time_step(self) -> float:

@@ -17,13 +17,13 @@ __all__ = ["drawn_factors", "plot_study", "plot_sweep"]
 
 #: The drawn model errors a figure can show: (the perturbation's field, the axis label, the run's value).
 _DRAWN = (
-    ("mass", "plant mass / model mass [-]", lambda d: d.mass_scale),
-    ("inertia", "plant inertia / model inertia [-]", lambda d: d.inertia_scale),
-    ("mu", "plant μ / model μ [-]", lambda d: d.mu_scale),
-    ("mu_kinetic", "plant μ_k factor [-]", lambda d: d.mu_kinetic_scale),
-    ("link_mass", "plant link mass / URDF link mass [-]", lambda d: d.link_mass_scale),
+    ("mass", "plant mass / model mass [-]", lambda d: d.errors.mass_scale),
+    ("inertia", "plant inertia / model inertia [-]", lambda d: d.errors.object_inertia_scale),
+    ("mu", "plant μ / model μ [-]", lambda d: d.errors.mu_scale),
+    ("mu_kinetic", "plant μ_k factor [-]", lambda d: d.errors.mu_kinetic_scale),
+    ("link_mass", "plant link mass / URDF link mass [-]", lambda d: d.errors.link_mass_scale),
     ("contact_position", "largest placement error |δξ| [mm]",
-     lambda d: 1e3 * max((abs(x) for x in d.xi_offset), default=0.0)),
+     lambda d: 1e3 * max((abs(x) for x in d.errors.xi_offset), default=0.0)),
 )
 
 

@@ -2,7 +2,7 @@ r"""Robustness studies: many seeded rollouts of one scenario under model errors 
 
 A study plans the regrasp schedule once (with the model), then runs ``runs`` rollouts. Run :math:`i` draws its
 plant's errors, and seeds its sensor and actuator noise, from ``numpy.random.SeedSequence(seed).spawn(runs)[i]``
-(:func:`~regrasp.model.perturbation.draw_runs`; what is perturbed: :mod:`regrasp.model.perturbation`). The results are
+(:func:`~regrasp.study.draws.draw_runs`; what is perturbed: :mod:`regrasp.model.perturbation`). The results are
 the same however many workers run them, in whatever order, on processes or on Ray.
 
 Where runs go: this process (``workers=1``), a pool of ``workers`` spawned processes, or a Ray cluster
@@ -27,19 +27,19 @@ from types import ModuleType
 from typing import TYPE_CHECKING
 
 from ..core.exceptions import InvalidParameterError, MissingDependencyError
-from ..model.perturbation import MAX_RUNS, Perturbation, RunDraw, draw_runs
 from ..core.validation import as_finite_float, as_integer, expect_type
+from ..model.perturbation import Perturbation
+from ..plants.spec import PlantSpec
+from .draws import RunDraw, draw_runs
 
 if TYPE_CHECKING:
-    from ..plants.mujoco.mjcf import MujocoSettings
     from ..envelope.planner import PlanResult
-    from ..rollout.build import Rollout
     from ..model.scenario import Scenario
+    from ..rollout.build import Rollout
     from ..schedule.schedule import RegraspSchedule
-    from ..supervisor.supervisor import SupervisorSettings
+    from ..supervisor.settings import SupervisorSettings
 
-__all__ = ["MAX_RUNS", "Perturbation", "RunDraw", "RunOutcome", "StudyResult", "build_run", "draw_runs", "run_once",
-           "run_study", "sweep_study", "wilson_interval"]
+__all__ = ["RunOutcome", "StudyResult", "build_run", "run_once", "run_study", "sweep_study", "wilson_interval"]
 
 #: z of a two-sided 95 % interval.
 Z_95 = 1.959963984540054
@@ -106,30 +106,27 @@ def _finite_or_none(x: float) -> float | None:
 
 
 def build_run(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
-              perturbation: Perturbation, settings: SupervisorSettings | None = None, plant: str = "project",
-              mujoco_settings: MujocoSettings | None = None, plan: PlanResult | None = None) -> Rollout:
-    """One run of a study, ready to run: the rollout of ``scenario`` on a plant (``plant``, ``mujoco_settings``:
-    as :func:`~regrasp.rollout.build.build_rollout` takes them) with ``draw``'s errors and the noise of
-    ``perturbation`` seeded by ``draw.seed``, supervised with ``settings`` (None: the rollout's default,
-    :meth:`~regrasp.supervisor.supervisor.SupervisorSettings.robust` told the actuation delay). Run it with a recorder to
-    look at a failed run on a rerun timeline (``regrasp study --replay I --rrd FILE``). ``plan``: the scenario's
-    envelope plan, if computed already (a study computes it once for all its runs)."""
+              perturbation: Perturbation, settings: SupervisorSettings | None = None,
+              plant: PlantSpec = PlantSpec(), plan: PlanResult | None = None) -> Rollout:
+    """One run of a study, ready to run: the rollout of ``scenario`` on ``plant`` with ``draw``'s model errors and
+    the noise of ``perturbation`` seeded by ``draw.seed``, supervised with ``settings`` (None: the rollout's
+    default, :meth:`~regrasp.supervisor.settings.SupervisorSettings.robust` told the actuation delay). Run it with a
+    recorder to look at a failed run on a rerun timeline (``regrasp study --replay I --rrd FILE``). ``plan``: the
+    scenario's envelope plan, if computed already (a study computes it once for all its runs)."""
     from ..rollout.build import build_rollout
+    from ..rollout.spec import RunSpec
 
-    return build_rollout(scenario, duration=duration, schedule=schedule, settings=settings, plant=plant,
-                         mujoco_settings=mujoco_settings, plant_mass_scale=draw.mass_scale,
-                         plant_mu_scale=draw.mu_scale, plant_inertia_scale=draw.inertia_scale,
-                         plant_link_mass_scale=draw.link_mass_scale, plant_mu_kinetic_scale=draw.mu_kinetic_scale,
-                         plant_xi_offset=draw.xi_offset or None, sensor_noise=perturbation.sensor_noise(),
-                         actuator_noise=perturbation.actuator_noise(), seed=draw.seed, plan=plan)
+    run = RunSpec(duration=duration, seed=draw.seed, sensor_noise=perturbation.sensor_noise(),
+                  actuator_noise=perturbation.actuator_noise())
+    return build_rollout(scenario, run, schedule=schedule, settings=settings, plan=plan,
+                         plant=replace(plant, errors=draw.errors))
 
 
 def run_once(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
-             perturbation: Perturbation, settings: SupervisorSettings | None = None, plant: str = "project",
-             mujoco_settings: MujocoSettings | None = None, plan: PlanResult | None = None) -> RunOutcome:
+             perturbation: Perturbation, settings: SupervisorSettings | None = None,
+             plant: PlantSpec = PlantSpec(), plan: PlanResult | None = None) -> RunOutcome:
     """:func:`build_run`'s rollout, run: what it did."""
-    r = build_run(scenario, draw, schedule, duration, perturbation, settings, plant, mujoco_settings, plan).run(
-        interruptible=False)
+    r = build_run(scenario, draw, schedule, duration, perturbation, settings, plant, plan).run(interruptible=False)
     f = r.failure
     return RunOutcome(draw, r.success, None if f is None else f.kind.value, None if f is None else f.time,
                       None if f is None else f.contact, r.min_cone_margin, r.min_envelope_margin,
@@ -191,8 +188,8 @@ class StudyResult:
                 "backend": self.backend, "plant": self.plant, "perturbation": asdict(self.perturbation), "runs": len(self.runs),
                 "successes": self.successes, "success_rate": self.success_rate, "wilson_95": [lo, hi],
                 "failures": self.failures, "wall_seconds": self.wall_seconds, "plan_seconds": self.plan_seconds,
-                "outcomes": [{**asdict(r), "draw": {**asdict(r.draw), "entropy": list(r.draw.entropy),
-                                                    "xi_offset": list(r.draw.xi_offset)}} for r in self.runs]}
+                "outcomes": [{**{f.name: getattr(r, f.name) for f in fields(r)}, "draw": r.draw.to_json_dict()}
+                             for r in self.runs]}
 
 
 _JOB: dict = {}
@@ -254,8 +251,7 @@ def _on_ray(address: str, workers: int | None, shared: tuple, draws: tuple[RunDr
 def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
               perturbation: Perturbation = Perturbation(), duration: float | None = None, periods: int | None = None,
               workers: int = 1, ray_address: str | None = None, schedule: RegraspSchedule | None = None,
-              settings: SupervisorSettings | None = None, plant: str = "project",
-              mujoco_settings: MujocoSettings | None = None,
+              settings: SupervisorSettings | None = None, plant: PlantSpec | str = "project",
               progress: Callable[[int, int], None] | None = None) -> StudyResult:
     """Plan the schedule once, then run ``runs`` seeded rollouts (module docstring).
 
@@ -272,15 +268,20 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
             rollouts keep by default): a planning stack that studies one plan under several perturbations plans
             it once.
         settings: The supervisor's settings in every run (None: the rollout's default).
-        plant, mujoco_settings: The plant every run is on (:func:`~regrasp.rollout.build.build_rollout`'s).
+        plant: The plant every run is on, as :func:`~regrasp.rollout.build.build_rollout` takes it (a
+            :class:`~regrasp.plants.spec.PlantSpec` without model errors: each run draws its own, or a kind's name).
         progress: Called as ``progress(done, runs)`` after each run.
     """
-    from ..rollout.build import DEFAULT_CONE_MARGIN, build_rollout
     from ..model.scenario import Scenario, load_scenario
-    from ..schedule.planner import RegraspSettings, plan_regrasps
+    from ..rollout.build import build_rollout
+    from ..rollout.spec import RunSpec
+    from ..schedule.planner import plan_regrasps
 
     start = time.perf_counter()
     workers = as_integer("workers", workers, 1)
+    plant = PlantSpec.of(plant)
+    if plant.errors != PlantSpec().errors:
+        raise InvalidParameterError("plant", plant, "a PlantSpec without model errors (each run draws its own)")
     expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
     if ray_address is not None:
         if not isinstance(ray_address, str) or not ray_address:
@@ -291,15 +292,14 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     name = str(scenario.path) if scenario.path is not None else scenario.name
     draws = draw_runs(runs, seed, perturbation, len(scenario.contacts))
     if schedule is None:
-        schedule = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
-    probe = build_rollout(scenario, duration=duration, periods=periods, schedule=schedule, settings=settings,
-                          plant=plant, mujoco_settings=mujoco_settings)
+        schedule = plan_regrasps(scenario)
+    probe = build_rollout(scenario, RunSpec(duration=duration, periods=periods), schedule=schedule, settings=settings,
+                          plant=plant)
     _check_offsets(scenario, probe.schedule.at(scenario.trajectory.t_start).xi if probe.schedule else None,
                    perturbation.contact_position)
     plan_seconds = time.perf_counter() - start
     # the schedule and the envelope plan are computed once for every run (they depend on the model only)
-    shared = (scenario, probe.schedule, probe.duration, perturbation, settings, plant, mujoco_settings,
-              probe.supervisor.plan)
+    shared = (scenario, probe.schedule, probe.duration, perturbation, settings, plant, probe.supervisor.plan)
     source = _on_processes(workers, shared, draws) if ray_address is None else \
         _on_ray(ray_address, workers, shared, draws)
     outcomes: list[RunOutcome] = []
@@ -308,7 +308,8 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
         if progress is not None:
             progress(len(outcomes), len(draws))
     return StudyResult(name, tuple(outcomes), perturbation, int(seed), probe.duration, workers,
-                       "process" if ray_address is None else "ray", time.perf_counter() - start, plan_seconds, plant)
+                       "process" if ray_address is None else "ray", time.perf_counter() - start, plan_seconds,
+                       plant.kind)
 
 
 def _check_offsets(scenario: Scenario, xi0, half_width: float) -> None:
@@ -342,10 +343,9 @@ def sweep_study(scenario: str | Path | Scenario, runs: int, name: str, values: S
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     if options.get("schedule") is None:
-        from ..rollout.build import DEFAULT_CONE_MARGIN
-        from ..schedule.planner import RegraspSettings, plan_regrasps
+        from ..schedule.planner import plan_regrasps
 
-        options["schedule"] = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
+        options["schedule"] = plan_regrasps(scenario)
     out = []
     for k, p in enumerate(perturbations):
         step = None if progress is None else (lambda done, total, k=k: progress(k * total + done,

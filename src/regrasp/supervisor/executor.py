@@ -49,24 +49,29 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.contact import ContactMode, Friction
-from ..dynamics.control import ComputedTorqueController, ControlOutput, FixedContactController, Gains, Proposition3Controller
 from ..core.events import Event, EventKind
 from ..core.exceptions import InvalidParameterError
-from .settings import ExecutorSettings
-from ..kernels.stretch import SLIDER
-from .types import SLIPPING_PHASES, ContactPhase, Reference, SlideEnd, SlideOrder, SlideProfile
+from ..dynamics.control import (
+    ComputedTorqueController,
+    ControlOutput,
+    FixedContactController,
+    Gains,
+    Proposition3Controller,
+)
 from ..dynamics.grasp import Grasp
-from ..model.hand import Hand
 from ..dynamics.internal_force.solver import ConeEdge, InternalForceInfeasibleError
 from ..dynamics.reduced import ReducedModel
+from ..kernels.stretch import SLIDER
+from ..model.hand import Hand
 from ..model.sphere_tip import sphere_tip_torque
+from .settings import ExecutorSettings
+from .types import ContactPhase, SlideEnd, SlideOrder, SlideProfile
 
 if TYPE_CHECKING:
-    from .supervisor import Measurement
+    from ..core.measurement import Measurement
     from ..core.trajectory import TrajectorySample
 
-__all__ = ["SLIPPING_PHASES", "ContactPhase", "ExecutorSettings", "Reference", "SlideEnd", "SlideExecutor",
-           "SlideOrder"]
+__all__ = ["SlideExecutor"]
 
 @dataclass
 class _Active:
@@ -222,7 +227,7 @@ class SlideExecutor:
         s = self.settings
         if s.friction_filter_time is None or meas.normal_force is None or not meas.sliding[i]:
             return
-        fn, ft = float(meas.normal_force[i]), float(meas.friction[i])
+        fn, ft = float(meas.normal_force[i]), float(meas.tangential_force[i])
         if not fn > s.friction_min_force:
             return
         ratio = abs(ft) / fn

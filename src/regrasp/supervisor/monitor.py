@@ -35,10 +35,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..envelope.finger_envelope import EnvelopeSample, FingerEnvelope, Geometry
-from ..envelope.tracker import EnvelopeTracker
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import as_finite_array, as_positive_float
+from ..envelope.finger_envelope import EnvelopeSample, FingerEnvelope
+from ..envelope.tracker import EnvelopeTracker
+from ..model.collision import Geometry
 
 __all__ = ["EnvelopeMonitor", "EnvelopeReading", "bound_speeds", "interval_of"]
 

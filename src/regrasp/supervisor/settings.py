@@ -1,37 +1,50 @@
-"""The slide executor's settings (:class:`ExecutorSettings`): how it primes, slides, settles and holds, and the
-laws it runs (:mod:`regrasp.supervisor.executor` explains the phases)."""
+"""The supervisor's settings, one tree: :class:`SupervisorSettings` holds its executor's (:class:`ExecutorSettings`:
+how a slide is primed, slid, settled and held, and the laws it runs; :mod:`regrasp.supervisor.executor` explains
+the phases), its envelope monitor's (:class:`MonitorSettings`) and each policy's (:class:`PaperSettings`,
+:class:`ScheduledSettings`), each once. :meth:`SupervisorSettings.robust` is what a rollout uses by default.
+
+Margins have one name per unit: a *friction margin* is a ratio [-] subtracted from μ_s
+(``InternalForceSettings.friction_margin``), a *cone margin* is a force [N], μ_s f_n - |f_t|
+(``InternalForceSettings.target_cone_margin``, :data:`~regrasp.core.contact.DEFAULT_CONE_MARGIN`)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
+from ..core.contact import DEFAULT_CONE_MARGIN
 from ..core.exceptions import InvalidParameterError
+from ..core.validation import as_duration, as_finite_float, as_flag, as_integer, as_positive_float, expect_type
 from ..dynamics.internal_force.solver import InternalForceSettings
-from ..core.validation import as_duration, as_flag, as_integer, as_positive_float
+from ..model.collision import Geometry, as_geometry
 
-__all__ = ["ExecutorSettings"]
+__all__ = ["ExecutorSettings", "MonitorSettings", "PaperSettings", "ScheduledSettings", "SupervisorSettings"]
 
 
 @dataclass(frozen=True)
 class ExecutorSettings:
-    """Tuning of :class:`SlideExecutor` (see the module docstring).
+    """Tuning of :class:`~regrasp.supervisor.executor.SlideExecutor` (:mod:`regrasp.supervisor.executor`).
 
     Attributes:
         omega_n: Natural frequency of the slide filter [rad/s] (orders without a reference).
         zeta: Damping ratio of the slide filter [-].
-        prime_time: Longest priming [s].
-        prime_overshoot: Priming asks for |f_t| = (μ_s + this) f_n at first [-] ...
+        prime_time: Longest priming [s]; it ends earlier when the contact is sensed slipping.
+        prime_overshoot: Priming asks for |f_t| = (μ_s + this) f_n at first [-], just past the static cone's edge,
+            so that the contact starts to slip by itself before the sliding law takes over (switching to the
+            sliding law while the contact is still stuck makes the plant redistribute the forces for one step and
+            can slip another contact) ...
         prime_overshoot_max: ... and up to (μ_s + this) f_n at the end of ``prime_time`` [-].
         start_speed: The priming ends when the contact is sensed sliding and moving in the slide's direction
             faster than this [m/s] (None: sensed sliding is enough).
-        settle_undershoot: Settling asks for (μ_k - this) f_n [-] (at most μ_k / 2) ...
+        settle_undershoot: A slide that ends with the contact still sliding settles with the fixed-contact law
+            asking for (μ_k - this) f_n of friction in the sliding direction [-] (at most μ_k / 2), just inside the
+            kinetic cone, so the contact slows down gently and sticks ...
         settle_margin: ... or for μ_k f_n - this [N] where that is less (with the normal force sensed when the
             slide ends; still at most μ_k / 2 below μ_k).
         arrive_tolerance: A slide has arrived when |ξ - ξ*| is below this [m] ...
         arrive_speed: ... and |ξ̇| below this [m/s].
         max_slide_time: A slide that has not arrived after this long ends where it is [s].
         friction_filter_time: Estimate each slider's kinetic friction ratio |f_t| / f_n from the sensed
-            contact forces (:class:`~regrasp.supervisor.supervisor.Measurement` ``normal_force``) with a first-order
+            contact forces (:class:`~regrasp.core.measurement.Measurement` ``normal_force``) with a first-order
             filter of this time constant [s], and let the laws use it instead of the model's μ_k (None:
             the model's). The plant's μ_k may differ from the model's; a slider that carries more friction
             than its law predicts stops and sticks, one that carries less overshoots.
@@ -54,8 +67,11 @@ class ExecutorSettings:
             the steady error that a wrong object mass or friction leaves (Δg / ω² = 2.5 mm for 10 % of
             the weight at 20 rad/s). The law stays stable for K_i < K_v K_s = 2ω³, i.e. ``integral`` < 2.
             It acts through the reference: S_d + (K_i / K_s) ∫E dt gives a = S̈_d + K_v Ė + K_s E + K_i ∫E.
-        internal_force: The controllers' internal-force QP settings; its ``target_cone_margin`` [N]
-            is the margin the fixed contacts are kept inside their cones by (the paper's "γ large").
+        internal_force: The controllers' internal-force QP settings (default: push ≥ 0.2 N, fixed contacts 0.05
+            inside their cones in ratio); its ``target_cone_margin`` [N] is the margin the fixed contacts are kept
+            inside their cones by where the forces allow (the paper's "γ large"). A larger minimum push squeezes
+            harder, which makes some slides infeasible for the torque balance (e.g. the side fingers of
+            paper_trajectory_2_three_fingers.toml sliding up at 0.5 N).
         hold_resolution: A held contact's position in the laws' model follows the sensed one when the two
             differ by more than this [m] (None: only at phase changes). A rigid point contact stays where it
             is held; a real fingertip of radius r rolls on the edge, r Δθ for a turn Δθ of the distal link
@@ -121,10 +137,182 @@ class ExecutorSettings:
                                         f"at least prime_overshoot = {self.prime_overshoot}")
         if self.integral >= 2.0:
             raise InvalidParameterError("integral", self.integral, "a gain fraction in [0, 2) (stability)")
-        if not isinstance(self.internal_force, InternalForceSettings):
-            raise InvalidParameterError("internal_force", self.internal_force, "an InternalForceSettings")
+        expect_type("internal_force", self.internal_force, InternalForceSettings, "an InternalForceSettings")
         if self.hold_resolution is not None:
             as_positive_float("hold_resolution", self.hold_resolution)
         if self.hold_filter_time is not None:
             as_duration("hold_filter_time", self.hold_filter_time)
         as_positive_float("tip_radius", self.tip_radius, allow_zero=True)
+
+
+@dataclass(frozen=True)
+class MonitorSettings:
+    """Tuning of the runtime envelope monitor (:class:`~regrasp.supervisor.monitor.EnvelopeMonitor`).
+
+    Attributes:
+        geometry: The envelopes' link geometry, a :class:`~regrasp.model.collision.Geometry` (or its string).
+        every: Evaluate the runtime envelopes every k-th step (1: every step; the monitor evaluates afresh whenever
+            the policy decides, too).
+        track: Follow each runtime envelope's ``urdf`` collision cuts from the last evaluation
+            (:class:`~regrasp.envelope.tracker.EnvelopeTracker`; it falls back to the full evaluation whenever the
+            envelope's structure changes) instead of finding them anew. Off by default: it matches a fresh
+            evaluation (same pieces, ends within the bisection tolerance) at every step tested on the three-finger
+            paper scenario, but on some random fingers it misses, for a few steps, a collision island born inside
+            a piece (a thick distal link grazing the edge). No effect with ``ideal``.
+    """
+
+    geometry: Geometry = Geometry.IDEAL
+    every: int = 1
+    track: bool = False
+
+    def __post_init__(self):
+        object.__setattr__(self, "geometry", as_geometry("geometry", self.geometry))
+        as_integer("every", self.every, 1)
+        as_flag("track", self.track)
+
+
+@dataclass(frozen=True)
+class PaperSettings:
+    """Tuning of the paper's danger-zone policy (:class:`~regrasp.supervisor.policies.paper.PaperPolicy`).
+
+    Attributes:
+        danger_fraction: A contact is in danger when its margin is below this fraction of its feasible interval's
+            width [-] ...
+        reaction_time: ... or when, within this time [s], it would come that close to a bound: by the planned
+            envelopes along the desired trajectory (when the supervisor has a plan), or else by the bounds' current
+            rates (finite differences of the runtime envelopes). A bound can sweep 100 mm/s near a vertex, faster
+            than a slide can start.
+        target_horizon: With a plan, a slide's target is the midpoint of the widest piece of the planned feasible
+            sets' intersection over the next ``target_horizon`` [s] (or over the longest prefix of it whose
+            intersection is not empty), within the current interval.
+        recheck_time: After the predicate rejects a slide, ask again after this long [s].
+        feasibility: Margins the sliding-direction predicate requires before a slide starts (at least those of
+            the executor's ``internal_force``, so that the priming QP is feasible).
+        regrasp: False: the policy never slides (every contact stays where it is; danger is still reported).
+        path_checks: The predicate is asked at this many points of a slide, evenly from the start to the target,
+            each at the desired state of when the filter is expected to pass there (a slide takes about 6/ω_n):
+            whether a slide is possible depends on where the contact is (its lever arm), so a slide can be
+            possible where it starts and not on the way.
+        enabling: When a contact's slide is rejected, look for a slide of another contact that makes it possible
+            (e.g. the palm finger moving under the side that must slide down), and do that first.
+        enabling_candidates: Candidate targets per other contact, evenly across what the plan keeps feasible for
+            it (out of its danger zones), the nearest first.
+        enabling_recheck_time: Search for an enabling slide at most this often per contact [s].
+    """
+
+    danger_fraction: float = 0.1
+    reaction_time: float = 0.4
+    target_horizon: float = 0.6
+    recheck_time: float = 0.01
+    feasibility: InternalForceSettings = field(
+        default_factory=lambda: InternalForceSettings(f_min=0.2, friction_margin=0.05, f_max=20.0))
+    regrasp: bool = True
+    path_checks: int = 3
+    enabling: bool = True
+    enabling_candidates: int = 9
+    enabling_recheck_time: float = 0.05
+
+    def __post_init__(self):
+        for name in ("reaction_time", "target_horizon", "recheck_time", "enabling_recheck_time"):
+            as_duration(name, getattr(self, name))
+        as_integer("path_checks", self.path_checks, 1)
+        as_integer("enabling_candidates", self.enabling_candidates, 1)
+        if not 0.0 < as_finite_float("danger_fraction", self.danger_fraction) < 0.5:
+            raise InvalidParameterError("danger_fraction", self.danger_fraction, "a fraction in (0, 0.5)")
+        expect_type("feasibility", self.feasibility, InternalForceSettings, "an InternalForceSettings")
+        as_flag("regrasp", self.regrasp)
+        as_flag("enabling", self.enabling)
+
+
+@dataclass(frozen=True)
+class ScheduledSettings:
+    """Tuning of :class:`ScheduledPolicy`.
+
+    Attributes:
+        prime_lead: Start priming this long before the schedule starts a slide [s] (the executor's
+            ``prime_time`` is the longest priming).
+        time_tolerance: A slide that ends (arrives, sticks, times out) more than this [s] from its
+            planned end triggers a re-plan ...
+        xi_tolerance: ... and so does one that ends more than this [m] from its planned end position.
+        margin_fraction: A runtime envelope margin below this fraction of the planned one (at the
+            nearest planned sample) triggers a re-plan [-].
+        replan_cooldown: After a re-plan (or a failed one), no margin-triggered re-plan for this long [s].
+        max_replans: At most this many re-plans in a run.
+        replan: False: never re-plan (nothing triggers one, nothing is logged).
+        decision_period: Decide at least this often [s] (default 10 ms; 0: at every step). Between decisions the policy
+            proposes nothing, unless something happened: a slide ended or a contact changed phase (the next
+            step decides), or a scheduled slide is due (the policy decides at its start, never late). What a
+            longer period delays is only the margin-triggered re-plan, by at most the period.
+    """
+
+    prime_lead: float = 0.0
+    time_tolerance: float = 0.05
+    xi_tolerance: float = 1e-3
+    margin_fraction: float = 0.5
+    replan_cooldown: float = 0.1
+    max_replans: int = 10
+    decision_period: float = 0.01
+    replan: bool = True
+
+    def __post_init__(self):
+        for name in ("prime_lead", "time_tolerance", "xi_tolerance", "replan_cooldown", "decision_period"):
+            as_positive_float(name, getattr(self, name), allow_zero=True)
+        if not 0.0 <= as_finite_float("margin_fraction", self.margin_fraction) < 1.0:
+            raise InvalidParameterError("margin_fraction", self.margin_fraction, "a fraction in [0, 1)")
+        if isinstance(self.max_replans, bool) or int(self.max_replans) != self.max_replans or self.max_replans < 0:
+            raise InvalidParameterError("max_replans", self.max_replans, "an integer >= 0")
+        as_flag("replan", self.replan)
+
+
+@dataclass(frozen=True)
+class SupervisorSettings:
+    """Tuning of :class:`~regrasp.supervisor.supervisor.RegraspSupervisor`: one value per concern, nested.
+
+    Attributes:
+        executor: How slides are run and the laws computed (:class:`ExecutorSettings`).
+        monitor: How the runtime envelopes are evaluated (:class:`MonitorSettings`).
+        paper: The paper's danger-zone policy (:class:`PaperSettings`; the supervisor's default policy).
+        scheduled: The schedule-following policy (:class:`ScheduledSettings`; what
+            :func:`~regrasp.rollout.build.build_rollout` builds by default).
+    """
+
+    executor: ExecutorSettings = field(default_factory=ExecutorSettings)
+    monitor: MonitorSettings = field(default_factory=MonitorSettings)
+    paper: PaperSettings = field(default_factory=PaperSettings)
+    scheduled: ScheduledSettings = field(default_factory=ScheduledSettings)
+
+    def __post_init__(self):
+        expect_type("executor", self.executor, ExecutorSettings, "an ExecutorSettings")
+        expect_type("monitor", self.monitor, MonitorSettings, "a MonitorSettings")
+        expect_type("paper", self.paper, PaperSettings, "a PaperSettings")
+        expect_type("scheduled", self.scheduled, ScheduledSettings, "a ScheduledSettings")
+
+    @classmethod
+    def robust(cls, geometry: Geometry | str = Geometry.IDEAL, cone_margin: float = DEFAULT_CONE_MARGIN, *,
+               actuation_delay: int = 0, tip_radius: float = 0.0,
+               hold_resolution: float | None = ExecutorSettings.hold_resolution) -> SupervisorSettings:
+        """Settings for a hand whose plant differs from the model and whose sensors and actuators are not
+        perfect (``docs/derivations.md``, "§4, executed" and "Robustness"): the fixed contacts kept 0.1 inside
+        their cones in ratio (0.05 where no force allows more) and ``cone_margin`` [N] inside where the forces
+        allow, the sliders' ξ at 60 rad/s, integral action (0.3 ω³), a priming whose overshoot grows from 0.05
+        to 0.25 over 40 ms and lasts until the contact moves the right way at 1 mm/s, the sliders' kinetic
+        friction estimated from the sensed forces (10 ms, from the break-away on), settling with 0.05 N of static
+        margin, the held contacts' model positions following their sensed ones through a 20 ms filter, and the
+        runtime envelopes evaluated every 10th step (100 Hz at 1 kHz; what a stale reading can miss:
+        :mod:`regrasp.supervisor.monitor`), in ``geometry``.
+
+        What the hand itself determines is an argument: its ``actuation_delay`` [control steps], its fingertips'
+        sphere ``tip_radius`` [m] and the ``hold_resolution`` [m] its ξ sensor's noise calls for. Change anything
+        else with :func:`dataclasses.replace` on the branch (e.g. ``replace(s, executor=replace(s.executor,
+        prime_overshoot=0.01))``)."""
+        executor = ExecutorSettings(
+            slide_omega=60.0, integral=0.3, prime_time=0.04, prime_overshoot_max=0.25, friction_filter_time=0.01,
+            breakaway_estimate=True, settle_margin=0.05, start_speed=1e-3, hold_filter_time=0.02,
+            internal_force=InternalForceSettings(f_min=0.2, friction_margin=0.1, target_cone_margin=cone_margin,
+                                                 fallback_friction_margin=0.05),
+            actuation_delay=actuation_delay, tip_radius=tip_radius, hold_resolution=hold_resolution)
+        return cls(executor=executor, monitor=MonitorSettings(geometry=geometry, every=10))
+
+    def with_executor(self, **changes: object) -> SupervisorSettings:
+        """These settings with ``changes`` to the executor's (``dataclasses.replace`` on that branch)."""
+        return replace(self, executor=replace(self.executor, **changes))

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 import scipy.optimize
+
 from internal_force_cases import (
     CASES,
     cone_edge_case,
@@ -26,7 +27,6 @@ from internal_force_cases import (
     to_surface,
     worst_violation,
 )
-
 from regrasp import Grasp, ReducedModel
 from regrasp.core.exceptions import InvalidParameterError
 from regrasp.dynamics.internal_force.solver import (
@@ -99,7 +99,7 @@ def test_target_margin_reaches_the_lp_optimum_and_both_paths_agree(kind, seed):
             assert to_surface(frames, result.forces)[:, 0].max() <= settings.f_max + 10 * settings.tolerance * scale
             assert np.linalg.norm(A.T @ result.f_c) <= 1e-9 * np.linalg.norm(A, 2) * max(np.linalg.norm(result.f_c), 1)
             # the reached margin, from the returned forces, is the LP's best (capped at the target)
-            reached = margin_of(result.forces, frames, fixed, mu, settings.margin)
+            reached = margin_of(result.forces, frames, fixed, mu, settings.friction_margin)
             assert result.cone_margin == pytest.approx(reached, abs=1e-12 * scale)
             assert abs(min(reached, target) - best) <= 1e-4, (target, reached, best)
             # never less margin than the least squeeze gives
@@ -144,13 +144,13 @@ def test_default_settings_report_the_least_squeeze_margin_and_target_zero_is_tod
                                         dataclasses.replace(settings, target_cone_margin=0.0))
     np.testing.assert_array_equal(with_zero.problem.G.toarray(), qp.problem.G.toarray())
     result = solve_internal_force_qp(qp, frames, modes, friction)
-    assert result.cone_margin == pytest.approx(margin_of(result.forces, frames, fixed, mu, settings.margin), abs=1e-12)
+    assert result.cone_margin == pytest.approx(margin_of(result.forces, frames, fixed, mu, settings.friction_margin), abs=1e-12)
     target = build_internal_force_qp(A, f_m, frames, modes, friction,
                                      dataclasses.replace(settings, target_cone_margin=0.3))
     assert target.problem.P.shape == (4, 4)  # (y, s)
 
 
-@pytest.mark.parametrize("field,value", [("f_min", -0.1), ("margin", -0.01), ("tolerance", 0.0), ("f_max", 0.5),
+@pytest.mark.parametrize("field,value", [("f_min", -0.1), ("friction_margin", -0.01), ("tolerance", 0.0), ("f_max", 0.5),
                                          ("target_cone_margin", -1.0), ("target_cone_margin", np.inf),
                                          ("target_cone_margin", np.nan), ("f_min", "0.5")])
 def test_settings_are_validated(field, value):
@@ -164,7 +164,7 @@ def test_two_cone_edges_put_both_contacts_on_their_edges():
     """m = 3, p = 0, two ConeEdges: each contact is on its edge, the third keeps its cone, the
     one-shot and persistent paths agree; a single ConeEdge and the tuple of it are the same QP."""
     solved = 0
-    settings = InternalForceSettings(f_min=0.5, margin=0.05)
+    settings = InternalForceSettings(f_min=0.5, friction_margin=0.05)
     for seed in range(6):
         A, f_m, frames, _, mu, modes = cone_edge_case(seed)
         for signs in ((1.0, 1.0), (1.0, -1.0), (-1.0, 1.0)):
@@ -219,27 +219,27 @@ def test_a_fallback_margin_answers_where_the_margin_cannot_be_kept_and_only_ther
             continue
         base = dataclasses.replace(case["settings"], target_cone_margin=0.2)
         grid = np.linspace(0.0, min(mu[i] for i in range(len(mu)) if fixed[i]), 21)
-        feasible = [m for m in grid if best_margin(case, dataclasses.replace(base, margin=m)) is not None]
+        feasible = [m for m in grid if best_margin(case, dataclasses.replace(base, friction_margin=m)) is not None]
         if len(feasible) < 2 or feasible[-1] == grid[-1]:
             continue
         # infeasible at high (the LP); low a grid step inside the feasible margins (at their very edge the
         # feasible set is a point, and OSQP's iterations run out)
         low, high = feasible[-2], grid[len(feasible)]
-        strict = dataclasses.replace(base, margin=high)
+        strict = dataclasses.replace(base, friction_margin=high)
         with pytest.raises(InternalForceInfeasibleError):
             InternalForceSolver(strict).solve(A, f_m, frames, modes, friction)
-        solver = InternalForceSolver(dataclasses.replace(strict, fallback_margin=low))
+        solver = InternalForceSolver(dataclasses.replace(strict, fallback_friction_margin=low))
         result = solver.solve(A, f_m, frames, modes, friction)
         scale = max(1.0, np.abs(f_m).max())
         assert solver.relaxations == 1 and result.feasible
-        assert worst_violation(result.forces, frames, fixed, mu, dataclasses.replace(base, margin=low)) \
+        assert worst_violation(result.forces, frames, fixed, mu, dataclasses.replace(base, friction_margin=low)) \
             <= 10 * base.tolerance * scale
         assert np.linalg.norm(A.T @ result.f_c) <= 1e-9 * np.linalg.norm(A, 2) * max(np.linalg.norm(result.f_c), 1)
         relaxed += 1
         inside = feasible[-3] if len(feasible) > 2 else 0.0  # a margin inside the feasible ones
-        easy = dataclasses.replace(base, margin=inside)
+        easy = dataclasses.replace(base, friction_margin=inside)
         if inside > 0.0:
-            with_fallback = InternalForceSolver(dataclasses.replace(easy, fallback_margin=0.0))
+            with_fallback = InternalForceSolver(dataclasses.replace(easy, fallback_friction_margin=0.0))
             plain = InternalForceSolver(easy).solve(A, f_m, frames, modes, friction)
             np.testing.assert_allclose(with_fallback.solve(A, f_m, frames, modes, friction).forces, plain.forces,
                                        rtol=0, atol=1e-9 * scale)
@@ -247,5 +247,5 @@ def test_a_fallback_margin_answers_where_the_margin_cannot_be_kept_and_only_ther
             kept += 1
     assert relaxed >= 10 and kept >= 5, (relaxed, kept)
     for bad in (0.05, 0.1, -0.01, np.nan):  # at least the margin, negative, not a number
-        with pytest.raises(InvalidParameterError, match="fallback_margin"):
-            InternalForceSettings(margin=0.05, fallback_margin=bad)
+        with pytest.raises(InvalidParameterError, match="fallback_friction_margin"):
+            InternalForceSettings(friction_margin=0.05, fallback_friction_margin=bad)

@@ -34,6 +34,7 @@ import numpy as np
 import pytest
 import qpsolvers
 import scipy.optimize
+
 from internal_force_cases import (  # noqa: F401
     CASES,
     EDGES,
@@ -55,7 +56,6 @@ from internal_force_cases import (  # noqa: F401
     to_surface,
     worst_violation,
 )
-
 from regrasp import (
     ContactMode,
     Friction,
@@ -184,7 +184,7 @@ def test_cone_edge_puts_the_contact_on_its_cone_edge(seed):
     the other contacts keep their constraints, Aᵀ f_c = 0, and ‖f_c‖ is the enumeration's minimum;
     otherwise the typed error."""
     A, f_m, frames, fixed, mu, modes = cone_edge_case(seed)
-    settings = InternalForceSettings(f_min=0.5, margin=0.05)
+    settings = InternalForceSettings(f_min=0.5, friction_margin=0.05)
     scale = max(1.0, np.abs(f_m).max())
     for j in range(3):
         for sign in (1.0, -1.0):
@@ -215,7 +215,7 @@ def test_cone_edge_puts_the_contact_on_its_cone_edge(seed):
 
 def test_cone_edge_cases_are_mostly_feasible():
     """The cone-edge checks above do exercise solutions (not only the error)."""
-    settings = InternalForceSettings(f_min=0.5, margin=0.05)
+    settings = InternalForceSettings(f_min=0.5, friction_margin=0.05)
     feasible = total = 0
     for seed in CONE_EDGE_SEEDS:
         A, f_m, frames, fixed, mu, modes = cone_edge_case(seed)
@@ -263,7 +263,7 @@ def test_fixed_cones_use_the_static_coefficient_and_a_cone_edge_its_own():
     model = ReducedModel(make_hand(2), Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [0.0, 0.0])
     st, A, frames, _ = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
     weight = model.object_mass * 9.81
-    settings = InternalForceSettings(f_min=0.01, margin=0.05)
+    settings = InternalForceSettings(f_min=0.01, friction_margin=0.05)
     f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]  # (W/2 up each, no squeeze)
     modes = model.grasp.modes
     solver = InternalForceSolver(settings)
@@ -275,10 +275,10 @@ def test_fixed_cones_use_the_static_coefficient_and_a_cone_edge_its_own():
             surface = to_surface(frames, result.forces)
             np.testing.assert_allclose(np.abs(surface[:, 1]), [weight / 2, weight / 2], rtol=1e-7)  # (ξ up, ξ down)
             if mu_s is not None:
-                np.testing.assert_allclose(surface[:, 0], weight / 2 / (mu_s - settings.margin), rtol=1e-6)
+                np.testing.assert_allclose(surface[:, 0], weight / 2 / (mu_s - settings.friction_margin), rtol=1e-6)
             else:  # finger 2 (μ_s = 0.3) needs the larger squeeze; finger 1 then sits inside its cone
-                assert surface[1, 0] == pytest.approx(weight / 2 / (0.3 - settings.margin), rel=1e-6)
-                assert abs(surface[0, 1]) < (0.6 - settings.margin) * surface[0, 0]
+                assert surface[1, 0] == pytest.approx(weight / 2 / (0.3 - settings.friction_margin), rel=1e-6)
+                assert abs(surface[0, 1]) < (0.6 - settings.friction_margin) * surface[0, 0]
     # a cone edge at μ_k puts finger 1 at t·f = μ_k n·f: f_n = W / 2 / 0.2 (finger 2 then well inside)
     edge = ConeEdge(0, 1.0, 0.2)
     for result in (solve_internal_force_qp(build_internal_force_qp(A, f_m, frames, modes, Friction(0.6, 0.2),
@@ -295,7 +295,7 @@ def test_fixed_cones_use_the_static_coefficient_and_a_cone_edge_its_own():
     f3 = from_surface(frames3, [[1.0, 0.3], [1.0, 0.0], [1.0, 0.0]])
     f3[2:] += np.linalg.lstsq(st3.G[:, 2:], -three.f_g - st3.G @ f3, rcond=None)[0]  # (the others balance)
     tiny = [Friction(0.06, 0.0), Friction(0.8, 0.5), Friction(0.8, 0.5)]
-    bounded = InternalForceSolver(InternalForceSettings(f_min=0.01, margin=0.05, f_max=5.0))
+    bounded = InternalForceSolver(InternalForceSettings(f_min=0.01, friction_margin=0.05, f_max=5.0))
     sliding = bounded.solve(A3, f3, frames3, three.grasp.modes, tiny)
     assert sliding.feasible
     assert to_surface(frames3, sliding.forces)[0, 1] == pytest.approx(to_surface(frames3, f3)[0, 1], rel=1e-9)
@@ -348,14 +348,14 @@ def infeasible_cases():
     st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
     f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
     cases.append(("mu=0.05", A, f_m, frames, model.grasp.modes, np.full(2, 0.05),
-                  InternalForceSettings(f_min=0.5, margin=0.05)))
+                  InternalForceSettings(f_min=0.5, friction_margin=0.05)))
     # (b) f_min huge for the geometry: contacts 30 mm apart vertically over 100 mm, so the squeeze
     # direction is 16.7° off the normals, outside cones of slope 0.25; a big squeeze leaves the cones
     model = ReducedModel(hand, Grasp(polygon(), EDGES[2], ["fixed", "fixed"]), [-0.015, -0.015])
     st, A, frames, fixed = qp_data(model, [0.0, Y0, 0.0], [0.0, 0.0, 0.0])
     f_m = np.linalg.lstsq(st.G, -model.f_g, rcond=None)[0]
     cases.append(("f_min=50", A, f_m, frames, model.grasp.modes, np.full(2, 0.3),
-                  InternalForceSettings(f_min=50.0, margin=0.05)))
+                  InternalForceSettings(f_min=50.0, friction_margin=0.05)))
     # (c) m = 3, sliding left finger, low friction, and a large upward tangential motion force at
     # the sliding contact (which no squeeze may change): the moments cannot be balanced by pushes
     model = ReducedModel(make_hand(3), Grasp(polygon(), EDGES[3], ["sliding", "fixed", "fixed"]),
@@ -364,7 +364,7 @@ def infeasible_cases():
     f_m = from_surface(frames, [[0.0, 20.0], [0.0, 0.0], [0.0, 0.0]])
     f_m = f_m + np.linalg.lstsq(st.G, -model.f_g - st.G @ f_m, rcond=None)[0]
     cases.append(("m3 large tangential", A, f_m, frames, model.grasp.modes, np.full(3, 0.1),
-                  InternalForceSettings(f_min=0.5, margin=0.05)))
+                  InternalForceSettings(f_min=0.5, friction_margin=0.05)))
     return cases
 
 
@@ -385,7 +385,7 @@ def test_infeasible_problem_raises_typed_error(index):
     message = str(exc)
     # the message states the minimum normal force and the friction margin that were asked for
     assert f">= {settings.f_min} N" in message
-    assert f"margin {settings.margin}" in message
+    assert f"margin {settings.friction_margin}" in message
 
 
 # ---------------------------------------------------------------------------- empty null space
@@ -396,7 +396,7 @@ def test_empty_null_space_only_checks_the_given_forces():
     st, A, frames, fixed = qp_data(model, [0.004, Y0 + 0.005, 0.08, -0.005], [0.01, 0.0, 0.1, 0.002])
     assert A.shape == (4, 4) and np.linalg.matrix_rank(A) == 4
     mu = np.array([0.5, 0.5])
-    settings = InternalForceSettings(f_min=0.5, margin=0.05)  # fixed contact: |f_t| <= 0.45 f_n
+    settings = InternalForceSettings(f_min=0.5, friction_margin=0.05)  # fixed contact: |f_t| <= 0.45 f_n
     cases = {
         # (normal, tangential) per contact -> expected feasibility
         "inside": ([[1.0, 0.7], [1.0, 0.4]], True),  # sliding contact's tangential force is free

@@ -20,19 +20,34 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
-from regrasp import (Finger, Grasp, Hand, PlantContact, ReducedModel, RegraspSettings, RegraspSupervisor,  # noqa: E402
-                     SupervisorSettings, WaypointTrajectory, build_rollout, load_scenario, plan_regrasps, planar_2r_urdf)
+from regrasp import (  # noqa: E402
+    Finger,
+    Grasp,
+    Hand,
+    PlantContact,
+    PlantSpec,
+    ReducedModel,
+    RegraspSettings,
+    RegraspSupervisor,
+    RunSpec,
+    SupervisorSettings,
+    WaypointTrajectory,
+    build_rollout,
+    load_scenario,
+    plan_regrasps,
+    planar_2r_urdf,
+)
 from regrasp.cli.main import main  # noqa: E402
-from regrasp.plants.closed_loop import run_closed_loop  # noqa: E402
-from regrasp.dynamics.control import FixedContactController, Gains, Proposition3Controller  # noqa: E402
 from regrasp.core.events import EventKind  # noqa: E402
 from regrasp.core.exceptions import FingerModelError, InvalidParameterError, MissingDependencyError  # noqa: E402
+from regrasp.dynamics.control import FixedContactController, Gains, Proposition3Controller  # noqa: E402
+from regrasp.plants.closed_loop import run_closed_loop  # noqa: E402
 from regrasp.plants.mujoco.mjcf import MujocoSettings, build_mjcf, require_mujoco  # noqa: E402
 from regrasp.plants.mujoco.plant import MujocoPlant  # noqa: E402
 from regrasp.plants.project.plant import Plant  # noqa: E402
-from regrasp.supervisor.policies.scheduled import OrderedSlidesPolicy  # noqa: E402
-from regrasp.rollout.build import Rollout  # noqa: E402
 from regrasp.plants.simulation import PlantLike  # noqa: E402
+from regrasp.rollout.build import Rollout  # noqa: E402
+from regrasp.supervisor.policies.base import OrderedSlidesPolicy
 from regrasp.supervisor.types import SlideOrder  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -124,11 +139,10 @@ def test_a_contact_pulled_away_separates():
 def holds():
     """The two-finger hold (paper_trajectory_2.toml, no regrasp, 1 s) on the project plant and on MuJoCo at a
     0.25 mm tip, with and without the held contacts following the sensed ones."""
-    runs = {"project": build_rollout(SC2, policy="none", duration=1.0).run()}
+    runs = {"project": build_rollout(SC2, RunSpec(duration=1.0), policy="none").run()}
     for name, hold in (("mujoco", 2e-6), ("mujoco, held where first touched", None)):
         settings = SupervisorSettings.robust(SC2.geometry.value, 0.2, tip_radius=R_TIP, hold_resolution=hold)
-        runs[name] = build_rollout(SC2, policy="none", duration=1.0, plant="mujoco", settings=settings,
-                                   mujoco_settings=MujocoSettings(tip_radius=R_TIP)).run()
+        runs[name] = build_rollout(SC2, RunSpec(duration=1.0), policy="none", settings=settings, plant=PlantSpec("mujoco", settings=MujocoSettings(tip_radius=R_TIP))).run()
     return runs
 
 
@@ -159,7 +173,7 @@ def figure_3_4_slide(kind: str, radius: float = R_TIP, start: float = 0.02, dura
     order = SlideOrder(0, 1, end, reference=lambda t: (XI0 + V0 * max(0.0, t - start), V0 if t >= start else 0.0, 0.0),
                        planned_start=start, planned_end=duration)
     supervisor = RegraspSupervisor(hand, SC2.polygon, [1, 3], WaypointTrajectory([0.0, 1.0], [X_HOLD, X_HOLD]),
-                                   [XI0, XI0], MU, settings=SupervisorSettings.robust("ideal", 0.2, **settings),
+                                   [XI0, XI0], MU, settings=SupervisorSettings.robust("ideal", 0.2).with_executor(**settings),
                                    policy=OrderedSlidesPolicy([order], 2))
     result = Rollout(plant, supervisor, duration, ("finger1", "finger2"), "ordered").run()
     kinds = [e.kind for e in result.events]
@@ -189,7 +203,7 @@ def test_the_scheduled_three_finger_rollout_makes_its_first_double_slide_on_mujo
     periodic one's first two slides, planned in a third of the time)."""
     schedule = plan_regrasps(SC3, RegraspSettings(cone_margin=0.2, periodic=False), t_end=1.6)
     assert [(s.contact, s.direction) for s in schedule.slides] == [(0, 1), (1, -1)]
-    result = build_rollout(SC3, duration=1.45, plant="mujoco", schedule=schedule).run()
+    result = build_rollout(SC3, RunSpec(duration=1.45), schedule=schedule, plant="mujoco").run()
     assert result.success, result.failure
     assert result.regrasps == {"finger1": 1, "finger2": 1, "palm": 0} and result.replans == 0
     assert result.plant_event_counts() == {"slip": 2, "stick": 2}
@@ -200,7 +214,7 @@ def test_the_scheduled_three_finger_rollout_makes_its_first_double_slide_on_mujo
 def test_a_mujoco_rollout_records_to_rerun(tmp_path):
     from regrasp import RolloutRecorder
 
-    rollout = build_rollout(SC2, policy="none", duration=0.03, plant="mujoco")
+    rollout = build_rollout(SC2, RunSpec(duration=0.03), policy="none", plant="mujoco")
     with RolloutRecorder(rollout.plant, rrd_path=tmp_path / "r.rrd", decimation=5) as recorder:
         result = rollout.run(recorder=recorder)
     assert result.success and (tmp_path / "r.rrd").stat().st_size > 10_000
@@ -214,8 +228,8 @@ def test_bad_plants_and_plant_options_are_typed_errors(tmp_path):
         MujocoPlant(hand, SC2.polygon, contacts, dt=1.05e-3)
     with pytest.raises(InvalidParameterError, match="plant"):
         build_rollout(SC2, policy="none", plant="bullet")
-    with pytest.raises(InvalidParameterError, match="mujoco_settings"):
-        build_rollout(SC2, policy="none", mujoco_settings=MujocoSettings())
+    with pytest.raises(InvalidParameterError, match="settings"):
+        build_rollout(SC2, policy="none", plant=PlantSpec(settings=MujocoSettings()))
     text = planar_2r_urdf(0.1, 0.05)
     finger = Finger.from_urdf_string(text, base_in_hand=(-0.05, 0.0, math.pi / 2))
     with pytest.raises(FingerModelError, match="URDF file"):

@@ -33,19 +33,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import (
-    ContactMode,
-    Friction,
-    Grasp,
-    Hand,
-    Plant,
-    PlantContact,
-    ReducedModel,
-    UrdfCollisionChecker,
-    load_scenario,
-)
+from regrasp import ContactMode, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
 from regrasp.core.exceptions import InvalidParameterError, UnknownEdgeError
 from regrasp.core.planar import rotation
+from regrasp.model import UrdfCollisionChecker
 
 ROOT = Path(__file__).resolve().parents[3]
 SCENARIO = ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml"

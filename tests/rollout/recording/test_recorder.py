@@ -11,18 +11,17 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pyarrow as pa
 import pytest
 import rerun as rr
 from rerun.chunk import RrdReader
 
 from recordings import read
-
-from regrasp import Friction, Grasp, Hand, Plant, PlantContact, PlantEvent, ReducedModel, load_scenario
-from regrasp.plants.closed_loop import run_closed_loop
-from regrasp.dynamics.control import Gains, Proposition3Controller
-from regrasp.core.exceptions import InvalidParameterError, RegraspError, UnknownEdgeError
+from regrasp import Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, RunSpec, load_scenario
 from regrasp.core.events import Failure, FailureKind
+from regrasp.core.exceptions import InvalidParameterError, RegraspError, UnknownEdgeError
+from regrasp.dynamics.control import Gains, Proposition3Controller
+from regrasp.plants.closed_loop import run_closed_loop
+from regrasp.plants.project.plant import PlantEvent
 from regrasp.rollout.recording.recorder import PHASE_CODES, RolloutRecorder
 
 pytestmark = pytest.mark.filterwarnings("error::rerun.error_utils.RerunWarning")
@@ -255,7 +254,7 @@ def test_a_buffered_rollout_recording_holds_each_steps_values_at_its_time(tmp_pa
     recorded = {}
     schedule = None  # planned once, for the three runs
     for flush_every in (1, 7, 500):  # one step per send (per-step logging), odd blocks, one block
-        rollout = build_rollout(sc, duration=0.03, schedule=schedule)
+        rollout = build_rollout(sc, RunSpec(duration=0.03), schedule=schedule)
         schedule = rollout.schedule
         path = tmp_path / f"flush_{flush_every}.rrd"
         with RolloutRecorder(rollout.plant, rrd_path=path, flush_every=flush_every) as rec:
@@ -332,7 +331,7 @@ def record_rollout(path: Path, *, policy="paper", duration=0.3, **kwargs):
     """A rollout of the three-finger scenario recorded to ``path``; returns it, its result and its records."""
     from regrasp.rollout.build import build_rollout
 
-    rollout = build_rollout(THREE, duration=duration, policy=policy)
+    rollout = build_rollout(THREE, RunSpec(duration=duration), policy=policy)
     records = []
     with RolloutRecorder(rollout.plant, rrd_path=path, **kwargs) as rec:
         log_record = rec.log_record
@@ -406,7 +405,7 @@ def test_a_supervised_rollout_is_logged_from_its_records(tmp_path, monkeypatch):
     # priming from step 0 until the contact is sensed moving the slide's way faster than start_speed
     k = int(np.argmax(finger1 == 2.0))
     assert k >= 1 and (finger1[:k] == 1.0).all()
-    start_speed = rollout.supervisor.settings.start_speed
+    start_speed = rollout.supervisor.settings.executor.start_speed
     direction = np.sign(records[int(np.argmax(finger1 == 3.0))].plant.xi[0] - records[0].plant.xi[0])
     speed = np.array([r.plant.xi_dot[0] for r in records[:k]]) * direction  # [m/s] after steps 0..k-1
     assert speed[-1] > start_speed and (speed[:-1] <= start_speed).all()
@@ -468,7 +467,7 @@ def test_a_schedules_xi_d_is_plotted(tmp_path):
     _, _, records, _ = record_rollout(tmp_path / "source.rrd", duration=0.005)
     from regrasp.rollout.build import build_rollout
 
-    rollout = build_rollout(THREE, duration=0.005, policy="paper")
+    rollout = build_rollout(THREE, RunSpec(duration=0.005), policy="paper")
     path = tmp_path / "planned.rrd"
     planned = [np.array([-0.005 - 0.001 * k, np.nan, 0.002 * k]) for k in range(len(records))]
     with RolloutRecorder(rollout.plant, rrd_path=path) as rec:
@@ -513,7 +512,7 @@ def test_a_collision_is_marked_on_the_colliding_link(tmp_path):
 def test_a_contact_failure_is_a_circle_at_its_tip(tmp_path):
     from regrasp.rollout.build import build_rollout
 
-    rollout = build_rollout(THREE, duration=0.005, policy="paper")
+    rollout = build_rollout(THREE, RunSpec(duration=0.005), policy="paper")
     path = tmp_path / "separation.rrd"
     with RolloutRecorder(rollout.plant, rrd_path=path) as rec:
         result = rollout.run(recorder=rec)

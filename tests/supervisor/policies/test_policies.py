@@ -11,11 +11,13 @@ import pytest
 
 from regrasp.core.events import EventKind
 from regrasp.core.exceptions import InvalidParameterError, RegraspError
-from regrasp.supervisor.executor import ContactPhase, SlideEnd, SlideOrder
-from regrasp.supervisor.monitor import EnvelopeReading
-from regrasp.supervisor.policies.scheduled import NoRegraspPolicy, OrderedSlidesPolicy, ScheduledPolicy, ScheduledSettings
+from regrasp.core.measurement import Measurement
 from regrasp.schedule.schedule import RegraspSchedule, Slide, slides_at
-from regrasp.supervisor.supervisor import Measurement
+from regrasp.supervisor.monitor import EnvelopeReading
+from regrasp.supervisor.policies.base import NoRegraspPolicy, OrderedSlidesPolicy
+from regrasp.supervisor.policies.scheduled import ScheduledPolicy
+from regrasp.supervisor.settings import ScheduledSettings
+from regrasp.supervisor.types import ContactPhase, SlideEnd, SlideOrder
 
 NAMES = ("a", "b")
 FIXED = (ContactPhase.FIXED, ContactPhase.FIXED)

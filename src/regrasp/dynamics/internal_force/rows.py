@@ -42,7 +42,7 @@ def _constraint_rows(frames, modes, frictions, settings, cone_edges: tuple):
         if np.isfinite(settings.f_max):
             ineq.append((i, -n, -settings.f_max))
         if modes[i] is ContactMode.FIXED and i not in on_edge:
-            slope = frictions[i].static - settings.margin
+            slope = frictions[i].static - settings.friction_margin
             cone += (len(ineq), len(ineq) + 1)
             ineq.append((i, slope * n - t, 0.0))
             ineq.append((i, slope * n + t, 0.0))

@@ -9,7 +9,7 @@ space, :math:`\dim = 2m - 3 - p`). The QP
 
 .. math:: \min_y \tfrac12 \|f_c\|^2 = \tfrac12 y^T y \quad \text{s.t.}\quad
           f_{min} \le n_i^T f_i\ (\le f_{max})\ \forall i,\qquad
-          |t_i^T f_i| \le (\mu_{s,i} - \text{margin})\, n_i^T f_i\ \text{for fixed } i
+          |t_i^T f_i| \le (\mu_{s,i} - \text{friction\_margin})\, n_i^T f_i\ \text{for fixed } i
 
 keeps every contact pushing and every fixed contact inside its static friction cone
 (:math:`\mu_{s,i}`, :class:`~regrasp.core.contact.Friction`) with a margin, with the least squeeze; a
@@ -23,7 +23,7 @@ overshoot for the transition before a slide, §4); such a contact gets no static
 ``settings.target_cone_margin`` = :math:`\bar s > 0` [N] the QP gains one variable s [N]:
 
 .. math:: \min_{y, s} \tfrac12 \|f_c\|^2 + \tfrac12 W (s - \bar s - \delta)^2 \quad \text{s.t.}\quad
-          (\mu_{s,i} - \text{margin})\, n_i^T f_i - |t_i^T f_i| \ge s\ \text{for fixed } i
+          (\mu_{s,i} - \text{friction\_margin})\, n_i^T f_i - |t_i^T f_i| \ge s\ \text{for fixed } i
           \text{ not on a cone edge},\qquad 0 \le s \le \bar s,
 
 plus the same normal-force and cone-edge rows. It is feasible exactly when the least-squeeze QP is
@@ -62,6 +62,18 @@ import qpsolvers
 import scipy.sparse as sp
 from numpy.typing import ArrayLike
 
+from ...core.contact import FrictionLike, ModesLike
+from ...core.exceptions import InvalidParameterError, RegraspError
+from ...core.validation import as_finite_float
+from ...kernels.force import (
+    FORCE_CHECK_FAILED,
+    FORCE_INFEASIBLE,
+    FORCE_NOT_APPLICABLE,
+    FORCE_NOT_CONVERGED,
+    FORCE_SOLVED,
+    internal_force_into,
+)
+from ...model.hand import block_diagonal
 from .rows import (
     _OSQP_INFTY,
     MARGIN_AIM,
@@ -70,12 +82,6 @@ from .rows import (
     _null_basis,
     _Rows,
 )
-from ...core.contact import FrictionLike, ModesLike
-from ...core.exceptions import InvalidParameterError, RegraspError
-from ...kernels.force import (FORCE_CHECK_FAILED, FORCE_INFEASIBLE, FORCE_NOT_APPLICABLE, FORCE_NOT_CONVERGED,
-                            FORCE_SOLVED, internal_force_into)
-from ...model.hand import block_diagonal
-from ...core.validation import as_finite_float
 
 __all__ = [
     "ConeEdge",
@@ -96,25 +102,25 @@ class InternalForceSettings:
 
     Attributes:
         f_min: Minimum normal force [N] at every contact, >= 0.
-        margin: Friction margin [-], >= 0: fixed contacts keep |f_t| <= (μ_s - margin) f_n.
+        friction_margin: A ratio [-], >= 0: fixed contacts keep |f_t| <= (μ_s - friction_margin) f_n.
         tolerance: OSQP absolute and relative tolerance, > 0.
         f_max: Maximum normal force [N] at every contact (what the fingers can push), > f_min, or inf.
         target_cone_margin: The smallest cone margin (μ_s - margin) f_n - |f_t| [N] to reach at the fixed
             contacts, >= 0 (the module docstring); 0: the least squeeze only.
-        fallback_margin: Where no internal force keeps the fixed contacts ``margin`` inside their cones, the
-            solver answers with this smaller friction margin [-] instead of failing (None: it fails). A margin
+        fallback_friction_margin: Where no internal force keeps the fixed contacts ``friction_margin`` inside their
+            cones, the solver answers with this smaller friction margin [-] instead of failing (None: it fails). A margin
             that covers an uncertain μ is a preference; the cone of the model's μ is the limit.
     """
 
     f_min: float = 0.5
-    margin: float = 0.05
+    friction_margin: float = 0.05
     tolerance: float = 1e-9
     f_max: float = float("inf")
     target_cone_margin: float = 0.0
-    fallback_margin: float | None = None
+    fallback_friction_margin: float | None = None
 
     def __post_init__(self):
-        for name, low, strict in (("f_min", 0.0, False), ("margin", 0.0, False), ("tolerance", 0.0, True),
+        for name, low, strict in (("f_min", 0.0, False), ("friction_margin", 0.0, False), ("tolerance", 0.0, True),
                                   ("target_cone_margin", 0.0, False)):
             value = as_finite_float(name, getattr(self, name))
             if value < low or (strict and value == low):
@@ -127,10 +133,11 @@ class InternalForceSettings:
                 f_max = math.nan  # (the error below says what f_max may be)
         if not f_max > self.f_min:
             raise InvalidParameterError("f_max", self.f_max, f"a maximum normal force > f_min ({self.f_min}) or inf")
-        if self.fallback_margin is not None and not 0.0 <= as_finite_float("fallback_margin", self.fallback_margin) \
-                < self.margin:
-            raise InvalidParameterError("fallback_margin", self.fallback_margin,
-                                        f"None or a friction margin in [0, margin = {self.margin:g})")
+        fallback = self.fallback_friction_margin
+        if fallback is not None and not 0.0 <= as_finite_float("fallback_friction_margin", fallback) \
+                < self.friction_margin:
+            raise InvalidParameterError("fallback_friction_margin", fallback,
+                                        f"None or a friction margin in [0, friction_margin = {self.friction_margin:g})")
 
 
 @dataclass(frozen=True)
@@ -214,7 +221,7 @@ class InternalForceInfeasibleError(RegraspError):
         super().__init__(
             f"internal-force QP infeasible (solver status: {status}): no squeeze keeps every contact "
             f"pushing with >= {qp.settings.f_min} N and every fixed contact inside its friction cone "
-            f"with margin {qp.settings.margin}"
+            f"with friction margin {qp.settings.friction_margin}"
         )
 
 
@@ -382,10 +389,10 @@ class InternalForceSolver:
         self._rows_settings = settings
         self._last_contacts = None  # (modes, friction) as last passed (tuples), and validated
         self._plain: InternalForceSolver | None = None  # the least-squeeze fallback of a target margin
-        self._relaxed: InternalForceSolver | None = None  # the fallback_margin's solver
+        self._relaxed: InternalForceSolver | None = None  # the fallback_friction_margin's solver
         #: how often a target-margin problem fell back to the least squeeze (its QP did not converge)
         self.fallbacks = 0
-        #: how often the friction margin was relaxed to ``fallback_margin`` (no force kept ``margin``)
+        #: how often the friction margin was relaxed to ``fallback_friction_margin`` (no force kept ``friction_margin``)
         self.relaxations = 0
 
     def _rows_for(self, m: int, modes, friction, cone_edge) -> _Rows:
@@ -469,12 +476,13 @@ class InternalForceSolver:
         if isinstance(outcome, InternalForceResult):
             return outcome
         status = outcome
-        if self.settings.fallback_margin is not None:
+        if self.settings.fallback_friction_margin is not None:
             # the friction margin is a preference too: the same problem with the smaller one (its own target
             # margin, and its own least-squeeze fallback)
             if self._relaxed is None:
-                self._relaxed = InternalForceSolver(replace(self.settings, margin=self.settings.fallback_margin,
-                                                            fallback_margin=None), compiled=self.compiled)
+                self._relaxed = InternalForceSolver(
+                    replace(self.settings, friction_margin=self.settings.fallback_friction_margin,
+                            fallback_friction_margin=None), compiled=self.compiled)
             self.relaxations += 1
             return self._relaxed._solve(constraint_matrix, motion_forces, frames, modes, friction, cone_edge, start)
         if rows.target > 0.0:

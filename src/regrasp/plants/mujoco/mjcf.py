@@ -42,12 +42,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...model.collision import checked_link_shapes, default_tip_clearance
 from ...core.contact import Friction
 from ...core.exceptions import FingerModelError, InvalidParameterError, MissingDependencyError
-from ...model.finger import Finger
 from ...core.polygon import ConvexPolygon
 from ...core.validation import as_finite_float, as_integer, as_positive_float, expect_sequence_of, expect_type
+from ...model.collision import checked_link_shapes, default_tip_clearance
+from ...model.finger import Finger
 
 if TYPE_CHECKING:
     from ...model.scenario import Scenario

@@ -44,14 +44,14 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ...core.contact import ContactMode, Friction, FrictionLike, as_frictions
+from ...core.contact import DEFAULT_FRICTION, ContactMode, Friction, FrictionLike, as_frictions
 from ...core.events import EventKind
 from ...core.exceptions import InvalidParameterError
-from ...model.hand import Hand
-from .mjcf import MujocoSettings, build_mjcf, require_mujoco
-from ..project.plant import MAX_DT, PlantContact, PlantEvent, PlantState, PlantStep
 from ...core.polygon import ConvexPolygon
 from ...core.validation import as_finite_array, as_finite_float, as_positive_float, expect_sequence_of, expect_type
+from ...model.hand import Hand
+from ..project.plant import MAX_DT, PlantContact, PlantEvent, PlantState, PlantStep
+from .mjcf import MujocoSettings, build_mjcf, require_mujoco
 
 __all__ = ["MujocoPlant"]
 
@@ -88,7 +88,7 @@ class MujocoPlant:
     """
 
     def __init__(self, hand: Hand, polygon: ConvexPolygon, contacts: Sequence[PlantContact], *,
-                 friction: FrictionLike = 0.5, object_mass: float | None = None, object_inertia: float | None = None,
+                 friction: FrictionLike = DEFAULT_FRICTION, object_mass: float | None = None, object_inertia: float | None = None,
                  dt: float = 1e-3, settings: MujocoSettings = MujocoSettings(),
                  tip_clearance: Sequence[float | None] | None = None, slip_speed: float = 2e-3,
                  stick_speed: float = 1e-3, separation_gap: float = 2.5e-5,

@@ -58,19 +58,36 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ...model.collision import UrdfCollisionChecker, default_tip_clearance
-from ...core.contact import ContactMode, FrictionLike, as_frictions, as_modes, cone_margin
-from ...core.exceptions import InvalidParameterError
+from ...core.contact import DEFAULT_FRICTION, ContactMode, FrictionLike, as_frictions, as_modes, cone_margin
 from ...core.events import EventKind
-from ...core.scalar import solve_small as _solve_small
-from ...model.hand import Hand, _condition
-from ...kernels.finger import FINGER_TERMS
-from ...kernels import warm_up
-from ...kernels.plant import (FIXED, PLANT_CONTACT, PLANT_PARAMETERS, SEPARATED, SLIDING, output_size, plant_evaluate,
-                             plant_step_into)
+from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
-from ...core.validation import (as_finite_array, as_finite_float, as_flag, as_inertia, as_integer, as_mass, as_positive_float,
-                         expect_sequence_of, expect_type)
+from ...core.scalar import solve_small as _solve_small
+from ...core.validation import (
+    as_finite_array,
+    as_finite_float,
+    as_flag,
+    as_inertia,
+    as_integer,
+    as_mass,
+    as_positive_float,
+    expect_sequence_of,
+    expect_type,
+)
+from ...kernels import warm_up
+from ...kernels.finger import FINGER_TERMS
+from ...kernels.plant import (
+    FIXED,
+    PLANT_CONTACT,
+    PLANT_PARAMETERS,
+    SEPARATED,
+    SLIDING,
+    output_size,
+    plant_evaluate,
+    plant_step_into,
+)
+from ...model.collision import UrdfCollisionChecker, default_tip_clearance
+from ...model.hand import Hand, _condition
 
 __all__ = ["Plant", "PlantContact", "PlantEvent", "PlantState", "PlantStep"]
 
@@ -244,7 +261,7 @@ class Plant:
         polygon: ConvexPolygon,
         contacts: Sequence[PlantContact],
         *,
-        friction: FrictionLike = 0.0,
+        friction: FrictionLike = DEFAULT_FRICTION,
         object_mass: float | None = None,
         object_inertia: float | None = None,
         dt: float = 1e-3,

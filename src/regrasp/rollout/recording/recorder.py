@@ -118,7 +118,6 @@ outright (SIGKILL, ``os._exit``) cannot finalise its file.
 
 from __future__ import annotations
 
-from dataclasses import replace
 import math
 import re
 import time as _time
@@ -126,27 +125,28 @@ import uuid
 import warnings
 import weakref
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import ArrayLike
 import pinocchio as pin
 import pyarrow as pa
 import rerun as rr
 import rerun.blueprint as rrb
+from numpy.typing import ArrayLike
 from rerun.components import LineStrip2DBatch
 from rerun.encodings import Vec2DBatch
 
 from ...core.contact import ContactMode, coefficients, cone_margin
-from ...dynamics.control import ControlOutput
-from ...envelope.finger_envelope import EnvelopeSample, FingerEnvelope
 from ...core.events import EventKind, EventSource, FailureKind
 from ...core.exceptions import InvalidParameterError, RegraspError
-from ...supervisor.executor import ContactPhase
 from ...core.planar import wrap_angle
+from ...dynamics.control import ControlOutput
+from ...envelope.finger_envelope import EnvelopeSample, FingerEnvelope
 from ...plants.project.plant import PlantStep
 from ...plants.simulation import PlantLike
+from ...supervisor.types import ContactPhase
 
 if TYPE_CHECKING:
     from ...core.events import Failure

@@ -24,15 +24,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...core.events import Event, EventKind
-from ..executor import ContactPhase, SlideOrder
-from ...dynamics.internal_force.solver import InternalForceSolver
 from ...core.intervals import intersect, widest
-from ..monitor import EnvelopeReading, interval_of
+from ...dynamics.internal_force.solver import InternalForceSolver
 from ...dynamics.sliding import sliding_feasibility
+from ..monitor import EnvelopeReading, interval_of
+from ..types import ContactPhase, SlideOrder
 
 if TYPE_CHECKING:
-    from ..executor import SlideEnd
-    from ..supervisor import Measurement, SupervisorContext, SupervisorSettings
+    from ...core.measurement import Measurement
+    from ..settings import SupervisorSettings
+    from ..types import SlideEnd, SupervisorContext
 
 __all__ = ["PaperPolicy"]
 
@@ -49,9 +50,9 @@ class PaperPolicy:
     """The danger-zone heuristic (module docstring).
 
     Args:
-        context: A :class:`~regrasp.supervisor.supervisor.SupervisorContext` (hand, grasp, trajectory, friction,
+        context: A :class:`~regrasp.supervisor.types.SupervisorContext` (hand, grasp, trajectory, friction,
             object mass and inertia, the plan).
-        settings: A :class:`~regrasp.supervisor.supervisor.SupervisorSettings` (danger zone, horizons, predicate
+        settings: A :class:`~regrasp.supervisor.settings.SupervisorSettings` (danger zone, horizons, predicate
             margins, enabling search; the slide filter's ω_n and the priming overshoot).
     """
 
@@ -60,6 +61,7 @@ class PaperPolicy:
     def __init__(self, context: SupervisorContext, settings: SupervisorSettings):
         self.c = context
         self.settings = settings
+        self.paper, self.executor = settings.paper, settings.executor
         m = context.hand.m
         plan = context.plan
         self._plan_bounds = None if plan is None else [_single_intervals(f.samples) for f in plan.fingers]
@@ -67,7 +69,7 @@ class PaperPolicy:
         self._in_danger = [False] * m
         self._recheck = [-math.inf] * m         # when a rejected slide may be asked about again
         self._enable_recheck = [-math.inf] * m  # when to search for an enabling slide again
-        self._feasibility = InternalForceSolver(settings.feasibility)  # the predicate's persistent QP
+        self._feasibility = InternalForceSolver(settings.paper.feasibility)  # the predicate's persistent QP
 
     def planned_xi(self, t: float) -> np.ndarray:
         """No planned contact positions (NaN per contact)."""
@@ -87,14 +89,14 @@ class PaperPolicy:
         """The first planned time within ``reaction_time`` where ξ is in a danger zone or outside."""
         times = self.c.plan.times
         k0 = self._plan_index(t)
-        k1 = int(np.searchsorted(times, t + self.settings.reaction_time, side="right"))
+        k1 = int(np.searchsorted(times, t + self.paper.reaction_time, side="right"))
         lo, hi, single = (a[k0:k1] for a in self._plan_bounds[i])
-        bad = single & (np.minimum(xi - lo, hi - xi) < self.settings.danger_fraction * (hi - lo))
+        bad = single & (np.minimum(xi - lo, hi - xi) < self.paper.danger_fraction * (hi - lo))
         samples = self.c.plan.fingers[i].samples
         for k in np.flatnonzero(~single):
             sample = samples[k0 + k]
             iv = interval_of(sample, xi)
-            bad[k] = iv is None or sample.margin(xi) < self.settings.danger_fraction * (iv[1] - iv[0])
+            bad[k] = iv is None or sample.margin(xi) < self.paper.danger_fraction * (iv[1] - iv[0])
         hits = np.flatnonzero(bad)
         return float(times[k0 + hits[0]]) if hits.size else None
 
@@ -105,7 +107,7 @@ class PaperPolicy:
             return interval, None
         prefix, until = (interval,), None
         for sample in self.c.plan.fingers[i].samples[self._plan_index(t):]:
-            if sample.time > t + self.settings.target_horizon:
+            if sample.time > t + self.paper.target_horizon:
                 break
             nxt = intersect(prefix, sample.feasible)
             if not nxt:
@@ -117,9 +119,9 @@ class PaperPolicy:
     def _verdict(self, i: int, direction: float, xi, target: float, t: float):
         """The predicate at ``path_checks`` points of contact i's slide from xi[i] to ``target``:
         (the first rejection, or the last acceptance; the ξ_i [m] where it was asked)."""
-        s, c = self.settings, self.c
+        s, c = self.paper, self.c
         n = s.path_checks
-        duration = 6.0 / s.omega_n  # a critically damped filter covers ~98 % of a step in 6/ω_n
+        duration = 6.0 / self.executor.omega_n  # a critically damped filter covers ~98 % of a step in 6/ω_n
         xi = np.array(xi, dtype=float)
         start = xi[i]
         for k in range(n):
@@ -127,7 +129,7 @@ class PaperPolicy:
             xi[i] = start + fraction * (target - start)
             desired = c.trajectory.sample(min(t + fraction * duration, c.trajectory.t_end))
             # where it starts, the priming asks for μ_s + overshoot (it must break away); on the way μ_k
-            edge_mu = c.friction[i].static + s.prime_overshoot if k == 0 else None
+            edge_mu = c.friction[i].static + self.executor.prime_overshoot if k == 0 else None
             verdict = sliding_feasibility(
                 c.grasp, desired.pose, xi, desired.acceleration, i, direction, c.friction,
                 object_mass=c.object_mass, object_inertia=c.object_inertia, gravity_in_hand=c.hand.gravity_in_hand,
@@ -139,8 +141,8 @@ class PaperPolicy:
     def _enabling(self, meas, reading: EnvelopeReading, phases, i: int, direction: float, target: float):
         """A slide of another fixed contact k after which contact i's rejected slide is possible:
         (k, ξ_k*) with the nearest such ξ_k* over the candidates, or None."""
-        s = self.settings
-        later = meas.t + 6.0 / s.omega_n  # contact i slides once k has arrived
+        s = self.paper
+        later = meas.t + 6.0 / self.executor.omega_n  # contact i slides once k has arrived
         for k in range(self.c.hand.m):
             lo, hi = reading.bounds[k]
             if k == i or phases[k] is not ContactPhase.FIXED or not math.isfinite(hi - lo):
@@ -149,7 +151,7 @@ class PaperPolicy:
             keep = s.danger_fraction * (phi - plo)
             candidates = np.linspace(plo + keep, phi - keep, s.enabling_candidates) if phi - plo > 0 else []
             for target_k in sorted(candidates, key=lambda x: abs(x - meas.xi[k])):
-                if abs(target_k - meas.xi[k]) < 2.0 * s.arrive_tolerance:
+                if abs(target_k - meas.xi[k]) < 2.0 * self.executor.arrive_tolerance:
                     continue
                 moved = meas.xi.copy()
                 moved[k] = target_k
@@ -163,7 +165,7 @@ class PaperPolicy:
     def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
                 out: list[Event]) -> list[SlideOrder]:
         """At most one slide order, for the most urgently endangered contact whose slide is possible."""
-        s = self.settings
+        s = self.paper
         danger = []
         for i in range(self.c.hand.m):
             lo, hi = reading.bounds[i]
@@ -198,7 +200,7 @@ class PaperPolicy:
                 continue
             (plo, phi), until = self._kept_feasible(i, meas.t, tuple(reading.bounds[i]))
             target = 0.5 * (plo + phi)
-            if abs(target - meas.xi[i]) < 2.0 * s.arrive_tolerance:
+            if abs(target - meas.xi[i]) < 2.0 * self.executor.arrive_tolerance:
                 continue  # already where a slide would take it
             direction = 1 if target > meas.xi[i] else -1
             verdict, where = self._verdict(i, direction, meas.xi, target, meas.t)

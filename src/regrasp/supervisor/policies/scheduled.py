@@ -1,18 +1,4 @@
-r"""Regrasp policies: who decides which contact slides, where and when.
-
-A policy *proposes*; the executor (:class:`~regrasp.supervisor.executor.SlideExecutor`) runs; the envelope
-monitor (:class:`~regrasp.supervisor.monitor.EnvelopeMonitor`) watches. Every policy has
-
-* ``propose(meas, reading, phases, out) -> list[SlideOrder]``: the slides to start now, given the
-  measurement, the monitor's reading and each contact's phase (decisions it logs go to ``out``);
-* ``notify(ends, meas, out)``: how the slides it ordered ended;
-* ``planned_xi(t) -> (m,)``: where it plans each contact to be at time t [m] (NaN: no plan).
-
-and may have, for the compiled stretches of a rollout (:mod:`regrasp.rollout.stretch`: the steps between decisions
-in one compiled call), ``quiet_until(phases)``: until when ``propose`` is sure to return nothing while the
-phases stay the same; and ``stretch_terms(t)`` / ``take_stretch(next_decision)``: what the compiled code needs
-to take the decisions that order nothing itself (:class:`ScheduledPolicy`'s: no slide due, no re-plan
-pending, every margin above its threshold). A policy without them is asked at every step.
+r"""The schedule-following policy (:class:`ScheduledPolicy`, its settings :class:`ScheduledSettings`).
 
 :class:`ScheduledPolicy` follows a :class:`~regrasp.schedule.schedule.RegraspSchedule` planned ahead
 (:func:`~regrasp.schedule.planner.plan_regrasps`): it primes each slide ``prime_lead`` before the
@@ -22,138 +8,29 @@ more than ``time_tolerance`` early or late or more than ``xi_tolerance`` from it
 when a contact's runtime envelope margin falls below ``margin_fraction`` of the planned one. A
 re-plan waits until no slide is under way; a failed re-plan is logged and the old schedule kept.
 :class:`~regrasp.supervisor.policies.paper.PaperPolicy` is the paper's danger-zone heuristic;
-:class:`NoRegraspPolicy` never slides; :class:`OrderedSlidesPolicy` starts given slides at given times
-(one slide on its own, e.g. Figure 3.4's on a plant).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...core.events import Event, EventKind
 from ...core.exceptions import InvalidParameterError, RegraspError
-from ..executor import ContactPhase, SlideEnd, SlideOrder
-from ..monitor import EnvelopeReading
 from ...schedule.schedule import RegraspSchedule
-from ..types import SlideProfile
-from ...core.validation import as_finite_float, as_integer, as_positive_float, expect_sequence_of
+from ..monitor import EnvelopeReading
+from ..settings import ScheduledSettings
+from ..types import ContactPhase, SlideEnd, SlideOrder, SlideProfile
 
 if TYPE_CHECKING:
-    from ..supervisor import Measurement
+    from ...core.measurement import Measurement
 
-__all__ = ["NoRegraspPolicy", "OrderedSlidesPolicy", "Policy", "ScheduledPolicy", "ScheduledSettings"]
-
-
-class Policy(Protocol):
-    """What the supervisor asks of a policy (module docstring)."""
-
-    name: str
-
-    def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
-                out: list[Event]) -> list[SlideOrder]: ...
-
-    def notify(self, ends: list[SlideEnd], meas: Measurement, out: list[Event]) -> None: ...
-
-    def planned_xi(self, t: float) -> np.ndarray: ...
+__all__ = ["ScheduledPolicy"]
 
 
-class NoRegraspPolicy:
-    """Never slides: every contact stays where it is (for comparison runs)."""
-
-    name = "none"
-
-    def __init__(self, m: int):
-        self.m = int(m)
-
-    def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
-                out: list[Event]) -> list[SlideOrder]:
-        return []
-
-    def quiet_until(self, phases: Sequence[ContactPhase]) -> float:
-        """It never proposes: inf (see :meth:`ScheduledPolicy.quiet_until`)."""
-        return math.inf
-
-    def notify(self, ends: list[SlideEnd], meas: Measurement, out: list[Event]) -> None:
-        pass
-
-    def planned_xi(self, t: float) -> np.ndarray:
-        return np.full(self.m, np.nan)
-
-
-class OrderedSlidesPolicy:
-    """Starts each given :class:`~regrasp.supervisor.types.SlideOrder` at its ``planned_start`` [s] (a contact that is not
-    fixed then gets its order when it is), and nothing else.
-
-    Args:
-        orders: The slides, each with a ``planned_start``.
-        m: The number of contacts.
-    """
-
-    name = "ordered"
-
-    def __init__(self, orders: Sequence[SlideOrder], m: int):
-        orders = expect_sequence_of("orders", orders, SlideOrder, "SlideOrders")
-        if not all(o.planned_start is not None for o in orders):
-            raise InvalidParameterError("orders", orders, "SlideOrders, each with a planned_start")
-        self.m = as_integer("m", m, least=1)
-        if not all(o.contact < self.m for o in orders):
-            raise InvalidParameterError("orders", orders, f"slides of contacts 0 to {self.m - 1}")
-        self.orders = sorted(orders, key=lambda o: o.planned_start)
-
-    def propose(self, meas: Measurement, reading: EnvelopeReading, phases: Sequence[ContactPhase],
-                out: list[Event]) -> list[SlideOrder]:
-        due = [o for o in self.orders if o.planned_start <= meas.t + 1e-9 and phases[o.contact] is ContactPhase.FIXED]
-        for o in due:
-            self.orders.remove(o)
-        return due
-
-    def notify(self, ends: list[SlideEnd], meas: Measurement, out: list[Event]) -> None:
-        pass
-
-    def planned_xi(self, t: float) -> np.ndarray:
-        return np.full(self.m, np.nan)
-
-
-@dataclass(frozen=True)
-class ScheduledSettings:
-    """Tuning of :class:`ScheduledPolicy`.
-
-    Attributes:
-        prime_lead: Start priming this long before the schedule starts a slide [s] (the executor's
-            ``prime_time`` is the longest priming).
-        time_tolerance: A slide that ends (arrives, sticks, times out) more than this [s] from its
-            planned end triggers a re-plan ...
-        xi_tolerance: ... and so does one that ends more than this [m] from its planned end position.
-        margin_fraction: A runtime envelope margin below this fraction of the planned one (at the
-            nearest planned sample) triggers a re-plan [-].
-        replan_cooldown: After a re-plan (or a failed one), no margin-triggered re-plan for this long [s].
-        max_replans: At most this many re-plans in a run.
-        decision_period: Decide at least this often [s] (default 10 ms; 0: at every step). Between decisions the policy
-            proposes nothing, unless something happened: a slide ended or a contact changed phase (the next
-            step decides), or a scheduled slide is due (the policy decides at its start, never late). What a
-            longer period delays is only the margin-triggered re-plan, by at most the period.
-    """
-
-    prime_lead: float = 0.0
-    time_tolerance: float = 0.05
-    xi_tolerance: float = 1e-3
-    margin_fraction: float = 0.5
-    replan_cooldown: float = 0.1
-    max_replans: int = 10
-    decision_period: float = 0.01
-
-    def __post_init__(self):
-        for name in ("prime_lead", "time_tolerance", "xi_tolerance", "replan_cooldown", "decision_period"):
-            as_positive_float(name, getattr(self, name), allow_zero=True)
-        if not 0.0 <= as_finite_float("margin_fraction", self.margin_fraction) < 1.0:
-            raise InvalidParameterError("margin_fraction", self.margin_fraction, "a fraction in [0, 1)")
-        if isinstance(self.max_replans, bool) or int(self.max_replans) != self.max_replans or self.max_replans < 0:
-            raise InvalidParameterError("max_replans", self.max_replans, "an integer >= 0")
 
 
 class ScheduledPolicy:

@@ -1,0 +1,117 @@
+"""What the command line's commands share: argument types (one parser maker for every numeric option), the
+progress bar, the figures' output directory, the default scenario and the plant options."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, TextIO, TypeVar
+
+from ..core.exceptions import InvalidParameterError
+
+if TYPE_CHECKING:
+    from ..plants.spec import PlantSpec
+
+__all__ = ["DEFAULT_SCENARIO", "ProgressBar", "add_plant_arguments", "nonnegative", "number_argument",
+           "output_directory", "plant_spec", "positive"]
+
+T = TypeVar("T", int, float)
+
+#: The default scenario (in the source tree's examples/).
+DEFAULT_SCENARIO = Path(__file__).resolve().parents[3] / "examples" / "scenarios" / \
+    "paper_trajectory_2_three_fingers.toml"
+
+
+
+def number_argument(kind: type[T], expected: str, accept: Callable[[T], bool]) -> Callable[[str], T]:
+    """A ``type=`` for argparse: ``kind(text)`` when ``accept`` takes it, else an ``ArgumentTypeError``
+    saying ``expected`` (argparse turns it into one ``error:`` line and exit 2)."""
+    def parse(text: str) -> T:
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
+        if not accept(value):
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+        return value
+    return parse
+
+
+def positive(kind: type[T]) -> Callable[[str], T]:
+    """A ``type=`` for a finite number > 0 of ``kind``."""
+    return number_argument(kind, f"a finite {kind.__name__} > 0", lambda v: 0 < v < float("inf"))
+
+
+#: A ``type=`` for a finite number >= 0.
+nonnegative = number_argument(float, "a finite number >= 0", lambda v: 0.0 <= v < float("inf"))
+
+
+class ProgressBar:
+    """A one-line progress bar on stderr (done/total, elapsed and remaining time), drawn only when stderr is a
+    terminal."""
+
+    def __init__(self, label: str, stream: TextIO = sys.stderr):
+        self.label, self.stream = label, stream
+        self.enabled = stream.isatty()
+        self._last = -1
+        self._start = time.monotonic()
+
+    def __call__(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        pct = int(100 * done / total)
+        if pct != self._last:
+            self._last = pct
+            bar = "#" * (pct // 4) + "." * (25 - pct // 4)
+            elapsed = time.monotonic() - self._start
+            left = f", {elapsed * (total - done) / done:.0f} s left" if 0 < done < total else ""
+            self.stream.write(f"\r{self.label} [{bar}] {pct:3d}% ({done}/{total}, {elapsed:.0f} s{left})  ")
+            if done == total:
+                self.stream.write("\n")
+            self.stream.flush()
+
+
+def output_directory(option: str, path: str | os.PathLike[str]) -> Path:
+    """``path`` as a directory figures can be written into (made if missing), or an
+    :class:`~regrasp.core.exceptions.InvalidParameterError` naming ``option``."""
+    directory = Path(path)
+    try:
+        if directory.exists() and not directory.is_dir():
+            raise InvalidParameterError(option, str(path), "a directory (it is a file)")
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InvalidParameterError(option, str(path), f"a directory that can be made ({exc.strerror or exc})") \
+            from None
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise InvalidParameterError(option, str(path), "a writable directory")
+    return directory
+
+
+def add_plant_arguments(p: argparse.ArgumentParser) -> None:
+    """``--plant`` and ``--tip-radius`` (read back by :func:`plant_spec`)."""
+    p.add_argument("--plant", choices=("project", "mujoco"), default="project",
+                   help="project: the full-coordinate plant with point contacts (default); mujoco: MuJoCo with sphere "
+                        "tips and soft contacts (pip install 'regrasp[mujoco]')")
+    p.add_argument("--tip-radius", type=positive(float), metavar="MM",
+                   help="--plant mujoco: the fingertips' sphere radius [mm] (default 0.25)")
+
+
+def plant_spec(args: argparse.Namespace) -> PlantSpec:
+    """The plant ``--plant`` and ``--tip-radius`` ask for; a missing ``mujoco`` or a radius without MuJoCo is an
+    error before any work."""
+    from ..plants.spec import PlantSpec
+
+    if args.tip_radius is not None and args.plant != "mujoco":
+        raise InvalidParameterError("--tip-radius", args.tip_radius, "no radius unless --plant mujoco (the project's "
+                                    "plant has point contacts)")
+    if args.plant != "mujoco":
+        return PlantSpec(args.plant)
+    from ..plants.mujoco.mjcf import MujocoSettings
+
+    # (PlantSpec checks for mujoco before any planning: it says at once that the extra is missing)
+    return PlantSpec("mujoco", MujocoSettings() if args.tip_radius is None else
+                     MujocoSettings(tip_radius=args.tip_radius * 1e-3))
