@@ -19,7 +19,7 @@ from ..core.trajectory import TrajectorySample
 from ..core.validation import as_duration, as_positive_float, expect_type
 from ..dynamics.control import ComputedTorqueController, ControlOutput, Proposition2Controller
 from ..dynamics.reduced import ReducedModel
-from .project.plant import PlantEvent
+from ..core.events import Event
 from .simulation import Command, PlantLike, StepRecord, sense_projected, simulate
 
 __all__ = ["ClosedLoopLog", "measure_reduced_state", "run_closed_loop"]
@@ -81,7 +81,7 @@ class ClosedLoopLog:
     cone_margins: np.ndarray
     internal_forces: np.ndarray
     control_seconds: np.ndarray
-    events: tuple[PlantEvent, ...]
+    events: tuple[Event, ...]
     max_constraint_error: float
     stopped: bool
 

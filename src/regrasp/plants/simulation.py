@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.contact import ContactMode, Friction, coefficients, cone_margin
-from ..core.events import Event, EventKind, EventSource, Failure, FailureKind
+from ..core.events import Event, EventKind, Failure, FailureKind
 from ..core.exceptions import InvalidParameterError, RegraspError
 from ..core.measurement import Measurement
 from ..core.polygon import ConvexPolygon
@@ -43,7 +43,7 @@ from ..dynamics.control import ControlOutput
 from ..model.hand import Hand
 from ..supervisor.types import SupervisorOutput
 from .disturbance import Disturbance
-from .project.plant import PlantContact, PlantEvent, PlantState, PlantStep
+from .project.plant import PlantContact, PlantState, PlantStep
 
 __all__ = ["Command", "Driver", "InterruptAtStepEnd", "PlantLike", "SimulationOutcome", "StepRecord", "sense",
            "sense_projected", "simulate"]
@@ -74,7 +74,7 @@ class PlantLike(Protocol):
     friction: tuple[Friction, ...]
     dt: float
     state: PlantState | None
-    events: list[PlantEvent]
+    events: list[Event]
     stopped: bool
     stop_on: frozenset[EventKind]
     max_constraint_error: float
@@ -314,8 +314,7 @@ def simulate(plant: PlantLike, driver: Driver, steps: int, *,
                     mus = plant.friction
                 forces = step.forces_surface
                 margins = cone_margin(np.array(coefficients(mus, step.modes)), forces[:, 0], forces[:, 1])
-                events = (() if command.supervision is None else command.supervision.events) + tuple(
-                    Event(e.time, e.contact, e.kind, e.detail, EventSource.PLANT, e.values) for e in step.events)
+                events = (() if command.supervision is None else command.supervision.events) + step.events
                 record = StepRecord(k, float(meas.t), meas, command, step, margins, events, plant_seconds, truth, tau)
                 for consume in consumers:
                     consume(record)

@@ -17,11 +17,10 @@ from rerun.chunk import RrdReader
 
 from recordings import read
 from regrasp import Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, RunSpec, load_scenario
-from regrasp.core.events import Failure, FailureKind
+from regrasp.core.events import Event, EventSource, Failure, FailureKind
 from regrasp.core.exceptions import InvalidParameterError, RegraspError, UnknownEdgeError
 from regrasp.dynamics.control import Gains, Proposition3Controller
 from regrasp.plants.closed_loop import run_closed_loop
-from regrasp.plants.project.plant import PlantEvent
 from regrasp.rollout.recording.recorder import PHASE_CODES, RolloutRecorder
 
 pytestmark = pytest.mark.filterwarnings("error::rerun.error_utils.RerunWarning")
@@ -183,7 +182,7 @@ def test_log_step_with_plant_steps_and_close_is_idempotent(tmp_path):
         step = plant.step(out.tau)
         forces.append(step.forces_surface.copy())
         if k == 2:  # a plant event is logged as text at its step
-            plant.events.append(PlantEvent(plant.state.t, "finger2", "slip", "made up for the test"))
+            plant.events.append(Event(plant.state.t, "finger2", "slip", "made up for the test", EventSource.PLANT))
         assert rec.log_step(plant, out, step=10 + k, desired_pose=reference(plant.state.t)[0][:3], plant_step=step)
     rec.close()
     rec.close()

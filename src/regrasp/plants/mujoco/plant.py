@@ -45,12 +45,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ...core.contact import DEFAULT_FRICTION, ContactMode, Friction, FrictionLike, as_frictions
-from ...core.events import EventKind
+from ...core.events import Event, EventKind, EventSource
 from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
 from ...core.validation import as_finite_array, as_finite_float, as_positive_float, expect_sequence_of, expect_type
 from ...model.hand import Hand
-from ..project.plant import MAX_DT, PlantContact, PlantEvent, PlantState, PlantStep
+from ..project.plant import MAX_DT, PlantContact, PlantState, PlantStep
 from .mjcf import MujocoSettings, build_mjcf, require_mujoco
 
 __all__ = ["MujocoPlant"]
@@ -144,7 +144,7 @@ class MujocoPlant:
         self._edges = [polygon.edge(c.edge) for c in contacts]
         self.contacts = self._copy_contacts(contacts)
         self.state: PlantState | None = None
-        self.events: list[PlantEvent] = []
+        self.events: list[Event] = []
         self.stopped = False
         self.max_constraint_error = 0.0
         self._energy0 = 0.0
@@ -321,7 +321,7 @@ class MujocoPlant:
         return PlantStep(self.state, surface, np.array(xi), np.array(xi_dot), modes, err, tuple(events))
 
     def _event(self, i: int, kind: EventKind, detail: str, out: list, **values) -> None:
-        ev = PlantEvent(self.state.t, self.hand.fingers[i].name, kind, detail, values)
+        ev = Event(self.state.t, self.hand.fingers[i].name, kind, detail, EventSource.PLANT, values)
         out.append(ev)
         self.events.append(ev)
         if kind in self.stop_on:
@@ -330,7 +330,7 @@ class MujocoPlant:
     def _events(self, surface: np.ndarray, links: dict, before: list) -> tuple[list, list, list, float]:
         """The events at the step's end (module docstring); ξ, ξ̇ and the constraint error there (``before``:
         each contact's :meth:`_measure` at the step's start)."""
-        out: list[PlantEvent] = []
+        out: list[Event] = []
         xis, rates, err = [], [], 0.0
         for i, c in enumerate(self.contacts):
             after = self._measure(self.data, i)

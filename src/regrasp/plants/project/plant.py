@@ -49,7 +49,7 @@ exceeds the hand's threshold). Kinds in ``stop_on`` stop the simulation.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -59,7 +59,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ...core.contact import DEFAULT_FRICTION, ContactMode, FrictionLike, as_frictions, as_modes, cone_margin
-from ...core.events import EventKind
+from ...core.events import Event, EventKind, EventSource
 from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
 from ...core.scalar import solve_small as _solve_small
@@ -89,7 +89,7 @@ from ...kernels.plant import (
 from ...model.collision import UrdfCollisionChecker, default_tip_clearance
 from ...model.hand import Hand, _condition
 
-__all__ = ["Plant", "PlantContact", "PlantEvent", "PlantState", "PlantStep"]
+__all__ = ["Plant", "PlantContact", "PlantState", "PlantStep"]
 
 # the members as module constants for the hot paths (``ContactMode.FIXED`` is a class-attribute
 # lookup through the enum's metaclass, ~0.3 us; a global is ~20 ns); compared with ``is``
@@ -163,28 +163,6 @@ class PlantContact:
                 raise InvalidParameterError("mode", self.mode, "'fixed', 'sliding' or 'separated'") from None
 
 
-@dataclass(frozen=True)
-class PlantEvent:
-    """Something the plant detected.
-
-    Attributes:
-        time: [s].
-        contact: Finger name.
-        kind: :class:`~regrasp.core.events.EventKind` ``SEPARATION``, ``SLIP``, ``STICK``, ``LEFT_EDGE``,
-            ``COLLISION`` or ``SINGULAR`` (equal to its string value, ``"slip"``...).
-        detail: Human-readable numbers.
-        values: The numbers by name: ``link`` (0 proximal, 1 distal) and ``depth`` [m] for a
-            collision, ``normal_force`` [N] for a separation, ``xi`` [m] for a stick or a contact off
-            its edge, ``tangential_force`` and ``normal_force`` [N] for a slip.
-    """
-
-    time: float
-    contact: str
-    kind: EventKind
-    detail: str
-    values: Mapping[str, float] = field(default_factory=dict)
-
-
 @dataclass
 class PlantState:
     """The plant's continuous state and its integrated work terms."""
@@ -215,7 +193,7 @@ class PlantStep:
         xi_dot: Each contact's relative tangential velocity ξ̇ [m/s] after the step.
         modes: Contact modes (:class:`~regrasp.core.contact.ContactMode`) during the step.
         constraint_error: Largest constraint violation [m] after the step.
-        events: Events detected after the step.
+        events: Events detected after the step (:class:`~regrasp.core.events.Event`, source ``PLANT``).
     """
 
     state: PlantState
@@ -224,7 +202,7 @@ class PlantStep:
     xi_dot: np.ndarray
     modes: tuple[ContactMode, ...]
     constraint_error: float
-    events: tuple[PlantEvent, ...] = field(default_factory=tuple)
+    events: tuple[Event, ...] = field(default_factory=tuple)
 
 
 class Plant:
@@ -317,7 +295,7 @@ class Plant:
         self._no_damping = (0.0,) * hand.nq
         self._edge_cache: dict[int, _EdgeGeometry] = {}
         self.state: PlantState | None = None
-        self.events: list[PlantEvent] = []
+        self.events: list[Event] = []
         self.stopped = False
         self.max_constraint_error = 0.0
         #: Whether :meth:`step` runs the compiled kernel.
@@ -815,7 +793,7 @@ class Plant:
                          out[size + 7 * m:], tuple(c.mode for c in self.contacts), last_error, ())
 
     def _event(self, t, i, kind, detail, out, **values):
-        ev = PlantEvent(t, self.hand.fingers[i].name, EventKind(kind), detail, values)
+        ev = Event(t, self.hand.fingers[i].name, EventKind(kind), detail, EventSource.PLANT, values)
         out.append(ev)
         self.events.append(ev)
         if kind in self.stop_on:
@@ -824,7 +802,7 @@ class Plant:
     def _events(self, st: PlantState, tau: tuple, forces, fingers):
         """Events at the step's end ``st`` given the contact forces and the fingers' dynamics there;
         and every contact's (ξ, ξ̇) after them."""
-        out: list[PlantEvent] = []
+        out: list[Event] = []
         V0 = st.V
         X = st.X.tolist()
         c, s = math.cos(X[2]), math.sin(X[2])
@@ -857,7 +835,7 @@ class Plant:
             self._collisions(st, [(f[11] - f[8], f[12] + f[6]) for f in fingers], out)
         return out, (current if st.V is V0 else xis())
 
-    def _collisions(self, st: PlantState, elbows, out: list[PlantEvent]) -> None:
+    def _collisions(self, st: PlantState, elbows, out: list[Event]) -> None:
         r"""Collision events from coal's signed distances of each finger's link shapes.
 
         Coal is skipped for a finger whose links cannot have reached the object since coal last
@@ -887,7 +865,7 @@ class Plant:
                     continue
             self._coal(st, i, posture, out)
 
-    def _coal(self, st: PlantState, i: int, posture, out: list[PlantEvent]) -> None:
+    def _coal(self, st: PlantState, i: int, posture, out: list[Event]) -> None:
         """Finger i's links against the object with coal: a collision event where one penetrates, and the
         finger's new certificate (``posture``: see :meth:`_collisions`)."""
         dist, nearest = self._certify(st.q, st.X, i, posture)

@@ -1083,19 +1083,10 @@ class RolloutRecorder:
         return True
 
     def _log_event(self, ev, step: int) -> None:
-        """One event (an :class:`~regrasp.core.events.Event` or a :class:`~regrasp.plants.project.plant.PlantEvent`) as a text line."""
-        source = getattr(ev, "source", EventSource.PLANT)
-        source = getattr(source, "value", source)
-        try:
-            kind = EventKind(ev.kind)
-        except ValueError:  # a kind the enum does not know: say it, loudly
-            kind, level = str(ev.kind), "WARN"
-        else:
-            level = "WARN" if kind in WARN_KINDS else "INFO"
-        kind = getattr(kind, "value", kind)
-        self._writer.log_now("events", step, float(ev.time),
-                             rr.TextLog(f"t = {ev.time:.4f} s  {source} {ev.contact or '-'}: {kind} ({ev.detail})",
-                                        level=level))
+        """One event (an :class:`~regrasp.core.events.Event`, the plant's or the supervisor's) as a text line."""
+        level = "WARN" if ev.kind in WARN_KINDS else "INFO"
+        self._writer.log_now("events", step, float(ev.time), rr.TextLog(
+            f"t = {ev.time:.4f} s  {ev.source.value} {ev.contact or '-'}: {ev.kind.value} ({ev.detail})", level=level))
 
     def _log_plant_events(self, plant: PlantLike, step: int) -> None:
         events = plant.events
