@@ -34,6 +34,7 @@ import numba
 import numpy as np
 
 from .control import CONTROL_OK, control_step_into, sliding_step_into
+from .decimation import logged
 from .disturbance import actuate_into, measure_into
 from .envelope import envelope_sample_into
 from .monitor import reading_at
@@ -384,7 +385,7 @@ def stretch_into(settings, state, held, xi_model, xi_sensed, integral_x, sliders
         if settings.delayed:
             commands[:] = commands_new
             st.commands = command_count
-        if log_every > 0 and (first_index + k + 1) % log_every == 0:
+        if logged(first_index + k + 1, log_every):
             for i in range(m):
                 for b in range(2):
                     log_predicted[logged, i, b] = control_out[o_forces + 2 * i + b]

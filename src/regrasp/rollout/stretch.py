@@ -32,6 +32,7 @@ import numpy as np
 
 from ..core.contact import coefficients, cone_margin
 from ..dynamics.control import FixedContactController, Proposition3Controller
+from ..kernels.decimation import logged_steps
 from ..kernels.monitor import envelope_arguments
 from ..kernels.stretch import STRETCH_COAL, STRETCH_DONE, STRETCH_SETTINGS, STRETCH_STATE, stretch_into, stretch_log
 from ..plants.project.plant import Plant, PlantStep
@@ -209,7 +210,7 @@ class CompiledStretches:
         done, cleared, worst, last_error = 0, False, 0.0, 0.0
         while done < n:
             s = slice(k0 + done, k0 + n)
-            entries = 0 if every == 0 else (k + done) // every - k // every  # (logged so far)
+            entries = len(logged_steps(k + 1, k + done + 1, every))  # (logged so far)
             taken, status, w, e = stretch_into(
                 settings, run_state, held, xi_model, xi_sensed, integral_x, sliders, intervals, counts,
                 previous_bounds, rates, bound_speed, geometry, samples, scratch, evaluation_counts, schedule_times,
@@ -263,7 +264,7 @@ class CompiledStretches:
         """Hand the recorder the stretch's logged steps (steps k .. k + done - 1, rows k0 ..)."""
         recorder, rows, sup = self.recorder, self.rows, self.supervisor
         every = recorder.decimation
-        indices = np.arange((k + every) // every * every - 1, k + done, every)  # ((index + 1) % every == 0)
+        indices = logged_steps(k + 1, k + done + 1, every) - 1  # (the records' indices: step = index + 1)
         if not indices.size:
             return
         predicted, surface, cone, error, xi, reference, intervals, counts = log
