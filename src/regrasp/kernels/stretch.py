@@ -159,7 +159,7 @@ def stretch_into(settings, state, held, xi_model, xi_sensed, integral_x, sliders
     found no collision at the first step's end. Rows (steps, ...): what
     :class:`regrasp.rollout.result.RolloutRows` keeps, with
     ``static_mu`` the plant's μ_s per contact. ``log``: what a recorder logs of the steps with
-    (``first_index`` + k + 1) % ``log_every`` == 0 (0: none), one entry each in order: the law's predicted forces
+    (:func:`~regrasp.kernels.decimation.logged` at step ``first_index`` + k + 1 and ``log_every``), one entry each in order: the law's predicted forces
     (hand frame and surface frame, (·, m, 2)), its cone margins (·, m), its pose error (·, 3), ξ after the step
     (·, m), the sliders' reference ξ (·, m, NaN elsewhere), the held envelopes' feasible intervals (·, m, k, 2)
     and counts (·, m). A disturbance: ``noise`` (steps, k) the standard normals each step draws, ``slips`` (d + 1,
@@ -188,7 +188,7 @@ def stretch_into(settings, state, held, xi_model, xi_sensed, integral_x, sliders
     new_evaluation = np.empty_like(evaluation_counts)
     margins = np.empty(m)
     reference = np.empty(p)
-    logged = 0
+    entry = 0
     X_m, V_m, xi_m, xi_dot_m, fn_m, ft_m = np.empty(3), np.empty(3), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     slides_m = np.empty(m, np.bool_)
     slips_new, commands_new = np.empty_like(slips), np.empty_like(commands)
@@ -388,16 +388,16 @@ def stretch_into(settings, state, held, xi_model, xi_sensed, integral_x, sliders
         if logged(first_index + k + 1, log_every):
             for i in range(m):
                 for b in range(2):
-                    log_predicted[logged, i, b] = control_out[o_forces + 2 * i + b]
-                    log_surface[logged, i, b] = control_out[o_forces + n2 + 2 * i + b]
-                log_cone[logged, i] = control_out[o_forces + 2 * n2 + i]
-                log_xi[logged, i] = plant_out[size + 6 * m + i]  # (the plant step's ξ after it)
-                log_reference[logged, i] = np.nan
-                log_counts[logged, i] = counts[i]
-                log_intervals[logged, i, :counts[i]] = intervals[i, :counts[i]]
+                    log_predicted[entry, i, b] = control_out[o_forces + 2 * i + b]
+                    log_surface[entry, i, b] = control_out[o_forces + n2 + 2 * i + b]
+                log_cone[entry, i] = control_out[o_forces + 2 * n2 + i]
+                log_xi[entry, i] = plant_out[size + 6 * m + i]  # (the plant step's ξ after it)
+                log_reference[entry, i] = np.nan
+                log_counts[entry, i] = counts[i]
+                log_intervals[entry, i, :counts[i]] = intervals[i, :counts[i]]
             for a in range(3):
-                log_error[logged, a] = control_out[o_error + a]
+                log_error[entry, a] = control_out[o_error + a]
             for c in range(p):
-                log_reference[logged, sliders[c].contact] = reference[c]
-            logged += 1
+                log_reference[entry, sliders[c].contact] = reference[c]
+            entry += 1
     return times.size, STRETCH_DONE, worst, last_err
