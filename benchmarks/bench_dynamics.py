@@ -21,7 +21,8 @@ import numpy as np
 from common import ROOT, median_us, parse_args, sliding_hold
 
 from regrasp import Finger, Grasp, Hand, ReducedModel
-from regrasp.dynamics.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.dynamics.control import Gains
+from regrasp.dynamics.laws import FixedContactController, Proposition1Controller
 
 
 def main() -> None:

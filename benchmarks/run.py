@@ -51,7 +51,7 @@ import numpy as np
 import pinocchio as pin
 from common import ROOT, median_us, parse_args, sliding_hold
 
-import regrasp.envelope.finger_envelope as envelope_module
+import regrasp.envelope.evaluator as envelope_module
 from regrasp import (
     FingerEnvelope,
     Grasp,
@@ -64,8 +64,9 @@ from regrasp import (
     plan_regrasps,
     run_study,
 )
-from regrasp.dynamics.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.dynamics.control import Gains
 from regrasp.dynamics.internal_force.solver import InternalForceSolver
+from regrasp.dynamics.laws import FixedContactController, Proposition1Controller
 from regrasp.kernels import FINGER_TERMS, control_step_into, envelope_sample_into, output_size, plant_step_into
 from regrasp.plants.simulation import sense
 from regrasp.supervisor.settings import MonitorSettings, PaperSettings, SupervisorSettings
@@ -75,7 +76,7 @@ THREE = ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml
 
 def control_kernel_us(controller, args, n: int) -> float:
     """The bare compiled control step (``control_step_into``) with ``controller``'s arguments [µs]."""
-    head, tail, _, size = controller._kernel
+    head, tail, _, size = controller.compiled_arguments
     rows, out = np.array(args, dtype=float), np.empty(size)
     return median_us(lambda: control_step_into(*head, rows[0], rows[1], rows[2], rows[3], rows[4], *tail, out), n)
 
@@ -306,12 +307,12 @@ def main() -> None:
     fixed_qp = FixedContactController(fixed, Gains.critically_damped(20.0, 3), friction=0.5)
     fixed_no = FixedContactController(fixed, Gains.critically_damped(20.0, 3), friction=0.5, internal_force=None)
     out = fixed_qp(X, zero3, X, zero3, zero3)
-    assert out.internal is not None and fixed_qp._kernel is not None  # (the compiled step answers)
+    assert out.internal is not None and fixed_qp.compiled  # (the compiled step answers)
     # the reference path: the controller's Python and the QP on OSQP; its floor: the bare OSQP solve
     fixed_ref = FixedContactController(fixed, Gains.critically_damped(20.0, 3), friction=0.5, compiled=False)
-    fixed_ref._qp = InternalForceSolver(fixed_ref.internal_force, compiled=False)
+    fixed_ref.internal_force_solver = InternalForceSolver(fixed_ref.internal_force, compiled=False)
     fixed_ref(X, zero3, X, zero3, zero3)
-    (raw_osqp,) = [solver for solver in fixed_ref._qp._solvers.values()]
+    (raw_osqp,) = fixed_ref.internal_force_solver.osqp_solvers
     osqp_floor = median_us(lambda: raw_osqp.solve(raise_error=False), n)
 
     third = hand.fingers[0].with_placement(base_in_hand=(0.04, -0.02, np.pi / 2), configuration="left",

@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from regrasp import FingerEnvelope, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
-from regrasp.dynamics.control import Gains, Proposition3Controller
-from regrasp.dynamics.internal_force.solver import InternalForceSettings
+from regrasp.dynamics.control import Gains
+from regrasp.dynamics.internal_force.settings import InternalForceSettings
+from regrasp.dynamics.laws import Proposition3Controller
 from regrasp.dynamics.sliding import sliding_feasibility
 from regrasp.plants.closed_loop import run_closed_loop
 

@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from regrasp import Friction, Grasp, load_scenario
+from regrasp.dynamics.plotting import plot_slide_feasibility
 from regrasp.dynamics.sliding import sliding_feasibility
-from regrasp.envelope.plotting import plot_slide_feasibility
 
 HERE = Path(__file__).resolve().parent
 

@@ -21,7 +21,8 @@ import time
 from pathlib import Path
 
 from regrasp import Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
-from regrasp.dynamics.control import Gains, Proposition3Controller
+from regrasp.dynamics.control import Gains
+from regrasp.dynamics.laws import Proposition3Controller
 from regrasp.plants.closed_loop import run_closed_loop
 from regrasp.rollout.recording.recorder import RolloutRecorder
 

@@ -14,7 +14,7 @@ import argparse
 from pathlib import Path
 
 from regrasp import NoScheduleError, RegraspSettings, load_scenario, plan_regrasps, plan_scenario
-from regrasp.envelope.plotting import plot_schedule
+from regrasp.schedule.plotting import plot_schedule
 
 HERE = Path(__file__).resolve().parent
 

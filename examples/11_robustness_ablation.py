@@ -30,7 +30,7 @@ from statistics import median
 
 from regrasp import load_scenario
 from regrasp.core.contact import DEFAULT_CONE_MARGIN
-from regrasp.dynamics.internal_force.solver import InternalForceSettings
+from regrasp.dynamics.internal_force.settings import InternalForceSettings
 from regrasp.schedule.planner import RegraspSettings, plan_regrasps
 from regrasp.study.study import Perturbation, run_study
 from regrasp.supervisor.settings import SupervisorSettings

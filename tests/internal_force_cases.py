@@ -22,14 +22,9 @@ from regrasp.core.exceptions import (
     SingularFingerError,
     UnreachableError,
 )
-from regrasp.dynamics.control import (
-    FixedContactController,
-    Gains,
-    Proposition1Controller,
-)
-from regrasp.dynamics.internal_force.solver import (
-    InternalForceSettings,
-)
+from regrasp.dynamics.control import Gains
+from regrasp.dynamics.internal_force.settings import InternalForceSettings
+from regrasp.dynamics.laws import FixedContactController, Proposition1Controller
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml"

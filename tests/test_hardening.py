@@ -109,7 +109,8 @@ def test_a_bad_input_is_a_typed_one_line_error_or_a_valid_result(case):
 
 def test_a_closed_loop_or_a_rollout_of_a_billion_seconds_is_refused():
     from regrasp import build_rollout
-    from regrasp.dynamics.control import FixedContactController, Gains
+    from regrasp.dynamics.control import Gains
+    from regrasp.dynamics.laws import FixedContactController
     from regrasp.dynamics.reduced import ReducedModel
     from regrasp.plants import run_closed_loop
 

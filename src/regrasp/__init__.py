@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from .core.polygon import ConvexPolygon  # noqa: F401
     from .core.trajectory import EllipseTrajectory, WaypointTrajectory  # noqa: F401
     from .dynamics.grasp import Grasp  # noqa: F401
-    from .dynamics.internal_force.solver import InternalForceSettings  # noqa: F401
+    from .dynamics.internal_force.settings import InternalForceSettings  # noqa: F401
     from .dynamics.reduced import ReducedModel  # noqa: F401
     from .envelope.finger_envelope import FingerEnvelope  # noqa: F401
     from .envelope.planner import plan, plan_scenario  # noqa: F401

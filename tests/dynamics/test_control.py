@@ -14,14 +14,15 @@ import pytest
 
 from regrasp import Finger, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
 from regrasp.core.exceptions import InvalidParameterError
-from regrasp.dynamics.control import (
+from regrasp.dynamics.control import Gains
+from regrasp.dynamics.internal_force.problem import InternalForceInfeasibleError
+from regrasp.dynamics.internal_force.settings import ConeEdge, InternalForceSettings
+from regrasp.dynamics.laws import (
     FixedContactController,
-    Gains,
     Proposition1Controller,
     Proposition2Controller,
     Proposition3Controller,
 )
-from regrasp.dynamics.internal_force.solver import ConeEdge, InternalForceInfeasibleError, InternalForceSettings
 from regrasp.plants.closed_loop import run_closed_loop
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -177,9 +178,9 @@ def test_proposition3_force_distribution_reduces_to_the_papers_P_for_two_fingers
         S_dot = np.append(rng.normal(0, 0.01, 3), speed)
         S_d = S + rng.normal(0, 1e-3, 4)
         out = law(S, S_dot, S_d, S_dot, rng.normal(0, 0.5, 4))
-        terms = model._terms(S.tolist(), S_dot.tolist())
-        st = model._state_from(S, S_dot, terms)
-        tau, f_hat, forces, _ = law._distributed_torque(st, terms, out.command, law._direction)
+        terms = model.terms(S.tolist(), S_dot.tolist())
+        st = model.state_from_terms(S, S_dot, terms)
+        tau, f_hat, forces, _ = law.distributed_torque(st, terms, out.command, law.directions)
         scale = np.abs(out.tau).max()
         assert np.abs(tau - out.tau).max() < 1e-9 * scale
         assert abs(f_hat[0] - out.friction_estimate[0]) < 1e-9 * scale

@@ -35,8 +35,10 @@ import scipy.optimize
 from factories import random_polygon
 from regrasp import Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
 from regrasp.core.exceptions import InvalidParameterError
-from regrasp.dynamics.control import Gains, Proposition3Controller
-from regrasp.dynamics.internal_force.solver import InternalForceSettings, InternalForceSolver
+from regrasp.dynamics.control import Gains
+from regrasp.dynamics.internal_force.settings import InternalForceSettings
+from regrasp.dynamics.internal_force.solver import InternalForceSolver
+from regrasp.dynamics.laws import Proposition3Controller
 from regrasp.dynamics.sliding import SlideFeasibility, sliding_feasibility
 from regrasp.plants.closed_loop import run_closed_loop
 
@@ -469,8 +471,8 @@ def test_figure_3_4_png(tmp_path):
     import numpy as np
 
     from regrasp import Grasp, load_scenario
+    from regrasp.dynamics.plotting import plot_slide_feasibility
     from regrasp.dynamics.sliding import sliding_feasibility
-    from regrasp.envelope.plotting import plot_slide_feasibility
 
     root = __import__("pathlib").Path(__file__).resolve().parents[2]
     sc = load_scenario(root / "examples" / "scenarios" / "paper_trajectory_2.toml")

@@ -37,7 +37,8 @@ from factories import make_case, make_finger, perp2, rot
 from regrasp import load_scenario
 from regrasp.core.exceptions import InvalidParameterError
 from regrasp.core.polygon import ConvexPolygon
-from regrasp.envelope.finger_envelope import Condition, FingerEnvelope
+from regrasp.envelope.finger_envelope import FingerEnvelope
+from regrasp.envelope.line import Condition
 from regrasp.envelope.tracker import EnvelopeTracker
 
 N_CASES = 200
@@ -465,7 +466,7 @@ def test_closed_form_reachable_set_matches_the_elbow_margin_classifier():
     membership must equal g(midpoint) >= 0, and the ends must be candidates."""
     import math
 
-    from regrasp.envelope.finger_envelope import elbow_margin, reachable_on_line
+    from regrasp.envelope.line import elbow_margin, reachable_on_line
 
     rng = np.random.default_rng(20261121)
     for _ in range(20000):
@@ -499,17 +500,17 @@ def test_closed_form_reachable_set_matches_the_elbow_margin_classifier():
 def test_float_helpers_match_numpy():
     """The envelope's float helpers reproduce numpy's linspace and wrap_angle bit for bit."""
     from regrasp.core.planar import wrap_angle
-    from regrasp.envelope.finger_envelope import _linspace, _wrap
+    from regrasp.envelope.floats import linspace_floats, wrap_angle_float
 
     rng = np.random.default_rng(7)
     for _ in range(2000):
         lo = rng.normal(0.0, 0.1)
         hi = lo + abs(rng.normal(0.0, 0.1)) * 10.0 ** rng.integers(-8, 1)
         num = int(rng.integers(2, 60))
-        assert _linspace(lo, hi, num) == np.linspace(lo, hi, num).tolist()
+        assert linspace_floats(lo, hi, num) == np.linspace(lo, hi, num).tolist()
     angles = np.concatenate([rng.uniform(-20.0, 20.0, 2000), np.pi * np.arange(-6, 7), [1e-300, -0.0]])
     for angle in angles.tolist():
-        assert _wrap(angle) == wrap_angle(angle)
+        assert wrap_angle_float(angle) == wrap_angle(angle)
 
 
 @pytest.mark.parametrize("bad", [[0.0, 0.1], [0.0, np.nan, 0.0], np.array([0.0, 0.1, np.inf]), "abc",

@@ -6,9 +6,10 @@ import pytest
 from internal_force_cases import EDGES, KINDS, Y0, make_hand, polygon
 from regrasp.core.contact import Friction
 from regrasp.core.exceptions import SingularFingerError, UnreachableError
-from regrasp.dynamics.control import FixedContactController, Gains, Proposition1Controller
+from regrasp.dynamics.control import Gains
 from regrasp.dynamics.grasp import Grasp
-from regrasp.dynamics.internal_force.solver import InternalForceSettings
+from regrasp.dynamics.internal_force.settings import InternalForceSettings
+from regrasp.dynamics.laws import FixedContactController, Proposition1Controller
 from regrasp.dynamics.reduced import ReducedModel
 
 
@@ -28,7 +29,7 @@ def controllers(kind, seed, **kwargs):
 @pytest.mark.parametrize("kind", list(KINDS))
 def test_compiled_control_step_equals_the_reference_path(kind, qp):
     (fast, reference), model, rng = controllers(kind, 7, internal_force=qp)
-    assert fast._kernel is not None and reference._kernel is None
+    assert fast.compiled and not reference.compiled
     compared = answered = 0
     for _ in range(40):
         n = model.n
@@ -46,7 +47,7 @@ def test_compiled_control_step_equals_the_reference_path(kind, qp):
             with pytest.raises(type(exc)):
                 fast(*args)
             continue
-        answered += fast._call_compiled(np.array(args, dtype=float), 0.0) is not None  # (no state: a pure step)
+        answered += fast.compiled_step(np.array(args, dtype=float), 0.0) is not None  # (no state: a pure step)
         got = fast(*args)
         scale = max(1.0, np.abs(expected.tau).max())
         np.testing.assert_allclose(got.tau, expected.tau, rtol=0, atol=1e-10 * scale)
@@ -68,9 +69,9 @@ def test_compiled_control_step_equals_the_reference_path(kind, qp):
 
 def test_a_law_that_estimates_friction_or_a_reference_model_takes_the_reference_path():
     (fast, _), model, _ = controllers("m3p1-left", 3)
-    assert fast._kernel is not None
+    assert fast.compiled
     reference_model = ReducedModel(model.hand, model.grasp, model.xi, compiled=False)
-    assert Proposition1Controller(reference_model, fast.gains, fast.friction)._kernel is None
+    assert not Proposition1Controller(reference_model, fast.gains, fast.friction).compiled
 
 
 @pytest.mark.parametrize("reversible", [True, False])
@@ -80,7 +81,7 @@ def test_a_law_that_estimates_friction_or_a_reference_model_takes_the_reference_
 def test_compiled_sliding_step_equals_the_reference_path(kind, qp, reversible):
     """Proposition 3 with three fingers: the same torques, forces, friction estimates and sliding directions
     (which both update, step after step, from the same measured rates), compiled or not."""
-    from regrasp.dynamics.control import Proposition3Controller
+    from regrasp.dynamics.laws import Proposition3Controller
 
     m, modes = KINDS[kind]
     rng = np.random.default_rng(11)
@@ -90,7 +91,7 @@ def test_compiled_sliding_step_equals_the_reference_path(kind, qp, reversible):
     fast = Proposition3Controller(model, gains, mu, internal_force=qp, reversible=reversible, direction=-1.0)
     reference = Proposition3Controller(model, gains, mu, internal_force=qp, reversible=reversible, direction=-1.0,
                                        compiled=False)
-    assert fast._kernel is not None and reference._kernel is None
+    assert fast.compiled and not reference.compiled
     compared = 0
     for _ in range(40):
         n = model.n

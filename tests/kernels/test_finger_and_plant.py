@@ -66,10 +66,11 @@ def test_finger_terms_equal_pinocchio_on_general_fingers(seed):
         hand = Hand(fingers, gravity_in_hand=gravity, damping=damped, link_mass_scale=rng.uniform(0.5, 2.0))
         assert hand.kernel_parameters is not None
         # an independent draw of states, and the armature Pinocchio adds to M's diagonal
-        model = pin.Model(hand._hand_model)
+        model = pin.Model(hand.pinocchio_model)
         model.armature = rng.uniform(0, 1e-4, model.nv)
-        params = np.stack([finger_parameters(model, tip, 2 * i + 1) for i, tip in enumerate(hand._hand_tips)])
-        worst, where = largest_disagreement(model, hand._hand_tips, params, gravity, damped, states=32, seed=seed + 100)
+        params = np.stack([finger_parameters(model, tip, 2 * i + 1) for i, tip in enumerate(hand.tip_frame_ids)])
+        worst, where = largest_disagreement(model, hand.tip_frame_ids, params, gravity, damped, states=32,
+                                            seed=seed + 100)
         assert worst <= KERNEL_TOLERANCE, where
 
 
@@ -114,8 +115,8 @@ def test_reference_terms_agree_with_the_hand():
     hand = Hand([c.finger for c in sc.contacts])
     q, v = np.linspace(-1, 1, 6), np.linspace(2, -2, 6)
     dyn = hand.dynamics(q, v)
-    model = hand._hand_model
-    ref = reference_terms(model, model.createData(), hand._hand_tips[1], 3, q, v, True)
+    model = hand.pinocchio_model
+    ref = reference_terms(model, model.createData(), hand.tip_frame_ids[1], 3, q, v, True)
     np.testing.assert_allclose(ref["M"], dyn.mass_matrix[2:4, 2:4], atol=1e-15)
     np.testing.assert_allclose(ref["N"], dyn.nonlinear[2:4], atol=1e-15)
     np.testing.assert_allclose(ref["Jdv"], dyn.jacobian_dot_v[2:4], atol=1e-15)
@@ -232,7 +233,7 @@ def test_compiled_reduced_terms_equal_the_reference(modes):
     for _ in range(25):
         S = np.concatenate([[0.0, 0.12, 0.0] + rng.uniform(-0.005, 0.005, 3), rng.uniform(-0.01, 0.01, p)])
         S_dot = rng.uniform(-0.05, 0.05, 3 + p)
-        a, b = ref._terms(S.tolist(), S_dot.tolist()), fast._terms(S.tolist(), S_dot.tolist())
+        a, b = ref.terms(S.tolist(), S_dot.tolist()), fast.terms(S.tolist(), S_dot.tolist())
         for name in a._fields:
             x, y = np.asarray(getattr(a, name), dtype=float), np.asarray(getattr(b, name), dtype=float)
             assert x.shape == y.shape, name
@@ -249,13 +250,13 @@ def test_compiled_reduced_terms_raise_what_the_reference_raises():
     far = [0.0, 0.5, 0.0]  # the object out of every finger's reach
     for model in (ref, fast):
         with pytest.raises(UnreachableError) as info:
-            model._terms(far, [0.0] * 3)
+            model.terms(far, [0.0] * 3)
         assert info.value.finger == "finger1"
     errors = []
     for model in (ref, fast):  # the object drawn down until a finger is out of reach
         for y in np.linspace(0.1, 0.3, 400):
             try:
-                model._terms([0.0, float(y), 0.0], [0.0] * 3)
+                model.terms([0.0, float(y), 0.0], [0.0] * 3)
             except (SingularFingerError, UnreachableError) as exc:
                 errors.append((type(exc).__name__, exc.finger, round(float(y), 6)))
                 break
@@ -264,6 +265,6 @@ def test_compiled_reduced_terms_raise_what_the_reference_raises():
     found = []
     for model in strict:  # a threshold every finger exceeds
         with pytest.raises(SingularFingerError) as info:
-            model._terms([0.0, 0.12, 0.0], [0.0] * 3)
+            model.terms([0.0, 0.12, 0.0], [0.0] * 3)
         found.append((info.value.finger, info.value.condition))
     assert found[0][0] == found[1][0] and found[0][1] == pytest.approx(found[1][1], rel=1e-12)

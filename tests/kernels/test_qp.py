@@ -11,7 +11,8 @@ import scipy.optimize
 import scipy.sparse as sp
 
 from internal_force_cases import KINDS, random_case, worst_violation
-from regrasp.dynamics.internal_force.solver import InternalForceInfeasibleError, InternalForceSolver
+from regrasp.dynamics.internal_force.problem import InternalForceInfeasibleError
+from regrasp.dynamics.internal_force.solver import InternalForceSolver
 from regrasp.kernels.force import null_basis
 from regrasp.kernels.qp import INFEASIBLE, SOLVED, diagonal_qp
 

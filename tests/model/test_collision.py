@@ -436,7 +436,7 @@ def test_certified_free_postures_give_coal_verdicts(seed):
         postures += [q + rng.normal(0.0, 0.05, size=2) for _ in range(20)]  # small jumps
         postures += [rng.uniform(-np.pi, np.pi, size=2) for _ in range(20)]  # large jumps
         checker.set_object_pose(*pose)
-        stateful = [checker.links_collide(*checker._posture(p)) for p in postures]
+        stateful = [checker.links_collide(*checker.link_frames(p)[2:].tolist()) for p in postures]
         fresh = [checker.collides(p, pose) for p in postures]  # resets the certificates each time
         assert stateful == fresh
 
@@ -457,7 +457,7 @@ def test_kept_certificates_give_coal_verdicts_while_the_object_moves(seed):
             q, pose = q + q_step, pose + pose_step
             checker.set_object_pose(*pose)
             before = [c for c in kept]
-            verdict = checker.links_collide_kept(kept, *checker._posture(q))
+            verdict = checker.links_collide_kept(kept, *checker.link_frames(q)[2:].tolist())
             coal_calls += sum(a is not b for a, b in zip(before, kept))
             assert verdict == checker.collides(q, pose)  # fresh certificates each time
         assert coal_calls < 2 * 150  # (the certificates were used)

@@ -137,7 +137,8 @@ def test_whole_hand_pass_matches_one_pinocchio_model_per_finger(seed):
     dyn = hand.dynamics(q, v)
     zero = np.zeros(2)
     for i, f in enumerate(hand.fingers):
-        model, data, fid, sl = hand._models[i], hand._models[i].createData(), f.tip_frame_id, slice(2 * i, 2 * i + 2)
+        model, fid, sl = hand.finger_models[i], f.tip_frame_id, slice(2 * i, 2 * i + 2)
+        data = model.createData()
         qi, vi = q[sl], v[sl]
         np.testing.assert_allclose(dyn.mass_matrix[sl, sl], pin.crba(model, data, qi), rtol=1e-13, atol=1e-18)
         nle = pin.nonLinearEffects(model, data, qi, vi) + np.asarray(model.damping) * vi

@@ -228,7 +228,7 @@ def test_a_one_step_delay_slips_issue_12s_supervisor_and_not_todays(three_finger
     fingers end a slide at 1.366 s with 0.24 N of normal force; issue 12's supervisor settles them 0.012 N
     inside their cones, the late settling torque lands on contacts that already stuck, and finger 1 slips. The
     robust settings (a settling margin in newtons, the slide held until the torques in flight are its own) hold."""
-    from regrasp.dynamics.internal_force.solver import InternalForceSettings
+    from regrasp.dynamics.internal_force.settings import InternalForceSettings
     from regrasp.model.noise import ActuatorNoise
     from regrasp.supervisor.settings import SupervisorSettings
 

@@ -17,7 +17,7 @@ from factories import rot
 from regrasp import Friction, Grasp
 from regrasp.core.exceptions import InvalidParameterError
 from regrasp.core.polygon import ConvexPolygon
-from regrasp.dynamics.internal_force.solver import InternalForceSettings
+from regrasp.dynamics.internal_force.settings import InternalForceSettings
 from regrasp.dynamics.sliding import sliding_feasibility
 from regrasp.schedule.slide_rule import two_finger_slide_range
 

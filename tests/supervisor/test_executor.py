@@ -16,7 +16,7 @@ from regrasp.core.events import EventKind
 from regrasp.core.exceptions import InvalidParameterError
 from regrasp.core.measurement import Measurement
 from regrasp.dynamics.grasp import Grasp
-from regrasp.dynamics.internal_force.solver import InternalForceSettings
+from regrasp.dynamics.internal_force.settings import InternalForceSettings
 from regrasp.supervisor.executor import SlideExecutor
 from regrasp.supervisor.settings import ExecutorSettings
 from regrasp.supervisor.types import ContactPhase, SlideOrder

@@ -252,7 +252,7 @@ def test_a_rejected_slide_gets_another_contact_to_enable_it():
     (prime,) = [e for e in out.events if e.kind == "prime"]
     assert prime.contact == "palm" and "to let finger1 slide -xi" in prime.detail
     assert out.phases[2] is ContactPhase.PRIMING and out.phases[0] is ContactPhase.FIXED
-    (plo, phi), _ = sup.policy._kept_feasible(0, t, tuple(out.bounds[0]))  # what the policy aims finger1 at
+    (plo, phi), _ = sup.policy.kept_feasible(0, t, tuple(out.bounds[0]))  # what the policy aims finger1 at
     palm_target, finger1_target = out.targets[2], 0.5 * (plo + phi)
     assert palm_target > xi[2] + 1e-3  # +ξ on the bottom edge: towards finger 1's side
 

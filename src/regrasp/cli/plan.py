@@ -152,7 +152,8 @@ def _cmd_plan(args) -> int:
             error = exc
     figures = []
     if args.plot:
-        from ..envelope.plotting import plot_schedule, write_plan_figures
+        from ..envelope.plotting import write_plan_figures
+        from ..schedule.plotting import plot_schedule
 
         figures = write_plan_figures(result, args.plot)
         if schedule is not None:

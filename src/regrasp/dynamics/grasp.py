@@ -88,9 +88,10 @@ class Grasp:
         self._tangents = np.array([e.xi_direction for e in self.edges])
         self._normals = np.array([e.inward_normal for e in self.edges])
         self._frames0 = np.stack([np.column_stack([n, t]) for n, t in zip(self._normals, self._tangents)])
-        #: per contact, as floats for scalar hot paths: (ξ origin, ξ direction, inward normal), object frame
-        self._contact_constants = [tuple(float(v) for v in (*o, *t, *n))
-                                   for o, t, n in zip(self._origins, self._tangents, self._normals)]
+        #: Per contact, as floats for scalar hot paths: its edge's ξ origin [m], ξ direction and inward normal,
+        #: (o_x, o_y, t_x, t_y, n_x, n_y), object frame.
+        self.contact_constants: tuple[tuple[float, ...], ...] = tuple(
+            tuple(float(v) for v in (*o, *t, *n)) for o, t, n in zip(self._origins, self._tangents, self._normals))
         bv = np.zeros((2 * self.m, self.p))
         for j, i in enumerate(self.sliding):
             bv[2 * i + 1, j] = 1.0

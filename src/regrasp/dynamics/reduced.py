@@ -43,7 +43,7 @@ from ..kernels.reduced import UNREACHABLE, contact_edges, ik_parameters, reduced
 from ..model.hand import Hand, HandDynamics
 from .grasp import Grasp
 
-__all__ = ["ReducedModel", "ReducedState"]
+__all__ = ["ReducedModel", "ReducedState", "ReducedTerms"]
 
 
 @dataclass(frozen=True)
@@ -78,11 +78,12 @@ class ReducedState:
     hand: HandDynamics
 
 
-class _Terms(NamedTuple):
-    """:class:`ReducedState`'s quantities as floats (hot paths; H as an array): per joint or per row of A, or per
-    finger: ``tips``, ``tip_velocities`` (x, y); ``jacobians``, ``inverses`` J_i and J_i^{-1} as
-    row-major (a, b, c, d); ``masses`` M_i's (m00, m01, m11); ``frames`` the surface frame (n_x, n_y,
-    t_x, t_y) in the hand frame."""
+class ReducedTerms(NamedTuple):
+    """:class:`ReducedState`'s quantities as floats (hot paths; H as an array), hand frame, SI units as there:
+    per contact ``xi``, ``xi_dot``; per joint ``q``, ``q_dot``, ``h_dot_s_dot`` (Ḣ Ṡ), ``nonlinear`` (N) and
+    ``jdv`` (J̇ q̇, two per finger); ``a_rows`` the rows of A = [G^T | R_f B_v]; per finger: ``tips``,
+    ``tip_velocities`` (x, y); ``jacobians``, ``inverses`` J_i and J_i^{-1} as row-major (a, b, c, d);
+    ``masses`` M_i's (m00, m01, m11); ``frames`` the surface frame (n_x, n_y, t_x, t_y)."""
 
     xi: list
     xi_dot: list
@@ -111,8 +112,9 @@ class ReducedModel:
         object_mass: [kg]; default: the polygon's.
         object_inertia: [kg m^2] about the centre of mass; default: the polygon's.
         compiled: Evaluate the terms with the compiled kernel (:mod:`regrasp.kernels.reduced`; the same
-            equations, ``tests/test_kernels.py`` checks it against the reference path). None (default): when
-            the hand's kernels agree with Pinocchio; False: the reference path (Pinocchio, plain floats).
+            equations, ``tests/kernels/test_finger_and_plant.py`` checks it against the reference path). None
+            (default): when the hand's kernels agree with Pinocchio; False: the reference path (Pinocchio, plain
+            floats).
     """
 
     def __init__(self, hand: Hand, grasp: Grasp, xi: ArrayLike, *, object_mass: float | None = None,
@@ -194,17 +196,18 @@ class ReducedModel:
 
     def _state(self, S: np.ndarray, S_dot: np.ndarray) -> ReducedState:
         """:meth:`state` on validated (n,) arrays."""
-        return self._state_from(S, S_dot, self._terms(S.tolist(), S_dot.tolist()))
+        return self.state_from_terms(S, S_dot, self.terms(S.tolist(), S_dot.tolist()))
 
-    def _terms(self, s_list: list, sd_list: list) -> "_Terms":
-        r"""The model's quantities at (S, Ṡ) (lists of floats) as floats (hot paths; see :class:`_Terms`).
+    def terms(self, s_list: list[float], sd_list: list[float]) -> ReducedTerms:
+        r"""The model's quantities at (S, Ṡ) (lists of n floats, not validated) as floats (hot paths; see
+        :class:`ReducedTerms`); raises UnreachableError or SingularFingerError as :meth:`state` does.
 
         Scalar arithmetic (m is 2 or 3: numpy's per-call cost would dominate). Each finger is a planar
         chain of revolute joints about z (validated by :class:`~regrasp.model.finger.Finger`), so its tip
         Jacobian's columns are :math:`e_z \times (p - o_1)` and :math:`e_z \times (p - o_2)` (o_1 joint
         1's axis, o_2 the elbow, p the tip, on its contact point) and :math:`\dot J\dot q = -\dot q_1^2
         (o_2 - o_1) - (\dot q_1 + \dot q_2)^2 (p - o_2)`; M and N come from Pinocchio
-        (:meth:`Hand._mass_blocks_and_bias`).
+        (:meth:`~regrasp.model.hand.Hand.mass_blocks_and_bias`).
         """
         if self.compiled:
             return self._terms_compiled(np.array(s_list), np.array(sd_list))
@@ -218,14 +221,14 @@ class ReducedModel:
         zeros = [0.0] * (n - 3)
         q, q_dot, tips, tip_velocities, a_rows, h_rows, a_dot, jacobians, inverses, frames, elbows = (
             [], [], [], [], [], [], [], [], [], [], [])
-        for i, (ox, oy, tx, ty, nx, ny) in enumerate(grasp._contact_constants):
+        for i, (ox, oy, tx, ty, nx, ny) in enumerate(grasp.contact_constants):
             cx, cy = ox + xi[i] * tx, oy + xi[i] * ty
             rx, ry = c * cx - s * cy, s * cx + c * cy  # lever arm r_i = R c_i(ξ_i)
             nx, ny = c * nx - s * ny, s * nx + c * ny  # surface frame [n_i t_i] = R [n°_i t°_i]
             tx, ty = c * tx - s * ty, s * tx + c * ty
             px, py = x + rx, y + ry  # the contact point, where the tip is
             finger = hand.fingers[i]
-            q1, q2, ex, ey = finger._joint_angles(px, py, elbow=True)
+            q1, q2, ex, ey = finger.joint_angles(px, py, elbow=True)
             o1x, o1y = finger.joint1_in_hand_floats
             ja, jb, jc, jd = o1y - py, ey - py, px - o1x, px - ex  # J_i = [e_z x (p - o_1), e_z x (p - o_2)]
             det = ja * jd - jb * jc
@@ -256,8 +259,8 @@ class ReducedModel:
             # Ȧ Ṡ = Ġ^T Ẋ + Ṙ_f B_v ξ̇: ω ⊥ṙ_i + ω ξ̇_i ⊥t_i with ṙ_i = ω ⊥r_i + ξ̇_i t_i
             a_dot += (-omega * omega * rx - 2.0 * omega * xi_dot[i] * ty,
                       -omega * omega * ry + 2.0 * omega * xi_dot[i] * tx)
-        hand._check_singular_blocks(q, jacobians)
-        masses, nonlinear = hand._mass_blocks_and_bias(q, q_dot)
+        hand.check_singular_blocks(q, jacobians)
+        masses, nonlinear = hand.mass_blocks_and_bias(q, q_dot)
         jdv, h_dot_s_dot = [], []
         for i, ((i00, i01, i10, i11), (px, py), (o1x, o1y, ex, ey)) in enumerate(zip(inverses, tips, elbows)):
             v0, v1 = q_dot[2 * i], q_dot[2 * i + 1]
@@ -266,11 +269,11 @@ class ReducedModel:
             jdv += (j0, j1)
             b0, b1 = a_dot[2 * i] - j0, a_dot[2 * i + 1] - j1
             h_dot_s_dot += (i00 * b0 + i01 * b1, i10 * b0 + i11 * b1)  # Ḣ Ṡ = J^-1 (Ȧ Ṡ - J̇ q̇)
-        return _Terms(xi, xi_dot, q, q_dot, tips, tip_velocities, a_rows, np.array(h_rows), h_dot_s_dot, jacobians,
-                      inverses, masses, nonlinear, jdv, frames)
+        return ReducedTerms(xi, xi_dot, q, q_dot, tips, tip_velocities, a_rows, np.array(h_rows), h_dot_s_dot,
+                            jacobians, inverses, masses, nonlinear, jdv, frames)
 
-    def _terms_compiled(self, s: np.ndarray, sd: np.ndarray) -> "_Terms":
-        """:meth:`_terms` from the compiled kernel (:func:`~regrasp.kernels.reduced.reduced_terms`)."""
+    def _terms_compiled(self, s: np.ndarray, sd: np.ndarray) -> ReducedTerms:
+        """:meth:`terms` from the compiled kernel (:func:`~regrasp.kernels.reduced.reduced_terms`)."""
         fingers, iks, edges, columns = self._kernel_constants
         hand = self.hand
         (status, bad, distance, xi, xi_dot, q, q_dot, tips, tip_vel, a_rows, h_rows, h_dot, jac, inv, mass, nonlinear,
@@ -282,8 +285,8 @@ class ReducedModel:
                                    float(distance), (float(k["inner"]), float(k["outer"])))
         q_list, jacobians = q.tolist(), jac.tolist()
         if not (conds <= hand.singular_threshold).all():  # (NaN too)
-            hand._check_singular_blocks(q_list, jacobians)
-        return _Terms(xi.tolist(), xi_dot.tolist(), q_list, q_dot.tolist(), tips.tolist(), tip_vel.tolist(),
+            hand.check_singular_blocks(q_list, jacobians)
+        return ReducedTerms(xi.tolist(), xi_dot.tolist(), q_list, q_dot.tolist(), tips.tolist(), tip_vel.tolist(),
                       a_rows.tolist(), h_rows, h_dot.tolist(), jacobians, inv.tolist(), mass.tolist(),
                       nonlinear.tolist(), jdv.tolist(), frames.tolist())
 
@@ -291,8 +294,8 @@ class ReducedModel:
         """Contact i's point [m] (hand frame) at the pose of S with the contacts at ``xi``."""
         return self.grasp.points(s[:3], xi)[i]
 
-    def _state_from(self, S: np.ndarray, S_dot: np.ndarray, terms: "_Terms") -> ReducedState:
-        """The :class:`ReducedState` of :meth:`_terms` at (S, Ṡ)."""
+    def state_from_terms(self, S: np.ndarray, S_dot: np.ndarray, terms: ReducedTerms) -> ReducedState:
+        """The :class:`ReducedState` at (S, Ṡ) ((n,) arrays, not validated) of their :meth:`terms`."""
         nq = self.hand.nq
         A = np.array(terms.a_rows)
         R_f = self._identity.copy()

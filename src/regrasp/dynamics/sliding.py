@@ -18,7 +18,7 @@ contact away past its static cone.
 
 With m = 2 the system is square and f is unique (the paper's P of eq. 3.4.9); with more
 fingers the least-squeeze f is found by the same QP as the internal force
-(:mod:`regrasp.dynamics.internal_force.solver`). For the paper's Figure 3.4, a block held against gravity,
+(:mod:`regrasp.dynamics.internal_force.problem`). For the paper's Figure 3.4, a block held against gravity,
 the predicate allows a slide in one direction and not in the other.
 """
 
@@ -34,13 +34,9 @@ from ..core.contact import ContactMode, FrictionLike, as_frictions, cone_margin
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import as_finite_array, as_finite_float, as_inertia, as_integer, as_mass, as_sign, expect_type
 from .grasp import Grasp
-from .internal_force.solver import (
-    InternalForceInfeasibleError,
-    InternalForceSettings,
-    InternalForceSolver,
-    build_internal_force_qp,
-    solve_internal_force_qp,
-)
+from .internal_force.problem import InternalForceInfeasibleError, build_internal_force_qp, solve_internal_force_qp
+from .internal_force.settings import InternalForceSettings
+from .internal_force.solver import InternalForceSolver
 
 __all__ = ["SlideFeasibility", "SlideObstacle", "sliding_feasibility"]
 

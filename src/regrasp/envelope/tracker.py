@@ -9,7 +9,8 @@ bisection of every flip of coal's verdict. :class:`EnvelopeTracker` holds the la
 and re-locates each cut near where it was:
 
 1. the closed-form part (line, condition, reachable set, reachable ∩ edge) is computed exactly as
-   :meth:`~regrasp.envelope.finger_envelope.FingerEnvelope.at` does (the ``ideal`` feasible set only on a fallback);
+   :meth:`~regrasp.envelope.finger_envelope.FingerEnvelope.at` does, by the envelope's
+   :class:`~regrasp.envelope.evaluator.EnvelopeEvaluator` (the ``ideal`` feasible set only on a fallback);
 2. if the *structure* is unchanged — the same condition, the same number of reachable pieces, of
    pieces of reachable ∩ edge and of tip positions inside each where link 1 passes through a vertex
    (the ``ideal`` set's only cuts), and coal's verdict at both ends of every piece and at its
@@ -20,9 +21,10 @@ and re-locates each cut near where it was:
    :math:`\tau` this costs two collision queries per cut. The queries use collision certificates
    that outlive the object pose
    (:meth:`~regrasp.model.collision.UrdfCollisionChecker.links_collide_kept`), so coal runs mostly at
-   the cuts. On the compiled path (:attr:`FingerEnvelope.compiled <regrasp.envelope.finger_envelope.FingerEnvelope.compiled>`)
-   each query is one closed-form kernel call instead, and a fallback takes ``at``'s cuts from the same
-   kernel (:meth:`~regrasp.envelope.finger_envelope.FingerEnvelope.urdf_cuts`);
+   the cuts. On the compiled path
+   (:attr:`FingerEnvelope.compiled <regrasp.envelope.finger_envelope.FingerEnvelope.compiled>`) each query is one
+   closed-form kernel call instead, and a fallback takes ``at``'s cuts from the same kernel
+   (:meth:`~regrasp.envelope.finger_envelope.FingerEnvelope.urdf_cuts`);
 3. it falls back to the full ``at`` computation when anything is ambiguous: the first call, a pose
    jump above ``max_pose_step``, any change of the structure, a search that leaves the piece or
    goes farther than one grid step of ``at``, or two cuts closer than one grid step of ``at`` plus
@@ -50,8 +52,11 @@ from typing import NamedTuple
 from numpy.typing import ArrayLike
 
 from ..core.exceptions import InvalidParameterError
+from ..core.intervals import Intervals
 from ..core.validation import as_positive_float
-from .finger_envelope import EnvelopeSample, FingerEnvelope, _pose_floats, _urdf_pieces
+from .evaluator import FreeTest, UrdfCuts, urdf_pieces
+from .finger_envelope import EnvelopeSample, FingerEnvelope
+from .floats import pose_floats
 
 __all__ = ["EnvelopeTracker"]
 
@@ -70,12 +75,12 @@ class _Cuts(NamedTuple):
     pose: tuple[float, float, float, float]  # (x [m], y [m], cos beta, sin beta) of the object
     time: float  # [s]
     structure: tuple  # (condition, reachable pieces, per piece of reachable ∩ edge: vertex cuts inside)
-    ends: tuple  # per piece of reachable ∩ edge: (free at its start, free sides of the flips)
+    ends: UrdfCuts  # per piece of reachable ∩ edge: (free at its start, free sides of the flips)
     rates: tuple  # per piece, per flip: the cut's rate [m/s] at the last update (0 when unknown)
     kept: tuple  # per piece: collision certificates at its start, at its end and at each cut
 
 
-def _locate(free, kept: list, guess: float, left: bool, lo: float, hi: float, tol: float, reach: float,
+def _locate(free: FreeTest, kept: list, guess: float, left: bool, lo: float, hi: float, tol: float, reach: float,
             known: tuple[bool, bool]) -> float | None:
     """The free side of the one flip of ``free`` near ``guess`` in (lo, hi) [m]: ``free`` is ``left``
     just below the flip. Steps of tol, 2 tol, 4 tol… [m] from ``guess`` until the verdict flips,
@@ -147,7 +152,7 @@ class EnvelopeTracker:
             raise InvalidParameterError("envelope", envelope, "a FingerEnvelope")
         self.envelope = envelope
         self.max_pose_step = as_positive_float("max_pose_step", max_pose_step)
-        self._radius = max(math.hypot(vx, vy) for vx, vy in envelope._vertices)
+        self._radius = max(math.hypot(vx, vy) for vx, vy in envelope.polygon.vertices.tolist())
         self._tol = envelope.urdf_tolerance * envelope.edge.length
         self.last: EnvelopeSample | None = None
         self.counts: Counter[str] = Counter()
@@ -167,26 +172,27 @@ class EnvelopeTracker:
         """The envelope at the object pose ``(x [m], y [m], beta [rad])`` in the hand frame at ``time`` [s]."""
         t_start = _time.perf_counter()
         env = self.envelope
-        x, y, beta = _pose_floats(pose_object_in_hand)
+        evaluator = env.evaluator
+        x, y, beta = pose_floats(pose_object_in_hand)
         time = float(time)
         if not math.isfinite(time):
             raise InvalidParameterError("time", time, "a finite number [s]")
         if env.checker is None:
-            frame = env._frame(x, y, beta)
+            frame = evaluator.closed_form(x, y, beta)
         else:  # the ideal feasible set only if it falls back (its ends are at()'s extra grid points)
-            frame = env._frame(x, y, beta, ideal=False)
+            frame = evaluator.closed_form(x, y, beta, ideal=False)
         if env.checker is None or not frame.base:
             self.counts[CLOSED_FORM] += 1
             self._cuts = None
-            self.last = env._sample(frame, frame.ideal, time, t_start)
+            self.last = env.sample(frame, frame.ideal, time, t_start)
             return self.last
         d, nx, ny = frame.d, frame.nx, frame.ny
         # where link 1 passes through a vertex: the ideal set's only cuts, and where the urdf cuts
         # of link 1 are born and die
-        _, vertex_cuts = env._vertex_cuts(x, y, frame.c, frame.s, d, nx, ny)
+        _, vertex_cuts = evaluator.vertex_cuts(x, y, frame.c, frame.s, d, nx, ny)
         structure = (frame.condition, len(frame.reach),
                      tuple(sum(lo < t < hi for t in vertex_cuts) for lo, hi in frame.base))
-        free = env._free_test(x, y, beta, d, nx, ny)
+        free = evaluator.free_test(x, y, beta, d, nx, ny)
         cuts = self._cuts
         if cuts is None:
             outcome = "first call"
@@ -202,18 +208,18 @@ class EnvelopeTracker:
             if env.compiled:  # at()'s own cuts, from the same kernel call
                 ends = env.urdf_cuts((x, y, beta))
             else:
-                ideal = env._ideal_feasible(frame.base, x, y, frame.c, frame.s, d, nx, ny)
-                ends = env._urdf_ends(frame.base, ideal, free)
+                ideal = evaluator.ideal_feasible(frame.base, x, y, frame.c, frame.s, d, nx, ny)
+                ends = evaluator.urdf_ends(frame.base, ideal, free)
             rates = tuple((0.0,) * len(flips) for _, flips in ends)
             kept = tuple(self._sites(lo, hi, flips, free) for (lo, hi), (_, flips) in zip(frame.base, ends))
         else:
             self.counts[TRACKED] += 1
             ends, rates, kept = outcome
         self._cuts = _Cuts((x, y, frame.c, frame.s), time, structure, ends, rates, kept)
-        self.last = env._sample(frame, _urdf_pieces(frame.base, ends), time, t_start)
+        self.last = env.sample(frame, urdf_pieces(frame.base, ends), time, t_start)
         return self.last
 
-    def _sites(self, lo: float, hi: float, flips: tuple, free) -> tuple:
+    def _sites(self, lo: float, hi: float, flips: tuple, free: FreeTest) -> tuple:
         """The collision certificates of a piece [lo, hi] of reachable ∩ edge (line coordinates [m]) with
         cuts ``flips``: at its start, at its end, at each cut, and the watched points of ``at``'s grid
         (grid index, verdict, certificates): the ``WATCHED`` interior grid points farther than 1.5
@@ -234,7 +240,7 @@ class EnvelopeTracker:
         watched = tuple((j, verdict, kept) for _, j, verdict, kept in candidates[:WATCHED])
         return [None, None], [None, None], tuple([None, None] for _ in flips), watched
 
-    def _follow(self, cuts: _Cuts, base, free, time: float):
+    def _follow(self, cuts: _Cuts, base: Intervals, free: FreeTest, time: float) -> tuple[UrdfCuts, tuple, tuple] | str:
         """(ends, rates, certificates) with every cut of ``cuts`` re-located on ``base`` (line
         coordinates [m]), or the reason to compute the sample from scratch."""
         tol = self._tol

@@ -204,7 +204,7 @@ def sliding_step_into(fingers, iks, edges, gravity, damped, xi_model, slide_colu
                       kv, ks, m_o_diagonal, object_mass, sliders, kinetic, directions, reversible, sample_time,
                       singular_threshold, margin_mu, use_qp, coefficients, lower, n_ineq, is_cone, target,
                       margin_column, weight, aim, out):
-    r"""One step of Proposition 3 with m > 2 (:meth:`regrasp.dynamics.control.Proposition3Controller._distributed_torque`)
+    r"""One step of Proposition 3 with m > 2 (:meth:`regrasp.dynamics.laws.Proposition3Controller.distributed_torque`)
     into ``out`` (:func:`control_layout`); returns (status, k, the QP's cone margin [N]).
 
     The sliders' directions :math:`s_j` (``directions``, updated in place as the reference path does: the sign

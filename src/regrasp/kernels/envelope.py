@@ -1,15 +1,15 @@
 r"""One ``urdf`` envelope sample, compiled: :meth:`regrasp.envelope.finger_envelope.FingerEnvelope.at` in one call.
 
-The same steps and the same arithmetic as the reference path (:mod:`regrasp.envelope.finger_envelope`, whose docstring
-has the derivations): the edge's line at the object pose (d, λ, s0), the reachable set on it
-(Definition 2.1) merged, its intersection with the edge, the ``ideal`` feasible set (link 1 through a
-vertex, each piece classified at its midpoint), then per piece of reachable ∩ edge the ``urdf`` cuts: the
-verdict on the grid of ``grid`` points plus the ``ideal`` ends inside, every flip bisected to ``tol``, and
-the free pieces merged. Only the collision verdict differs in kind: the footprints' closed-form signed
-distances (:mod:`.footprint`) instead of coal's, so a verdict can differ only within coal's own tolerance
-of a contact (``tests/test_kernels_footprint.py`` measures both).
+The same steps and the same arithmetic as the reference path (:class:`~regrasp.envelope.evaluator.EnvelopeEvaluator`;
+:mod:`regrasp.envelope.line` and :mod:`regrasp.envelope.finger_envelope` have the derivations): the edge's line at
+the object pose (d, λ, s0), the reachable set on it (Definition 2.1) merged, its intersection with the edge, the
+``ideal`` feasible set (link 1 through a vertex, each piece classified at its midpoint), then per piece of
+reachable ∩ edge the ``urdf`` cuts: the verdict on the grid of ``grid`` points plus the ``ideal`` ends inside, every
+flip bisected to ``tol``, and the free pieces merged. Only the collision verdict differs in kind: the footprints'
+closed-form signed distances (:mod:`.footprint`) instead of coal's, so a verdict can differ only within coal's own
+tolerance of a contact (``tests/kernels/test_footprint.py`` measures both).
 
-Everything is in line coordinates s [m] (:class:`~regrasp.envelope.finger_envelope.EdgeLine`; ξ = s - s0). The finger, edge
+Everything is in line coordinates s [m] (:class:`~regrasp.envelope.line.EdgeLine`; ξ = s - s0). The finger, edge
 and sampling constants are one :data:`ENVELOPE_PARAMETERS` record; the polygon is given in its own frame
 (vertices and inward edge normals) and the link shapes as :data:`~.footprint.FOOTPRINT` records.
 """
@@ -101,7 +101,7 @@ def _merge(pieces, count, out):
 
 @numba.njit(cache=True)
 def _reachable(p, d, pieces, out):
-    """:func:`regrasp.envelope.finger_envelope.reachable_on_line` into ``out`` (4, 2) (``pieces``: (4, 2) scratch); returns the
+    """:func:`regrasp.envelope.line.reachable_on_line` into ``out`` (4, 2) (``pieces``: (4, 2) scratch); returns the
     count."""
     l1, l2 = p.l1, p.l2
     outer2 = p.outer_sq - d * d
@@ -188,11 +188,12 @@ def _sorted_unique(values, count):
 
 @numba.njit(cache=True)
 def _ideal(p, base, nb, d, nx, ny, verts, normals, offsets, extra, cuts, pieces, out):
-    """The ``ideal`` feasible pieces of ``base[:nb]`` into ``out`` (:meth:`FingerEnvelope._ideal_feasible`);
-    scratch: ``extra`` (2n,), ``cuts`` (2n + 2,), ``pieces`` (4 (2n + 1), 2)."""
+    """The ``ideal`` feasible pieces of ``base[:nb]`` into ``out``
+    (:meth:`~regrasp.envelope.evaluator.EnvelopeEvaluator.ideal_feasible`); scratch: ``extra`` (2n,), ``cuts``
+    (2n + 2,), ``pieces`` (4 (2n + 1), 2)."""
     n = verts.shape[0]
     ne = 0
-    for k in range(n):  # link 1 through a vertex (FingerEnvelope._vertex_cuts)
+    for k in range(n):  # link 1 through a vertex (EnvelopeEvaluator.vertex_cuts)
         wx, wy = verts[k, 0] - p.o1x, verts[k, 1] - p.o1y
         dist = math.hypot(wx, wy)
         if dist == 0.0 or dist > p.l1:
@@ -229,7 +230,8 @@ def _ideal(p, base, nb, d, nx, ny, verts, normals, offsets, extra, cuts, pieces,
 
 @numba.njit(cache=True, inline="always")
 def _free(p, shapes, d, nx, ny, s, verts, normals, offsets, nearest, exact=False):
-    """Whether no footprint penetrates the object with the tip at line coordinate s (``FingerEnvelope._free_test``)."""
+    """Whether no footprint penetrates the object with the tip at line coordinate s
+    (``EnvelopeEvaluator.free_test``)."""
     px, py, ex, ey = _tip_and_elbow(p, d, nx, ny, s)
     n1 = math.hypot(ex, ey)
     vx, vy = px - ex, py - ey
@@ -240,7 +242,7 @@ def _free(p, shapes, d, nx, ny, s, verts, normals, offsets, nearest, exact=False
 
 @numba.njit(cache=True)
 def _line(p, x, y, c, s):
-    """(d, λ, s0, n_x, n_y) of the edge's line at the object pose (``FingerEnvelope._line``)."""
+    """(d, λ, s0, n_x, n_y) of the edge's line at the object pose (``EnvelopeEvaluator.edge_line``)."""
     nx, ny = c * p.n0x - s * p.n0y, s * p.n0x + c * p.n0y
     rx = x + (c * p.c0x - s * p.c0y) - p.o1x
     ry = y + (s * p.c0x + c * p.c0y) - p.o1y
@@ -304,7 +306,7 @@ def envelope_sample_into(params, shapes, vertices, normals, x, y, beta, scalars,
     nf = 0
     for j in range(nb):
         lo, hi = base[j, 0], base[j, 1]
-        delta = hi - lo  # FingerEnvelope._linspace
+        delta = hi - lo  # regrasp.envelope.floats.linspace_floats
         div = grid - 1
         step = delta / div
         for k in range(div):

@@ -34,7 +34,7 @@ import numpy as np
 import pinocchio as pin
 
 __all__ = ["FINGER_PARAMETERS", "FINGER_TERMS", "condition_2x2", "finger_parameters", "finger_terms",
-           "finger_terms_at", "reference_terms"]
+           "finger_terms_at", "finger_terms_into", "reference_terms"]
 
 _F8 = np.float64
 
@@ -96,8 +96,10 @@ def condition_2x2(a: float, b: float, c: float, d: float) -> float:
 
 
 @numba.njit(cache=True, inline="always")
-def _terms_into(p, q1, q2, v1, v2, gx, gy, damped, out):
-    """:func:`finger_terms` of one finger (record ``p``) into the record ``out``."""
+def finger_terms_into(p, q1, q2, v1, v2, gx, gy, damped, out):
+    """:func:`finger_terms` of one finger (record ``p``, :data:`FINGER_PARAMETERS`) at joint positions ``q1``, ``q2``
+    [rad] and velocities ``v1``, ``v2`` [rad/s], gravity (``gx``, ``gy``) [m/s^2] in the hand frame (``damped``: with
+    the joints' viscous damping), into the record ``out`` (:data:`FINGER_TERMS`); inlined into the compiled callers."""
     phi1 = p.a1 + q1
     phi2 = phi1 + p.a2 + q2
     c1, s1, c2, s2 = math.cos(phi1), math.sin(phi1), math.cos(phi2), math.sin(phi2)
@@ -141,8 +143,8 @@ def finger_terms(params, q, v, gravity, damped):
     frame; ``damped``: add the joints' viscous damping to N."""
     out = np.empty(params.shape[0], dtype=FINGER_TERMS)
     for i in range(params.shape[0]):
-        _terms_into(params[i], q[2 * i], q[2 * i + 1], v[2 * i], v[2 * i + 1], gravity[0], gravity[1], damped,
-                    out[i])
+        finger_terms_into(params[i], q[2 * i], q[2 * i + 1], v[2 * i], v[2 * i + 1], gravity[0], gravity[1], damped,
+                          out[i])
     return out
 
 

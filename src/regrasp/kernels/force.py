@@ -124,7 +124,7 @@ def internal_force_into(A: np.ndarray, f_m: np.ndarray, frames: np.ndarray, coef
             f_c[i] = acc
     for i in range(m2):
         forces[i] = f_m[i] + f_c[i]
-    ok = True  # (the reference path's check, ``regrasp.dynamics.internal_force.rows._Rows.check_at``, compiled)
+    ok = True  # (the reference path's check, ``regrasp.dynamics.internal_force.rows.ConstraintRows.check_at``, compiled)
     margin = math.inf
     for r in range(rows):
         residual = -lower[r]

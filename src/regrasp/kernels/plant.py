@@ -22,7 +22,7 @@ import math
 import numba
 import numpy as np
 
-from .finger import FINGER_TERMS, _terms_into, condition_2x2
+from .finger import FINGER_TERMS, condition_2x2, finger_terms_into
 
 __all__ = ["FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDING", "output_size", "plant_evaluate",
            "plant_step_into"]
@@ -61,8 +61,8 @@ def _evaluate(fingers, plant, contacts, y, tau, terms, dy, forces):
     vx, vy, w = y[2 * n + 3], y[2 * n + 4], y[2 * n + 5]
     gx, gy = plant.gx, plant.gy
     for i in range(m):
-        _terms_into(fingers[i], y[2 * i], y[2 * i + 1], y[n + 2 * i], y[n + 2 * i + 1], gx, gy, plant.damped,
-                    terms[i])
+        finger_terms_into(fingers[i], y[2 * i], y[2 * i + 1], y[n + 2 * i], y[n + 2 * i + 1], gx, gy, plant.damped,
+                          terms[i])
     # per finger: τ - N and the tip's free acceleration J M^-1 (τ - N) + J̇q̇ - g
     res = np.empty((m, 2))
     acc = np.empty((m, 2))

@@ -1,4 +1,4 @@
-r"""The reduced model's terms at (S, Ṡ), compiled: :meth:`regrasp.dynamics.reduced.ReducedModel._terms` in one call.
+r"""The reduced model's terms at (S, Ṡ), compiled: :meth:`regrasp.dynamics.reduced.ReducedModel.terms` in one call.
 
 Per contact i at the object pose (x, y, β) and its ξ: the contact point :math:`p_i = x_o + R(\beta) c_i(\xi_i)`
 (where the tip is), the finger's joint angles there (its inverse kinematics in its configuration, as
@@ -20,7 +20,7 @@ import math
 import numba
 import numpy as np
 
-from .finger import FINGER_TERMS, _terms_into, condition_2x2
+from .finger import FINGER_TERMS, condition_2x2, finger_terms_into
 
 __all__ = ["CONTACT_EDGE", "FINGER_IK", "REACHABLE", "UNREACHABLE", "contact_edges", "ik_parameters",
            "reduced_terms"]
@@ -142,7 +142,7 @@ def reduced_terms(fingers, iks, edges, gravity, damped, xi_model, slide_column, 
         terms = np.empty(m, dtype=FINGER_TERMS)
         for i in range(m):
             r0, r1 = 2 * i, 2 * i + 1
-            _terms_into(fingers[i], q[r0], q[r1], q_dot[r0], q_dot[r1], gravity[0], gravity[1], damped, terms[i])
+            finger_terms_into(fingers[i], q[r0], q[r1], q_dot[r0], q_dot[r1], gravity[0], gravity[1], damped, terms[i])
             t = terms[i]
             mass[i, 0], mass[i, 1], mass[i, 2] = t.m00, t.m01, t.m11
             nonlinear[r0], nonlinear[r1] = t.n0, t.n1

@@ -15,7 +15,7 @@ differs by a constant offset read from the model (see :attr:`Finger.theta2_offse
 
 All positions are in the hand frame [m]. The caller's ``pin.Model`` is never mutated:
 the finger keeps its own copy with the base pose folded into the first joint's
-placement.
+placement. The model is parsed and checked by :mod:`regrasp.model.finger_model`.
 """
 
 from __future__ import annotations
@@ -29,14 +29,12 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ..core.capture import captured_fd
 from ..core.exceptions import FingerModelError, InvalidParameterError, UnreachableError
 from ..core.planar import se3_from_planar, wrap_angle
 from ..core.validation import as_finite_array, as_name, expect_type, file_problem
+from .finger_model import parse_finger_urdf, planar_angle, validate_finger_model
 
 __all__ = ["Configuration", "Finger", "LinkShape"]
-
-_PLANAR_TOL = 1e-9
 
 
 class Configuration(str, Enum):
@@ -78,100 +76,6 @@ class LinkShape:
     placement_in_joint: pin.SE3
 
 
-def _planar_angle(placement: pin.SE3) -> float:
-    return float(np.arctan2(placement.rotation[1, 0], placement.rotation[0, 0]))
-
-
-def _is_planar(placement: pin.SE3) -> bool:
-    rot, trans = placement.rotation, placement.translation
-    return (
-        abs(trans[2]) <= _PLANAR_TOL
-        and abs(rot[2, 2] - 1.0) <= _PLANAR_TOL
-        and np.allclose(rot[2, :2], 0.0, atol=_PLANAR_TOL)
-        and np.allclose(rot[:2, 2], 0.0, atol=_PLANAR_TOL)
-    )
-
-
-_JOINT_KIND = {
-    "JointModelRZ": None,
-    "JointModelRUBZ": "is continuous; declare it 'revolute' with limits (a planar finger needs nq = 1 per joint)",
-    "JointModelRX": "rotates about x; a planar finger's joints must rotate about +z",
-    "JointModelRY": "rotates about y; a planar finger's joints must rotate about +z",
-    "JointModelRevoluteUnaligned": "has an axis other than +z; a planar finger's joints must rotate about +z",
-    "JointModelRUBX": "is continuous about x; a planar finger's joints must be revolute about +z",
-    "JointModelRUBY": "is continuous about y; a planar finger's joints must be revolute about +z",
-    "JointModelPX": "is prismatic; a planar 2R finger has revolute joints only",
-    "JointModelPY": "is prismatic; a planar 2R finger has revolute joints only",
-    "JointModelPZ": "is prismatic; a planar 2R finger has revolute joints only",
-    "JointModelPrismaticUnaligned": "is prismatic; a planar 2R finger has revolute joints only",
-}
-
-
-def _validate_model(model: pin.Model, source: str, tip_frame: str) -> None:
-    """Raise FingerModelError unless ``model`` is a planar serial 2R chain with a tip frame."""
-    for jid in range(1, model.njoints):
-        name = model.names[jid]
-        kind = model.joints[jid].shortname()
-        if kind not in _JOINT_KIND:
-            raise FingerModelError(
-                f"joint type {kind} is not supported; a planar 2R finger has revolute joints about +z",
-                source=source,
-                joint=name,
-            )
-        if _JOINT_KIND[kind] is not None:
-            raise FingerModelError(f"this joint {_JOINT_KIND[kind]}", source=source, joint=name)
-        if jid > 2:
-            raise FingerModelError(
-                f"a planar 2R finger has exactly two actuated joints; this is actuated joint number {jid}",
-                source=source,
-                joint=name,
-            )
-        if model.parents[jid] != jid - 1:
-            raise FingerModelError(
-                "the joints do not form a serial chain (this joint hangs off "
-                f"'{model.names[model.parents[jid]]}')",
-                source=source,
-                joint=name,
-            )
-        if not _is_planar(model.jointPlacements[jid]):
-            raise FingerModelError(
-                "the joint origin leaves the xy-plane (non-zero z offset or a roll/pitch rotation)",
-                source=source,
-                joint=name,
-            )
-    if model.njoints != 3:
-        raise FingerModelError(
-            f"a planar 2R finger has exactly two actuated joints; found {model.njoints - 1}", source=source
-        )
-    if not model.existFrame(tip_frame):
-        raise FingerModelError(
-            f"no frame named '{tip_frame}' (add a fixed joint to a link named '{tip_frame}' at the fingertip)",
-            source=source,
-            joint=tip_frame,
-        )
-    named = [f for f in model.frames if f.name == tip_frame]
-    if len(named) > 1:
-        raise FingerModelError(
-            f"{len(named)} frames are named '{tip_frame}' (a joint and a link, say): the tip frame's name must be "
-            "unique",
-            source=source,
-            joint=tip_frame,
-        )
-    frame = named[0]
-    if frame.parentJoint != 2:
-        raise FingerModelError(
-            f"the tip frame must hang off the second joint, not '{model.names[frame.parentJoint]}'",
-            source=source,
-            joint=tip_frame,
-        )
-    if abs(frame.placement.translation[2]) > _PLANAR_TOL:
-        raise FingerModelError("the tip frame leaves the xy-plane", source=source, joint=tip_frame)
-    if np.linalg.norm(model.jointPlacements[2].translation[:2]) <= _PLANAR_TOL:
-        raise FingerModelError("the first link has zero length", source=source, joint=model.names[2])
-    if np.linalg.norm(frame.placement.translation[:2]) <= _PLANAR_TOL:
-        raise FingerModelError("the second link has zero length", source=source, joint=tip_frame)
-
-
 class Finger:
     r"""A planar two-link finger: URDF model, base pose in the hand frame and configuration.
 
@@ -199,7 +103,7 @@ class Finger:
     ):
         self.source = str(source)
         expect_type("model", model, pin.Model, "a Pinocchio model (pin.Model)")
-        _validate_model(model, self.source, as_name("tip_frame", tip_frame))
+        validate_finger_model(model, self.source, as_name("tip_frame", tip_frame))
         self.name = as_name("name", name)
         self.configuration = Configuration.parse(configuration)
         self.base_in_hand = as_finite_array("base_in_hand", base_in_hand, (3,))
@@ -225,9 +129,9 @@ class Finger:
                 raise FingerModelError(f"{label} is {length:.6g} m long: expected 1e-6 to 10 m", source=self.source)
         self._alpha1 = float(np.arctan2(elbow_in_j1[1], elbow_in_j1[0]))
         alpha2 = float(np.arctan2(tip_in_j2[1], tip_in_j2[0]))
-        gamma2 = _planar_angle(self.model.jointPlacements[2])
+        gamma2 = planar_angle(self.model.jointPlacements[2])
         #: Absolute angle [rad] of link 1 at q1 = 0 in the hand frame.
-        self.psi1_offset = _planar_angle(joint1) + self._alpha1
+        self.psi1_offset = planar_angle(joint1) + self._alpha1
         #: Geometric elbow angle theta2 [rad] minus q2.
         self.theta2_offset = float(wrap_angle(gamma2 + alpha2 - self._alpha1))
         l1, l2 = self._l1, self._l2
@@ -252,7 +156,7 @@ class Finger:
         problem = file_problem(path, "URDF file")
         if problem is not None:
             raise FingerModelError(problem, source=path)
-        model, geom = _parse_urdf(lambda: pin.buildModelFromUrdf(str(path)),
+        model, geom = parse_finger_urdf(lambda: pin.buildModelFromUrdf(str(path)),
                                   lambda model: pin.buildGeomFromUrdf(model, str(path), pin.GeometryType.COLLISION),
                                   path)
         return cls(
@@ -278,7 +182,7 @@ class Finger:
         """Build a finger from URDF text (for generated fingers, see :mod:`regrasp.model.finger_urdf`)."""
         if not isinstance(urdf, str):
             raise InvalidParameterError("urdf", urdf, "URDF text (a str)")
-        model, geom = _parse_urdf(lambda: pin.buildModelFromXML(urdf),
+        model, geom = parse_finger_urdf(lambda: pin.buildModelFromXML(urdf),
                                   lambda model: pin.buildGeomFromUrdfString(model, urdf, pin.GeometryType.COLLISION),
                                   "<string>")
         return cls(
@@ -386,11 +290,12 @@ class Finger:
 
     def _inverse_kinematics(self, target: np.ndarray) -> np.ndarray:
         """:meth:`inverse_kinematics` on a validated (2,) target (hot paths)."""
-        return np.array(self._joint_angles(float(target[0]), float(target[1])))
+        return np.array(self.joint_angles(float(target[0]), float(target[1])))
 
-    def _joint_angles(self, x: float, y: float, elbow: bool = False) -> tuple[float, ...]:
-        """(q1, q2) [rad] for the tip at (x, y) in the hand frame, in scalar arithmetic (hot paths);
-        with ``elbow``, (q1, q2, e_x, e_y), e the elbow (joint 2's axis) [m]."""
+    def joint_angles(self, x: float, y: float, elbow: bool = False) -> tuple[float, ...]:
+        """:meth:`inverse_kinematics` in scalar arithmetic (hot paths; ``x``, ``y`` not validated): (q1, q2)
+        [rad] for the tip at (x [m], y [m]) in the hand frame; with ``elbow``, (q1, q2, e_x, e_y), e the elbow
+        (joint 2's axis) [m] in the hand frame. Raises UnreachableError as :meth:`inverse_kinematics` does."""
         ox, oy, sigma, inner, outer, slack = self._ik_constants
         rx, ry = x - ox, y - oy
         dist = math.hypot(rx, ry)
@@ -425,37 +330,3 @@ class Finger:
             f"base_in_hand={self.base_in_hand.tolist()}, configuration={self.configuration.value!r})"
         )
 
-
-def _parse_urdf(build_model, build_geometry, source):
-    """(model, collision geometry) from Pinocchio, urdfdom's own lines on fd 2 kept off the terminal
-    (its first line joins the error when parsing fails), and the links' inertial values checked."""
-    with captured_fd(2) as printed:
-        try:
-            model = build_model()
-            geom = build_geometry(model)
-        except Exception as exc:  # Pinocchio raises bare ValueError/RuntimeError
-            error = exc
-        else:
-            error = None
-    if error is not None:
-        said = next((" ".join(line.split()) for line in printed.text.splitlines() if line.strip()), "")
-        raise FingerModelError(f"Pinocchio could not parse the URDF: {' '.join(str(error).split())}"
-                               + (f" (urdfdom: {said})" if said else ""), source=source) from error
-    for frame in model.frames:  # before the inertias, which Pinocchio sums over the links fixed to a joint
-        offset = math.hypot(*frame.placement.translation)  # (no overflow, unlike a sum of squares)
-        if not offset <= 10.0:
-            raise FingerModelError(f"frame {frame.name!r} is placed {offset:.6g} m from its joint: expected at "
-                                   "most 10 m", source=source)
-    for j in range(1, model.njoints):
-        inertia = model.inertias[j]
-        rotational = np.asarray(inertia.inertia, dtype=float)
-        mass = float(inertia.mass)
-        moments = np.linalg.eigvalsh(0.5 * (rotational + rotational.T)) if np.isfinite(rotational).all() \
-            else np.full(3, np.nan)
-        if not (np.isfinite(mass) and mass > 0.0 and np.isfinite(moments).all() and moments.min() >= 0.0
-                and moments.max() > 0.0 and np.isfinite(inertia.lever).all()):
-            raise FingerModelError(f"link of joint {model.names[j]!r}: expected a finite mass > 0 and a non-zero, "
-                                   f"positive semi-definite inertia, got mass {mass:.6g} kg, principal moments "
-                                   f"{', '.join(f'{m:.3g}' for m in moments)} kg m^2", source=source,
-                                   joint=model.names[j])
-    return model, geom

@@ -105,25 +105,31 @@ class Hand:
         self.singular_threshold = as_positive_float("singular_threshold", singular_threshold)
         self.damping_enabled = as_flag("damping", damping)
         self.link_mass_scale = as_positive_float("link_mass_scale", link_mass_scale)
-        self._models = [pin.Model(f.model) for f in self.fingers]
+        #: Each finger's own Pinocchio model (a copy, with the hand's gravity and link masses), in finger order.
+        self.finger_models: tuple[pin.Model, ...] = tuple(pin.Model(f.model) for f in self.fingers)
         if self.link_mass_scale != 1.0:
-            for model in self._models:
+            for model in self.finger_models:
                 for j in range(1, model.njoints):
                     inertia = model.inertias[j]
                     model.inertias[j] = pin.Inertia(inertia.mass * self.link_mass_scale, inertia.lever,
                                                     inertia.inertia * self.link_mass_scale)
-        self._datas = [model.createData() for model in self._models]
+        self._datas = [model.createData() for model in self.finger_models]
         self._tip_ids = [f.tip_frame_id for f in self.fingers]
         # the hot paths run one model of the whole hand (every finger a chain from the hand frame):
         # one Pinocchio pass instead of one per finger
-        self._hand_model, self._hand_tips = _whole_hand(self._models, self._tip_ids)
-        self._hand_data = self._hand_model.createData()
-        self._damping = np.concatenate([np.asarray(model.damping, dtype=float) for model in self._models])
+        whole, tips = _whole_hand(self.finger_models, self._tip_ids)
+        #: The Pinocchio model of the whole hand: finger i a chain from the hand frame (the universe) on joints
+        #: 2i + 1, 2i + 2, its names prefixed "<i>/" (module docstring).
+        self.pinocchio_model: pin.Model = whole
+        #: Each finger's tip frame id in :attr:`pinocchio_model`, in finger order.
+        self.tip_frame_ids: tuple[int, ...] = tuple(tips)
+        self._hand_data = self.pinocchio_model.createData()
+        self._damping = np.concatenate([np.asarray(model.damping, dtype=float) for model in self.finger_models])
         self._damping_list = self._damping.tolist()
         upper = [2 * i * self.nq + 2 * i + 1 for i in range(self.m)]  # (2i, 2i + 1), row-major
         self._mass_mirror = (np.array([u + self.nq - 1 for u in upper]), np.array(upper))
         # whether this Pinocchio's computeAllTerms leaves M's lower triangle to us (crba does)
-        pin.computeAllTerms(self._hand_model, self._hand_data, np.full(self.nq, 0.5), np.zeros(self.nq))
+        pin.computeAllTerms(self.pinocchio_model, self._hand_data, np.full(self.nq, 0.5), np.zeros(self.nq))
         self._mirror_mass = not np.array_equal(self._hand_data.M, self._hand_data.M.T)
         self.gravity_in_hand = np.zeros(2)
         self.set_gravity(gravity_in_hand)
@@ -137,9 +143,9 @@ class Hand:
     def _build_kernels(self) -> None:
         from ..kernels.finger import finger_parameters, largest_disagreement
 
-        params = np.stack([finger_parameters(self._hand_model, tip, 2 * i + 1)
-                           for i, tip in enumerate(self._hand_tips)])
-        found = largest_disagreement(self._hand_model, self._hand_tips, params, self.gravity_in_hand,
+        params = np.stack([finger_parameters(self.pinocchio_model, tip, 2 * i + 1)
+                           for i, tip in enumerate(self.tip_frame_ids)])
+        found = largest_disagreement(self.pinocchio_model, self.tip_frame_ids, params, self.gravity_in_hand,
                                      self.damping_enabled)
         self.kernel_disagreement = found
         if found[0] <= KERNEL_TOLERANCE:
@@ -164,7 +170,7 @@ class Hand:
         """Set the gravity vector [m/s^2] in the hand frame."""
         g = as_finite_array("gravity_in_hand", gravity_in_hand, (2,))
         self.gravity_in_hand = g
-        for model in (*self._models, self._hand_model):
+        for model in (*self.finger_models, self.pinocchio_model):
             model.gravity = pin.Motion(np.array([g[0], g[1], 0.0, 0.0, 0.0, 0.0]))
 
     @property
@@ -172,7 +178,7 @@ class Hand:
         """Viscous joint damping [N m s/rad] of every joint, (2m,) (zeros when disabled)."""
         if not self.damping_enabled:
             return np.zeros(self.nq)
-        return np.concatenate([np.asarray(model.damping, dtype=float) for model in self._models])
+        return np.concatenate([np.asarray(model.damping, dtype=float) for model in self.finger_models])
 
     def _split(self, name: str, value) -> np.ndarray:
         return as_finite_array(name, value, (self.nq,)).reshape(self.m, 2)
@@ -184,7 +190,7 @@ class Hand:
     def _dynamics(self, qs: np.ndarray, vs: np.ndarray, kinematics=None) -> HandDynamics:
         """:meth:`dynamics` on already validated (m, 2) arrays (hot paths); ``kinematics``: J and the
         tips at ``qs``, when the caller has them already."""
-        model, data = self._hand_model, self._hand_data
+        model, data = self.pinocchio_model, self._hand_data
         v = vs.reshape(-1)
         # one pass: M (crba), N (rnea at q̈ = 0), the joint Jacobians and the bodies' velocities and
         # accelerations at q̈ = 0
@@ -196,37 +202,37 @@ class Hand:
             mass.reshape(-1)[lower] = mass.reshape(-1)[upper]
         nle = data.nle + self._damping * v if self.damping_enabled else data.nle.copy()
         jdv = np.empty(self.nq)
-        for i, fid in enumerate(self._hand_tips):
+        for i, fid in enumerate(self.tip_frame_ids):
             jdv[2 * i:2 * i + 2] = pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED).linear[:2]
         return HandDynamics(mass, nle, jac, jdv, tips, jac.dot(v).reshape(self.m, 2))
 
     def _frame_jacobian(self) -> np.ndarray:
         """J (2m, 2m) from the joint Jacobians of the last pass."""
-        model, data = self._hand_model, self._hand_data
+        model, data = self.pinocchio_model, self._hand_data
         jac = np.empty((self.nq, self.nq))
-        for i, fid in enumerate(self._hand_tips):
+        for i, fid in enumerate(self.tip_frame_ids):
             # finger i's rows: its 2x2 block, zeros elsewhere (the chains are independent)
             jac[2 * i:2 * i + 2] = pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED)[:2]
         return jac
 
     def _frame_tips(self) -> np.ndarray:
         """The tips (m, 2) from the placements of the last pass."""
-        model, data = self._hand_model, self._hand_data
-        return np.array([pin.updateFramePlacement(model, data, fid).translation[:2] for fid in self._hand_tips])
+        model, data = self.pinocchio_model, self._hand_data
+        return np.array([pin.updateFramePlacement(model, data, fid).translation[:2] for fid in self.tip_frame_ids])
 
     def jacobian(self, q: ArrayLike) -> np.ndarray:
         """J(q) = blockdiag(J_i), (2m, 2m) [m/rad]."""
         return self._jacobian(self._split("q", q))
 
     def _jacobian(self, qs: np.ndarray) -> np.ndarray:
-        pin.computeJointJacobians(self._hand_model, self._hand_data, qs.reshape(-1))
+        pin.computeJointJacobians(self.pinocchio_model, self._hand_data, qs.reshape(-1))
         return self._frame_jacobian()
 
     def tip_positions(self, q: ArrayLike) -> np.ndarray:
         """Tip positions [m], (m, 2), hand frame."""
         qs = self._split("q", q)
         out = np.empty((self.m, 2))
-        for i, (model, data, fid) in enumerate(zip(self._models, self._datas, self._tip_ids)):
+        for i, (model, data, fid) in enumerate(zip(self.finger_models, self._datas, self._tip_ids)):
             pin.forwardKinematics(model, data, qs[i])
             out[i] = pin.updateFramePlacement(model, data, fid).translation[:2]
         return out
@@ -235,13 +241,13 @@ class Hand:
         """Gravitational potential energy [J] of the fingers (zero at the hand frame's origin)."""
         qs = self._split("q", q)
         return float(sum(pin.computePotentialEnergy(model, data, qs[i])
-                         for i, (model, data) in enumerate(zip(self._models, self._datas))))
+                         for i, (model, data) in enumerate(zip(self.finger_models, self._datas))))
 
     def kinetic_energy(self, q: ArrayLike, v: ArrayLike) -> float:
         """Kinetic energy [J] of the fingers."""
         qs, vs = self._split("q", q), self._split("v", v)
         return float(sum(pin.computeKineticEnergy(model, data, qs[i], vs[i])
-                         for i, (model, data) in enumerate(zip(self._models, self._datas))))
+                         for i, (model, data) in enumerate(zip(self.finger_models, self._datas))))
 
     def check_singular(self, q: ArrayLike, jacobian: np.ndarray | None = None) -> np.ndarray:
         """Condition numbers of the fingers' tip Jacobians; raises SingularFingerError above the threshold."""
@@ -250,11 +256,12 @@ class Hand:
 
     def _check_singular(self, qs: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
         blocks = [jacobian[2 * i:2 * i + 2, 2 * i:2 * i + 2].reshape(-1).tolist() for i in range(self.m)]
-        return np.array(self._check_singular_blocks(qs.reshape(-1).tolist(), blocks))
+        return np.array(self.check_singular_blocks(qs.reshape(-1).tolist(), blocks))
 
-    def _check_singular_blocks(self, q, blocks) -> list[float]:
-        """Condition numbers of the tip Jacobians given as (a, b, c, d) = row-major 2x2 blocks (floats);
-        ``q``: the joint positions (2m) (floats), for the error."""
+    def check_singular_blocks(self, q: Sequence[float], blocks: Sequence[Sequence[float]]) -> list[float]:
+        """:meth:`check_singular` in scalar arithmetic (hot paths; not validated): the condition numbers of the
+        fingers' tip Jacobians given as (a, b, c, d) = row-major 2x2 blocks [m/rad] (floats); ``q``: the joint
+        positions (2m) [rad] (floats), for the error. Raises SingularFingerError above the threshold."""
         conds = [_condition(*block) for block in blocks]
         for i, c in enumerate(conds):
             if not c <= self.singular_threshold:  # also catches inf/nan
@@ -262,10 +269,12 @@ class Hand:
                                           self.singular_threshold)
         return conds
 
-    def _mass_blocks_and_bias(self, q, v) -> tuple[list[tuple[float, float, float]], list[float]]:
-        """Each finger's (m00, m01, m11) of M and N (2m) at joint positions ``q`` and velocities ``v``
-        (floats), as floats (hot paths): ``pin.crba`` and ``pin.nonLinearEffects`` on the whole hand."""
-        model, data = self._hand_model, self._hand_data
+    def mass_blocks_and_bias(self, q: Sequence[float], v: Sequence[float]) -> tuple[list[tuple[float, float, float]],
+                                                                                   list[float]]:
+        """Each finger's (m00, m01, m11) of M [kg m^2] and N (2m) [N m] at joint positions ``q`` [rad] and velocities
+        ``v`` [rad/s] (2m floats, not validated), as floats (hot paths): ``pin.crba`` and ``pin.nonLinearEffects``
+        on the whole hand (:attr:`pinocchio_model`), plus the joints' damping when enabled."""
+        model, data = self.pinocchio_model, self._hand_data
         q = np.array(q)
         v_array = np.array(v)
         rows = pin.crba(model, data, q).tolist()  # (its upper triangle: the lower one may be left unset)
@@ -280,7 +289,7 @@ class Hand:
         return self._inverse_kinematics(as_finite_array("tips_in_hand", tips_in_hand, (self.m, 2)))
 
     def _inverse_kinematics(self, tips: np.ndarray) -> np.ndarray:
-        return np.array([angle for f, (x, y) in zip(self.fingers, tips.tolist()) for angle in f._joint_angles(x, y)])
+        return np.array([angle for f, (x, y) in zip(self.fingers, tips.tolist()) for angle in f.joint_angles(x, y)])
 
 
 def _whole_hand(models: Sequence[pin.Model], tip_ids: Sequence[int]) -> tuple[pin.Model, list[int]]:

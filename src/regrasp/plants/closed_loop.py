@@ -17,7 +17,8 @@ import numpy as np
 from ..core.exceptions import InvalidParameterError
 from ..core.trajectory import TrajectorySample
 from ..core.validation import as_duration, as_positive_float, expect_type
-from ..dynamics.control import ComputedTorqueController, ControlOutput, Proposition2Controller
+from ..dynamics.control import ComputedTorqueController, ControlOutput
+from ..dynamics.laws import Proposition2Controller
 from ..dynamics.reduced import ReducedModel
 from ..core.events import Event
 from .simulation import Command, PlantLike, StepRecord, sense_projected, simulate

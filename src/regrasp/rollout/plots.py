@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..envelope.plotting import plt, save_figure
+from ..core.figures import pyplot, save_figure
 
 if TYPE_CHECKING:
     from ..core.polygon import ConvexPolygon
@@ -37,7 +37,7 @@ def _failure_title(result) -> str:
 def plot_rollout(result: RolloutResult, path: str | Path, *, danger_fraction: float = 0.1) -> Path:
     """Per finger: feasible band, danger zones, planned and actual contact versus time (module docstring)."""
     m = len(result.names)
-    fig, axes = plt.subplots(m, 1, figsize=(9, 2.4 * m), sharex=True, squeeze=False)
+    fig, axes = pyplot().subplots(m, 1, figsize=(9, 2.4 * m), sharex=True, squeeze=False)
     t = result.times
     for i, (ax, name) in enumerate(zip(axes[:, 0], result.names)):
         lo, hi = result.bounds[:, i, 0] * _MM, result.bounds[:, i, 1] * _MM
@@ -69,6 +69,7 @@ def plot_frames(result: RolloutResult, hand: Hand, polygon: ConvexPolygon, path:
     picks = list(np.linspace(0, n - 1, frames).round().astype(int)) if n else []
     cols = min(len(picks), 3) or 1
     rows = max(1, -(-len(picks) // cols))
+    plt = pyplot()
     fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 3.4 * rows), squeeze=False)
     everything = []
     for ax, k in zip(axes.flat, picks):

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.contact import coefficients, cone_margin
-from ..dynamics.control import FixedContactController, Proposition3Controller
+from ..dynamics.laws import FixedContactController, Proposition3Controller
 from ..kernels.decimation import logged_steps
 from ..kernels.monitor import envelope_arguments
 from ..kernels.stretch import STRETCH_COAL, STRETCH_DONE, STRETCH_SETTINGS, STRETCH_STATE, stretch_into, stretch_log

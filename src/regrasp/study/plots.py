@@ -65,11 +65,11 @@ def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
     * ``study_failure_times.png``: when the failed runs failed, stacked by failure kind;
     * ``study_margins.png``: each run's smallest cone and envelope margins, successes and failures apart.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.ticker import MaxNLocator
+
+    from ..core.figures import pyplot
+
+    plt = pyplot()
 
     directory = Path(directory)
     runs = result.runs
@@ -127,14 +127,11 @@ def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
 def plot_sweep(name: str, results: Sequence[StudyResult], path: str | Path) -> Path:
     """``study_sweep.png``: each study's success rate (Wilson 95 % bars) and its runs' median smallest cone margin
     against the size of the perturbation ``name`` the studies differ in."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    from ..core.figures import pyplot
     from ..model.perturbation import Perturbation
     from .study import wilson_interval
 
+    plt = pyplot()
     x = [getattr(r.perturbation, name) for r in results]
     x = [0.0 if v is None else float(v) for v in x]
     rates = [r.success_rate for r in results]

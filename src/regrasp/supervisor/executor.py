@@ -13,7 +13,7 @@ through three phases (``docs/derivations.md`` §4, "lessons"):
    for at most ``prime_time``. Switching to the sliding law while the contact is still stuck makes the plant
    redistribute the forces for a step and can slip another contact; with an actuation delay, a contact that
    has just broken away is still stuck one step later unless the priming has set it moving;
-2. **sliding**: the sliding law (:class:`~regrasp.dynamics.control.Proposition3Controller`, every slider on
+2. **sliding**: the sliding law (:class:`~regrasp.dynamics.laws.Proposition3Controller`, every slider on
    its kinetic cone edge, p ≥ 1) tracking ξ_d, until the contact is at the target and slow
    (*arrived*), sticks before it (*stuck*), or runs out of ``max_slide_time`` (*timed out*);
 3. **settling**: a contact that ends its slide still sliding gets the fixed law with its force just
@@ -51,15 +51,11 @@ from numpy.typing import ArrayLike
 from ..core.contact import ContactMode, Friction
 from ..core.events import Event, EventKind
 from ..core.exceptions import InvalidParameterError
-from ..dynamics.control import (
-    ComputedTorqueController,
-    ControlOutput,
-    FixedContactController,
-    Gains,
-    Proposition3Controller,
-)
+from ..dynamics.control import ComputedTorqueController, ControlOutput, Gains
 from ..dynamics.grasp import Grasp
-from ..dynamics.internal_force.solver import ConeEdge, InternalForceInfeasibleError
+from ..dynamics.internal_force.problem import InternalForceInfeasibleError
+from ..dynamics.internal_force.settings import ConeEdge
+from ..dynamics.laws import FixedContactController, Proposition3Controller
 from ..dynamics.reduced import ReducedModel
 from ..kernels.stretch import SLIDER
 from ..model.hand import Hand

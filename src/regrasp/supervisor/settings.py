@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 from ..core.contact import DEFAULT_CONE_MARGIN
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import as_duration, as_finite_float, as_flag, as_integer, as_positive_float, expect_type
-from ..dynamics.internal_force.solver import InternalForceSettings
+from ..dynamics.internal_force.settings import InternalForceSettings
 from ..model.collision import Geometry, as_geometry
 
 __all__ = ["ExecutorSettings", "MonitorSettings", "PaperSettings", "ScheduledSettings", "SupervisorSettings"]

@@ -1,4 +1,4 @@
-"""The internal-force QP's target cone margin and several cone edges (``regrasp.dynamics.internal_force.solver``).
+"""The internal-force QP's target cone margin and several cone edges (``regrasp.dynamics.internal_force.problem``).
 
 The random cases are those of ``tests/test_internal_force.py`` (seeded states of m = 2 and m = 3
 grasps, motion forces from a controller or random). With a target cone margin the QP must give
@@ -29,14 +29,13 @@ from internal_force_cases import (
 )
 from regrasp import Grasp, ReducedModel
 from regrasp.core.exceptions import InvalidParameterError
-from regrasp.dynamics.internal_force.solver import (
-    ConeEdge,
+from regrasp.dynamics.internal_force.problem import (
     InternalForceInfeasibleError,
-    InternalForceSettings,
-    InternalForceSolver,
     build_internal_force_qp,
     solve_internal_force_qp,
 )
+from regrasp.dynamics.internal_force.settings import ConeEdge, InternalForceSettings
+from regrasp.dynamics.internal_force.solver import InternalForceSolver
 
 TARGETS = (0.3, 5.0)  # [N]: one usually reachable, one usually capped by f_max
 

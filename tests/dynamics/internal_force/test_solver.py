@@ -1,4 +1,4 @@
-"""The internal-force QP (``regrasp.dynamics.internal_force.solver``, paper §3.3 eq. 3.3.7) against its definition.
+"""The internal-force QP (``regrasp.dynamics.internal_force.problem``, paper §3.3 eq. 3.3.7) against its definition.
 
 Set-up: the hand of ``examples/scenarios/paper_trajectory_2.toml`` holding its 0.10 x 0.04 m,
 0.08 kg rectangle (finger 1 on edge 1 = left side, ξ up; finger 2 on edge 3 = right side, ξ
@@ -65,14 +65,13 @@ from regrasp import (
 from regrasp.core.exceptions import (
     InvalidParameterError,
 )
-from regrasp.dynamics.internal_force.solver import (
-    ConeEdge,
+from regrasp.dynamics.internal_force.problem import (
     InternalForceInfeasibleError,
     InternalForceQP,
-    InternalForceSettings,
     build_internal_force_qp,
     solve_internal_force_qp,
 )
+from regrasp.dynamics.internal_force.settings import ConeEdge, InternalForceSettings
 
 
 @pytest.mark.parametrize("kind,seed", CASES)
@@ -463,18 +462,18 @@ def test_null_basis_is_orthonormal_and_falls_back_on_rank_deficient_matrices():
     a rank-deficient A takes scipy's SVD (numerical rank), a square full-rank one has none."""
     import scipy.linalg
 
-    from regrasp.dynamics.internal_force.solver import _null_basis
+    from regrasp.dynamics.internal_force.rows import null_basis
 
     rng = np.random.default_rng(3)
     for rows, cols in ((4, 3), (6, 4), (6, 3), (4, 4)):
         A = rng.normal(size=(rows, cols))
-        N = _null_basis(A)
+        N = null_basis(A)
         assert N.shape == (rows, rows - cols)
         np.testing.assert_allclose(N.T @ N, np.eye(rows - cols), atol=1e-14)
         np.testing.assert_allclose(A.T @ N, 0.0, atol=1e-14)
     A = rng.normal(size=(6, 4))
     A[:, 3] = A[:, 0] - 2.0 * A[:, 1]  # rank 3
-    N = _null_basis(A)
+    N = null_basis(A)
     assert N.shape == scipy.linalg.null_space(A.T).shape == (6, 3)
     np.testing.assert_allclose(A.T @ N, 0.0, atol=1e-13)
 

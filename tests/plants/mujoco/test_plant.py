@@ -40,7 +40,8 @@ from regrasp import (  # noqa: E402
 from regrasp.cli.main import main  # noqa: E402
 from regrasp.core.events import EventKind  # noqa: E402
 from regrasp.core.exceptions import FingerModelError, InvalidParameterError, MissingDependencyError  # noqa: E402
-from regrasp.dynamics.control import FixedContactController, Gains, Proposition3Controller  # noqa: E402
+from regrasp.dynamics.control import Gains  # noqa: E402
+from regrasp.dynamics.laws import FixedContactController, Proposition3Controller  # noqa: E402
 from regrasp.plants.closed_loop import run_closed_loop  # noqa: E402
 from regrasp.plants.mujoco.mjcf import MujocoSettings, build_mjcf, require_mujoco  # noqa: E402
 from regrasp.plants.mujoco.plant import MujocoPlant  # noqa: E402

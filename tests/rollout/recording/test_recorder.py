@@ -19,9 +19,12 @@ from recordings import read
 from regrasp import Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, RunSpec, load_scenario
 from regrasp.core.events import Event, EventSource, Failure, FailureKind
 from regrasp.core.exceptions import InvalidParameterError, RegraspError, UnknownEdgeError
-from regrasp.dynamics.control import Gains, Proposition3Controller
+from regrasp.dynamics.control import Gains
+from regrasp.dynamics.laws import Proposition3Controller
+from regrasp.envelope.finger_envelope import FingerEnvelope
 from regrasp.plants.closed_loop import run_closed_loop
-from regrasp.rollout.recording.recorder import PHASE_CODES, RolloutRecorder
+from regrasp.rollout.recording.recorder import RolloutRecorder
+from regrasp.rollout.recording.rows import PHASE_CODES
 
 pytestmark = pytest.mark.filterwarnings("error::rerun.error_utils.RerunWarning")
 
@@ -151,18 +154,19 @@ def test_interrupted_rollout_leaves_a_complete_file(tmp_path):
 def test_a_failure_inside_the_recorder_keeps_the_steps_before_it(tmp_path, monkeypatch):
     plant, controller = setup()
     path = tmp_path / "failed.rrd"
+    at = FingerEnvelope.at
     with pytest.raises(ZeroDivisionError):
         with RolloutRecorder(plant, rrd_path=path, envelope_tolerance=0.0) as rec:
             hook = rec.hook(plant, reference)
-            envelope = rec._envelope
 
-            def failing(i, edge):  # fails half-way through step 4's row (after the scene's first rows)
-                if rec._next_step == 5:
+            def failing(envelope, *args, **kwargs):  # fails half-way through step 4's row (after its forces)
+                if rec.steps_logged == 4:
                     raise ZeroDivisionError("boom")
-                return envelope(i, edge)
+                return at(envelope, *args, **kwargs)
 
-            monkeypatch.setattr(rec, "_envelope", failing)
+            monkeypatch.setattr(FingerEnvelope, "at", failing)  # (the recorder's envelopes, evaluated per row)
             run_closed_loop(plant, controller, reference, 0.01, on_step=hook)
+    assert rec.closed and rec.steps_logged == 4
     verify(path)
     rows, *_ = read(path)
     for entity in SCENE + PLOTS:
@@ -324,6 +328,7 @@ def test_cones_and_margins_use_each_contacts_coefficient_of_its_mode(tmp_path):
 
 # ------------------------------------------------------------------------- supervised rollouts
 THREE = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml")
+LOGGING: list = []  # the record being logged by record_rollout's recorder, while it is
 
 
 def record_rollout(path: Path, *, policy="paper", duration=0.3, **kwargs):
@@ -337,7 +342,11 @@ def record_rollout(path: Path, *, policy="paper", duration=0.3, **kwargs):
 
         def keep(record, desired_pose):
             records.append(record)
-            return log_record(record, desired_pose)
+            LOGGING.append(record)
+            try:
+                return log_record(record, desired_pose)
+            finally:
+                LOGGING.pop()
 
         rec.log_record = keep
         result = rollout.run(recorder=rec)
@@ -365,17 +374,18 @@ def test_a_supervised_rollout_is_logged_from_its_records(tmp_path, monkeypatch):
     margins, the supervisor's phases, band, danger zones and ξ_d; the decisions and the plant's
     events are in ``events``; no envelope is evaluated by the recorder after the initial state."""
     path = tmp_path / "supervised.rrd"
-    calls = []
-    original = RolloutRecorder._record_rows
+    calls, evaluated = [], []
+    at = FingerEnvelope.at
 
-    def no_envelopes(self, record, desired):  # the record path evaluates no envelope of its own
-        monkeypatch.setattr(self, "_envelope", lambda *a: calls.append(a))
-        return original(self, record, desired)
+    def counted(envelope, *args, **kwargs):  # the record path evaluates no envelope of its own
+        (calls if LOGGING else evaluated).append(args)
+        return at(envelope, *args, **kwargs)
 
-    monkeypatch.setattr(RolloutRecorder, "_record_rows", no_envelopes)
+    monkeypatch.setattr(FingerEnvelope, "at", counted)
     rollout, result, records, rec = record_rollout(path)
     n = result.steps
     assert n == 300 and result.success and len(records) == n and not calls
+    assert evaluated  # (the initial state's row, measured, and the supervisor's)
     rows, static, _, _ = read(path)
     names = rollout.names
     for entity in per_step_entities(names):
@@ -527,7 +537,8 @@ def test_a_contact_failure_is_a_circle_at_its_tip(tmp_path):
     radius = np.linalg.norm(np.array(circle) * [1e-3, -1e-3] - tip, axis=1)
     assert np.allclose(radius, 0.004, atol=1e-6)
     errors = [t[0] for t, lv in zip(rows["events"]["TextLog:text"], rows["events"]["TextLog:level"]) if lv == ["ERROR"]]
-    assert errors == ["FAILURE (separation): separation of finger2: made up", "FAILURE (interrupted): interrupted (Ctrl-C)"]
+    assert errors == ["FAILURE (separation): separation of finger2: made up",
+                      "FAILURE (interrupted): interrupted (Ctrl-C)"]
 
 
 def test_connect_streams_to_a_running_server(tmp_path):
@@ -549,3 +560,11 @@ def test_connect_streams_to_a_running_server(tmp_path):
     with RolloutRecorder(plant, connect=url) as rec:  # the viewer only
         run_closed_loop(plant, controller, reference, 0.01, on_step=rec.hook(plant, reference))
     assert rec.steps_logged == 11 and rec.rrd_path is None
+
+
+def test_the_recorders_module_constants_are_kept():
+    from regrasp.rollout.recording import events, recorder, rows
+
+    assert recorder.MODE_CODES is rows.MODE_CODES and recorder.PHASE_CODES is rows.PHASE_CODES
+    assert recorder.WARN_KINDS is events.WARN_KINDS
+    assert {"MODE_CODES", "PHASE_CODES", "WARN_KINDS", "RolloutRecorder"} <= set(recorder.__all__)

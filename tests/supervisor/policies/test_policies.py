@@ -220,7 +220,7 @@ def test_planned_xi_series_uses_the_schedule_in_force_at_each_time():
     times = np.linspace(0.0, 3.0, 31)
     before = policy.planned_xi_series(times)
     assert np.array_equal(before, np.array([policy.planned_xi(float(t)) for t in times]))
-    policy._use(schedule([], xi_start=(0.005, 0.01)), 1.5)  # (a re-plan adopted at 1.5 s)
+    policy.adopt(schedule([], xi_start=(0.005, 0.01)), 1.5)  # (a re-plan adopted at 1.5 s)
     after = policy.planned_xi_series(times)
     assert np.array_equal(after[times < 1.5], before[times < 1.5])
     assert np.all(after[times >= 1.5, 0] == 0.005)

@@ -1,5 +1,5 @@
-r"""The internal-force QP's constraint rows and null-space basis (the kernels of
-:mod:`regrasp.dynamics.internal_force.solver`, kept apart so that module holds the public API).
+r"""The internal-force QP's constraint rows and null-space basis (the building blocks of
+:mod:`regrasp.dynamics.internal_force.problem` and :mod:`regrasp.dynamics.internal_force.solver`).
 
 A row reads :math:`\alpha_r n_i^T f_i + \beta_r t_i^T f_i\ (-\ \sigma_r s) \ge lo_r` on the predicted
 force :math:`f_i` of contact i (equalities last, :math:`= lo_r`). With a target cone margin
@@ -15,12 +15,17 @@ import math
 
 import numpy as np
 import scipy.linalg
+from numpy.typing import ArrayLike
 from scipy.linalg import lapack
 
-from ...core.contact import ContactMode, as_frictions, as_modes
+from ...core.contact import ContactMode, Friction, FrictionLike, ModesLike, as_frictions, as_modes
+from .settings import ConeEdge, InternalForceSettings
+
+__all__ = ["MARGIN_AIM", "MARGIN_WEIGHT", "OSQP_INFTY", "ConstraintRows", "as_contacts", "null_basis"]
 
 _EPS = float(np.finfo(float).eps)
-_OSQP_INFTY = 1e30  # OSQP's infinity (osqp.OSQP().constant("OSQP_INFTY"))
+#: OSQP's infinity (``osqp.OSQP().constant("OSQP_INFTY")``): a bound at or beyond it is no bound.
+OSQP_INFTY = 1e30
 #: the weight W [-] of the margin term ½ W (s - target - δ)² and its aim δ [N] beyond the target
 #: (``docs/derivations.md``, "Internal force for a margin"): at s = target the term still pulls with
 #: W δ = 1e4 N, more than the squeeze's marginal cost ‖f_c‖ ‖∂f_c/∂s‖ of any squeeze below ~100 N, so s
@@ -53,20 +58,24 @@ def _constraint_rows(frames, modes, frictions, settings, cone_edges: tuple):
     return ineq, eq, cone
 
 
-def _contacts(m: int, modes, friction) -> tuple[tuple[ContactMode, ...], tuple]:
-    """The modes and the frictions of ``m`` contacts, validated."""
+def as_contacts(m: int, modes: ModesLike,
+                friction: FrictionLike) -> tuple[tuple[ContactMode, ...], tuple[Friction, ...]]:
+    """The modes (:func:`~regrasp.core.contact.as_modes`) and the frictions (:func:`~regrasp.core.contact.as_frictions`)
+    of ``m`` contacts, validated."""
     return as_modes(modes, m), as_frictions(friction, m)
 
 
-class _Rows:
-    r"""The constraint rows of :func:`_constraint_rows` for one (modes, frictions, settings, cone edges),
-    as matrices: row r reads :math:`\alpha_r n_i^T f_i + \beta_r t_i^T f_i - \sigma_r s \ge lo_r`
+class ConstraintRows:
+    r"""The QP's constraint rows (module docstring) for one (modes, frictions, settings, cone edges) of ``m``
+    contacts, as matrices: row r reads :math:`\alpha_r n_i^T f_i + \beta_r t_i^T f_i - \sigma_r s \ge lo_r`
     (equalities last, = lo_r), so that for given surface frames all rows are one product :math:`C f`
-    (:meth:`matrix`); ``cone_edges``: a tuple of :class:`~regrasp.dynamics.internal_force.solver.ConeEdge` on distinct
-    contacts, validated by the caller."""
+    (:meth:`matrix`); ``modes`` and ``friction`` as :func:`as_contacts` takes them; ``cone_edges``: a tuple of
+    :class:`~regrasp.dynamics.internal_force.settings.ConeEdge` on distinct contacts, validated by the caller
+    (:func:`~regrasp.dynamics.internal_force.settings.as_cone_edges`)."""
 
-    def __init__(self, m: int, modes, friction, settings, cone_edges: tuple):
-        modes, frictions = _contacts(m, modes, friction)
+    def __init__(self, m: int, modes: ModesLike, friction: FrictionLike, settings: InternalForceSettings,
+                 cone_edges: tuple[ConeEdge, ...]):
+        modes, frictions = as_contacts(m, modes, friction)
         # in surface coordinates (n = e_x, t = e_y) each row's coefficients are (α_r, β_r)
         ineq, eq, cone = _constraint_rows(np.broadcast_to(np.eye(2), (m, 2, 2)), modes, frictions, settings,
                                           cone_edges)
@@ -79,7 +88,7 @@ class _Rows:
             self.coefficients[r, 2 * i:2 * i + 2] = coef
         self.lower = np.array([lo for _, _, lo in ineq + eq])
         self.n_ineq, self.n_eq = len(ineq), len(eq)
-        self.upper = np.full(self.n_ineq + self.n_eq, _OSQP_INFTY)  # equalities' bounds set per problem
+        self.upper = np.full(self.n_ineq + self.n_eq, OSQP_INFTY)  # equalities' bounds set per problem
         #: the inequalities' indices of the static-cone rows (their residuals' minimum is the cone margin)
         self.cone = tuple(cone)
         cone_set = set(cone)
@@ -147,7 +156,7 @@ class _Rows:
         return ok, margin
 
 
-def _null_basis(constraint_matrix) -> np.ndarray:
+def null_basis(constraint_matrix: ArrayLike) -> np.ndarray:
     r"""An orthonormal basis of :math:`\mathrm{null}(A^T)`, (rows, k).
 
     For a full-column-rank A (the usual case) the last k columns of Q in A = QR (Householder,

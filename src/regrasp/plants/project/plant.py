@@ -76,6 +76,7 @@ from ...core.validation import (
 )
 from ...kernels import warm_up
 from ...kernels.finger import FINGER_TERMS
+from ...kernels.finger import condition_2x2 as _condition
 from ...kernels.plant import (
     FIXED,
     PLANT_CONTACT,
@@ -87,7 +88,7 @@ from ...kernels.plant import (
     plant_step_into,
 )
 from ...model.collision import UrdfCollisionChecker, default_tip_clearance
-from ...model.hand import Hand, _condition
+from ...model.hand import Hand
 
 __all__ = ["Plant", "PlantContact", "PlantState", "PlantStep"]
 
@@ -285,11 +286,11 @@ class Plant:
             self._link_radii_array = np.array(self._link_radii, dtype=float)
             self._certificates = np.full((hand.m, 9), np.nan)  # per finger (a NaN row: none): see _collisions()
         # the plant's own Pinocchio data on the hand's model of all fingers (their gravity and link masses)
-        self._hand_pin = (hand._hand_model, hand._hand_model.createData())
+        self._hand_pin = (hand.pinocchio_model, hand.pinocchio_model.createData())
         # per finger: its tip frame in that model, its joints' damping and joint 1's axis
         self._pin = [(tip, *np.asarray(model.damping, dtype=float).tolist(),
                       *model.jointPlacements[1].translation[:2].tolist())
-                     for model, tip in zip(hand._models, hand._hand_tips)]
+                     for model, tip in zip(hand.finger_models, hand.tip_frame_ids)]
         self._last_key, self._last_evaluation = (None,) * 4, None  # see step()
         self._damping = tuple(d for entry in self._pin for d in entry[1:3])
         self._no_damping = (0.0,) * hand.nq

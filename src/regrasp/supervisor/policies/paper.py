@@ -100,7 +100,7 @@ class PaperPolicy:
         hits = np.flatnonzero(bad)
         return float(times[k0 + hits[0]]) if hits.size else None
 
-    def _kept_feasible(self, i: int, t: float, interval) -> tuple[tuple[float, float], float | None]:
+    def kept_feasible(self, i: int, t: float, interval: tuple[float, float]) -> tuple[tuple[float, float], float | None]:
         """The widest piece of ``interval`` the plan keeps feasible for contact i over
         [t, t + target_horizon] (or its longest prefix with a non-empty intersection), and until when."""
         if self.c.plan is None:
@@ -147,7 +147,7 @@ class PaperPolicy:
             lo, hi = reading.bounds[k]
             if k == i or phases[k] is not ContactPhase.FIXED or not math.isfinite(hi - lo):
                 continue
-            (plo, phi), _ = self._kept_feasible(k, meas.t, (lo, hi))
+            (plo, phi), _ = self.kept_feasible(k, meas.t, (lo, hi))
             keep = s.danger_fraction * (phi - plo)
             candidates = np.linspace(plo + keep, phi - keep, s.enabling_candidates) if phi - plo > 0 else []
             for target_k in sorted(candidates, key=lambda x: abs(x - meas.xi[k])):
@@ -198,7 +198,7 @@ class PaperPolicy:
         for *_, i in sorted(danger):  # the soonest squeezed first
             if meas.t < self._recheck[i]:
                 continue
-            (plo, phi), until = self._kept_feasible(i, meas.t, tuple(reading.bounds[i]))
+            (plo, phi), until = self.kept_feasible(i, meas.t, tuple(reading.bounds[i]))
             target = 0.5 * (plo + phi)
             if abs(target - meas.xi[i]) < 2.0 * self.executor.arrive_tolerance:
                 continue  # already where a slide would take it

@@ -66,14 +66,16 @@ class ScheduledPolicy:
         self._cooldown_until = -math.inf
         self._next_decision = -math.inf      # decide at the first step at or after it (settings.decision_period)
         self._phases: tuple = ()             # the phases at the last decision
-        self._use(schedule, schedule.t_start)
+        self.adopt(schedule, schedule.t_start)
 
     @property
     def schedule(self) -> RegraspSchedule:
         """The schedule in force."""
         return self.schedules[-1][1]
 
-    def _use(self, schedule: RegraspSchedule, since: float) -> None:
+    def adopt(self, schedule: RegraspSchedule, since: float) -> None:
+        """Follow ``schedule`` from ``since`` [s] on (a re-plan's, or one a planning stack hands over); the slides
+        already issued are forgotten, the schedules before stay in :attr:`schedules`."""
         self.schedules.append((float(since), schedule))
         self._issued: set[tuple[int, int]] = set()  # (period, slide index)
         self._since = float(since)
@@ -233,6 +235,6 @@ class ScheduledPolicy:
         except RegraspError as exc:
             self._event(out, t, None, EventKind.REPLAN_FAILED, f"{why}; re-plan failed: {exc}; keeping the schedule")
             return
-        self._use(schedule, t)
+        self.adopt(schedule, t)
         self._event(out, t, None, EventKind.REPLAN, f"{why}; re-planned from t = {t:.3f} s: {len(schedule.slides)} "
                     f"slide(s) to t = {schedule.t_end:.3f} s", slides=len(schedule.slides), until=schedule.t_end)

@@ -1,0 +1,63 @@
+"""What the package's PNG figures share (matplotlib, headless): pyplot on the Agg backend, a column of axes over a
+common time axis, interval sets drawn as images, and writing a figure.
+
+matplotlib is imported inside the functions, on first use, so that importing :mod:`regrasp` does not load it.
+Plot lengths are in millimetres (:data:`MM`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .intervals import Intervals
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["MM", "membership", "pyplot", "save_figure", "stacked_axes"]
+
+#: Millimetres per metre: the figures' lengths are in mm.
+MM = 1000.0
+
+
+def pyplot() -> ModuleType:
+    """``matplotlib.pyplot``, with the headless Agg backend selected (imported on first use)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def stacked_axes(n: int) -> tuple[Figure, np.ndarray]:
+    """A figure of ``n`` axes in a column sharing their x (time) axis, 3.4 in high each; (figure, the (n,) axes)."""
+    fig, axes = pyplot().subplots(n, 1, figsize=(9, 3.4 * n), sharex=True, squeeze=False)
+    return fig, axes[:, 0]
+
+
+def membership(times: np.ndarray, sets_per_sample: Sequence[Intervals], grid: np.ndarray) -> np.ndarray:
+    """(len(grid), len(times)) boolean image: whether a ``grid`` value lies in the sample's interval set (one set per
+    time of ``times``; the grid and the sets in the same unit)."""
+    img = np.zeros((len(grid), len(times)), dtype=bool)
+    for k, intervals in enumerate(sets_per_sample):
+        for lo, hi in intervals:
+            img[:, k] |= (grid >= lo) & (grid <= hi)
+    return img
+
+
+def save_figure(fig: Figure, path: str | Path, layout: bool = True) -> Path:
+    """Write ``fig`` to ``path`` (a PNG at 110 dpi; its directory made if missing, tight layout first when
+    ``layout``) and close it; the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if layout:
+        fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    pyplot().close(fig)
+    return path

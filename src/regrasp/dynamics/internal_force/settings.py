@@ -1,0 +1,104 @@
+r"""The internal-force QP's settings (paper §3.3, eq. 3.3.7): its margins (:class:`InternalForceSettings`) and the
+contacts to put on a friction-cone edge (:class:`ConeEdge`); the QP itself is
+:mod:`regrasp.dynamics.internal_force.problem`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...core.exceptions import InvalidParameterError
+from ...core.validation import as_finite_float
+
+__all__ = ["ConeEdge", "InternalForceSettings", "as_cone_edges"]
+
+
+@dataclass(frozen=True)
+class InternalForceSettings:
+    """Margins of the internal-force QP.
+
+    Attributes:
+        f_min: Minimum normal force [N] at every contact, >= 0.
+        friction_margin: A ratio [-], >= 0: fixed contacts keep |f_t| <= (μ_s - friction_margin) f_n.
+        tolerance: OSQP absolute and relative tolerance, > 0.
+        f_max: Maximum normal force [N] at every contact (what the fingers can push), > f_min, or inf.
+        target_cone_margin: The smallest cone margin (μ_s - margin) f_n - |f_t| [N] to reach at the fixed
+            contacts, >= 0 (:mod:`regrasp.dynamics.internal_force.problem`); 0: the least squeeze only.
+        fallback_friction_margin: Where no internal force keeps the fixed contacts ``friction_margin`` inside their
+            cones, the solver answers with this smaller friction margin [-] instead of failing (None: it fails). A margin
+            that covers an uncertain μ is a preference; the cone of the model's μ is the limit.
+    """
+
+    f_min: float = 0.5
+    friction_margin: float = 0.05
+    tolerance: float = 1e-9
+    f_max: float = float("inf")
+    target_cone_margin: float = 0.0
+    fallback_friction_margin: float | None = None
+
+    def __post_init__(self):
+        for name, low, strict in (("f_min", 0.0, False), ("friction_margin", 0.0, False), ("tolerance", 0.0, True),
+                                  ("target_cone_margin", 0.0, False)):
+            value = as_finite_float(name, getattr(self, name))
+            if value < low or (strict and value == low):
+                raise InvalidParameterError(name, value, f"a finite value {'>' if strict else '>='} {low:g}")
+        f_max = self.f_max
+        if not (isinstance(f_max, float) and f_max == math.inf):  # inf: no upper bound
+            try:
+                f_max = as_finite_float("f_max", f_max)
+            except InvalidParameterError:
+                f_max = math.nan  # (the error below says what f_max may be)
+        if not f_max > self.f_min:
+            raise InvalidParameterError("f_max", self.f_max, f"a maximum normal force > f_min ({self.f_min}) or inf")
+        fallback = self.fallback_friction_margin
+        if fallback is not None and not 0.0 <= as_finite_float("fallback_friction_margin", fallback) \
+                < self.friction_margin:
+            raise InvalidParameterError("fallback_friction_margin", fallback,
+                                        f"None or a friction margin in [0, friction_margin = {self.friction_margin:g})")
+
+
+@dataclass(frozen=True)
+class ConeEdge:
+    r"""Put contact ``contact`` on a cone edge: :math:`t \cdot f = \text{sign}\,\mu\, n \cdot f` there.
+
+    Attributes:
+        contact: The contact's index.
+        sign: The sliding direction, ±1 (the friction on the object points along sign · t).
+        mu: The edge's coefficient [-], >= 0, chosen by the caller: the kinetic one for a sliding
+            contact, the static one plus an overshoot to make a fixed contact break away, the kinetic
+            one minus an undershoot to let a sliding contact slow down and stick.
+    """
+
+    contact: int
+    sign: float
+    mu: float
+
+    def __post_init__(self):
+        if self.sign not in (-1, 1, -1.0, 1.0):
+            raise InvalidParameterError("cone_edge.sign", self.sign, "+1 or -1")
+        if not as_finite_float("cone_edge.mu", self.mu) >= 0.0:
+            raise InvalidParameterError("cone_edge.mu", self.mu, "a finite friction coefficient >= 0")
+        object.__setattr__(self, "sign", float(self.sign))
+        object.__setattr__(self, "mu", float(self.mu))
+
+def as_cone_edges(cone_edge: ConeEdge | Iterable[ConeEdge] | None, m: int) -> tuple[ConeEdge, ...]:
+    """``cone_edge`` (None, a :class:`ConeEdge`, or a sequence of them on distinct contacts) as a tuple,
+    validated against ``m`` contacts."""
+    if cone_edge is None:
+        return ()
+    edges = (cone_edge,) if isinstance(cone_edge, ConeEdge) else cone_edge
+    if isinstance(edges, (str, bytes)) or not hasattr(edges, "__iter__"):
+        raise InvalidParameterError("cone_edge", cone_edge, "None, a ConeEdge or a tuple of them")
+    edges = tuple(edges)
+    if not all(isinstance(edge, ConeEdge) for edge in edges):
+        raise InvalidParameterError("cone_edge", cone_edge, "None, a ConeEdge or a tuple of them")
+    contacts = [edge.contact for edge in edges]
+    if not all(isinstance(j, (int, np.integer)) and 0 <= j < m for j in contacts):
+        raise InvalidParameterError("cone_edge", cone_edge, f"contact indices in 0..{m - 1}")
+    if len(set(contacts)) != len(contacts):
+        raise InvalidParameterError("cone_edge", cone_edge, "cone edges on distinct contacts")
+    return edges

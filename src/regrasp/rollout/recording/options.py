@@ -1,0 +1,185 @@
+"""A recorder's options, checked before anything is opened (:func:`checked_options`): a bad argument raises a typed
+error and leaves nothing behind (no stream, no file); and the checks of what each logged step is given (its plant,
+step number, time and desired pose)."""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ...core.contact import ContactMode
+from ...core.exceptions import InvalidParameterError
+from ...plants.project.plant import PlantState
+from ...plants.simulation import PlantLike
+
+__all__ = ["RecorderOptions", "checked_desired", "checked_options", "checked_plant_state", "checked_step",
+           "checked_time"]
+
+#: Where ``connect`` may point: a rerun gRPC URL such as ``rerun+http://127.0.0.1:9876/proxy``.
+_GRPC_URL = re.compile(r"^rerun(\+https?)?://[^/\s]+(/\S*)?$")
+
+
+@dataclass(frozen=True)
+class RecorderOptions:
+    """A :class:`~regrasp.rollout.recording.recorder.RolloutRecorder`'s options, checked (its arguments' names,
+    meanings and units).
+
+    Attributes:
+        rrd_path: The ``.rrd`` file, or None.
+        spawn: Whether a viewer is spawned.
+        connect: The gRPC URL streamed to, or None.
+        application_id: Rerun application id.
+        recording_name: The name shown in the viewer.
+        danger_fraction: Width of each danger zone, a fraction of its interval, in [0, 0.5).
+        decimation: Log every n-th step (n >= 1).
+        flush_every: Send the buffered rows every this many logged steps (>= 1).
+        force_scale: Arrow length per newton [mm/N].
+        cone_length: Length of the friction cones' rays [mm].
+        plant_forces: Recompute the plant's forces without a ``PlantStep``.
+        envelope_tolerance: Reuse an edge's envelope sample while the object moves less than this [m].
+        envelope_geometry: ``"ideal"`` or ``"urdf"``.
+        envelope_edges: Per finger the edges whose envelopes are drawn, or None (each contact's current edge).
+        sliding: The contacts whose ξ are the tracking error's reduced coordinates.
+    """
+
+    rrd_path: Path | None
+    spawn: bool
+    connect: str | None
+    application_id: str
+    recording_name: str
+    danger_fraction: float
+    decimation: int
+    flush_every: int
+    force_scale: float
+    cone_length: float
+    plant_forces: bool
+    envelope_tolerance: float
+    envelope_geometry: str
+    envelope_edges: list[tuple[int, ...]] | None
+    sliding: list[int]
+
+
+def checked_options(plant: PlantLike, *, envelope_edges: Sequence[int | Sequence[int] | None] | None,
+                    rrd_path: str | Path | None, spawn: bool, connect: str | None, application_id: str,
+                    recording_name: str | None, danger_fraction: float, decimation: int,
+                    sliding: Sequence[int] | None, envelope_geometry: str, force_scale: float, cone_length: float,
+                    plant_forces: bool, envelope_tolerance: float, flush_every: int) -> RecorderOptions:
+    """A recorder's arguments (:class:`~regrasp.rollout.recording.recorder.RolloutRecorder`'s, the same names),
+    checked and normalised. The envelope geometry is checked when the envelopes are made.
+
+    Raises:
+        InvalidParameterError: no plant, no sink, a missing directory, ``spawn`` with ``connect``, a ``connect``
+            that is no rerun gRPC URL, or a parameter out of its domain.
+        UnknownEdgeError: an edge in ``envelope_edges`` that the object does not have.
+    """
+    if not isinstance(plant, PlantLike):
+        raise InvalidParameterError("plant", plant,
+                                    "a plant (regrasp.Plant or regrasp.plants.mujoco.plant.MujocoPlant)")
+    if connect is not None:
+        if not isinstance(connect, str) or not _GRPC_URL.match(connect):
+            raise InvalidParameterError("connect", connect,
+                                        "a rerun gRPC URL such as 'rerun+http://127.0.0.1:9876/proxy'")
+        if spawn:
+            raise InvalidParameterError("connect", connect, "either spawn=True or connect, not both")
+    if rrd_path is None and not spawn and connect is None:
+        raise InvalidParameterError("rrd_path", None, "a sink: an .rrd path, spawn=True or connect, or both")
+    path = None
+    if rrd_path is not None:
+        path = Path(rrd_path)
+        if path.is_dir() or not path.parent.is_dir():
+            raise InvalidParameterError("rrd_path", rrd_path, "a file path in an existing directory")
+    if not (isinstance(danger_fraction, (int, float)) and 0.0 <= danger_fraction < 0.5):
+        raise InvalidParameterError("danger_fraction", danger_fraction, "a fraction in [0, 0.5)")
+    decimation = _positive_int("decimation", decimation)
+    flush_every = _positive_int("flush_every", flush_every)
+    for name, value in (("force_scale", force_scale), ("cone_length", cone_length)):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise InvalidParameterError(name, value, "a length > 0 [mm per N, mm]")
+    if not (isinstance(envelope_tolerance, (int, float)) and math.isfinite(envelope_tolerance)
+            and envelope_tolerance >= 0):
+        raise InvalidParameterError("envelope_tolerance", envelope_tolerance, "a distance >= 0 [m]")
+    m = plant.hand.m
+    edges = _parse_edges(envelope_edges, plant)
+    if sliding is None:
+        sliding = [i for i, c in enumerate(plant.contacts) if c.mode is ContactMode.SLIDING]
+    sliding = list(sliding)
+    if (len(set(sliding)) != len(sliding)
+            or not all(isinstance(i, (int, np.integer)) and 0 <= i < m for i in sliding)):
+        raise InvalidParameterError("sliding", sliding, f"distinct contact indices in 0..{m - 1}")
+    name = recording_name if recording_name is not None else (path.stem if path is not None else "rollout")
+    return RecorderOptions(
+        rrd_path=path, spawn=spawn, connect=connect, application_id=application_id, recording_name=str(name),
+        danger_fraction=float(danger_fraction), decimation=decimation, flush_every=flush_every,
+        force_scale=float(force_scale), cone_length=float(cone_length), plant_forces=bool(plant_forces),
+        envelope_tolerance=float(envelope_tolerance), envelope_geometry=envelope_geometry, envelope_edges=edges,
+        sliding=[int(i) for i in sliding])
+
+
+def _positive_int(name: str, value: object) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise InvalidParameterError(name, value, "an integer >= 1")
+    return int(value)
+
+
+def _parse_edges(envelope_edges: object, plant: PlantLike) -> list[tuple[int, ...]] | None:
+    """Per finger the edges to draw (an edge, a sequence of edges or None each), checked against the object."""
+    if envelope_edges is None:
+        return None
+    m = plant.hand.m
+    if isinstance(envelope_edges, (str, bytes)) or not isinstance(envelope_edges, Sequence) \
+            or len(envelope_edges) != m:
+        raise InvalidParameterError("envelope_edges", envelope_edges,
+                                    f"one entry per finger ({m}): an edge, a list of edges or None")
+    out = []
+    for entry in envelope_edges:
+        if entry is None:
+            out.append(())
+            continue
+        edges = [entry] if isinstance(entry, (int, np.integer)) else list(entry)
+        for e in edges:
+            plant.polygon.edge(e)  # UnknownEdgeError
+        out.append(tuple(int(e) for e in edges))
+    return out
+
+
+def checked_time(t: float) -> float:
+    """A logged time [s], checked finite."""
+    t = float(t)
+    if not math.isfinite(t):
+        raise InvalidParameterError("time", t, "a finite time [s]")
+    return t
+
+
+def checked_desired(desired_pose: ArrayLike | None) -> np.ndarray | None:
+    """A desired pose (x, y, β) or reduced state S_d = (x, y, β, ξ...) as a flat float array, checked finite; or
+    None."""
+    desired = None if desired_pose is None else np.asarray(desired_pose, dtype=float).reshape(-1)
+    if desired is not None and (desired.size < 3 or not np.isfinite(desired).all()):
+        raise InvalidParameterError("desired_pose", desired_pose, "(x, y, beta) or S_d = (x, y, beta, xi...)")
+    return desired
+
+
+def checked_plant_state(plant: object, recorder_plant: PlantLike) -> PlantState:
+    """The state of ``plant``: the recorder's plant, or one with as many fingers and an object of as many edges."""
+    m = recorder_plant.hand.m
+    if plant is not recorder_plant and (not isinstance(plant, PlantLike) or plant.hand.m != m
+                                        or plant.polygon.n_vertices != recorder_plant.polygon.n_vertices):
+        raise InvalidParameterError("plant", plant, f"a plant with the recorder's {m} fingers and object")
+    if plant.state is None:
+        raise InvalidParameterError("plant.state", None, "a state: call plant.reset() first")
+    return plant.state
+
+
+def checked_step(step: object, default: int) -> int:
+    """A logged step's number: ``step``, an integer >= 0, or ``default`` for None."""
+    if step is None:
+        return default
+    if isinstance(step, bool) or not isinstance(step, (int, np.integer)) or step < 0:
+        raise InvalidParameterError("step", step, "an integer >= 0")
+    return int(step)

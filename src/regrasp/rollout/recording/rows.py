@@ -1,0 +1,243 @@
+"""What one logged step's rows are (:class:`StepRow`: the raw data the scene draws and the plotted values), built
+from a supervised step (:class:`SupervisedStep`: a record of the simulation loop or a compiled stretch's step) by
+:func:`supervised_row`; :mod:`~regrasp.rollout.recording.measure` builds them from the plant itself. A block of
+rows becomes the plots' columns here (:func:`series_columns`) and the scene's in
+:class:`~regrasp.rollout.recording.scene.Scene`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+import rerun as rr
+from numpy.typing import ArrayLike
+
+from ...core.contact import ContactMode
+from ...core.planar import wrap_angle
+from ...supervisor.types import ContactPhase
+from .hand import HandDrawing
+
+if TYPE_CHECKING:
+    from ...plants.project.plant import PlantContact
+    from ...plants.simulation import StepRecord
+
+__all__ = ["MODE_CODES", "PHASE_CODES", "Layout", "Segment", "Series", "StepRow", "SupervisedStep", "poses",
+           "segments", "series", "series_columns", "supervised_row"]
+
+#: Contact mode → the value plotted under ``plots/mode`` (a ContactMode equals its string, so either looks up).
+MODE_CODES = {ContactMode.FIXED: 0, ContactMode.SLIDING: 1, ContactMode.SEPARATED: 2}
+#: Supervisor phase → the value plotted under ``plots/phase/<finger>``.
+PHASE_CODES = {ContactPhase.FIXED: 0, ContactPhase.PRIMING: 1, ContactPhase.SLIDING: 2, ContactPhase.SETTLING: 3}
+
+#: One drawn feasible interval: (finger, edge, slot: the how-many-th envelope drawn along that edge, lo, hi [m]).
+Segment = tuple[int, int, int, float, float]
+#: A pose as drawn: (cos β, sin β, x [m], y [m]).
+Pose = tuple[float, float, float, float]
+
+
+@dataclass(frozen=True)
+class Layout:
+    """What every row holds: the fingers as drawn (and their kinematics), the contacts whose ξ are the tracking
+    error's reduced coordinates (``sliding``) and the danger zones' width (a fraction of each interval)."""
+
+    hand: HandDrawing
+    sliding: tuple[int, ...]
+    danger_fraction: float
+
+    @property
+    def n_errors(self) -> int:
+        """Entries of the tracking error: x, y, β and one ξ per sliding contact."""
+        return 3 + len(self.sliding)
+
+    def object_error(self, error: ArrayLike) -> np.ndarray:
+        """A control law's error cut to the object's entries (x, y, β) and padded with NaN to the error series."""
+        out = np.full(self.n_errors, np.nan)
+        out[:3] = np.asarray(error, dtype=float)[:3]
+        return out
+
+
+class Series(NamedTuple):
+    """One logged step's plotted values, in the plots' units (module docstring of
+    :mod:`regrasp.rollout.recording`: mm, degrees, N, codes; NaN where absent), per plot entity."""
+
+    error: list[float]  #: ``plots/error``
+    xi: list[list[float]]  #: ``plots/xi/<finger>``, per finger its seven series
+    force: list[float]  #: ``plots/force``
+    cone_margin: list[float]  #: ``plots/cone_margin``
+    mode: list[float]  #: ``plots/mode``
+    phase: list[list[float]]  #: ``plots/phase/<finger>``, per finger
+
+
+class StepRow(NamedTuple):
+    """One logged step's rows: what the scene draws (hand frame, metres, object frame for the edges) and the
+    plotted values.
+
+    Attributes:
+        pose: The object's pose after the step.
+        desired: The desired pose, or None (no ghost).
+        frames: The fingers' joint frames (:meth:`HandDrawing.kinematics`).
+        chains: The fingers' chains (m, 3, 2) [m].
+        edges: Each contact's edge now.
+        modes: Each contact's mode now.
+        surface: The plant's contact forces (f_n, f_t) per contact (m, 2) [N], or None.
+        predicted: The controller's predicted contact forces in the hand frame (m, 2) [N], or None.
+        segments: The feasible intervals drawn.
+        series: The plotted values.
+    """
+
+    pose: Pose
+    desired: Pose | None
+    frames: list[np.ndarray]
+    chains: np.ndarray
+    edges: list[int]
+    modes: list[ContactMode]
+    surface: np.ndarray | None
+    predicted: np.ndarray | None
+    segments: list[Segment]
+    series: Series
+
+
+class SupervisedStep(NamedTuple):
+    """What a supervised step gives a recording (a :class:`~regrasp.plants.simulation.StepRecord`'s fields, or a
+    compiled stretch's outputs for that step), per contact where shaped (m, ...).
+
+    Attributes:
+        X: The object's pose after the step (x, y [m], β [rad]).
+        q: The joint angles after the step (2m,) [rad].
+        surface: The plant's contact forces at the step's start (f_n, f_t) (m, 2) [N].
+        predicted: The law's predicted contact forces, hand frame (m, 2) [N].
+        predicted_surface: The same as (f_n, f_t) (m, 2) [N].
+        feasible: Per contact the supervisor's envelope's feasible intervals [(lo, hi), ...] [m].
+        phases: Per contact the supervisor's phase.
+        xi: Each contact's ξ after the step [m].
+        error: The law's tracking error (its first three entries, x, y [m] and β [rad], are plotted).
+        plant_cone: The plant's cone margins μ f_n - |f_t| [N].
+        predicted_cone: The law's [N].
+        bounds: The feasible interval holding each ξ (m, 2) [m].
+        reference_xi: The law's ξ_d [m] (NaN: none).
+        planned_xi: The schedule's ξ_d [m] (NaN: none).
+    """
+
+    X: ArrayLike
+    q: ArrayLike
+    surface: ArrayLike
+    predicted: ArrayLike
+    predicted_surface: ArrayLike
+    feasible: Sequence[Sequence[tuple[float, float]]]
+    phases: Sequence[ContactPhase]
+    xi: ArrayLike
+    error: ArrayLike
+    plant_cone: ArrayLike
+    predicted_cone: ArrayLike
+    bounds: ArrayLike
+    reference_xi: ArrayLike
+    planned_xi: ArrayLike
+
+    @classmethod
+    def from_record(cls, record: StepRecord) -> SupervisedStep:
+        """A supervised record's step: the state after it, its forces and margins, the law's output and the
+        supervisor's view at its start."""
+        ps, sup, control = record.plant, record.supervision, record.command.control
+        return cls(ps.state.X, ps.state.q, ps.forces_surface, control.contact_forces, control.contact_forces_surface,
+                   [e.feasible for e in sup.envelopes], sup.phases, ps.xi, control.error, record.cone_margins,
+                   control.cone_margins, sup.bounds, sup.reference_xi, sup.planned_xi)
+
+
+def poses(X: ArrayLike, desired: np.ndarray | None) -> tuple[Pose, Pose | None]:
+    """The object's pose ``X`` and the desired pose (``desired``'s first three entries, or None) as drawn."""
+    x, y, beta = np.asarray(X, dtype=float).tolist()
+    ghost = None if desired is None else (math.cos(desired[2]), math.sin(desired[2]), desired[0], desired[1])
+    return (math.cos(beta), math.sin(beta), x, y), ghost
+
+
+def segments(edges: Iterable[tuple[int, int]],
+             feasible_of: Callable[[int, int], Sequence[tuple[float, float]]]) -> list[Segment]:
+    """The intervals drawn for the (finger, edge) pairs ``edges``: ``feasible_of(finger, edge)``'s, each with its
+    slot, the how-many-th envelope along its edge (the drawing offsets them from the edge)."""
+    out = []
+    slot: dict[int, int] = {}
+    for i, edge in edges:
+        k = slot.get(edge, 0)
+        slot[edge] = k + 1
+        for lo, hi in feasible_of(i, edge):
+            out.append((i, edge, k, lo, hi))
+    return out
+
+
+def series(layout: Layout, X: ArrayLike, xi: Sequence[float], modes: Sequence[ContactMode],
+           desired: np.ndarray | None, output_error: ArrayLike | None, forces: list[float], margins: list[float],
+           bands: Sequence[Sequence[float]], law_xi: Sequence[float], planned_xi: Sequence[float],
+           phases: Sequence[float]) -> Series:
+    """One step's plotted values from the pose ``X`` and each contact's ``xi`` [m] after it: the tracking error
+    against ``desired`` (S_d) when known, else ``output_error`` (else NaN); ``forces`` (f_n..., f_t..., predicted
+    f_n..., f_t... [N]) and ``margins`` (the plant's, then the predicted [N]) as they are; ``bands`` (m, 2) the
+    feasible interval holding each ξ [m] (NaN: none); ``law_xi``, ``planned_xi`` per contact [m] (NaN: none);
+    ``phases`` the phase codes (NaN: no supervisor)."""
+    nan = math.nan
+    x, y, beta = np.asarray(X, dtype=float).tolist()
+    if desired is not None:
+        d = desired.tolist()
+        err = [d[0] - x, d[1] - y, wrap_angle(d[2] - beta)] + [nan] * (layout.n_errors - 3)
+        for j, i in enumerate(layout.sliding):
+            if 3 + j < len(d):
+                err[3 + j] = d[3 + j] - xi[i]
+    elif output_error is not None:
+        err = np.asarray(output_error, dtype=float).tolist()
+    else:
+        err = [nan] * layout.n_errors
+    err[0] *= 1000.0
+    err[1] *= 1000.0
+    err[2] = math.degrees(err[2])
+    f = layout.danger_fraction
+    xi_rows, phase_rows = [], []
+    for i in range(len(modes)):
+        row = [nan] * 7
+        if modes[i] is not ContactMode.SEPARATED:
+            lo, hi = bands[i]
+            w = f * (hi - lo)
+            row = [xi[i], law_xi[i], lo, hi, lo + w, hi - w, planned_xi[i]]
+        xi_rows.append([v * 1000.0 for v in row])
+        phase_rows.append([phases[i]])
+    return Series(error=err[:3] + [v * 1000.0 for v in err[3:]], xi=xi_rows, force=forces, cone_margin=margins,
+                  mode=[float(MODE_CODES.get(mo, 2)) for mo in modes], phase=phase_rows)
+
+
+def supervised_row(layout: Layout, contacts: Sequence[PlantContact], step: SupervisedStep,
+                   desired: np.ndarray | None) -> StepRow:
+    """A supervised step's row, from the step alone (the contacts' edges and modes now): nothing is recomputed."""
+    frames, chains = layout.hand.kinematics(step.q)
+    modes = [c.mode for c in contacts]
+    edges = [c.edge for c in contacts]
+    surface = np.array(step.surface, dtype=float)
+    pred = np.asarray(step.predicted_surface, dtype=float)
+    feasible = step.feasible
+    values = series(
+        layout, step.X, np.asarray(step.xi, dtype=float).tolist(), modes, desired, layout.object_error(step.error),
+        surface[:, 0].tolist() + surface[:, 1].tolist() + pred[:, 0].tolist() + pred[:, 1].tolist(),
+        np.asarray(step.plant_cone, dtype=float).tolist() + np.asarray(step.predicted_cone, dtype=float).tolist(),
+        np.asarray(step.bounds, dtype=float).tolist(), np.asarray(step.reference_xi, dtype=float).tolist(),
+        np.asarray(step.planned_xi, dtype=float).tolist(),
+        [float(PHASE_CODES.get(ph, math.nan)) for ph in step.phases])
+    pose, ghost = poses(step.X, desired)
+    return StepRow(pose, ghost, frames, chains, edges, modes, surface, np.array(step.predicted, dtype=float),
+                   segments(enumerate(edges), lambda i, _edge: feasible[i]), values)
+
+
+def series_columns(rows: Sequence[StepRow], keys: Sequence[str]) -> Iterator[tuple[str, rr.ComponentColumnList]]:
+    """``(entity path, columns)`` of the plots for a block of rows (one row per step), in a fixed order."""
+    yield "plots/error", _scalars([r.series.error for r in rows])
+    for i, key in enumerate(keys):
+        yield f"plots/xi/{key}", _scalars([r.series.xi[i] for r in rows])
+    yield "plots/force", _scalars([r.series.force for r in rows])
+    yield "plots/cone_margin", _scalars([r.series.cone_margin for r in rows])
+    yield "plots/mode", _scalars([r.series.mode for r in rows])
+    for i, key in enumerate(keys):
+        yield f"plots/phase/{key}", _scalars([r.series.phase[i] for r in rows])
+
+
+def _scalars(values: list[list[float]]) -> rr.ComponentColumnList:
+    return rr.Scalars.columns(scalars=np.array(values, dtype=float))
