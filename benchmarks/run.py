@@ -47,6 +47,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import coal
 import numpy as np
 import pinocchio as pin
 from common import ROOT, median_us, parse_args, sliding_hold
@@ -84,7 +85,7 @@ def control_kernel_us(controller, args, n: int) -> float:
 def plant_kernel_us(plant, n: int) -> float:
     """Median of the bare compiled plant step (:func:`regrasp.kernels.plant.plant_step_into`) at the plant's state."""
     m = plant.hand.m
-    args = (*plant.kernel_arguments(np.zeros(plant.hand.nq)), np.empty(output_size(m)), np.empty(m, dtype=FINGER_TERMS),
+    args = (*plant.kernel.arguments(plant.state, plant.contacts, np.zeros(plant.hand.nq)), np.empty(output_size(m)), np.empty(m, dtype=FINGER_TERMS),
             np.empty(m, np.bool_), np.empty((m, 7)))
     return median_us(lambda: plant_step_into(*args), n)
 
@@ -110,22 +111,18 @@ def supervisor_step_us(geometry: str, n: int, track: bool = False) -> tuple[floa
         return float(np.median(times[1:]) * 1e6), floor
     if all(env.compiled for env in sup.monitor.envelopes):
         return float(np.median(times[1:]) * 1e6), compiled_queries_us(sup, meas, plant.dt, n)
-    calls = [0]
-    for env in sup.monitor.envelopes:  # count the coal calls of a few more steps
-        def counted(*args, inner=env.checker._link_distance):
-            calls[0] += 1
-            return inner(*args)
-        env.checker._link_distance = counted
+    before = sum(env.checker.queries for env in sup.monitor.envelopes)  # the coal queries of a few more steps
     for _ in range(n):
         sup.step(meas, plant.dt)
-    for env in sup.monitor.envelopes:
-        del env.checker._link_distance
+    calls = sum(env.checker.queries for env in sup.monitor.envelopes) - before
+    # one bare coal distance query: the distal link's first shape against the object, 1 cm apart
     checker = sup.monitor.envelopes[0].checker
-    distance, placement, _ = checker._links[1][5][0]
-    tf = checker._object_in_link(1, 0.0, 0.0, 1.0, 0.0)
-    request, result = checker._request, checker._result
-    bare = batch_us(lambda: distance(placement, tf, request, result), 100)
-    return float(np.median(times[1:]) * 1e6), calls[0] / n * bare
+    shape = next(s for s in checker.shapes if s.link == 1)
+    distance = coal.ComputeDistance(shape.geometry, checker.object_geometry)
+    placement, apart = coal.Transform3s(), coal.Transform3s(np.eye(3), np.array([0.0, 0.01 + 0.1, 0.0]))
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+    bare = batch_us(lambda: distance(placement, apart, request, result), 100)
+    return float(np.median(times[1:]) * 1e6), calls / n * bare
 
 
 def compiled_queries_us(sup, meas, dt: float, n: int) -> float:
@@ -322,7 +319,6 @@ def main() -> None:
     S3, S3d = np.array([0.0, 0.12, 0.0, -0.01]), np.array([0.0, 0.0, 0.0, 0.01])
     slide_qp = Proposition1Controller(three, Gains.critically_damped(20.0, 4), friction=[0.0, 0.5, 0.5])
     slide_no = Proposition1Controller(three, Gains.critically_damped(20.0, 4), friction=[0.0, 0.5, 0.5], internal_force=None)
-    floor_dyn3 = pinocchio_floor_us(hand3, args.quick)
 
     env_ideal = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1)
     env_urdf = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1, geometry="urdf")

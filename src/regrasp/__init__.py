@@ -37,15 +37,16 @@ if TYPE_CHECKING:
     from .dynamics.reduced import ReducedModel  # noqa: F401
     from .envelope.finger_envelope import FingerEnvelope  # noqa: F401
     from .envelope.planner import plan, plan_scenario  # noqa: F401
-    from .model.collision import Geometry  # noqa: F401
     from .model.finger import Finger  # noqa: F401
     from .model.finger_urdf import planar_2r_urdf  # noqa: F401
+    from .model.geometry import Geometry
     from .model.hand import Hand  # noqa: F401
     from .model.noise import ActuatorNoise, SensorNoise  # noqa: F401
     from .model.perturbation import Perturbation  # noqa: F401
     from .model.scenario import Scenario, load_scenario  # noqa: F401
     from .plants.mujoco.mjcf import MujocoSettings  # noqa: F401
-    from .plants.project.plant import Plant, PlantContact  # noqa: F401
+    from .plants.project.plant import Plant
+    from .plants.project.state import PlantContact
     from .plants.spec import ModelErrors, PlantSpec  # noqa: F401
     from .rollout.build import build_rollout  # noqa: F401
     from .rollout.recording.recorder import RolloutRecorder  # noqa: F401

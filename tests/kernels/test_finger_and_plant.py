@@ -19,7 +19,8 @@ from regrasp.kernels import finger_parameters, finger_terms_at
 from regrasp.kernels.finger import largest_disagreement, reference_terms
 from regrasp.model.finger import Finger
 from regrasp.model.hand import KERNEL_TOLERANCE, KernelMismatchWarning
-from regrasp.plants.project.plant import Plant, PlantContact
+from regrasp.plants.project.plant import Plant
+from regrasp.plants.project.state import PlantContact
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from regrasp import Friction, ScenarioError, load_scenario
-from regrasp.model.collision import Geometry
+from regrasp.model.geometry import Geometry
 
 ROOT = Path(__file__).resolve().parents[2]
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"

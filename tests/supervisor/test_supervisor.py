@@ -14,7 +14,7 @@ from regrasp.core.exceptions import InvalidParameterError
 from regrasp.core.measurement import Measurement
 from regrasp.dynamics.sliding import sliding_feasibility
 from regrasp.envelope.planner import plan, plan_scenario
-from regrasp.model.collision import Geometry
+from regrasp.model.geometry import Geometry
 from regrasp.supervisor.settings import ExecutorSettings, MonitorSettings, PaperSettings, SupervisorSettings
 from regrasp.supervisor.supervisor import RegraspSupervisor
 from regrasp.supervisor.types import ContactPhase

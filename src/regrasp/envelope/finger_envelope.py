@@ -38,8 +38,9 @@ from ..core.intervals import Intervals
 from ..core.planar import rotation
 from ..core.polygon import ConvexPolygon
 from ..core.validation import as_finite_array, as_finite_float, as_integer, as_positive_float, expect_type
-from ..model.collision import Geometry, UrdfCollisionChecker, default_tip_clearance
+from ..model.collision import UrdfCollisionChecker, default_tip_clearance
 from ..model.finger import Finger
+from ..model.geometry import Geometry
 from .evaluator import ClosedForm, EnvelopeEvaluator, UrdfCuts, urdf_pieces
 from .floats import pose_floats
 from .line import Condition, EdgeLine, condition_of_floats

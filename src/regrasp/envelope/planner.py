@@ -31,7 +31,7 @@ from ..core.intervals import Intervals, intersect, widest
 from ..core.polygon import ConvexPolygon
 from ..core.trajectory import Trajectory
 from ..core.validation import MAX_SAMPLES, as_finite_array, as_sample_count, expect_sequence_of, expect_type
-from ..model.collision import Geometry
+from ..model.geometry import Geometry
 from ..model.scenario import FingerContact, Scenario
 from .finger_envelope import EnvelopeSample, FingerEnvelope
 

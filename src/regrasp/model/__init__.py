@@ -9,9 +9,10 @@ from typing import TYPE_CHECKING
 from ..core.lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from .collision import Geometry, UrdfCollisionChecker, default_tip_clearance, segment_hits_polygon  # noqa: F401
+    from .collision import UrdfCollisionChecker, default_tip_clearance, segment_hits_polygon
     from .finger import Configuration, Finger, LinkShape  # noqa: F401
     from .finger_urdf import planar_2r_urdf  # noqa: F401
+    from .geometry import Geometry
     from .hand import Hand, HandDynamics, KernelMismatchWarning  # noqa: F401
     from .noise import ActuatorNoise, SensorNoise  # noqa: F401
     from .perturbation import Perturbation  # noqa: F401

@@ -27,35 +27,19 @@ coal stays the reference and the checker of the closed form (``tests/test_kernel
 from __future__ import annotations
 
 import math
-from enum import Enum
 
 import coal
 import numpy as np
 import pinocchio as pin
 
-from ..core.exceptions import FingerModelError, InvalidParameterError
+from ..core.exceptions import FingerModelError
 from ..core.polygon import ConvexPolygon
 from ..core.validation import as_finite_array, as_positive_float, expect_type
 from ..kernels.footprint import FOOTPRINT
 from .finger import Finger, LinkShape
 
-__all__ = ["Geometry", "UrdfCollisionChecker", "as_geometry", "checked_link_shapes", "default_tip_clearance",
-           "planar_footprint", "segment_hits_polygon"]
-
-
-class Geometry(str, Enum):
-    """How links are modelled for collision: segments (``ideal``) or URDF shapes (``urdf``)."""
-
-    IDEAL = "ideal"
-    URDF = "urdf"
-
-
-def as_geometry(name: str, value: object, expected: str = "'ideal' or 'urdf'") -> Geometry:
-    """``value`` as a :class:`Geometry` (a member or its string), else an error naming ``name``."""
-    try:
-        return Geometry(value)
-    except (ValueError, TypeError):
-        raise InvalidParameterError(name, value, expected) from None
+__all__ = ["UrdfCollisionChecker", "checked_link_shapes", "default_tip_clearance", "planar_footprint",
+           "segment_hits_polygon"]
 
 
 #: How far [m, or a unit vector's component] a shape may be from the symmetric placement of
@@ -270,6 +254,8 @@ class UrdfCollisionChecker:
         #: Half height [m] of the object's prism.
         self.half_thickness = float(h)
         self.object_geometry = polygon.to_coal(h)
+        #: coal distance queries asked by the collision tests (:meth:`links_collide`, :meth:`links_collide_kept`) so far.
+        self.queries = 0
         self._object_radius = float(np.max(np.hypot(polygon.vertices[:, 0], polygon.vertices[:, 1])))
         self._request = coal.DistanceRequest()
         self._request.enable_signed_distance = True
@@ -376,6 +362,7 @@ class UrdfCollisionChecker:
         tf = self._object_in_link(k, ox, oy, c, s)
         nearest = math.inf
         for distance, placement, _ in shapes:
+            self.queries += 1
             result.clear()
             nearest = min(nearest, distance(placement, tf, request, result))
             if nearest < 0.0:

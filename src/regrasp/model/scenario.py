@@ -79,8 +79,8 @@ from ..core.exceptions import (
 from ..core.polygon import ConvexPolygon
 from ..core.trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
 from ..core.validation import MAX_SAMPLES, as_finite_array, as_positive_float, file_problem
-from .collision import Geometry
 from .finger import Finger
+from .geometry import Geometry
 from .perturbation import Perturbation
 
 __all__ = ["FingerContact", "Scenario", "load_scenario"]
@@ -133,7 +133,7 @@ class Scenario:
     study: Perturbation = Perturbation()
 
     def check_geometry(self, geometry: Geometry | str) -> Geometry:
-        """``geometry`` as a :class:`~regrasp.model.collision.Geometry` every finger of this scenario can be planned
+        """``geometry`` as a :class:`~regrasp.model.geometry.Geometry` every finger of this scenario can be planned
         with: for ``urdf``, each finger's collision shapes (:func:`~regrasp.model.collision.checked_link_shapes`),
         else a :class:`~regrasp.core.exceptions.ScenarioError` naming the finger's ``urdf`` key."""
         try:

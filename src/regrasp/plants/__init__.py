@@ -15,7 +15,8 @@ if TYPE_CHECKING:
     from .disturbance import Disturbance  # noqa: F401
     from .mujoco.mjcf import MujocoSettings, scenario_to_mjcf  # noqa: F401
     from .mujoco.plant import MujocoPlant  # noqa: F401
-    from .project.plant import Plant, PlantContact, PlantState, PlantStep  # noqa: F401
+    from .project.plant import Plant
+    from .project.state import PlantContact, PlantState, PlantStep
     from .simulation import Command, PlantLike, StepRecord, sense, sense_projected, simulate  # noqa: F401
     from .spec import PLANTS, ModelErrors, PlantSpec  # noqa: F401
 

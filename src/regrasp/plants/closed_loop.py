@@ -14,13 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.events import Event
 from ..core.exceptions import InvalidParameterError
 from ..core.trajectory import TrajectorySample
 from ..core.validation import as_duration, as_positive_float, expect_type
 from ..dynamics.control import ComputedTorqueController, ControlOutput
 from ..dynamics.laws import Proposition2Controller
 from ..dynamics.reduced import ReducedModel
-from ..core.events import Event
 from .simulation import Command, PlantLike, StepRecord, sense_projected, simulate
 
 __all__ = ["ClosedLoopLog", "measure_reduced_state", "run_closed_loop"]

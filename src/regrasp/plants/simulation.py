@@ -43,7 +43,7 @@ from ..dynamics.control import ControlOutput
 from ..model.hand import Hand
 from ..supervisor.types import SupervisorOutput
 from .disturbance import Disturbance
-from .project.plant import PlantContact, PlantState, PlantStep
+from .project.state import PlantContact, PlantState, PlantStep
 
 __all__ = ["Command", "Driver", "InterruptAtStepEnd", "PlantLike", "SimulationOutcome", "StepRecord", "sense",
            "sense_projected", "simulate"]
@@ -57,7 +57,7 @@ class PlantLike(Protocol):
     Attributes:
         hand: The fingers (names, URDFs, base poses; the recorder draws them).
         polygon: The object.
-        contacts: One :class:`~regrasp.plants.project.plant.PlantContact` per finger: its edge, its mode now, and for a
+        contacts: One :class:`~regrasp.plants.project.state.PlantContact` per finger: its edge, its mode now, and for a
             fixed contact the ξ [m] it is held at (what :func:`sense` reads).
         friction: The friction the plant has, one :class:`~regrasp.core.contact.Friction` per contact.
         dt: The control step [s] (:meth:`step` advances by it).

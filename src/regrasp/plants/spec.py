@@ -20,7 +20,8 @@ from ..core.contact import ContactMode, Friction, FrictionLike, as_frictions
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import as_finite_array, as_positive_float, expect_type
 from ..model.hand import Hand
-from .project.plant import Plant, PlantContact
+from .project.plant import Plant
+from .project.state import PlantContact
 
 if TYPE_CHECKING:
     from ..model.scenario import Scenario

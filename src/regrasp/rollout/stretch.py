@@ -35,7 +35,8 @@ from ..dynamics.laws import FixedContactController, Proposition3Controller
 from ..kernels.decimation import logged_steps
 from ..kernels.monitor import envelope_arguments
 from ..kernels.stretch import STRETCH_COAL, STRETCH_DONE, STRETCH_SETTINGS, STRETCH_STATE, stretch_into, stretch_log
-from ..plants.project.plant import Plant, PlantStep
+from ..plants.project.plant import Plant
+from ..plants.project.state import PlantStep
 from ..supervisor.supervisor import RegraspSupervisor
 from .result import RolloutRows
 
@@ -199,7 +200,7 @@ class CompiledStretches:
         evaluation_counts = np.zeros((held.size, 3), np.int64)
         schedule_times, schedule_margins = self._schedule
         fingers, plant_record, contacts, y, certificates, radii, out, terms, needs_coal, posture = \
-            self.plant.stretch_arguments()
+            self.plant.kernel.stretch_arguments(self.plant.state, self.plant.contacts)
         last_out = np.concatenate((y, last.forces_surface.reshape(-1), np.zeros(4 * held.size), last.xi,
                                    last.xi_dot))
         control_out = np.empty(size)
@@ -223,7 +224,7 @@ class CompiledStretches:
             if taken:
                 worst, last_error = max(worst, w), e
             done += taken
-            cleared = status == STRETCH_COAL and self.plant.clear_collisions(out, needs_coal, posture)
+            cleared = status == STRETCH_COAL and self.plant.kernel.clear_collisions(out, needs_coal, posture)
             if status == STRETCH_DONE or not cleared:
                 break
         if disturbance is not None:  # (its generator as if it had drawn these steps' noise, and its deques)
@@ -258,7 +259,9 @@ class CompiledStretches:
             self._log(k, k0, done, log)
         self.steps += done
         self.calls += 1
-        return done, self.plant.take_stretch(y, last_out, float(times[done - 1] + dt), worst, last_error)
+        step = self.plant.kernel.take_stretch(y, last_out, float(times[done - 1] + dt), self.plant.contacts, last_error)
+        self.plant.adopt(step.state, worst)
+        return done, step
 
     def _log(self, k: int, k0: int, done: int, log: tuple) -> None:
         """Hand the recorder the stretch's logged steps (steps k .. k + done - 1, rows k0 ..)."""

@@ -23,7 +23,7 @@ from ..core.contact import DEFAULT_CONE_MARGIN
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import as_finite_array, as_positive_float
 from ..envelope.finger_envelope import FingerEnvelope
-from ..model.collision import Geometry, as_geometry
+from ..model.geometry import Geometry, as_geometry
 from ..model.scenario import Scenario
 from .force_polytope import ForceGeometry, ForceLimits, force_vertices, xi_intervals
 from .lattice import Lattice, motion_combos
@@ -59,7 +59,7 @@ class RegraspSettings:
         verify_substeps: Samples per time step of the planner's own verification.
         periodic: Plan a periodic schedule (None: when the trajectory is periodic and its domain
             covers a period).
-        geometry: Envelope geometry, a :class:`~regrasp.model.collision.Geometry` or its string (None: the
+        geometry: Envelope geometry, a :class:`~regrasp.model.geometry.Geometry` or its string (None: the
             scenario's).
         max_repairs: Re-plans after a failed verification before giving up.
         period_candidates: Start states tried for a periodic schedule, in order: the middle and the end of

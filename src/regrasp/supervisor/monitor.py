@@ -39,7 +39,7 @@ from ..core.exceptions import InvalidParameterError
 from ..core.validation import as_finite_array, as_positive_float
 from ..envelope.finger_envelope import EnvelopeSample, FingerEnvelope
 from ..envelope.tracker import EnvelopeTracker
-from ..model.collision import Geometry
+from ..model.geometry import Geometry
 
 __all__ = ["EnvelopeMonitor", "EnvelopeReading", "bound_speeds", "interval_of"]
 

@@ -15,7 +15,7 @@ from ..core.contact import DEFAULT_CONE_MARGIN
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import as_duration, as_finite_float, as_flag, as_integer, as_positive_float, expect_type
 from ..dynamics.internal_force.settings import InternalForceSettings
-from ..model.collision import Geometry, as_geometry
+from ..model.geometry import Geometry, as_geometry
 
 __all__ = ["ExecutorSettings", "MonitorSettings", "PaperSettings", "ScheduledSettings", "SupervisorSettings"]
 
@@ -150,7 +150,7 @@ class MonitorSettings:
     """Tuning of the runtime envelope monitor (:class:`~regrasp.supervisor.monitor.EnvelopeMonitor`).
 
     Attributes:
-        geometry: The envelopes' link geometry, a :class:`~regrasp.model.collision.Geometry` (or its string).
+        geometry: The envelopes' link geometry, a :class:`~regrasp.model.geometry.Geometry` (or its string).
         every: Evaluate the runtime envelopes every k-th step (1: every step; the monitor evaluates afresh whenever
             the policy decides, too).
         track: Follow each runtime envelope's ``urdf`` collision cuts from the last evaluation

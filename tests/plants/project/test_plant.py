@@ -866,7 +866,7 @@ def test_private_dynamics_pass_matches_the_hand(damping, link_mass_scale):
     for _ in range(5):
         q, v = rng.uniform(-2.5, 2.5, 4), rng.normal(size=4) * 3.0
         dyn = hand.dynamics(q, v)
-        for i, f in enumerate(plant._pin_pass(q, v)):
+        for i, f in enumerate(plant.equations.pin_pass(q, v)):
             sl = slice(2 * i, 2 * i + 2)
             mass, jac = dyn.mass_matrix[sl, sl], dyn.jacobian[sl, sl]
             scale = np.abs(mass).max()

@@ -8,7 +8,7 @@ contacts with elliptic friction cones between sphere tips and the object (``docs
 **Stepping.** Each control step of ``dt`` holds the joint torques τ (``qfrc_applied``, zero-order hold)
 over ``round(dt / timestep)`` MuJoCo steps.
 
-**What it reports** (:class:`~regrasp.plants.project.plant.PlantStep`), all of it what a hand could sense:
+**What it reports** (:class:`~regrasp.plants.project.state.PlantStep`), all of it what a hand could sense:
 
 * the state: joint angles and rates, the object's pose X = (x, y, β) and twist;
 * each contact's force on the object in its surface frame (inward normal, ξ direction) [N]: MuJoCo's
@@ -50,7 +50,7 @@ from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
 from ...core.validation import as_finite_array, as_finite_float, as_positive_float, expect_sequence_of, expect_type
 from ...model.hand import Hand
-from ..project.plant import MAX_DT, PlantContact, PlantState, PlantStep
+from ..project.state import MAX_DT, PlantContact, PlantState, PlantStep
 from .mjcf import MujocoSettings, build_mjcf, require_mujoco
 
 __all__ = ["MujocoPlant"]
@@ -67,7 +67,7 @@ class MujocoPlant:
         hand: The fingers (from URDF files) and gravity; only their URDFs, base poses, names, gravity,
             link mass scale and singularity threshold are read.
         polygon: The object.
-        contacts: One :class:`~regrasp.plants.project.plant.PlantContact` per finger: its edge and initial mode.
+        contacts: One :class:`~regrasp.plants.project.state.PlantContact` per finger: its edge and initial mode.
         friction: Anything :class:`~regrasp.plants.project.plant.Plant` takes; MuJoCo gets μ_k
             (:class:`~regrasp.plants.mujoco.mjcf.MujocoSettings`) and the plant reports ``Friction(μ_k)``.
         object_mass, object_inertia: Override the polygon's [kg], [kg m²].

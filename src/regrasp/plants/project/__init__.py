@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 from ...core.lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from .plant import Plant, PlantContact, PlantState, PlantStep  # noqa: F401
+    from .plant import Plant
+    from .state import PlantContact, PlantState, PlantStep
 
 __getattr__, __dir__, __all__ = lazy_exports(__name__)

@@ -1,7 +1,7 @@
 """A logged step's rows measured from the plant, for a step without a supervisor (a bare control law's, or a record
 without ``supervision``): ξ from the fingertips, the envelopes evaluated here
 (:class:`~regrasp.envelope.finger_envelope.FingerEnvelope`, reused while the object moves less than a tolerance),
-the forces from the step's :class:`~regrasp.plants.project.plant.PlantStep` or one KKT solve at the logged state.
+the forces from the step's :class:`~regrasp.plants.project.state.PlantStep` or one KKT solve at the logged state.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from ...core.contact import ContactMode, coefficients, cone_margin
 from ...core.exceptions import RegraspError
 from ...dynamics.control import ControlOutput
 from ...envelope.finger_envelope import EnvelopeSample, FingerEnvelope
-from ...plants.project.plant import PlantStep
+from ...plants.project.state import PlantStep
 from ...plants.simulation import PlantLike
 from .rows import Layout, StepRow, poses, segments, series
 

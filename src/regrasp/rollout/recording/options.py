@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 
 from ...core.contact import ContactMode
 from ...core.exceptions import InvalidParameterError
-from ...plants.project.plant import PlantState
+from ...plants.project.state import PlantState
 from ...plants.simulation import PlantLike
 
 __all__ = ["RecorderOptions", "checked_desired", "checked_options", "checked_plant_state", "checked_step",

@@ -52,7 +52,7 @@ from ...core.events import EventSource
 from ...core.exceptions import InvalidParameterError
 from ...dynamics.control import ControlOutput
 from ...kernels.decimation import logged
-from ...plants.project.plant import PlantStep
+from ...plants.project.state import PlantStep
 from ...plants.simulation import PlantLike
 from ...supervisor.types import ContactPhase
 from .blueprint import blueprint
@@ -224,7 +224,7 @@ class RolloutRecorder:
             desired_pose: The desired object pose (x, y, β), or the whole desired reduced state
                 S_d = (x, y, β, ξ of each ``sliding`` contact): drawn as a ghost, and the
                 tracking error is then measured at the logged state.
-            plant_step: The :class:`~regrasp.plants.project.plant.PlantStep` of the step, whose forces (at the
+            plant_step: The :class:`~regrasp.plants.project.state.PlantStep` of the step, whose forces (at the
                 step's start) are then drawn and plotted instead of recomputed ones.
 
         Returns:

@@ -22,7 +22,7 @@ from ...supervisor.types import ContactPhase
 from .hand import HandDrawing
 
 if TYPE_CHECKING:
-    from ...plants.project.plant import PlantContact
+    from ...plants.project.state import PlantContact
     from ...plants.simulation import StepRecord
 
 __all__ = ["MODE_CODES", "PHASE_CODES", "Layout", "Segment", "Series", "StepRow", "SupervisedStep", "poses",

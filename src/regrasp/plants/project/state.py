@@ -1,0 +1,176 @@
+"""The project plant's value types: a contact's mode and parameters (:class:`PlantContact`), the continuous state
+(:class:`PlantState`), what one step produced (:class:`PlantStep`), the event log (:class:`PlantLog`), and an edge's
+constants in plain floats (:class:`EdgeGeometry`) with the contact kinematics on it (:func:`contact_xi`,
+:func:`surface_force`)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from ...core.contact import ContactMode, as_modes
+from ...core.events import Event, EventKind, EventSource
+from ...core.exceptions import InvalidParameterError
+from ...core.polygon import ConvexPolygon
+from ...core.validation import as_finite_float, as_integer
+
+__all__ = ["MAX_DT", "PLANT_EVENT_KINDS", "EdgeGeometry", "PlantContact", "PlantLog", "PlantState", "PlantStep",
+           "contact_xi", "edge_geometry", "surface_force"]
+
+#: The plant's largest step [s].
+MAX_DT = 0.01
+
+#: The kinds of event a plant reports (and may stop on).
+PLANT_EVENT_KINDS = frozenset(k.value for k in (EventKind.SEPARATION, EventKind.SLIP, EventKind.STICK,
+                                                EventKind.LEFT_EDGE, EventKind.COLLISION, EventKind.SINGULAR))
+
+
+@dataclass
+class PlantContact:
+    """One contact's mode and parameters (mutable: the plant switches modes on events).
+
+    Attributes:
+        edge: Edge index on the object.
+        mode: A :class:`~regrasp.core.contact.ContactMode` (its string, ``"fixed"``, ``"sliding"`` or
+            ``"separated"``, is converted).
+        xi: For a fixed contact, its position ξ [m] on the edge (object-fixed).
+        sign: For a sliding contact, the sliding direction s = ±1 along the edge's ξ.
+    """
+
+    edge: int
+    mode: ContactMode
+    xi: float = 0.0
+    sign: float = 1.0
+
+    def __post_init__(self) -> None:
+        self.edge = as_integer("edge", self.edge)
+        self.xi = as_finite_float("xi", self.xi)
+        self.sign = as_finite_float("sign", self.sign)
+        if type(self.mode) is not ContactMode:
+            try:
+                self.mode = as_modes((self.mode,))[0]
+            except InvalidParameterError:
+                raise InvalidParameterError("mode", self.mode, "'fixed', 'sliding' or 'separated'") from None
+
+
+@dataclass
+class PlantState:
+    """The plant's continuous state and its integrated work terms: joint positions q [rad] and velocities v [rad/s]
+    (2m,), the object's pose X = (x, y, β) [m, rad] and twist V [m/s, rad/s] in the hand frame, at time t [s]; the
+    work [J] done by the joint torques, the joint damping and the contact forces since the last reset."""
+
+    t: float
+    q: np.ndarray
+    v: np.ndarray
+    X: np.ndarray
+    V: np.ndarray
+    torque_work: float = 0.0
+    damping_work: float = 0.0
+    contact_work: float = 0.0
+
+    def copy(self) -> PlantState:
+        return PlantState(self.t, self.q.copy(), self.v.copy(), self.X.copy(), self.V.copy(),
+                          self.torque_work, self.damping_work, self.contact_work)
+
+    def flat(self) -> np.ndarray:
+        """The state as one flat array (q, v, X, V, the three works): the compiled kernels' layout."""
+        return np.concatenate((self.q, self.v, self.X, self.V, (self.torque_work, self.damping_work,
+                                                                 self.contact_work)))
+
+    @classmethod
+    def from_flat(cls, t: float, y: np.ndarray, n: int) -> PlantState:
+        """The state at time ``t`` [s] from a flat array ``y`` (:meth:`flat`'s layout) of ``n`` joints; q, v, X and V
+        are views of ``y``."""
+        return cls(t, y[:n], y[n:2 * n], y[2 * n:2 * n + 3], y[2 * n + 3:2 * n + 6], *y[2 * n + 6:2 * n + 9].tolist())
+
+
+@dataclass(frozen=True)
+class PlantStep:
+    """What one plant step produced.
+
+    Attributes:
+        state: The state after the step.
+        forces_surface: Each contact's force on the object in its surface frame
+            (normal, tangential) [N], at the step's start; zeros when separated.
+        xi: Each contact's ξ [m] after the step.
+        xi_dot: Each contact's relative tangential velocity ξ̇ [m/s] after the step.
+        modes: Contact modes (:class:`~regrasp.core.contact.ContactMode`) during the step.
+        constraint_error: Largest constraint violation [m] after the step.
+        events: Events detected after the step (:class:`~regrasp.core.events.Event`, source ``PLANT``).
+    """
+
+    state: PlantState
+    forces_surface: np.ndarray
+    xi: np.ndarray
+    xi_dot: np.ndarray
+    modes: tuple[ContactMode, ...]
+    constraint_error: float
+    events: tuple[Event, ...] = field(default_factory=tuple)
+
+
+class EdgeGeometry(NamedTuple):
+    """An edge's inward normal n, ξ direction t, ξ origin o, n·o [m] and ξ range [m] (object frame), as floats."""
+
+    nx: float
+    ny: float
+    tx: float
+    ty: float
+    ox: float
+    oy: float
+    offset: float
+    lo: float
+    hi: float
+
+
+def edge_geometry(polygon: ConvexPolygon, k: int) -> EdgeGeometry:
+    """Edge ``k``'s constants as floats (object frame)."""
+    e = polygon.edge(k)
+    (nx, ny), (tx, ty), (ox, oy) = e.inward_normal.tolist(), e.xi_direction.tolist(), e.xi_origin.tolist()
+    return EdgeGeometry(nx, ny, tx, ty, ox, oy, float(e.inward_normal @ e.xi_origin), *e.xi_range)
+
+
+def contact_xi(g: EdgeGeometry, X: list, V: list, c: float, s: float, tip: list,
+               tip_vel: list) -> tuple[float, float]:
+    """ξ [m] of a tip (position ``tip``, velocity ``tip_vel``: pairs of floats, hand frame) projected on edge ``g``'s
+    line, and its velocity relative to the object ξ̇ [m/s], at object pose X and twist V (floats), (c, s) =
+    (cos β, sin β)."""
+    rx, ry = tip[0] - X[0], tip[1] - X[1]
+    xi = g.tx * ((c * rx + s * ry) - g.ox) + g.ty * ((c * ry - s * rx) - g.oy)
+    # velocity of the tip relative to the object, in object coordinates
+    ux, uy = tip_vel[0] - (V[0] - V[2] * ry), tip_vel[1] - (V[1] + V[2] * rx)
+    return xi, g.tx * (c * ux + s * uy) + g.ty * (c * uy - s * ux)
+
+
+def surface_force(g: EdgeGeometry, c: float, s: float, force: list) -> tuple[float, float]:
+    """A force (fx, fy) [N] (hand frame) at a contact on edge ``g`` in its surface frame (normal, tangential), at
+    object rotation (c, s) = (cos β, sin β)."""
+    fx, fy = force
+    return ((c * g.nx - s * g.ny) * fx + (s * g.nx + c * g.ny) * fy,
+            (c * g.tx - s * g.ty) * fx + (s * g.tx + c * g.ty) * fy)
+
+
+class PlantLog:
+    """A plant's event log: the events since the last reset (:class:`~regrasp.core.events.Event`, source ``PLANT``)
+    and whether one of a kind in ``stop_on`` stopped the plant; ``names``: the fingers'."""
+
+    def __init__(self, names: Sequence[str], stop_on: frozenset[EventKind]):
+        self.names, self.stop_on = tuple(names), stop_on
+        self.events: list[Event] = []
+        self.stopped = False
+
+    def add(self, t: float, i: int, kind: str | EventKind, detail: str, out: list[Event], **values: float) -> None:
+        """Log contact ``i``'s event of ``kind`` at ``t`` [s] (``detail``: in words; ``values``: the numbers by name),
+        here and in ``out``; a kind in ``stop_on`` stops the plant."""
+        ev = Event(t, self.names[i], EventKind(kind), detail, EventSource.PLANT, values)
+        out.append(ev)
+        self.events.append(ev)
+        if kind in self.stop_on:
+            self.stopped = True
+
+    def clear(self) -> None:
+        """Forget the events; the plant runs again."""
+        self.events = []
+        self.stopped = False
