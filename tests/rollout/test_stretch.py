@@ -151,3 +151,16 @@ def test_simulate_refuses_stretches_built_for_another_disturbance(scenario):
     rollout = build_rollout(scenario, RunSpec(duration=0.01))
     with pytest.raises(InvalidParameterError, match="stretches"):
         simulate(rollout.plant, None, 1, stretches=object(), disturbance=Disturbance())
+
+
+def test_every_participant_follows_the_stretch_protocol(scenario):
+    """The executor, the monitor, the scheduled policy, the plant's kernel and a disturbance each give a stretch its
+    view and take its state back (regrasp.rollout.stretch.StretchParticipant)."""
+    from regrasp import ActuatorNoise
+    from regrasp.rollout.stretch import StretchParticipant
+
+    rollout = build_rollout(scenario, RunSpec(duration=0.01, actuator_noise=ActuatorNoise(delay=1), seed=1))
+    sup = rollout.supervisor
+    for participant in (sup.executor, sup.monitor, sup.policy, rollout.plant.kernel, rollout.disturbance):
+        assert isinstance(participant, StretchParticipant), type(participant).__name__
+    assert not isinstance(sup, StretchParticipant)

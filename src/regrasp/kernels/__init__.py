@@ -65,7 +65,20 @@ from .plant import (
     plant_step_into,
 )
 from .reduced import CONTACT_EDGE, FINGER_IK, reduced_terms
-from .stretch import SLIDER, STRETCH_SETTINGS, STRETCH_STATE, stretch_into, stretch_log
+from .stretch import stretch_into
+from .stretch_layout import (
+    SLIDER,
+    STRETCH_SETTINGS,
+    STRETCH_STATE,
+    StretchDisturbance,
+    StretchExecutor,
+    StretchLaw,
+    StretchMonitor,
+    StretchPlant,
+    StretchRows,
+    StretchSchedule,
+    stretch_log,
+)
 
 __all__ = ["CONTACT_EDGE", "ENVELOPE_PARAMETERS", "FINGER_IK", "FINGER_PARAMETERS", "FINGER_TERMS", "FIXED",
            "FOOTPRINT", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDER", "SLIDING", "STRETCH_SETTINGS",
@@ -151,18 +164,21 @@ def _warm_stretch(fingers, plant, iks, edges, rows) -> None:
     head = (fingers, iks, edges, np.zeros(2), True, np.zeros(1), np.full(1, -1, dtype=np.int64))
     contacts = np.zeros(m, dtype=PLANT_CONTACT)
     size = 4 * m + 9
-    stretch_into(np.zeros((), dtype=STRETCH_SETTINGS)[()], np.zeros(1, dtype=STRETCH_STATE), np.zeros(m, np.bool_),
-                 np.zeros(m), np.zeros(m), np.zeros(3), np.zeros(0, dtype=SLIDER), np.zeros((m, 1, 2)),
-                 np.zeros(m, np.int64), np.zeros((m, 2)), np.zeros((m, 2)), np.zeros(m), *envelope_arguments(None, m),
-                 np.zeros((m, 3), np.int64), np.zeros(1), np.zeros((1, m)), np.zeros(0), np.zeros((0, 9)), head,
-                 np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0), np.zeros(0), False, 0.0, 1e8, np.ones(m), True,
-                 rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0,
-                 np.empty(control_layout(m, 3)["f_hat"].stop), fingers, plant, contacts, np.zeros(size),
-                 np.zeros(output_size(m)), np.full((m, 9), np.nan), np.zeros((m, 2)), np.empty(output_size(m)),
-                 np.empty(m, dtype=FINGER_TERMS), np.empty(m, np.bool_), np.empty((m, 7)), False, np.empty((0, m)),
-                 np.empty((0, m, 2)), np.empty((0, m)), np.empty((0, 3)), np.empty((0, 3)), np.empty((0, 2 * m)),
-                 np.empty((0, m, 2)), np.empty((0, m)), np.ones(m), 0, 0, stretch_log(0, m, 1),
-                 np.zeros((0, 0)), np.zeros((1, m), np.bool_), np.zeros((1, 2 * m)))
+    executor = StretchExecutor(np.zeros(m, np.bool_), np.zeros(m), np.zeros(m), np.zeros(3), np.zeros(0, dtype=SLIDER))
+    monitor = StretchMonitor(np.zeros((m, 1, 2)), np.zeros(m, np.int64), np.zeros((m, 2)), np.zeros((m, 2)),
+                             np.zeros(m), *envelope_arguments(None, m), np.zeros((m, 3), np.int64))
+    law = StretchLaw(head, np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0), np.zeros(0), False, 0.0, 1e8,
+                     np.ones(m), True, rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0,
+                     np.empty(control_layout(m, 3)["f_hat"].stop))
+    plant_arguments = StretchPlant(fingers, plant, contacts, np.zeros(size), np.zeros(output_size(m)),
+                                   np.full((m, 9), np.nan), np.zeros((m, 2)), np.empty(output_size(m)),
+                                   np.empty(m, dtype=FINGER_TERMS), np.empty(m, np.bool_), np.empty((m, 7)))
+    rows_out = StretchRows(np.empty((0, m)), np.empty((0, m, 2)), np.empty((0, m)), np.empty((0, 3)),
+                           np.empty((0, 3)), np.empty((0, 2 * m)), np.empty((0, m, 2)), np.empty((0, m)), np.ones(m))
+    stretch_into(np.zeros((), dtype=STRETCH_SETTINGS)[()], np.zeros(1, dtype=STRETCH_STATE), np.zeros(0),
+                 np.zeros((0, 9)), executor, monitor, StretchSchedule(np.zeros(1), np.zeros((1, m))), law,
+                 plant_arguments, rows_out, stretch_log(0, m, 1), 0, 0,
+                 StretchDisturbance(np.zeros((0, 0)), np.zeros((1, m), np.bool_), np.zeros((1, 2 * m))), False)
 
 
 def _warm_envelope() -> None:

@@ -40,70 +40,10 @@ from .envelope import envelope_sample_into
 from .monitor import reading_at
 from .plant import FIXED, SLIDING, plant_step_into
 
-__all__ = ["SLIDER", "STRETCH_COAL", "STRETCH_DONE", "STRETCH_HANDOFF", "STRETCH_SETTINGS", "STRETCH_STATE",
-           "stretch_into", "stretch_log"]
-
-_F8 = np.float64
+__all__ = ["STRETCH_COAL", "STRETCH_DONE", "STRETCH_HANDOFF", "stretch_into"]
 
 #: How :func:`stretch_into` stopped: all steps done; a step for the reference path; a step that needs coal.
 STRETCH_DONE, STRETCH_HANDOFF, STRETCH_COAL = 0, 1, 2
-
-#: The executor's, monitor's and policy's constants for a stretch: the held contacts' filter gain and resolution
-#: [m] (NaN: none), the integral action's K_i / K_s per ω [-], the friction filter's gain (NaN: no estimate), its
-#: least normal force [N] and the laws' friction resolution [-], a slide's arrival tolerance [m] and speed
-#: [m/s], its longest sliding phase [s], the law's ω of the pose and of a slider [rad/s], the step [s], whether
-#: the fixed law runs (else Proposition 3, m > 2); the monitor's ``every`` and ``max_bound_step`` [m] and whether
-#: the kernel evaluates the envelopes (else it hands such a step over); whether it takes the policy's decisions
-#: (:class:`regrasp.supervisor.policies.scheduled.ScheduledPolicy`: else it hands them over), their period [s], when the next slide
-#: is due [s], whether it re-plans on a low margin, from when [s] and below which fraction of the planned
-#: margin, and the schedule's start, end [s] and whether it repeats; a disturbance
-#: (:class:`regrasp.plants.disturbance.Disturbance`): whether the sensor is not ideal, its slip threshold [m/s] (NaN:
-#: the plant's modes) and standard deviations (pose [m], [rad], twist [m/s], [rad/s], ξ [m], ξ̇ [m/s], forces
-#: [N]), whether the actuator is not ideal and its torque noise [N m]; and where each noise term lies in a
-#: step's row of standard normals (-1: not drawn; :meth:`regrasp.plants.disturbance.Disturbance.stretch_noise`).
-STRETCH_SETTINGS = np.dtype([
-    ("hold_gain", _F8), ("hold_resolution", _F8), ("integral", _F8), ("friction_gain", _F8),
-    ("friction_min_force", _F8), ("friction_resolution", _F8), ("arrive_tolerance", _F8), ("arrive_speed", _F8),
-    ("max_slide_time", _F8), ("control_omega", _F8), ("slide_omega", _F8), ("dt", _F8), ("fixed_law", np.bool_),
-    ("every", np.int64), ("max_bound_step", _F8), ("evaluate", np.bool_),
-    ("decide", np.bool_), ("decision_period", _F8), ("slide_due", _F8), ("replan", np.bool_),
-    ("cooldown_until", _F8), ("margin_fraction", _F8), ("schedule_start", _F8), ("schedule_end", _F8),
-    ("periodic", np.bool_),
-    ("sensed", np.bool_), ("slip_threshold", _F8), ("position", _F8), ("angle", _F8), ("velocity", _F8),
-    ("angular_velocity", _F8), ("xi_sigma", _F8), ("xi_dot_sigma", _F8), ("force_sigma", _F8),
-    ("delayed", np.bool_), ("torque_sigma", _F8),
-    ("o_pose", np.int64), ("o_twist", np.int64), ("o_normal", np.int64), ("o_xi", np.int64), ("o_xi_dot", np.int64),
-    ("o_friction", np.int64), ("o_torque", np.int64),
-], align=True)
-
-#: What a stretch changes of the monitor and the policy (one record): the next decision's time [s], the last
-#: evaluation's time [s] (NaN: none yet), the reads since it, whether this call committed an evaluation and
-#: whether a step it handed over evaluated the envelopes after that (its outputs are then not the committed ones);
-#: how many entries the disturbance's slip sensor and actuation delay hold (their deques' lengths).
-STRETCH_STATE = np.dtype([
-    ("decision_time", _F8), ("previous_time", _F8), ("calls", np.int64), ("evaluated", np.bool_),
-    ("clobbered", np.bool_), ("slips", np.int64), ("commands", np.int64),
-], align=True)
-
-#: A sliding contact: its index, slip flag, friction estimate μ̂ (NaN: none yet), sliding phase's start [s],
-#: target [m], planned end [s] (NaN: none), its planned profile (:class:`regrasp.schedule.schedule.Slide`: start, end [s],
-#: ξ from, to [m], ramp [s], cruise speed [m/s], direction ±1, time offset [s]), the μ_k its law uses and the
-#: model's μ_k, and ∫(ξ_d - ξ) dt [m s] of its integral action.
-SLIDER = np.dtype([
-    ("contact", np.int64), ("slipped", np.bool_), ("mu_hat", _F8), ("integral", _F8), ("phase_start", _F8),
-    ("target", _F8),
-    ("planned_end", _F8), ("start", _F8), ("end", _F8), ("start_xi", _F8), ("end_xi", _F8), ("ramp", _F8),
-    ("speed", _F8), ("direction", _F8), ("offset", _F8), ("law_kinetic", _F8), ("model_kinetic", _F8),
-], align=True)
-
-
-def stretch_log(entries: int, m: int, capacity: int) -> tuple:
-    """An empty ``log`` for :func:`stretch_into`: ``entries`` logged steps of m contacts whose envelopes have at
-    most ``capacity`` intervals each."""
-    return (np.empty((entries, m, 2)), np.empty((entries, m, 2)), np.empty((entries, m)), np.empty((entries, 3)),
-            np.empty((entries, m)), np.empty((entries, m)), np.zeros((entries, m, capacity, 2)),
-            np.zeros((entries, m), np.int64))
-
 
 @numba.njit(cache=True)
 def _profile(sl, t):
@@ -133,40 +73,30 @@ def _finite(a):
 
 
 @numba.njit(cache=True)
-def stretch_into(settings, state, held, xi_model, xi_sensed, integral_x, sliders, intervals, counts, previous_bounds,
-                 rates, bound_speed, geometry, samples, scratch, evaluation_counts, schedule_times, schedule_margins,
-                 times, desired, head, kv, ks, diagonal, object_mass, f_hat, directions, reversible, sample_time,
-                 singular_threshold, margin_mu, use_qp, coefficients, lower, n_ineq, is_cone, target, margin_column,
-                 weight, aim, control_out, fingers, plant, contacts, y, last, certificates, radii, plant_out, terms,
-                 needs_coal, posture, coal_cleared, rows_xi, rows_bounds, rows_margin, rows_error, rows_pose, rows_q,
-                 rows_surface, rows_cone, static_mu, log_every, first_index, log, noise, slips, commands):
-    r"""Up to ``times.size`` steps from the plant state ``y`` (module docstring); returns (steps taken, status,
-    the largest constraint violation of those steps [m], the last one's [m]).
+def stretch_into(settings, state, times, desired, executor, monitor, schedule, law, plant, rows, log, log_every,
+                 first_index, disturbance, coal_cleared):
+    r"""Up to ``times.size`` steps from the plant's state (module docstring); returns (steps taken, status, the
+    largest constraint violation of those steps [m], the last one's [m]).
 
-    Executor: ``settings`` (:data:`STRETCH_SETTINGS`), ``state`` (:data:`STRETCH_STATE`, one record), ``held`` (m,
-    bool: the contacts the executor holds fixed), ``xi_model`` (m: the held positions its law was built with),
-    ``xi_sensed`` (m: the filtered sensed positions), ``integral_x`` (3: ∫E dt of the pose), ``sliders``
-    (:data:`SLIDER` records); monitor: ``intervals`` (m, k, 2) and ``counts`` (m) of its held samples' feasible
-    intervals, the bounds at its last evaluation (m, 2), their rates (m, 2) and the fastest each contact's bounds
-    moved (m) (:class:`regrasp.supervisor.monitor.EnvelopeMonitor`'s), ``geometry``, ``samples`` and ``scratch``: the
-    envelopes' (:func:`.monitor.envelope_arguments`), ``evaluation_counts`` (m, 3)
-    :func:`.envelope.envelope_sample_into`'s answers at the last evaluation; the policy's schedule: its sample
-    times and planned envelope margins (times, m); ``times`` the steps' start times [s] and ``desired`` (steps, 9)
-    the desired pose, twist and acceleration there. Law: ``head`` (:func:`.control.control_step_into`'s first
-    seven arguments), then its gains and the rest of its arguments (the fixed law's ``f_hat`` or Proposition 3's
-    sliders' ``directions``); ``control_out`` its output. Plant: :func:`.plant.plant_step_into`'s arguments,
-    ``last`` the last step's ``out`` (its ξ, ξ̇ and surface forces are sensed; updated), ``coal_cleared``: coal
-    found no collision at the first step's end. Rows (steps, ...): what
-    :class:`regrasp.rollout.result.RolloutRows` keeps, with
-    ``static_mu`` the plant's μ_s per contact. ``log``: what a recorder logs of the steps with
-    (:func:`~regrasp.kernels.decimation.logged` at step ``first_index`` + k + 1 and ``log_every``), one entry each in order: the law's predicted forces
-    (hand frame and surface frame, (·, m, 2)), its cone margins (·, m), its pose error (·, 3), ξ after the step
-    (·, m), the sliders' reference ξ (·, m, NaN elsewhere), the held envelopes' feasible intervals (·, m, k, 2)
-    and counts (·, m). A disturbance: ``noise`` (steps, k) the standard normals each step draws, ``slips`` (d + 1,
-    m) the slip sensor's readings, oldest first, and ``commands`` (delay + 1, 2m) the commanded torques, oldest
-    first (``state`` says how many each holds). The arrays of the executor, ``y``, ``last``, the rows, the log
-    and the disturbance's are updated for the steps taken and for them only.
+    ``settings`` (:data:`~.stretch_layout.STRETCH_SETTINGS`) and ``state`` (:data:`~.stretch_layout.STRETCH_STATE`, one record) are the executor's,
+    monitor's, policy's and disturbance's constants and what the stretch changes of them; ``times`` the steps'
+    start times [s] and ``desired`` (steps, 9) the desired pose, twist and acceleration there. Each participant's
+    arrays come in its bundle (:mod:`.stretch_layout`: :class:`~.stretch_layout.StretchExecutor`,
+    ``StretchMonitor``, ``StretchSchedule``, ``StretchLaw``, ``StretchPlant``, ``StretchRows``, ``StretchLog``,
+    ``StretchDisturbance``: each names and documents its fields). ``log_every`` and ``first_index``: the
+    steps logged are those :func:`~regrasp.kernels.decimation.logged` says of step ``first_index`` + k + 1;
+    ``coal_cleared``: coal found no collision at the first step's end. The arrays of the executor, the plant's
+    ``y`` and ``last``, the monitor's, the rows, the log and the disturbance's are updated for the steps taken and
+    for them only.
     """
+    held, xi_model, xi_sensed, integral_x, sliders = executor
+    intervals, counts, previous_bounds, rates, bound_speed, geometry, samples, scratch, evaluation_counts = monitor
+    schedule_times, schedule_margins = schedule
+    (head, kv, ks, diagonal, object_mass, f_hat, directions, reversible, sample_time, singular_threshold, margin_mu,
+     use_qp, coefficients, lower, n_ineq, is_cone, target, margin_column, weight, aim, control_out) = law
+    fingers, plant_record, contacts, y, last, certificates, radii, plant_out, terms, needs_coal, posture = plant
+    rows_xi, rows_bounds, rows_margin, rows_error, rows_pose, rows_q, rows_surface, rows_cone, static_mu = rows
+    noise, slips, commands = disturbance
     m = fingers.shape[0]
     n2 = 2 * m
     size = y.shape[0]
@@ -334,7 +264,7 @@ def stretch_into(settings, state, held, xi_model, xi_sensed, integral_x, sliders
         command_count = actuate_into(settings, st, tau, noise[k], commands,
                                  commands_new, applied)
         # 5. the plant
-        err, attention, any_coal = plant_step_into(fingers, plant, contacts, y, applied, certificates, radii,
+        err, attention, any_coal = plant_step_into(fingers, plant_record, contacts, y, applied, certificates, radii,
                                                    plant_out, terms, needs_coal, posture)
         if attention:
             return k, STRETCH_HANDOFF, worst, last_err

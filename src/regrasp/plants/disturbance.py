@@ -29,6 +29,7 @@ import numpy as np
 
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import expect_type
+from ..kernels.stretch_layout import StretchDisturbance
 from ..model.noise import ActuatorNoise, SensorNoise
 
 if TYPE_CHECKING:
@@ -99,6 +100,14 @@ class Disturbance:
             k += size if drawn else 0
         layout["size"] = k
         return layout
+
+    def stretch_view(self, m: int, steps: int) -> tuple[StretchDisturbance, object, int, int]:
+        """What a compiled stretch of at most ``steps`` steps of m contacts needs: its draws and deques
+        (:class:`~regrasp.kernels.stretch_layout.StretchDisturbance`), the generator's state before the draws and how
+        many entries the slip sensor's and the actuation delay's deques hold (:meth:`take_stretch` takes them back)."""
+        noise, state = self.stretch_noise(m, steps)
+        slips, slip_count, commands, command_count = self.stretch_deques(m)
+        return StretchDisturbance(noise, slips, commands), state, slip_count, command_count
 
     def stretch_noise(self, m: int, steps: int) -> tuple[np.ndarray, object]:
         """The standard normals ``steps`` steps would draw, one row a step (:meth:`stretch_layout`), and the

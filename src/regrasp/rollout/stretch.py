@@ -11,10 +11,27 @@ its steps' rows into the rollout's :class:`~regrasp.rollout.result.RolloutRows` 
 the steps it logs (:meth:`~regrasp.rollout.recording.recorder.RolloutRecorder.log_stretch_step`: what the record of that step
 would give it).
 
-So the compiled path changes how fast a rollout runs, not what it does: ``tests/test_stretch.py`` runs the
+**The participants** (:class:`StretchParticipant`): each gives a stretch what the kernel reads of it now, packed in
+its bundle of :mod:`regrasp.kernels.stretch_layout` (``stretch_view``; None where only the reference path serves),
+and takes back the state the kernel left (``take_stretch``). No participant reads another's state, and this module
+reads none of theirs but through these two methods (and the law's and the envelopes' kernel arguments):
+
+=====================================================  =====================================  ==================
+participant                                            ``stretch_view`` gives                 ``take_stretch``
+=====================================================  =====================================  ==================
+:class:`~regrasp.supervisor.executor.SlideExecutor`    ``StretchExecutor`` (held contacts,    slip flags, μ̂,
+                                                       filtered ξ, integrals, sliders)        integrals, clock
+:class:`~regrasp.supervisor.monitor.EnvelopeMonitor`   held intervals, bounds, rates, reads   reads, evaluation
+:class:`~regrasp.supervisor.policies.scheduled.        the decision terms and the schedule's  the next decision
+ScheduledPolicy`                                       planned margins
+:class:`~regrasp.plants.project.compiled.PlantKernel`  ``StretchPlant``'s arrays              the step reached
+:class:`~regrasp.plants.disturbance.Disturbance`       ``StretchDisturbance`` (the draws and  the generator and
+                                                       the deques)                            the deques
+=====================================================  =====================================  ==================
+
+So the compiled path changes how fast a rollout runs, not what it does: ``tests/rollout/test_stretch.py`` runs the
 three-finger rollout both ways (with and without sensing noise, a slip sensor and an actuation delay: a
-stretch draws the run's noise from its generator in the same order, :meth:`~regrasp.plants.disturbance.Disturbance.
-stretch_noise`) and compares every row and event. Where a stretch cannot serve (MuJoCo or a reference plant, a
+stretch draws the run's noise from its generator in the same order) and compares every row and event. Where a stretch cannot serve (MuJoCo or a reference plant, a
 contact being primed or settling, a policy without ``quiet_until``, a law without a compiled step), the loop
 runs every step on the reference path, as before.
 
@@ -26,7 +43,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -34,7 +51,19 @@ from ..core.contact import coefficients, cone_margin
 from ..dynamics.laws import FixedContactController, Proposition3Controller
 from ..kernels.decimation import logged_steps
 from ..kernels.monitor import envelope_arguments
-from ..kernels.stretch import STRETCH_COAL, STRETCH_DONE, STRETCH_SETTINGS, STRETCH_STATE, stretch_into, stretch_log
+from ..kernels.stretch import STRETCH_COAL, STRETCH_DONE, stretch_into
+from ..kernels.stretch_layout import (
+    STRETCH_SETTINGS,
+    STRETCH_STATE,
+    StretchDisturbance,
+    StretchLaw,
+    StretchLog,
+    StretchMonitor,
+    StretchPlant,
+    StretchRows,
+    StretchSchedule,
+    stretch_log,
+)
 from ..plants.project.plant import Plant
 from ..plants.project.state import PlantStep
 from ..supervisor.supervisor import RegraspSupervisor
@@ -44,7 +73,18 @@ if TYPE_CHECKING:
     from ..plants.disturbance import Disturbance
     from .recording.recorder import RolloutRecorder
 
-__all__ = ["CompiledStretches"]
+__all__ = ["CompiledStretches", "StretchParticipant"]
+
+
+@runtime_checkable
+class StretchParticipant(Protocol):
+    """What a compiled stretch needs of each participant (module docstring's table): ``stretch_view(...)``, what the
+    kernel reads of it now (its bundle, or None where only the reference path serves), and ``take_stretch(...)``,
+    the state the kernel left."""
+
+    def stretch_view(self, *args: Any) -> Any: ...
+
+    def take_stretch(self, *args: Any) -> Any: ...
 
 #: The shortest stretch worth the call, and the longest in one call (the loop's progress reports and Ctrl-C
 #: checks come between calls) [steps].
@@ -127,7 +167,7 @@ class CompiledStretches:
 
     def _policy_terms(self, t0: float, n: int, k: int) -> tuple[int, bool]:
         """Write the policy's terms into the settings; (the steps the stretch may take, whether it decides)."""
-        terms = getattr(self.supervisor.policy, "stretch_terms", None)
+        terms = getattr(self.supervisor.policy, "stretch_view", None)
         terms = None if terms is None else terms(t0)
         settings = self._settings
         settings["decide"] = terms is not None
@@ -159,7 +199,7 @@ class CompiledStretches:
         evaluates = self.evaluates
         if n < MIN_STRETCH or (not t0 < decision and not decides) or (monitor.held_reads() == 0 and not evaluates):
             return 0, last  # (the first step would be handed over)
-        state = ex.stretch_state()
+        state = ex.stretch_view()
         if state is None:
             return 0, last
         law = ex.law()
@@ -186,41 +226,46 @@ class CompiledStretches:
             threshold, margin_mu, use_qp, *qp = rest
             f_hat, directions = np.zeros(0), np.array(law.directions)
             reversible, sample_time = law.reversible, law.sample_time
-        intervals, counts, previous_bounds, rates, bound_speed, previous_time, calls = monitor.stretch_arguments()
+        intervals, counts, previous_bounds, rates, bound_speed, previous_time, calls = monitor.stretch_view()
         disturbance = self.disturbance
         if disturbance is None:
-            noise, rng_state = np.zeros((n, 0)), None
-            slips, slip_count, commands, command_count = np.zeros((1, held.size), np.bool_), 0, \
-                np.zeros((1, 2 * held.size)), 0
+            drawn, rng_state, slip_count, command_count = StretchDisturbance(
+                np.zeros((n, 0)), np.zeros((1, held.size), np.bool_), np.zeros((1, 2 * held.size))), None, 0, 0
         else:
-            noise, rng_state = disturbance.stretch_noise(held.size, n)
-            slips, slip_count, commands, command_count = disturbance.stretch_deques(held.size)
+            drawn, rng_state, slip_count, command_count = disturbance.stretch_view(held.size, n)
+        noise, slips, commands = drawn
         run_state = np.zeros(1, dtype=STRETCH_STATE)
         run_state[0] = (decision, previous_time, calls, False, False, slip_count, command_count)
         evaluation_counts = np.zeros((held.size, 3), np.int64)
         schedule_times, schedule_margins = self._schedule
         fingers, plant_record, contacts, y, certificates, radii, out, terms, needs_coal, posture = \
-            self.plant.kernel.stretch_arguments(self.plant.state, self.plant.contacts)
+            self.plant.kernel.stretch_view(self.plant.state, self.plant.contacts)
         last_out = np.concatenate((y, last.forces_surface.reshape(-1), np.zeros(4 * held.size), last.xi,
                                    last.xi_dot))
         control_out = np.empty(size)
         geometry, samples, scratch = self._envelopes
         every = 0 if self.recorder is None else self.recorder.decimation
         log = stretch_log(0 if every == 0 else n // every + 1, held.size, intervals.shape[1])
+        executor = state
+        monitored = StretchMonitor(intervals, counts, previous_bounds, rates, bound_speed, geometry, samples, scratch,
+                                   evaluation_counts)
+        schedule = StretchSchedule(schedule_times, schedule_margins)
+        law_arguments = StretchLaw(head, kv, ks, diagonal, mass, f_hat, directions, reversible, sample_time, threshold,
+                                   margin_mu, use_qp, *qp, control_out)
+        plant_arguments = StretchPlant(fingers, plant_record, contacts, y, last_out, certificates, radii, out, terms,
+                                       needs_coal, posture)
         start = time.perf_counter()
         done, cleared, worst, last_error = 0, False, 0.0, 0.0
         while done < n:
             s = slice(k0 + done, k0 + n)
             entries = len(logged_steps(k + 1, k + done + 1, every))  # (logged so far)
+            rows_out = StretchRows(rows.xi[s], rows.bounds[s], rows.envelope_margin[s], rows.object_error[s],
+                                   rows.poses[s], rows.joint_positions[s], rows.forces_surface[s], rows.cone_margin[s],
+                                   self._static)
             taken, status, w, e = stretch_into(
-                settings, run_state, held, xi_model, xi_sensed, integral_x, sliders, intervals, counts,
-                previous_bounds, rates, bound_speed, geometry, samples, scratch, evaluation_counts, schedule_times,
-                schedule_margins, times[done:], desired[done:], head, kv, ks, diagonal, mass, f_hat, directions,
-                reversible, sample_time, threshold, margin_mu, use_qp, *qp, control_out, fingers, plant_record,
-                contacts, y, last_out, certificates, radii, out, terms, needs_coal, posture, cleared, rows.xi[s],
-                rows.bounds[s], rows.envelope_margin[s], rows.object_error[s], rows.poses[s], rows.joint_positions[s],
-                rows.forces_surface[s], rows.cone_margin[s], self._static, every, k + done,
-                tuple(a[entries:] for a in log), noise[done:], slips, commands)
+                settings, run_state, times[done:], desired[done:], executor, monitored, schedule, law_arguments,
+                plant_arguments, rows_out, StretchLog(*(a[entries:] for a in log)), every, k + done,
+                StretchDisturbance(noise[done:], slips, commands), cleared)
             if taken:
                 worst, last_error = max(worst, w), e
             done += taken

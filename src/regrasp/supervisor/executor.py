@@ -57,7 +57,7 @@ from ..dynamics.internal_force.problem import InternalForceInfeasibleError
 from ..dynamics.internal_force.settings import ConeEdge
 from ..dynamics.laws import FixedContactController, Proposition3Controller
 from ..dynamics.reduced import ReducedModel
-from ..kernels.stretch import SLIDER
+from ..kernels.stretch_layout import SLIDER, StretchExecutor
 from ..model.hand import Hand
 from ..model.sphere_tip import sphere_tip_torque
 from .settings import ExecutorSettings
@@ -286,10 +286,10 @@ class SlideExecutor:
         """The control law the next step runs (the current phases' law; cached while it stays the same)."""
         return self._law()
 
-    def stretch_state(self) -> tuple | None:
+    def stretch_view(self) -> StretchExecutor | None:
         """What a compiled stretch (:mod:`regrasp.rollout.stretch`) reads and updates of the executor: (held (m,) bool, the
         law's held positions ξ [m], the filtered sensed positions [m] and ∫(X_d - X) dt, both the executor's own
-        arrays, the sliders as :data:`~regrasp.kernels.stretch.SLIDER` records); None where only the reference
+        arrays, the sliders as :data:`~regrasp.kernels.stretch_layout.SLIDER` records); None where only the reference
         path serves: a contact being primed or settling, a slide without a planned profile
         (:class:`~regrasp.supervisor.types.SlideProfile`) or spherical tips."""
         s = self.settings
@@ -314,11 +314,11 @@ class SlideExecutor:
                           slide.start_xi, slide.end_xi, slide.ramp, slide.speed, float(slide.direction), offset,
                           self._kinetic(i), self.friction[i].kinetic)
         held = np.array([p is ContactPhase.FIXED for p in self.phases])
-        return held, self.xi, self._xi_sensed, self._integral_X, records
+        return StretchExecutor(held, self.xi, self._xi_sensed, self._integral_X, records)
 
     def take_stretch(self, sliders: np.ndarray, t: float) -> None:
         """After a stretch whose last step started at ``t`` [s]: the sliders' slip flags, friction estimates and
-        integrals from its records (:meth:`stretch_state`)."""
+        integrals from its records (:meth:`stretch_view`)."""
         for record in sliders:
             a = self._active[int(record["contact"])]
             a.slipped, a.mu_hat = bool(record["slipped"]), float(record["mu_hat"])

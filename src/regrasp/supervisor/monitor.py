@@ -161,7 +161,7 @@ class EnvelopeMonitor:
             self._held = (self._samples, intervals, counts)
         return self._held[1], self._held[2]
 
-    def stretch_arguments(self) -> tuple:
+    def stretch_view(self) -> tuple:
         """What a compiled stretch (:mod:`regrasp.rollout.stretch`) reads and updates of the monitor, as new arrays: the held
         samples' feasible intervals (m, k, 2) [m] with room for any evaluation's, their counts (m,), the bounds at
         the last evaluation (m, 2) [m], their rates (m, 2) [m/s], :attr:`bound_speed` (m,) [m/s], the last

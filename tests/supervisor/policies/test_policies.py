@@ -200,19 +200,19 @@ def test_quiet_until_is_the_next_decision_while_the_phases_stay():
         assert policy.propose(meas(t), reading(t), FIXED, []) == [] and policy.quiet_until(FIXED) == quiet
 
 
-def test_stretch_terms_say_when_the_next_slide_is_due_and_end_with_the_period():
+def test_stretch_view_say_when_the_next_slide_is_due_and_end_with_the_period():
     policy = ScheduledPolicy(schedule([UP, DOWN]), NAMES, replan=lambda t, xi: schedule([UP]),
                              settings=ScheduledSettings(decision_period=0.01, prime_lead=0.02))
-    terms = policy.stretch_terms(0.1)
+    terms = policy.stretch_view(0.1)
     assert terms["slide_due"] == pytest.approx(0.5 - 0.02 - 1e-9, abs=1e-12) and terms["end"] == 2.0
     assert terms["replan"] and terms["periodic"] and terms["margins"].shape == (101, 2)
     orders = run_until(policy, 0.6)[0]
-    assert len(orders) == 1 and policy.stretch_terms(0.6)["slide_due"] == pytest.approx(1.2 - 0.02 - 1e-9)
-    assert policy.stretch_terms(2.1)["end"] == 4.0 and policy.stretch_terms(2.1)["slide_due"] == pytest.approx(
+    assert len(orders) == 1 and policy.stretch_view(0.6)["slide_due"] == pytest.approx(1.2 - 0.02 - 1e-9)
+    assert policy.stretch_view(2.1)["end"] == 4.0 and policy.stretch_view(2.1)["slide_due"] == pytest.approx(
         2.5 - 0.02 - 1e-9)
     late = SlideEnd(orders[0][1], EventKind.ARRIVED, 1.2, 0.01)  # (0.2 s late: a re-plan is pending)
     policy.notify([late], meas(1.2), [])
-    assert policy.stretch_terms(1.2) is None
+    assert policy.stretch_view(1.2) is None
 
 
 def test_planned_xi_series_uses_the_schedule_in_force_at_each_time():

@@ -42,7 +42,7 @@ class PlantKernel:
     """The compiled path (module docstring) of a plant of ``hand`` with ``friction`` per contact, ``equations`` (its
     object's mass and inertia, its Baumgarte α, its edges), event ``checks`` (their collision certificates and link
     radii), control step ``dt`` [s] and ``contact_events``: its step (:meth:`step`), its accelerations
-    (:meth:`accelerations`) and what a compiled stretch needs of it (:meth:`stretch_arguments`,
+    (:meth:`accelerations`) and what a compiled stretch needs of it (:meth:`stretch_view`,
     :meth:`clear_collisions`, :meth:`take_stretch`). The plant's state and contacts are passed in; the caller adopts
     the state a step or a stretch reaches."""
 
@@ -140,7 +140,7 @@ class PlantKernel:
         return PlantStep(new, surface, xi, xi_dot, modes, err, tuple(events))
 
     # ------------------------------------------------------------------ stretches (regrasp.rollout.stretch)
-    def stretch_arguments(self, state: PlantState, contacts: list[PlantContact]) -> tuple:
+    def stretch_view(self, state: PlantState, contacts: list[PlantContact]) -> tuple:
         """What :func:`~regrasp.kernels.stretch.stretch_into` steps the plant with from ``state``: (fingers, plant,
         contacts, the flat state y (a copy), certificates, radii, the step's ``out``, terms, needs_coal, posture)."""
         fingers, plant, records, y, _, certificates, radii = self.arguments(state, contacts, self._no_torques)

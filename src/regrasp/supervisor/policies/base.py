@@ -10,7 +10,7 @@ monitor (:class:`~regrasp.supervisor.monitor.EnvelopeMonitor`) watches. Every po
 
 and may have, for the compiled stretches of a rollout (:mod:`regrasp.rollout.stretch`: the steps between decisions
 in one compiled call), ``quiet_until(phases)``: until when ``propose`` is sure to return nothing while the
-phases stay the same; and ``stretch_terms(t)`` / ``take_stretch(next_decision)``: what the compiled code needs
+phases stay the same; and ``stretch_view(t)`` / ``take_stretch(next_decision)``: what the compiled code needs
 to take the decisions that order nothing itself (:class:`ScheduledPolicy`'s: no slide due, no re-plan
 pending, every margin above its threshold). A policy without them is asked at every step.
 

@@ -132,7 +132,7 @@ class ScheduledPolicy:
         decision's time (-inf: it decides at the next step). Compiled stretches (:mod:`regrasp.rollout.stretch`) end there."""
         return self._next_decision if tuple(phases) == self._phases else -math.inf
 
-    def stretch_terms(self, t: float) -> dict | None:
+    def stretch_view(self, t: float) -> dict | None:
         """What a compiled stretch (:mod:`regrasp.rollout.stretch`) from time ``t`` [s] needs to take this policy's decisions
         where they are sure to order nothing (no slide due, no re-plan pending, the margins above their threshold;
         any other decision is handed to :meth:`propose`): when the next slide is due [s], when the stretch must end
