@@ -85,8 +85,8 @@ def control_kernel_us(controller, args, n: int) -> float:
 def plant_kernel_us(plant, n: int) -> float:
     """Median of the bare compiled plant step (:func:`regrasp.kernels.plant.plant_step_into`) at the plant's state."""
     m = plant.hand.m
-    args = (*plant.kernel.arguments(plant.state, plant.contacts, np.zeros(plant.hand.nq)), np.empty(output_size(m)), np.empty(m, dtype=FINGER_TERMS),
-            np.empty(m, np.bool_), np.empty((m, 7)))
+    args = (*plant.kernel.arguments(plant.state, plant.contacts, np.zeros(plant.hand.nq)), np.empty(output_size(m)),
+            np.empty(m, dtype=FINGER_TERMS), np.empty(m, np.bool_), np.empty((m, 7)))
     return median_us(lambda: plant_step_into(*args), n)
 
 
@@ -318,7 +318,8 @@ def main() -> None:
     three = ReducedModel(hand3, Grasp(sc.polygon, [1, 3, 2], ["sliding", "fixed", "fixed"]), xi=[-0.01, -0.01, 0.02])
     S3, S3d = np.array([0.0, 0.12, 0.0, -0.01]), np.array([0.0, 0.0, 0.0, 0.01])
     slide_qp = Proposition1Controller(three, Gains.critically_damped(20.0, 4), friction=[0.0, 0.5, 0.5])
-    slide_no = Proposition1Controller(three, Gains.critically_damped(20.0, 4), friction=[0.0, 0.5, 0.5], internal_force=None)
+    slide_no = Proposition1Controller(three, Gains.critically_damped(20.0, 4), friction=[0.0, 0.5, 0.5],
+                                      internal_force=None)
 
     env_ideal = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1)
     env_urdf = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1, geometry="urdf")
@@ -373,8 +374,8 @@ def main() -> None:
           f"{rt['requested_s']:.3f} s simulated; {rt['outcome']}; {rt['steps_in_stretches']:.1%} of the steps in "
           f"compiled stretches); reference path {rt['reference_path']:.2f}x")
     for policy, value in results["rollout_policies"].items():
-        print(f"rollout, {policy:9s} policy      {value['realtime_factor']:6.2f}x real time ({value['simulated_s']:.3f} s "
-              f"simulated; {value['outcome']})")
+        print(f"rollout, {policy:9s} policy      {value['realtime_factor']:6.2f}x real time "
+              f"({value['simulated_s']:.3f} s simulated; {value['outcome']})")
     st = results["study_throughput"]
     one, two = st["workers_1"], st["workers_2"]
     print(f"study throughput              {one['simulated_s_per_s_per_worker']:6.2f} simulated s per s per worker "

@@ -47,7 +47,8 @@ def slide_range(sc, grasp):
     lo, hi = lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo)
     settings = InternalForceSettings(f_min=0.3, friction_margin=0.05, f_max=6.0)
     both = [x for x in np.arange(lo, hi + 1e-12, 5e-4)
-            if all(sliding_feasibility(grasp, X0, [x, XI_HOLD], np.zeros(3), 0, s, FRICTION, object_mass=sc.polygon.mass,
+            if all(sliding_feasibility(grasp, X0, [x, XI_HOLD], np.zeros(3), 0, s, FRICTION,
+                                       object_mass=sc.polygon.mass,
                                        object_inertia=sc.polygon.inertia, gravity_in_hand=sc.gravity_in_hand,
                                        settings=settings).possible for s in (1, -1))]
     return (lo, hi), (min(both), max(both))
@@ -85,7 +86,8 @@ def main() -> None:
     hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
     grasp = Grasp(sc.polygon, [1, 3], ["sliding", "fixed"])
     (env_lo, env_hi), (lo, hi) = slide_range(sc, grasp)
-    print(f"finger 1's feasible interval (planner, urdf geometry) minus 10 %: [{env_lo * 1e3:.1f}, {env_hi * 1e3:.1f}] mm")
+    print("finger 1's feasible interval (planner, urdf geometry) minus 10 %: "
+          f"[{env_lo * 1e3:.1f}, {env_hi * 1e3:.1f}] mm")
     print(f"where it can slide both ways (sliding_feasibility): [{lo * 1e3:.1f}, {hi * 1e3:.1f}] mm -> slide range")
 
     model = ReducedModel(hand, grasp, xi=[lo, XI_HOLD])
@@ -105,7 +107,8 @@ def main() -> None:
           f"{np.degrees(np.abs(err[:, 2]).max()):.4f} deg")
     print(f"max sliding error: {np.abs(err[:, 3]).max() * 1e6:.1f} um")
     print(f"min cone margin of the holding finger: {log.cone_margins[:, 1].min():.3f} N "
-          f"(min normal forces: {log.plant_forces[:, 0, 0].min():.3f} N sliding, {log.plant_forces[:, 1, 0].min():.3f} N holding)")
+          f"(min normal forces: {log.plant_forces[:, 0, 0].min():.3f} N sliding, "
+          f"{log.plant_forces[:, 1, 0].min():.3f} N holding)")
     print("plant event log:", "empty" if not log.events else "")
     for ev in log.events:
         print(f"  t = {ev.time:.3f} s  {ev.contact:8s} {ev.kind:10s} {ev.detail}")

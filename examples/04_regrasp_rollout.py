@@ -72,7 +72,9 @@ def main() -> None:
         print(f"  {s.name:8s} {'+xi' if s.direction > 0 else '-xi'} {s.start_xi * 1e3:6.1f} -> {s.end_xi * 1e3:6.1f} mm"
               f"  in [{s.start:.3f}, {s.end:.3f}] s")
 
-    rollout = build_rollout(scenario, RunSpec(periods=args.periods), schedule=schedule, plant=PlantSpec(errors=ModelErrors(mass_scale=args.plant_mass_scale, mu_scale=args.plant_mu_scale)))
+    rollout = build_rollout(scenario, RunSpec(periods=args.periods), schedule=schedule,
+                            plant=PlantSpec(errors=ModelErrors(mass_scale=args.plant_mass_scale,
+                                                               mu_scale=args.plant_mu_scale)))
     recorder = None
     if args.rrd is not None:
         from regrasp import RolloutRecorder

@@ -43,7 +43,8 @@ def main() -> None:
         print(f"  {f.name} on edge {f.edge} ({f.configuration}):")
         for s in f.samples[::20]:
             feas = ", ".join(f"[{lo*1e3:+.1f}, {hi*1e3:+.1f}]" for lo, hi in s.feasible) or "empty"
-            print(f"    t = {s.time:.2f} s  d = {s.d*1e3:+6.1f} mm  condition {s.condition.value:3s} feasible xi [mm]: {feas}")
+            print(f"    t = {s.time:.2f} s  d = {s.d*1e3:+6.1f} mm  condition {s.condition.value:3s} "
+                  f"feasible xi [mm]: {feas}")
         fixed = ", ".join(f"[{lo*1e3:+.1f}, {hi*1e3:+.1f}]" for lo, hi in f.fixed_grasp)
         print(f"    fixed grasp for the whole path: {fixed or 'none (a regrasp is needed)'}")
 

@@ -32,11 +32,13 @@ def main() -> None:
                                    object_inertia=sc.polygon.inertia, gravity_in_hand=sc.gravity_in_hand)
                for direction in (+1, -1)]
     for r in results:
-        forces = ", ".join(f"finger{i + 1} (n {fn:+.3f} N, t {ft:+.3f} N)" for i, (fn, ft) in enumerate(r.forces_surface))
+        forces = ", ".join(f"finger{i + 1} (n {fn:+.3f} N, t {ft:+.3f} N)"
+                           for i, (fn, ft) in enumerate(r.forces_surface))
         print(f"slide finger 1 {'up  ' if r.direction > 0 else 'down'}: {'possible  ' if r.possible else 'impossible'}"
               f" {forces}" + (f"  <- {r.reason}" if r.reason else ""))
-    path = plot_slide_feasibility(sc.polygon, pose, [c.finger for c in sc.contacts], grasp.points(pose, xi), [1, 3], friction,
-                                  results, Path(args.out) / "figure_3_4.png", gravity_in_hand=sc.gravity_in_hand,
+    path = plot_slide_feasibility(sc.polygon, pose, [c.finger for c in sc.contacts], grasp.points(pose, xi), [1, 3],
+                                  friction, results, Path(args.out) / "figure_3_4.png",
+                                  gravity_in_hand=sc.gravity_in_hand,
                                   title="Remark 3.3 / Figure 3.4: a block held against gravity, finger 1 sliding")
     print(f"figure: {path}")
 

@@ -37,7 +37,8 @@ def figures(result, rollout, directory: Path | None, stem: str, frames: bool) ->
         return
     paths = [plot_rollout(result, directory / f"{stem}.png")]
     if frames:
-        paths.append(plot_frames(result, rollout.supervisor.hand, rollout.plant.polygon, directory / f"{stem}_frames.png"))
+        paths.append(plot_frames(result, rollout.supervisor.hand, rollout.plant.polygon,
+                                 directory / f"{stem}_frames.png"))
     for p in paths:
         print(f"    figure: {p}")
 

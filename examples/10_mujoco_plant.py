@@ -46,7 +46,8 @@ def hold(sc, plant, radius):
     """The two-finger hold on ``plant``: (orientation error [mrad], position error [mm], events)."""
     spec = PlantSpec() if plant == "project" else PlantSpec("mujoco", MujocoSettings(tip_radius=radius))
     r = build_rollout(sc, RunSpec(duration=1.0), policy="none", plant=spec).run()
-    return r.max_orientation_error_after_transient * 1e3, r.max_object_error_after_transient * 1e3, r.plant_event_counts()
+    return (r.max_orientation_error_after_transient * 1e3, r.max_object_error_after_transient * 1e3,
+            r.plant_event_counts())
 
 
 def figure_3_4(sc, plant, radius):

@@ -48,7 +48,8 @@ def variants(geometry: str, delay: int, hold_resolution: float) -> list[tuple[st
                                       hold_resolution=hold_resolution)
     now = today.executor
     before = today.with_executor(settle_margin=0.0, actuation_delay=0, breakaway_estimate=False, start_speed=None,
-                                 internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=DEFAULT_CONE_MARGIN),
+                                 internal_force=InternalForceSettings(f_min=0.2,
+                                                                      target_cone_margin=DEFAULT_CONE_MARGIN),
                                  hold_resolution=None, hold_filter_time=None)
     steps = [("0 issue 12's robust settings", before)]
     steps.append(("1 + settle margin 0.05 N", steps[-1][1].with_executor(settle_margin=now.settle_margin)))

@@ -1,9 +1,9 @@
 """Shared test factories: seeded random fingers, convex polygons and envelope cases, and an
 independent force oracle.
 
-Used by tests/test_envelope.py (brute-force oracle), tests/test_collision.py, and (``force_lp``,
-the contact-force LP written from scratch) tests/test_force_polytope.py, test_schedule_problem.py
-and test_schedule_planner.py.
+Used by tests/envelope/test_finger_envelope.py (brute-force oracle), tests/model/test_collision.py, and (``force_lp``,
+the contact-force LP written from scratch) tests/schedule/test_force_polytope.py, tests/schedule/test_problem.py
+and tests/schedule/test_planner.py.
 """
 
 from __future__ import annotations

@@ -120,8 +120,8 @@ def test_version_and_ctrl_c():
                              timeout=60)
     assert version.returncode == 0 and re.fullmatch(r"regrasp \d+\.\d+\.\d+\S*\n", version.stdout)
     proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli.main", "plan",
-                             str(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"), "--samples",
-                             "100000", "--geometry", "ideal", "--regrasp"], stdout=subprocess.PIPE,
+                             str(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"),
+                             "--samples", "100000", "--geometry", "ideal", "--regrasp"], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     # past the imports (about 2 s), well inside the plan: 300 000 envelopes in Python (the ideal geometry; the
     # compiled urdf ones take 2 s) and the regrasp schedule, about 9 s here

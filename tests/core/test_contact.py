@@ -17,7 +17,8 @@ def test_contact_mode_members_equal_their_strings():
     assert ContactMode("sliding") is ContactMode.SLIDING
     assert ContactMode.FIXED == "fixed" and hash(ContactMode.FIXED) == hash("fixed")
     assert {"fixed": 0}[ContactMode.FIXED] == 0  # dictionaries keyed by the strings still look up
-    assert regrasp.ContactMode is ContactMode and regrasp.Friction is Friction and regrasp.core.cone_margin is cone_margin
+    assert (regrasp.ContactMode is ContactMode and regrasp.Friction is Friction
+            and regrasp.core.cone_margin is cone_margin)
 
 
 def test_as_modes_converts_strings_and_rejects_anything_else():
@@ -46,9 +47,9 @@ def test_friction_defaults_kinetic_to_static_and_is_frozen():
 
 
 @pytest.mark.parametrize("static,kinetic,name", [
-    (-0.1, None, "mu_static"), (math.nan, None, "mu_static"), (math.inf, None, "mu_static"), ("0.5x", None, "mu_static"),
-    (True, None, "mu_static"), (None, None, "mu_static"), (0.5, -0.1, "mu_kinetic"), (0.5, math.nan, "mu_kinetic"),
-    (0.5, False, "mu_kinetic"), (0.4, 0.5, "mu_kinetic"),  # kinetic above static
+    (-0.1, None, "mu_static"), (math.nan, None, "mu_static"), (math.inf, None, "mu_static"),
+    ("0.5x", None, "mu_static"), (True, None, "mu_static"), (None, None, "mu_static"), (0.5, -0.1, "mu_kinetic"),
+    (0.5, math.nan, "mu_kinetic"), (0.5, False, "mu_kinetic"), (0.4, 0.5, "mu_kinetic"),  # kinetic above static
 ])
 def test_friction_rejects_bad_coefficients_with_typed_errors(static, kinetic, name):
     with pytest.raises(InvalidParameterError) as err:

@@ -273,7 +273,8 @@ GOOD_POSES = [[0.0, 0.0, 0.0], [1.0, 0.5, 0.2], [0.0, 0.0, 0.0]]
     "times, poses, boundary, error, expected",
     [
         ([0.0, 2.0, 1.0], GOOD_POSES, "natural", TrajectoryError, r"strictly increasing: times\[1\] = 2\.0"),
-        ([0.0, 1.0, 1.0], GOOD_POSES, "natural", TrajectoryError, r"strictly increasing: times\[1\] = 1\.0 s and times\[2\] = 1\.0"),
+        ([0.0, 1.0, 1.0], GOOD_POSES, "natural", TrajectoryError,
+         r"strictly increasing: times\[1\] = 1\.0 s and times\[2\] = 1\.0"),
         ([0.0, np.nan, 2.0], GOOD_POSES, "natural", InvalidParameterError, "finite"),
         (GOOD_TIMES, [[0.0, 0.0, np.inf]] * 3, "natural", InvalidParameterError, "finite"),
         (GOOD_TIMES, [[0.0, 0.0]] * 3, "natural", InvalidParameterError, r"shape \(nx3\)"),

@@ -38,8 +38,10 @@ SLOW = [Friction(0.6, 0.3), Friction(0.6, 0.3)]
 SLOW3 = [Friction(0.7, 0.3), Friction(0.8, 0.5), Friction(0.8, 0.5)]
 CASES = {
     "fixed": (FixedContactController, 2, ["fixed", "fixed"], [0.0, 0.0], [0.5, 0.5], 0.0),
-    "prop1_mu0": (Proposition1Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.0, 0.5, 0.5], 0.01),
-    "prop1_mu03": (Proposition1Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.3, 0.5, 0.5], 0.01),
+    "prop1_mu0": (Proposition1Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.0, 0.5, 0.5],
+                  0.01),
+    "prop1_mu03": (Proposition1Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.3, 0.5, 0.5],
+                   0.01),
     "prop2": (Proposition2Controller, 3, ["sliding", "fixed", "fixed"], [-0.01, -0.01, 0.02], [0.3, 0.5, 0.5], 0.01),
     "prop3_up": (Proposition3Controller, 2, ["sliding", "fixed"], [-0.0075, -0.0075], [0.3, 0.3], 0.01),
     "prop3_down": (Proposition3Controller, 2, ["sliding", "fixed"], [0.005, 0.015], [0.05, 0.8], -0.01),
@@ -230,7 +232,7 @@ def test_proposition3_checks_its_arguments():
 def test_proposition3_puts_the_slider_on_its_kinetic_edge_and_reports_each_modes_margin(name):
     """μ_s > μ_k: the predicted slider force has t·f = μ_k n·f (m = 2 through P, m > 2 through the
     cone-edge row), the fixed contacts stay inside (μ_s - margin) cones (m > 2: the QP, which
-    tests/test_internal_force.py checks against μ_k), and the reported cone margins are
+    tests/dynamics/internal_force/test_solver.py checks against μ_k), and the reported cone margins are
     μ_k f_n - |f_t| at the slider (0) and μ_s f_n - |f_t| at the others."""
     law_class, m, modes, xi, friction, speed = CASES[name]
     model, S, _, _ = model_of(name)
@@ -244,7 +246,8 @@ def test_proposition3_puts_the_slider_on_its_kinetic_edge_and_reports_each_modes
         f_n, f_t = out.contact_forces_surface.T
         assert f_t[0] == pytest.approx(friction[0].kinetic * f_n[0], rel=1e-9)  # sliding up: along +t
         assert out.friction_estimate[0] == pytest.approx(f_t[0], rel=1e-9)
-        expected = np.concatenate([[friction[0].kinetic * f_n[0] - abs(f_t[0])], static[1:] * f_n[1:] - np.abs(f_t[1:])])
+        expected = np.concatenate([[friction[0].kinetic * f_n[0] - abs(f_t[0])],
+                                   static[1:] * f_n[1:] - np.abs(f_t[1:])])
         np.testing.assert_allclose(out.cone_margins, expected, rtol=0, atol=1e-12)
         if m > 2:
             assert np.all(np.abs(f_t[1:]) <= (static[1:] - settings.friction_margin) * f_n[1:] + 1e-6)

@@ -48,7 +48,8 @@ def random_state(rng, model):
     model.xi = xi
     S = np.concatenate([[rng.uniform(-0.01, 0.01), rng.uniform(0.115, 0.125), rng.uniform(-0.15, 0.15)],
                         xi[list(model.grasp.sliding)]])
-    S_dot = np.concatenate([rng.normal(size=3) * [0.05, 0.05, 0.5], rng.choice([-1, 1], size=p) * rng.uniform(0.005, 0.03, size=p)])
+    S_dot = np.concatenate([rng.normal(size=3) * [0.05, 0.05, 0.5],
+                            rng.choice([-1, 1], size=p) * rng.uniform(0.005, 0.03, size=p)])
     return S, S_dot
 
 

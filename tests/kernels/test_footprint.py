@@ -84,23 +84,26 @@ def test_shipped_fingers_match_coal(urdf):
 
 
 # --------------------------------------------------------------------------- random shapes
-BARE = """<?xml version="1.0"?>
+BARE = ("""<?xml version="1.0"?>
 <robot name="shapes">
   <link name="base"/>
   <joint name="joint1" type="revolute"><parent link="base"/><child link="link1"/>
-    <origin xyz="0 0 0" rpy="0 0 {yaw1!r}"/><axis xyz="0 0 1"/><limit lower="-3.14" upper="3.14" effort="5" velocity="20"/>
+    <origin xyz="0 0 0" rpy="0 0 {yaw1!r}"/><axis xyz="0 0 1"/>"""
+        """<limit lower="-3.14" upper="3.14" effort="5" velocity="20"/>
   </joint>
   <link name="link1"><inertial><origin xyz="0.05 0 0"/><mass value="0.05"/>
     <inertia ixx="1e-6" ixy="0" ixz="0" iyy="5e-5" iyz="0" izz="5e-5"/></inertial>{link1}</link>
   <joint name="joint2" type="revolute"><parent link="link1"/><child link="link2"/>
-    <origin xyz="{l1!r} 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/><limit lower="-3.14" upper="3.14" effort="5" velocity="20"/>
+    <origin xyz="{l1!r} 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/>"""
+        """<limit lower="-3.14" upper="3.14" effort="5" velocity="20"/>
   </joint>
   <link name="link2"><inertial><origin xyz="0.04 0 0"/><mass value="0.05"/>
     <inertia ixx="1e-6" ixy="0" ixz="0" iyy="5e-5" iyz="0" izz="5e-5"/></inertial>{link2}</link>
-  <joint name="tip_joint" type="fixed"><parent link="link2"/><child link="tip"/><origin xyz="{l2!r} 0 0" rpy="0 0 0"/></joint>
+  <joint name="tip_joint" type="fixed"><parent link="link2"/><child link="tip"/>"""
+        """<origin xyz="{l2!r} 0 0" rpy="0 0 0"/></joint>
   <link name="tip"/>
 </robot>
-"""
+""")
 
 
 def collision(xyz, rpy, geometry: str) -> str:
@@ -239,8 +242,8 @@ def test_compiled_envelopes_match_the_reference_on_random_cases(seed):
 
 def test_tracker_on_the_reference_path_still_matches_fresh_samples():
     """The tracker follows coal's cuts when its envelope runs the reference path (the compiled one is covered by
-    tests/test_envelope.py): at every step the pieces of a fresh reference sample, ends within the bisection
-    tolerance, and a fallback is bitwise a fresh sample."""
+    tests/envelope/test_finger_envelope.py): at every step the pieces of a fresh reference sample, ends within the
+    bisection tolerance, and a fallback is bitwise a fresh sample."""
     from regrasp.envelope.tracker import EnvelopeTracker
 
     sc = load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml")

@@ -372,7 +372,8 @@ def test_default_tip_clearance_for_a_box_distal_link():
     assert env.tip_clearance == pytest.approx(3 * 0.005)
     sample = env.at(np.array([0.03, 0.12, 0.0]))
     ideal = FingerEnvelope(finger, rect, 1).at(np.array([0.03, 0.12, 0.0]))
-    assert sample.feasible and sample.feasible[0][1] - sample.feasible[0][0] > 0.5 * (ideal.feasible[0][1] - ideal.feasible[0][0])
+    assert (sample.feasible
+            and sample.feasible[0][1] - sample.feasible[0][0] > 0.5 * (ideal.feasible[0][1] - ideal.feasible[0][0]))
 
 
 # --------------------------------------------------------------------------- 4. the checker's fast paths

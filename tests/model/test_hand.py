@@ -28,7 +28,8 @@ def textbook_2r(finger, q, v, g_hand, theta_base):
     l1 = finger.link_lengths[0]
     a, b = q
     M = np.array([
-        [m1 * c1**2 + I1 + m2 * (l1**2 + c2**2 + 2 * l1 * c2 * np.cos(b)) + I2, m2 * (c2**2 + l1 * c2 * np.cos(b)) + I2],
+        [m1 * c1**2 + I1 + m2 * (l1**2 + c2**2 + 2 * l1 * c2 * np.cos(b)) + I2,
+         m2 * (c2**2 + l1 * c2 * np.cos(b)) + I2],
         [m2 * (c2**2 + l1 * c2 * np.cos(b)) + I2, m2 * c2**2 + I2],
     ])
     hh = -m2 * l1 * c2 * np.sin(b)

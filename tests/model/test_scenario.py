@@ -53,7 +53,8 @@ def test_shipped_scenarios_load():
         assert [c.finger.configuration.value for c in sc.contacts] == ["left", "right"]
         # the bases are as far apart as the rectangle is wide (paper Example 2.1)
         width = np.ptp(sc.polygon.vertices[:, 0])
-        assert abs(sc.contacts[1].finger.base_in_hand[0] - sc.contacts[0].finger.base_in_hand[0]) == pytest.approx(width)
+        assert abs(sc.contacts[1].finger.base_in_hand[0]
+                   - sc.contacts[0].finger.base_in_hand[0]) == pytest.approx(width)
         assert sc.geometry is Geometry.IDEAL and sc.samples == 401
 
 
@@ -65,9 +66,11 @@ def test_valid_minimal_and_defaults(tmp_path):
 
 
 def test_waypoint_trajectory_and_vertices(tmp_path):
-    text = VALID.replace("width = 0.1\nheight = 0.04", "vertices = [[0.05, 0.02], [-0.05, 0.02], [-0.05, -0.02], [0.05, -0.02]]")
+    text = VALID.replace("width = 0.1\nheight = 0.04",
+                         "vertices = [[0.05, 0.02], [-0.05, 0.02], [-0.05, -0.02], [0.05, -0.02]]")
     text = text.replace('type = "ellipse"\ncx = 0.0\ncy = 0.12\na = 0.09\nb = 0.05\nomega = 2.0',
-                        'type = "waypoints"\ntimes = [0.0, 1.0, 2.0]\nposes = [[0, 0.12, 0], [0.02, 0.13, 0.1], [0, 0.12, 0]]\nboundary = "clamped"')
+                        'type = "waypoints"\ntimes = [0.0, 1.0, 2.0]\n'
+                        'poses = [[0, 0.12, 0], [0.02, 0.13, 0.1], [0, 0.12, 0]]\nboundary = "clamped"')
     sc = load_scenario(write(tmp_path, text))
     np.testing.assert_allclose(sc.trajectory.pose(1.0), [0.02, 0.13, 0.1])
 
@@ -82,7 +85,8 @@ CASES = [
     ("a = 0.09", "", "trajectory.a", "required"),
     ('type = "ellipse"', 'type = "circle"', "trajectory.type", "'ellipse', 'waypoints'"),
     ("base = [-0.05, 0.0, 1.5707963267948966]", "base = [-0.05, 0.0]", "fingers[0].base", "shape (3)"),
-    ('urdf = "' + str(URDF) + '"\nbase = [-0.05', 'urdf = "missing.urdf"\nbase = [-0.05', "fingers[0].urdf", "not found"),
+    ('urdf = "' + str(URDF) + '"\nbase = [-0.05', 'urdf = "missing.urdf"\nbase = [-0.05', "fingers[0].urdf",
+     "not found"),
     ('name = "f2"', 'name = "f1"', "fingers[1].name", "unique"),
     ("width = 0.1\nheight = 0.04", "vertices = [[0, 0], [1, 0], [0.2, 0.2], [0, 1]]", "object.vertices", "convex"),
     ("width = 0.1\nheight = 0.04", "vertices = [[0, 0], [1, 0]]", "object.vertices", "3"),

@@ -55,7 +55,8 @@ def test_sensor_noise_has_the_standard_deviations_asked_for_and_no_bias():
     for _ in range(n):
         m = d.measure(reading)
         rows.append(np.concatenate([m.X - reading.X, m.V - reading.V, m.xi - reading.xi, m.xi_dot - reading.xi_dot,
-                                    m.normal_force - reading.normal_force, m.tangential_force - reading.tangential_force]))
+                                    m.normal_force - reading.normal_force,
+                                    m.tangential_force - reading.tangential_force]))
     rows = np.array(rows)
     want = np.array([1e-4, 1e-4, 1e-3, 2e-3, 2e-3, 0.05] + [2e-4] * 3 + [1e-3] * 3 + [0.01] * 6)
     # a sample standard deviation of n = 20 000 normal draws is within 3 % of sigma (about 6 of its own sigmas),
@@ -92,7 +93,9 @@ def test_the_actuator_applies_each_command_its_delay_late_with_its_noise():
 
 def test_the_loop_drives_the_controller_with_the_noisy_reading_and_the_plant_with_the_delayed_torque():
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
-    rollout = build_rollout(sc, RunSpec(duration=0.02, seed=7, xi0=[-0.0125, 0.0125, 0.0], sensor_noise=SensorNoise(position=1e-4, angle=1e-3, xi=2e-4), actuator_noise=ActuatorNoise(delay=1)), policy="none")
+    rollout = build_rollout(sc, RunSpec(duration=0.02, seed=7, xi0=[-0.0125, 0.0125, 0.0],
+                                        sensor_noise=SensorNoise(position=1e-4, angle=1e-3, xi=2e-4),
+                                        actuator_noise=ActuatorNoise(delay=1)), policy="none")
     records = []
     outcome = simulate(rollout.plant, driver(rollout), 20, consumers=[records.append],
                        disturbance=rollout.disturbance)
@@ -105,17 +108,20 @@ def test_the_loop_drives_the_controller_with_the_noisy_reading_and_the_plant_wit
     assert 2e-5 < np.abs(dx[:, :2]).max() < 6e-4 and 2e-4 < np.abs(dx[:, 2]).max() < 6e-3
     assert all(np.array_equal(r.object_error, r.command.desired.pose - r.truth.X) for r in records)
     with pytest.raises(InvalidParameterError, match="rng"):
-        build_rollout(sc, RunSpec(duration=0.02, xi0=[-0.0125, 0.0125, 0.0], sensor_noise=SensorNoise(xi=1e-4)), policy="none")
+        build_rollout(sc, RunSpec(duration=0.02, xi0=[-0.0125, 0.0125, 0.0], sensor_noise=SensorNoise(xi=1e-4)),
+                      policy="none")
 
 
 def test_a_placement_error_moves_the_plants_fingertips_and_not_the_supervisors_belief():
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
     xi0 = np.array([-0.0125, 0.0125, 0.0])
     offset = np.array([2e-4, -1e-4, 0.0])
-    rollout = build_rollout(sc, RunSpec(duration=0.01, xi0=xi0), policy="none", plant=PlantSpec(errors=ModelErrors(xi_offset=offset)))
+    rollout = build_rollout(sc, RunSpec(duration=0.01, xi0=xi0), policy="none",
+                            plant=PlantSpec(errors=ModelErrors(xi_offset=offset)))
     np.testing.assert_allclose([c.xi for c in rollout.plant.contacts], xi0 + offset, rtol=0, atol=1e-15)
     # the plant's tips are on the object at the offset positions (its constraints hold at the start)
     assert rollout.plant.max_constraint_error < 1e-12
     assert rollout.run().success
     with pytest.raises(InvalidParameterError, match="xi_offset"):
-        build_rollout(sc, RunSpec(duration=0.01, xi0=xi0), policy="none", plant=PlantSpec(errors=ModelErrors(xi_offset=[0.0, math.nan, 0.0])))
+        build_rollout(sc, RunSpec(duration=0.01, xi0=xi0), policy="none",
+                      plant=PlantSpec(errors=ModelErrors(xi_offset=[0.0, math.nan, 0.0])))

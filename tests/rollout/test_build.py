@@ -110,9 +110,11 @@ def test_a_fingertips_friction_comes_from_the_scenario(tmp_path):
     assert sc.friction == (Friction(0.5), Friction(0.8, 0.6))  # 0.5 when unset
     rollout = build_rollout(sc, RunSpec(duration=0.01, xi0=[-0.01, 0.01]), policy="paper")
     assert rollout.plant.friction == rollout.supervisor.context.friction == sc.friction
-    other = build_rollout(sc, RunSpec(duration=0.01, xi0=[-0.01, 0.01]), policy="paper", plant=PlantSpec(friction=Friction(0.9, 0.3)))
+    other = build_rollout(sc, RunSpec(duration=0.01, xi0=[-0.01, 0.01]), policy="paper",
+                          plant=PlantSpec(friction=Friction(0.9, 0.3)))
     assert other.plant.friction == (Friction(0.9, 0.3),) * 2 and other.supervisor.context.friction == sc.friction
-    scaled = build_rollout(sc, RunSpec(duration=0.01, xi0=[-0.01, 0.01]), policy="paper", plant=PlantSpec(errors=ModelErrors(mass_scale=0.9, mu_scale=1.1)))
+    scaled = build_rollout(sc, RunSpec(duration=0.01, xi0=[-0.01, 0.01]), policy="paper",
+                           plant=PlantSpec(errors=ModelErrors(mass_scale=0.9, mu_scale=1.1)))
     assert np.allclose([(f.static, f.kinetic) for f in scaled.plant.friction], [(0.55, 0.55), (0.88, 0.66)],
                        rtol=1e-15, atol=0.0)
     assert scaled.plant.mass == pytest.approx(0.9 * sc.polygon.mass)
@@ -173,7 +175,8 @@ def test_the_scheduled_rollout_survives_a_plant_ten_percent_off_the_model(three_
     periods: the robust settings (margins kept by the internal force, integral action, the sliders'
     friction estimated from the sensed forces) carry the schedule through."""
     sc, schedule = three_fingers_schedule
-    rollout = build_rollout(sc, RunSpec(periods=2), schedule=schedule, plant=PlantSpec(errors=ModelErrors(mass_scale=mass_scale, mu_scale=mu_scale)))
+    rollout = build_rollout(sc, RunSpec(periods=2), schedule=schedule,
+                            plant=PlantSpec(errors=ModelErrors(mass_scale=mass_scale, mu_scale=mu_scale)))
     assert rollout.plant.mass == pytest.approx(mass_scale * sc.polygon.mass)
     assert rollout.supervisor.context.object_mass == sc.polygon.mass
     result = rollout.run()

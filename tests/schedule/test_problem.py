@@ -73,7 +73,8 @@ def test_force_tables_say_what_the_lp_says(problem):
     def ratios(k, mu):
         return [None if d == 0 else d * f.kinetic for d, f in zip(combos[mu], problem.friction)]
 
-    seen = _check(problem, rng, lat.lo, lat.hi, lambda r: (int(r.integers(0, lat.layers)), int(r.integers(0, len(combos)))),
+    seen = _check(problem, rng, lat.lo, lat.hi,
+                  lambda r: (int(r.integers(0, lat.layers)), int(r.integers(0, len(combos)))),
                   lambda k, mu, xi: (problem.times[k], xi), ratios)
     assert 0.1 < np.mean(seen) < 0.95
 

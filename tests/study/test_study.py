@@ -71,10 +71,12 @@ def test_draws_are_seeded_per_run_and_inside_the_half_widths():
     mu = np.array([d.errors.mu_scale for d in draws])
     assert 0.8 <= mass.min() and mass.max() <= 1.2 and 0.9 <= mu.min() and mu.max() <= 1.1
     assert mass.std() > 0.05 and abs(np.corrcoef(mass, mu)[0, 1]) < 0.4  # spread, and drawn independently
-    assert all(d.errors.mass_scale == d.errors.mu_scale == d.errors.object_inertia_scale == d.errors.link_mass_scale == 1.0
+    assert all(d.errors.mass_scale == d.errors.mu_scale == d.errors.object_inertia_scale
+               == d.errors.link_mass_scale == 1.0
                for d in draw_runs(3, 0, Perturbation()))
     full = draw_runs(200, 3, Perturbation(mass=0.2, mu=0.2, inertia=0.2, link_mass=0.2))
-    factors = np.array([[d.errors.mass_scale, d.errors.mu_scale, d.errors.object_inertia_scale, d.errors.link_mass_scale] for d in full])
+    factors = np.array([[d.errors.mass_scale, d.errors.mu_scale, d.errors.object_inertia_scale,
+                         d.errors.link_mass_scale] for d in full])
     assert (factors >= 0.8).all() and (factors <= 1.2).all()
     assert np.abs(np.corrcoef(factors.T) - np.eye(4)).max() < 0.25  # four independent draws
     offsets = np.array([d.errors.xi_offset for d in draw_runs(300, 4, Perturbation(contact_position=2e-4), contacts=3)])
@@ -107,7 +109,8 @@ def same_runs(local, doc):
     assert doc["runs"] == 4 and doc["successes"] == local.successes
     assert doc["wilson_95"] == pytest.approx(list(local.interval))
     for mine, theirs in zip(local.runs, doc["outcomes"]):
-        assert theirs["draw"]["mass_scale"] == mine.draw.errors.mass_scale and theirs["draw"]["mu_scale"] == mine.draw.errors.mu_scale
+        assert (theirs["draw"]["mass_scale"] == mine.draw.errors.mass_scale
+                and theirs["draw"]["mu_scale"] == mine.draw.errors.mu_scale)
         assert theirs["draw"]["xi_offset"] == list(mine.draw.errors.xi_offset)
         for key in ("success", "failure_kind", "failure_time", "min_cone_margin", "min_envelope_margin", "slides",
                     "max_orientation_error"):
@@ -138,11 +141,12 @@ def test_a_study_on_a_local_ray_gives_the_same_runs(in_process, capsys):
 
 def test_a_run_replayed_alone_repeats_the_studys_run_and_records_it(in_process, capsys, tmp_path):
     rrd = tmp_path / "run2.rrd"
-    code = main(["study", str(SCENARIO), "--seed", "5", *FLAGS, "--duration", "0.15", "--replay", "2", "--rrd", str(rrd),
-                 "--json"])
+    code = main(["study", str(SCENARIO), "--seed", "5", *FLAGS, "--duration", "0.15", "--replay", "2",
+                 "--rrd", str(rrd), "--json"])
     doc = json.loads(capsys.readouterr().out)
     run = in_process.runs[2]
-    assert code == (0 if run.success else 1) and doc["run"] == 2 and doc["draw"]["xi_offset"] == list(run.draw.errors.xi_offset)
+    assert (code == (0 if run.success else 1) and doc["run"] == 2
+            and doc["draw"]["xi_offset"] == list(run.draw.errors.xi_offset))
     assert doc["min_cone_margin"] == run.min_cone_margin and doc["min_envelope_margin"] == run.min_envelope_margin
     assert rrd.stat().st_size > 10_000
     assert main(["study", str(SCENARIO), "--rrd", str(rrd)]) == 2  # a recording needs --replay
@@ -209,8 +213,8 @@ def test_the_scenario_study_table_sets_the_perturbations_and_flags_override_it(t
     doc = json.loads(capsys.readouterr().out)
     assert doc["perturbation"]["mass"] == 0.05 and doc["perturbation"]["delay"] == 1
     assert doc["perturbation"]["angle_noise"] == 0.001
-    for bad, key in (("mass = 1.5", "study.mass"), ("delay = 0.5", "study.delay"), ("xi_nosie = 1e-4", "study.xi_nosie"),
-                     ("position_noise = -1e-4", "study.position_noise")):
+    for bad, key in (("mass = 1.5", "study.mass"), ("delay = 0.5", "study.delay"),
+                     ("xi_nosie = 1e-4", "study.xi_nosie"), ("position_noise = -1e-4", "study.position_noise")):
         path.write_text(text + f"\n[study]\n{bad}\n")
         with pytest.raises(ScenarioError, match=key):
             load_scenario(path)
@@ -241,7 +245,9 @@ def test_the_plant_gets_the_drawn_errors_and_the_controllers_keep_the_model():
     from regrasp import build_rollout, load_scenario
 
     sc = load_scenario(SCENARIO)
-    r = build_rollout(sc, RunSpec(duration=0.1), policy="none", plant=PlantSpec(errors=ModelErrors(mass_scale=1.1, inertia_scale=0.85, link_mass_scale=1.2, mu_scale=0.9)))
+    r = build_rollout(sc, RunSpec(duration=0.1), policy="none",
+                      plant=PlantSpec(errors=ModelErrors(mass_scale=1.1, inertia_scale=0.85, link_mass_scale=1.2,
+                                                         mu_scale=0.9)))
     assert r.plant.mass == pytest.approx(1.1 * sc.polygon.mass)
     assert r.plant.inertia == pytest.approx(0.85 * sc.polygon.inertia)
     assert r.plant.friction[0].static == pytest.approx(0.9 * sc.friction[0].static)

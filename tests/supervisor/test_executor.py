@@ -178,7 +178,8 @@ def test_with_an_actuation_delay_a_stuck_slide_settles_until_the_torques_in_flig
 
 def test_an_infeasible_slide_is_aborted_and_the_contact_held():
     # a priming that asks finger 1 for |f_t| = 3.5 f_n: no squeeze balances that with the others in their cones
-    ex = executor(prime_overshoot=3.0, prime_overshoot_max=3.0, internal_force=InternalForceSettings(f_min=0.2, f_max=5.0))
+    ex = executor(prime_overshoot=3.0, prime_overshoot_max=3.0,
+                  internal_force=InternalForceSettings(f_min=0.2, f_max=5.0))
     out = []
     ex.start(SlideOrder(0, 1, 0.0), meas(0.8), out)
     control, law, _, aborted = command(ex, 0.8, meas(0.8), out)

@@ -1,6 +1,6 @@
 """The regrasp supervisor: its settings, its danger test, its slide targets and its refusals.
 
-Closed-loop behaviour on the independent plant is in tests/test_rollout.py.
+Closed-loop behaviour on the independent plant is in tests/rollout/test_build.py.
 """
 
 import dataclasses
@@ -139,7 +139,8 @@ def test_a_possible_slide_is_primed_on_the_cone_edge_towards_the_target(two_fing
     assert out.law == "fixed contacts (cone edge)"
     f_n, f_t = out.control.contact_forces_surface[0]
     overshoot = sup.settings.executor.prime_overshoot
-    assert f_t == pytest.approx((sup.context.friction[0].static + overshoot) * f_n, rel=1e-6)  # + direction: up the edge
+    # + direction: up the edge
+    assert f_t == pytest.approx((sup.context.friction[0].static + overshoot) * f_n, rel=1e-6)
 
 
 @pytest.mark.parametrize("kinetic,settle", [(0.4, 0.35), (0.06, 0.03)])
@@ -208,7 +209,8 @@ def test_a_slide_is_asked_about_along_its_path(two_fingers):
     assert "fixed contact 1 would slip" in rejected.detail and "-12.50 mm on the way" in rejected.detail
     target = 0.5 * (lo + hi)
     desired = two_fingers.trajectory.sample(min(6.0 / sup.settings.executor.omega_n, two_fingers.trajectory.t_end))
-    at_target = sliding_feasibility(sup.context.grasp, desired.pose, [target, 0.012], desired.acceleration, 0, 1.0, sup.context.friction,
+    at_target = sliding_feasibility(sup.context.grasp, desired.pose, [target, 0.012], desired.acceleration, 0, 1.0,
+                                    sup.context.friction,
                                     object_mass=sup.context.object_mass, object_inertia=sup.context.object_inertia,
                                     gravity_in_hand=sup.hand.gravity_in_hand, settings=sup.settings.paper.feasibility)
     at_start = sliding_feasibility(sup.context.grasp, two_fingers.trajectory.pose(0.0), xi,
@@ -261,7 +263,8 @@ def test_a_rejected_slide_gets_another_contact_to_enable_it():
         c = sup.context
         return sliding_feasibility(c.grasp, desired.pose, [where, xi[1], palm], desired.acceleration, 0, -1.0,
                                    c.friction, object_mass=c.object_mass, object_inertia=c.object_inertia,
-                                   gravity_in_hand=c.hand.gravity_in_hand, settings=sup.settings.paper.feasibility).possible
+                                   gravity_in_hand=c.hand.gravity_in_hand,
+                                   settings=sup.settings.paper.feasibility).possible
 
     duration = 6.0 / sup.settings.executor.omega_n
     path = [(xi[0] + f * (finger1_target - xi[0]), t + duration + f * duration) for f in (0.5, 1.0)]

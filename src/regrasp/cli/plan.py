@@ -40,7 +40,8 @@ def configure(p: argparse.ArgumentParser) -> None:
     p.add_argument("--envelope-margin", type=nonnegative, metavar="M",
                    help="with --regrasp: the envelope margin [m] every contact keeps (default 0.001)")
     p.add_argument("--cone-margin", type=nonnegative, metavar="N",
-                   help=f"with --regrasp: the cone margin [N] every fixed contact keeps (default {DEFAULT_CONE_MARGIN})")
+                   help="with --regrasp: the cone margin [N] every fixed contact keeps (default "
+                        f"{DEFAULT_CONE_MARGIN})")
     p.set_defaults(func=_cmd_plan)
 
 
@@ -75,7 +76,8 @@ def _summary(plan, scenario, figures) -> str:
                      f"l2 = {l2 * mm:.1f} mm")
         lines.append(f"    conditions: {_condition_runs(times, f)}")
         lines.append(f"    feasible width [mm]: min {widths.min():.2f}, median {np.median(widths):.2f}, "
-                     f"max {widths.max():.2f} (edge length {(f.samples[0].edge_range[1] - f.samples[0].edge_range[0]) * mm:.1f})")
+                     f"max {widths.max():.2f} (edge length "
+                     f"{(f.samples[0].edge_range[1] - f.samples[0].edge_range[0]) * mm:.1f})")
         for iv in f.infeasible_intervals:
             lines.append(f"    infeasible: t in [{iv.start:.3f}, {iv.end:.3f}] s - {iv.reason}")
         if f.initial_xi is None:

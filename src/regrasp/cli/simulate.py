@@ -214,7 +214,8 @@ def _simulate(args, scenario, run, common) -> tuple[int, str]:
         doc["plant"] = args.plant
         doc["figures"] = figures
         return code, json.dumps(doc)
-    lines = [rollout_summary(result, scenario, plant_text(args.plant, rollout.plant))] + [f"  figure: {f}" for f in figures]
+    lines = ([rollout_summary(result, scenario, plant_text(args.plant, rollout.plant))]
+             + [f"  figure: {f}" for f in figures])
     if result.failure is not None and result.failure.kind is FailureKind.INTERRUPTED:
         lines.append("  (interrupted: the result and the recording cover the run so far)")
     return code, "\n".join(lines)

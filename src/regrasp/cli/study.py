@@ -195,7 +195,8 @@ def _sweep_study(args: argparse.Namespace, scenario, perturbation, plant: PlantS
         sys.stdout.write("\n")
         return 0
     print(f"regrasp study --sweep {name}: {len(values)} studies of {args.runs} runs, seed {args.seed}; besides "
-          f"{name}: {replace(perturbation, **{name: type(perturbation).__dataclass_fields__[name].default}).describe()}")
+          f"{name}: "
+          f"{replace(perturbation, **{name: type(perturbation).__dataclass_fields__[name].default}).describe()}")
     for value, r in zip(values, results):
         lo, hi = r.interval
         failures = ", ".join(f"{k} {v}" for k, v in sorted(r.failures.items())) or "none"

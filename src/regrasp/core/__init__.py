@@ -1,5 +1,5 @@
-"""``regrasp.core``: Value types and arithmetic every concern shares: the contact's mode, friction and cone margin, the object
-(a convex polygon), its trajectory, what a hand senses (:class:`Measurement`), events and failures, the typed
+"""``regrasp.core``: Value types and arithmetic every concern shares: the contact's mode, friction and cone margin, the
+object (a convex polygon), its trajectory, what a hand senses (:class:`Measurement`), events and failures, the typed
 errors and the one validation layer."""
 
 from __future__ import annotations

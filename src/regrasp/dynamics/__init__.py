@@ -1,7 +1,7 @@
-"""``regrasp.dynamics``: Paper §3: the hand-object dynamics and its control. Grasp matrices (:class:`Grasp`), the reduced model in
-S = (x_o, β, ξ) (:class:`ReducedModel`), computed torque (:mod:`.control`) and its laws (:mod:`.laws`: the
-fixed-contact law, Propositions 1-3), when a slide is possible (:func:`sliding_feasibility`); the internal-force QP is
-:mod:`regrasp.dynamics.internal_force`."""
+"""``regrasp.dynamics``: Paper §3: the hand-object dynamics and its control. Grasp matrices (:class:`Grasp`), the
+reduced model in S = (x_o, β, ξ) (:class:`ReducedModel`), computed torque (:mod:`.control`) and its laws (:mod:`.laws`:
+the fixed-contact law, Propositions 1-3), when a slide is possible (:func:`sliding_feasibility`); the internal-force QP
+is :mod:`regrasp.dynamics.internal_force`."""
 
 from __future__ import annotations
 

@@ -72,7 +72,8 @@ class Gains:
         kv = as_finite_array("kv", self.kv, (-1,))
         ks = as_finite_array("ks", self.ks, (-1,))
         if len(kv) != len(ks) or len(kv) < 3:
-            raise InvalidParameterError("ks", self.ks, f"one gain per reduced coordinate, as many as kv ({len(kv)} >= 3)")
+            raise InvalidParameterError("ks", self.ks,
+                                        f"one gain per reduced coordinate, as many as kv ({len(kv)} >= 3)")
         for name, gains, value in (("kv", kv, self.kv), ("ks", ks, self.ks)):
             if (gains <= 0.0).any():
                 raise InvalidParameterError(name, value, "positive gains (> 0)")
@@ -243,11 +244,13 @@ class ComputedTorqueController:
         error = [a - b for a, b in zip(s_d, s)]
         error_rate = [a - b for a, b in zip(s_d_dot, s_dot)]
         command = [a + kv * r + ks * e
-                   for a, kv, r, ks, e in zip(s_d_ddot, self.gains.kv.tolist(), error_rate, self.gains.ks.tolist(), error)]
+                   for a, kv, r, ks, e in zip(s_d_ddot, self.gains.kv.tolist(), error_rate, self.gains.ks.tolist(),
+                                              error)]
         command_array = np.array(command)
         tau, f_hat, forces, force_list, internal = self.law_torque(terms, args, command_array, tangential_force)
         # (n_i^T f_i, t_i^T f_i) per contact, and the cone margins μ f_n - |f_t| (μ of the contact's mode)
-        surface = [(nx * force_list[2 * i] + ny * force_list[2 * i + 1], tx * force_list[2 * i] + ty * force_list[2 * i + 1])
+        surface = [(nx * force_list[2 * i] + ny * force_list[2 * i + 1],
+                    tx * force_list[2 * i] + ty * force_list[2 * i + 1])
                    for i, (nx, ny, tx, ty) in enumerate(terms.frames)]
         margins = [cone_margin(mu, f_n, f_t) for mu, (f_n, f_t) in zip(self._margin_mu, surface)]
         return ControlOutput(np.array(tau), command_array, np.array(error), np.array(error_rate), f_hat, forces,

@@ -97,9 +97,9 @@ class Proposition3Controller(ComputedTorqueController):
 
     law = "Proposition 3"
 
-    def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = DEFAULT_FRICTION, *, sample_time: float = 1e-3,
-                 direction: float | Sequence[float] = 1.0, reversible: bool = True, compiled: bool | None = None,
-                 **kwargs: Any):
+    def __init__(self, model: ReducedModel, gains: Gains, friction: FrictionLike = DEFAULT_FRICTION, *,
+                 sample_time: float = 1e-3, direction: float | Sequence[float] = 1.0, reversible: bool = True,
+                 compiled: bool | None = None, **kwargs: Any):
         m, p = model.grasp.m, model.grasp.p
         if m < 2 or p < 1 or 2 * m < 3 + p:
             raise InvalidParameterError("model", model.grasp.modes,
@@ -144,7 +144,8 @@ class Proposition3Controller(ComputedTorqueController):
     def directions(self, values: Sequence[float]) -> None:
         values = [float(v) for v in values]
         if len(values) != len(self._directions) or any(v not in (-1.0, 1.0) for v in values):
-            raise InvalidParameterError("directions", values, f"one sign (+1 or -1) per slider ({len(self._directions)})")
+            raise InvalidParameterError("directions", values,
+                                        f"one sign (+1 or -1) per slider ({len(self._directions)})")
         self._directions = values
 
     def sliding_direction(self, xi_dot: float, xi_ddot_command: float) -> float:

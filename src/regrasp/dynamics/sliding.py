@@ -176,7 +176,8 @@ def sliding_feasibility(
         worst = int(np.argmin(surface[:, 0]))
         strongest = int(np.argmax(surface[:, 0]))
         if surface[worst, 0] < 0.0:
-            reason, obstacle = f"contact {worst} would pull (normal force {surface[worst, 0]:.3g} N)", SlideObstacle.PULL
+            reason, obstacle = (f"contact {worst} would pull (normal force {surface[worst, 0]:.3g} N)",
+                                SlideObstacle.PULL)
         elif surface[worst, 0] < settings.f_min:
             reason = f"contact {worst} would push only {surface[worst, 0]:.3g} N < f_min = {settings.f_min:.3g} N"
             obstacle = SlideObstacle.WEAK_PUSH

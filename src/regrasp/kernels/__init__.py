@@ -4,38 +4,49 @@ Pinocchio stays the source of every model: a kernel's constants are read from th
 hand is built, and the hand checks the kernels against Pinocchio there (M, N, J, J̇q̇ and the tip at random
 states, to 1e-12 relative to max(1, |value|)); where they disagree it warns and keeps the Pinocchio path.
 
-=====================================  ==========================================  ===========================
-kernel                                 reference path                              equality test
-=====================================  ==========================================  ===========================
-:mod:`.finger`: M, N, J, J̇q̇, tip      Pinocchio (``crba``, ``nonLinearEffects``,   ``tests/test_kernels.py``
-                                       frame Jacobian, classical acceleration)
-:mod:`.plant`: a plant step (RK4,      :class:`~regrasp.plants.project.plant.Plant` with           ``tests/test_kernels.py``
-fixed and sliding contacts,            ``compiled=False``
-Baumgarte, works, event inputs)
-:mod:`.reduced`: the reduced model's   :class:`~regrasp.dynamics.reduced.ReducedModel` with  ``tests/test_kernels.py``
-terms (IK, J, H, Ḣ Ṡ, M, N)            ``compiled=False``
-:mod:`.force`, :mod:`.qp`: the         ``InternalForceSolver(compiled=False)``      ``tests/test_kernels_qp.py``
-internal-force QP (null basis, rows,   (:mod:`regrasp.dynamics.internal_force.solver`, OSQP)
-an exact dense QP, the check)
-:mod:`.control`: a computed-torque     the controller with ``compiled=False``       ``tests/test_kernels_control.py``
-control step (fixed law, Prop. 1,
+==========================  =========================================================  =================================
+kernel                      reference path                                             equality test
+==========================  =========================================================  =================================
+:mod:`.finger`: M, N, J,    Pinocchio (``crba``, ``nonLinearEffects``,                 ``tests/kernels/
+J̇q̇, tip                     frame Jacobian, classical acceleration)                    test_finger_and_plant.py``
+:mod:`.plant`: a plant      :class:`~regrasp.plants.project.plant.Plant` with          ``tests/kernels/
+step (RK4, fixed and        ``compiled=False``                                         test_finger_and_plant.py``
+sliding contacts,
+Baumgarte, works, event
+inputs)
+:mod:`.reduced`: the        :class:`~regrasp.dynamics.reduced.ReducedModel` with       ``tests/kernels/
+reduced model's terms (IK,  ``compiled=False``                                         test_finger_and_plant.py``
+J, H, Ḣ Ṡ, M, N)
+:mod:`.force`, :mod:`.qp`:  ``InternalForceSolver(compiled=False)``                    ``tests/kernels/test_qp.py``
+the internal-force QP       (:mod:`regrasp.dynamics.internal_force.solver`, OSQP)
+(null basis, rows, an
+exact dense QP, the check)
+:mod:`.control`: a          the controller with ``compiled=False``                     ``tests/kernels/test_control.py``
+computed-torque control
+step (fixed law, Prop. 1,
 Prop. 3 with m > 2)
-:mod:`.footprint`: link shape–prism    coal (``UrdfCollisionChecker.                ``tests/test_kernels_
-signed distances in closed form        signed_distances``)                          footprint.py``
-:mod:`.envelope`: a ``urdf`` envelope  :class:`~regrasp.envelope.finger_envelope.FingerEnvelope`    ``tests/test_kernels_
-sample (grid, bisection)               with ``compiled=False``                      footprint.py``
-:mod:`.stretch`: a rollout's steps     the simulation loop with the supervisor      ``tests/test_stretch.py``
-between discrete decisions (the        (``Rollout.run(compiled_stretches=False)``)
-above, and the supervisor's
-continuous work)
-:mod:`.monitor`, :mod:`.disturbance`:  :class:`~regrasp.supervisor.monitor.EnvelopeMonitor`,     ``tests/test_stretch.py``
-a reading's margins, the noise, the    :class:`~regrasp.plants.disturbance.Disturbance`
-slip sensor and the actuation delay
-=====================================  ==========================================  ===========================
+:mod:`.footprint`: link     coal (``UrdfCollisionChecker.                              ``tests/test_kernels_
+shape–prism signed          signed_distances``)                                        footprint.py``
+distances in closed form
+:mod:`.envelope`: a         :class:`~regrasp.envelope.finger_envelope.FingerEnvelope`  ``tests/test_kernels_
+``urdf`` envelope sample    with ``compiled=False``                                    footprint.py``
+(grid, bisection)
+:mod:`.stretch`: a          the simulation loop with the supervisor                    ``tests/rollout/test_stretch.py``
+rollout's steps between     (``Rollout.run(compiled_stretches=False)``)
+discrete decisions (the
+above, and the
+supervisor's continuous
+work)
+:mod:`.monitor`,            :class:`~regrasp.supervisor.monitor.EnvelopeMonitor`,      ``tests/rollout/test_stretch.py``
+:mod:`.disturbance`: a      :class:`~regrasp.plants.disturbance.Disturbance`
+reading's margins, the
+noise, the slip sensor
+and the actuation delay
+==========================  =========================================================  =================================
 
 :func:`warm_up` loads every kernel (compiling it where the cache has none): a compiled
-:class:`~regrasp.plants.project.plant.Plant` and a study's worker call it when built, so a rollout's timed loop never pays
-for it.
+:class:`~regrasp.plants.project.plant.Plant` and a study's worker call it when built, so a rollout's timed loop never
+pays for it.
 
 Every kernel reads named fields (numpy record dtypes: :data:`FINGER_PARAMETERS`, :data:`FINGER_TERMS`,
 :data:`PLANT_CONTACT`, :data:`PLANT_PARAMETERS`, :data:`ENVELOPE_PARAMETERS`, :data:`FOOTPRINT`),
@@ -159,7 +170,8 @@ def warm_up() -> None:
 
 
 def _warm_stretch(fingers, plant, iks, edges, rows) -> None:
-    """The stretch kernel with the argument types :class:`regrasp.rollout.stretch.CompiledStretches` passes (no step)."""
+    """The stretch kernel with the argument types :class:`regrasp.rollout.stretch.CompiledStretches` passes
+    (no step)."""
     m = 1
     head = (fingers, iks, edges, np.zeros(2), True, np.zeros(1), np.full(1, -1, dtype=np.int64))
     contacts = np.zeros(m, dtype=PLANT_CONTACT)

@@ -14,7 +14,7 @@ as corrected in ``docs/derivations.md``), then the internal force (:func:`.force
 :math:`\mu f_n - |f_t|`. Anything but the plain case (an unreachable contact, a finger near a singularity, a
 QP the kernel does not settle) is reported, and the caller takes the reference path, which raises or falls
 back exactly as before. :func:`sliding_step_into` is Proposition 3 with m > 2 (the sliders on their kinetic
-cone edges, the QP in the null space of those equations). ``tests/test_kernels_control.py`` checks the outputs
+cone edges, the QP in the null space of those equations). ``tests/kernels/test_control.py`` checks the outputs
 against the reference paths.
 """
 

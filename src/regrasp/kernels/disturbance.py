@@ -2,7 +2,7 @@ r"""A run's disturbance in compiled code: :class:`regrasp.plants.disturbance.Dis
 on a step's drawn standard normals (:meth:`~regrasp.plants.disturbance.Disturbance.stretch_noise`), with the slip
 sensor's and the actuation delay's deques as arrays, oldest first, for :func:`.stretch.stretch_into`. The same
 arithmetic as the reference (numpy's ``normal(loc, scale)`` is ``loc + scale`` times the next standard normal);
-``tests/test_stretch.py`` runs noisy rollouts both ways.
+``tests/rollout/test_stretch.py`` runs noisy rollouts both ways.
 """
 
 from __future__ import annotations

@@ -148,7 +148,8 @@ def _tip_and_elbow(p, d, nx, ny, s):
 
 @numba.njit(cache=True)
 def _segment_hits(ax, ay, bx, by, verts, normals, offsets, eps):
-    """:func:`regrasp.model.collision.segment_hits_halfplanes` against the polygon (:func:`~.footprint.object_in_hand`)."""
+    """:func:`regrasp.model.collision.segment_hits_halfplanes` against the polygon
+    (:func:`~.footprint.object_in_hand`)."""
     n = verts.shape[0]
     t0, t1 = 0.0, 1.0
     for k in range(n):

@@ -194,7 +194,8 @@ def largest_disagreement(model: pin.Model, tip_frames, params: np.ndarray, gravi
                     ref = reference_terms(model, data, tip, 2 * i + 1, q, v, damped)
                     t = terms[i]
                     mine = {"M": np.array([[t["m00"], t["m01"]], [t["m01"], t["m11"]]]),
-                            "N": np.array([t["n0"], t["n1"]]), "J": np.array([[t["j00"], t["j01"]], [t["j10"], t["j11"]]]),
+                            "N": np.array([t["n0"], t["n1"]]),
+                            "J": np.array([[t["j00"], t["j01"]], [t["j10"], t["j11"]]]),
                             "Jdv": np.array([t["jdx"], t["jdy"]]), "tip": np.array([t["px"], t["py"]])}
                     for key, value in mine.items():
                         err = float(np.max(np.abs(value - ref[key]) / np.maximum(1.0, np.abs(ref[key]))))

@@ -1,11 +1,11 @@
 r"""The internal-force QP of :class:`regrasp.dynamics.internal_force.solver.InternalForceSolver`, compiled in one call.
 
-What :meth:`InternalForceSolver.solve <regrasp.dynamics.internal_force.solver.InternalForceSolver.solve>` does around OSQP,
-with the dense solver of :mod:`.qp` in its place: an orthonormal basis :math:`N_c` of
+What :meth:`InternalForceSolver.solve <regrasp.dynamics.internal_force.solver.InternalForceSolver.solve>` does around
+OSQP, with the dense solver of :mod:`.qp` in its place: an orthonormal basis :math:`N_c` of
 :math:`\mathrm{null}(A^T)` (Householder QR of A, the last 2m - c columns of Q; a rank-deficient A is reported,
 and the caller takes the reference path's SVD), the rows :math:`C f \ge lo` at the contacts' surface frames
-(``regrasp.dynamics.internal_force.rows``: row r is :math:`\alpha_r n_i^T f_i + \beta_r t_i^T f_i - \sigma_r s`), the QP in
-:math:`y` (or :math:`(y, s)` with a target cone margin: weight W on :math:`(s - \text{target} - \delta)^2`,
+(``regrasp.dynamics.internal_force.rows``: row r is :math:`\alpha_r n_i^T f_i + \beta_r t_i^T f_i - \sigma_r s`), the QP
+in :math:`y` (or :math:`(y, s)` with a target cone margin: weight W on :math:`(s - \text{target} - \delta)^2`,
 :math:`0 \le s \le` target), :math:`f_c = N_c y`, and the same check of the predicted forces
 :math:`f_m + f_c` as the reference path (every row to a slack of :math:`10^{-6}\max(1, |f_m|_\infty)` N, or
 :math:`10^{-9}` of it when nothing is chosen, k = 0), with the cone margin: the least residual of the
@@ -63,7 +63,8 @@ def internal_force_into(A: np.ndarray, f_m: np.ndarray, frames: np.ndarray, coef
         lower: lo_r (rows,); the first ``n_ineq`` rows are inequalities, the rest equalities.
         is_cone: Whether each row is a static-cone row (rows,).
         target: The target cone margin [N]; > 0 adds the variable s (``margin_column`` its σ_r, ``weight``
-            W and ``aim`` δ [N] the objective's, :data:`regrasp.dynamics.internal_force.rows.MARGIN_WEIGHT` and ``MARGIN_AIM``).
+            W and ``aim`` δ [N] the objective's, :data:`regrasp.dynamics.internal_force.rows.MARGIN_WEIGHT` and
+            ``MARGIN_AIM``).
 
     Returns:
         (status, k, cone margin [N]): ``FORCE_*``; k the null space's dimension; the least static-cone
@@ -124,7 +125,8 @@ def internal_force_into(A: np.ndarray, f_m: np.ndarray, frames: np.ndarray, coef
             f_c[i] = acc
     for i in range(m2):
         forces[i] = f_m[i] + f_c[i]
-    ok = True  # (the reference path's check, ``regrasp.dynamics.internal_force.rows.ConstraintRows.check_at``, compiled)
+    # (the reference path's check, ``regrasp.dynamics.internal_force.rows.ConstraintRows.check_at``, compiled)
+    ok = True
     margin = math.inf
     for r in range(rows):
         residual = -lower[r]

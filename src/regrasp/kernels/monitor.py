@@ -1,7 +1,7 @@
 r"""The runtime envelope monitor's arithmetic in compiled code, for :func:`.stretch.stretch_into`: a contact's
-margin and the feasible interval holding (or nearest to) its ξ (:meth:`regrasp.envelope.finger_envelope.EnvelopeSample.margin`,
-:func:`regrasp.supervisor.monitor.interval_of`), and the envelopes' arguments for their evaluation in a stretch
-(:func:`.envelope.envelope_sample_into` for every finger).
+margin and the feasible interval holding (or nearest to) its ξ
+(:meth:`regrasp.envelope.finger_envelope.EnvelopeSample.margin`, :func:`regrasp.supervisor.monitor.interval_of`), and
+the envelopes' arguments for their evaluation in a stretch (:func:`.envelope.envelope_sample_into` for every finger).
 """
 
 from __future__ import annotations
@@ -17,12 +17,13 @@ __all__ = ["envelope_arguments", "reading_at"]
 
 def envelope_arguments(arguments: list[tuple] | None, m: int) -> tuple[tuple, tuple, tuple]:
     """The ``geometry``, ``samples`` and ``scratch`` arguments of :func:`stretch_into` for m fingers whose envelopes
-    have the compiled arguments ``arguments`` (:attr:`regrasp.envelope.finger_envelope.FingerEnvelope.compiled_arguments`: one
-    tuple per finger, all on one polygon), or placeholders of the same types for None (the kernel then does not
-    evaluate). ``geometry``: the fingers' :data:`.envelope.ENVELOPE_PARAMETERS` (m,), their link footprints one
-    after another (read-only) and where each finger's start (m + 1,), the polygon's vertices and inward normals;
-    ``samples``: per finger the last evaluation's (d, λ, s0) (m, 3), reachable set (m, 4, 2) and feasible set
-    (m, rows, 2) [m]; ``scratch``: the rest of :func:`.envelope.envelope_sample_into`'s outputs, sized for all."""
+    have the compiled arguments ``arguments``
+    (:attr:`regrasp.envelope.finger_envelope.FingerEnvelope.compiled_arguments`: one tuple per finger, all on one
+    polygon), or placeholders of the same types for None (the kernel then does not evaluate). ``geometry``: the fingers'
+    :data:`.envelope.ENVELOPE_PARAMETERS` (m,), their link footprints one after another (read-only) and where each
+    finger's start (m + 1,), the polygon's vertices and inward normals; ``samples``: per finger the last evaluation's
+    (d, λ, s0) (m, 3), reachable set (m, 4, 2) and feasible set (m, rows, 2) [m]; ``scratch``: the rest of
+    :func:`.envelope.envelope_sample_into`'s outputs, sized for all."""
     if not arguments:
         shapes = np.zeros(1, dtype=FOOTPRINT)
         shapes.flags.writeable = False

@@ -188,8 +188,8 @@ def plant_step_into(fingers, plant, contacts, y, tau, certificates, radii, out, 
     end), ``needs_coal`` and ``posture``.
 
     ``certificates`` (m, 9) and ``radii`` (m, 2) are the collision check's (see
-    :meth:`regrasp.plants.project.plant.Plant._collisions`; a NaN row: none): ``needs_coal`` says which fingers' links may have
-    reached the object since their certificate, ``posture`` each finger's (q_1, q_2, β, joint 1 and the elbow
+    :meth:`regrasp.plants.project.plant.Plant._collisions`; a NaN row: none): ``needs_coal`` says which fingers' links
+    may have reached the object since their certificate, ``posture`` each finger's (q_1, q_2, β, joint 1 and the elbow
     in the object frame: a new certificate's first seven entries).
 
     Returns the largest violation [m] of the active constraints, whether an event may have happened (a contact

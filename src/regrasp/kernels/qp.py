@@ -1,7 +1,7 @@
 r"""A small dense QP solver, compiled: the internal-force QP's few variables, solved exactly.
 
-The internal-force QP (:mod:`regrasp.dynamics.internal_force.solver`) has k <= 2m - 3 variables (plus the margin variable s)
-and a dozen rows; OSQP solves it iteratively to a tolerance in ~10 µs, most of it set-up and the Python
+The internal-force QP (:mod:`regrasp.dynamics.internal_force.solver`) has k <= 2m - 3 variables (plus the margin
+variable s) and a dozen rows; OSQP solves it iteratively to a tolerance in ~10 µs, most of it set-up and the Python
 around it. Its objective has a diagonal Hessian, so it is a *least-distance problem* (Lawson & Hanson,
 *Solving Least Squares Problems*, 1974, ch. 23):
 
@@ -18,7 +18,7 @@ feasible problem with solution norm :math:`\|w\|` has :math:`\|r\|^2 = 1/(1 + \|
 :math:`\|r\|^2 \le 10^{-14}` calls infeasible only what would need :math:`\|w\| > 10^7` (N, here).
 
 The active set terminates in finitely many steps (each passive set is visited once); the answer is exact to
-round-off, where OSQP's is within its tolerance. ``tests/test_kernels_qp.py`` checks both against each other
+round-off, where OSQP's is within its tolerance. ``tests/kernels/test_qp.py`` checks both against each other
 and the KKT conditions on random problems.
 """
 
@@ -27,8 +27,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["INFEASIBLE", "NOT_CONVERGED", "SOLVED", "back_substitute", "diagonal_qp", "householder_into", "least_distance",
-           "matmul", "matvec", "nnls"]
+__all__ = ["INFEASIBLE", "NOT_CONVERGED", "SOLVED", "back_substitute", "diagonal_qp", "householder_into",
+           "least_distance", "matmul", "matvec", "nnls"]
 
 #: statuses of :func:`diagonal_qp` and :func:`least_distance`
 SOLVED, INFEASIBLE, NOT_CONVERGED = 0, 1, 2

@@ -23,7 +23,7 @@ may have an event (its ``attention`` flag). It then stops *before* that step (:d
 caller takes the step on the reference path. A plant step whose collision certificate expired stops with
 :data:`STRETCH_COAL`, uncommitted: the caller asks coal and, with no collision, calls again with
 ``coal_cleared``. So a rollout with stretches takes the same steps as one without
-(``tests/test_stretch.py``).
+(``tests/rollout/test_stretch.py``).
 """
 
 from __future__ import annotations
@@ -78,10 +78,10 @@ def stretch_into(settings, state, times, desired, executor, monitor, schedule, l
     r"""Up to ``times.size`` steps from the plant's state (module docstring); returns (steps taken, status, the
     largest constraint violation of those steps [m], the last one's [m]).
 
-    ``settings`` (:data:`~.stretch_layout.STRETCH_SETTINGS`) and ``state`` (:data:`~.stretch_layout.STRETCH_STATE`, one record) are the executor's,
-    monitor's, policy's and disturbance's constants and what the stretch changes of them; ``times`` the steps'
-    start times [s] and ``desired`` (steps, 9) the desired pose, twist and acceleration there. Each participant's
-    arrays come in its bundle (:mod:`.stretch_layout`: :class:`~.stretch_layout.StretchExecutor`,
+    ``settings`` (:data:`~.stretch_layout.STRETCH_SETTINGS`) and ``state`` (:data:`~.stretch_layout.STRETCH_STATE`, one
+    record) are the executor's, monitor's, policy's and disturbance's constants and what the stretch changes of them;
+    ``times`` the steps' start times [s] and ``desired`` (steps, 9) the desired pose, twist and acceleration there. Each
+    participant's arrays come in its bundle (:mod:`.stretch_layout`: :class:`~.stretch_layout.StretchExecutor`,
     ``StretchMonitor``, ``StretchSchedule``, ``StretchLaw``, ``StretchPlant``, ``StretchRows``, ``StretchLog``,
     ``StretchDisturbance``: each names and documents its fields). ``log_every`` and ``first_index``: the
     steps logged are those :func:`~regrasp.kernels.decimation.logged` says of step ``first_index`` + k + 1;

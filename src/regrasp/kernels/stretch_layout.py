@@ -21,8 +21,8 @@ _F8 = np.float64
 #: [m/s], its longest sliding phase [s], the law's ω of the pose and of a slider [rad/s], the step [s], whether
 #: the fixed law runs (else Proposition 3, m > 2); the monitor's ``every`` and ``max_bound_step`` [m] and whether
 #: the kernel evaluates the envelopes (else it hands such a step over); whether it takes the policy's decisions
-#: (:class:`regrasp.supervisor.policies.scheduled.ScheduledPolicy`: else it hands them over), their period [s], when the next slide
-#: is due [s], whether it re-plans on a low margin, from when [s] and below which fraction of the planned
+#: (:class:`regrasp.supervisor.policies.scheduled.ScheduledPolicy`: else it hands them over), their period [s], when the
+#: next slide is due [s], whether it re-plans on a low margin, from when [s] and below which fraction of the planned
 #: margin, and the schedule's start, end [s] and whether it repeats; a disturbance
 #: (:class:`regrasp.plants.disturbance.Disturbance`): whether the sensor is not ideal, its slip threshold [m/s] (NaN:
 #: the plant's modes) and standard deviations (pose [m], [rad], twist [m/s], [rad/s], ξ [m], ξ̇ [m/s], forces
@@ -53,8 +53,8 @@ STRETCH_STATE = np.dtype([
 ], align=True)
 
 #: A sliding contact: its index, slip flag, friction estimate μ̂ (NaN: none yet), sliding phase's start [s],
-#: target [m], planned end [s] (NaN: none), its planned profile (:class:`regrasp.schedule.schedule.Slide`: start, end [s],
-#: ξ from, to [m], ramp [s], cruise speed [m/s], direction ±1, time offset [s]), the μ_k its law uses and the
+#: target [m], planned end [s] (NaN: none), its planned profile (:class:`regrasp.schedule.schedule.Slide`: start, end
+#: [s], ξ from, to [m], ramp [s], cruise speed [m/s], direction ±1, time offset [s]), the μ_k its law uses and the
 #: model's μ_k, and ∫(ξ_d - ξ) dt [m s] of its integral action.
 SLIDER = np.dtype([
     ("contact", np.int64), ("slipped", np.bool_), ("mu_hat", _F8), ("integral", _F8), ("phase_start", _F8),
@@ -90,7 +90,8 @@ class StretchMonitor(NamedTuple):
 
 
 class StretchSchedule(NamedTuple):
-    """The scheduled policy's planned envelope margins (:class:`regrasp.supervisor.policies.scheduled.ScheduledPolicy`)."""
+    """The scheduled policy's planned envelope margins
+    (:class:`regrasp.supervisor.policies.scheduled.ScheduledPolicy`)."""
 
     times: np.ndarray    #: (k,) the schedule's sample times [s]
     margins: np.ndarray  #: (k, m) the planned envelope margin of each contact there [m]

@@ -1,6 +1,6 @@
-"""``regrasp.model``: The hand and its task as described: fingers loaded from URDF through Pinocchio, the hand's dynamics, the
-links' collision geometry, spherical fingertips, scenario files, and what a real hand adds (sensing and actuation
-noise; the perturbations a study draws)."""
+"""``regrasp.model``: The hand and its task as described: fingers loaded from URDF through Pinocchio, the hand's
+dynamics, the links' collision geometry, spherical fingertips, scenario files, and what a real hand adds (sensing and
+actuation noise; the perturbations a study draws)."""
 
 from __future__ import annotations
 

@@ -21,7 +21,7 @@ Where every kept shape is symmetric about the hand plane (a box turned about z, 
 capsule with its axis in the plane, a sphere centred in it), its distance to the prism is the planar
 distance of its footprint to the polygon (:mod:`regrasp.kernels.footprint` derives it), and
 :attr:`UrdfCollisionChecker.footprints` gives those footprints for the envelope's compiled path;
-coal stays the reference and the checker of the closed form (``tests/test_kernels_footprint.py``).
+coal stays the reference and the checker of the closed form (``tests/kernels/test_footprint.py``).
 """
 
 from __future__ import annotations
@@ -239,7 +239,7 @@ class UrdfCollisionChecker:
         half_thickness: Half height [m] of the object's prism; default: the finger's
             reach, far larger than any link radius so the 3-D distance is the planar one.
         coal_tolerance: Tolerance [m] of coal's GJK and EPA iterations; default: coal's (1e-6), which
-            makes its distances accurate to about 1e-6 m (``tests/test_kernels_footprint.py``).
+            makes its distances accurate to about 1e-6 m (``tests/kernels/test_footprint.py``).
     """
 
     def __init__(self, finger: Finger, polygon: ConvexPolygon, tip_clearance: float,
@@ -254,7 +254,8 @@ class UrdfCollisionChecker:
         #: Half height [m] of the object's prism.
         self.half_thickness = float(h)
         self.object_geometry = polygon.to_coal(h)
-        #: coal distance queries asked by the collision tests (:meth:`links_collide`, :meth:`links_collide_kept`) so far.
+        #: coal distance queries asked by the collision tests (:meth:`links_collide`, :meth:`links_collide_kept`) so
+        #: far.
         self.queries = 0
         self._object_radius = float(np.max(np.hypot(polygon.vertices[:, 0], polygon.vertices[:, 1])))
         self._request = coal.DistanceRequest()

@@ -203,7 +203,8 @@ class Hand:
         nle = data.nle + self._damping * v if self.damping_enabled else data.nle.copy()
         jdv = np.empty(self.nq)
         for i, fid in enumerate(self.tip_frame_ids):
-            jdv[2 * i:2 * i + 2] = pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED).linear[:2]
+            jdv[2 * i:2 * i + 2] = pin.getFrameClassicalAcceleration(model, data, fid,
+                                                                     pin.LOCAL_WORLD_ALIGNED).linear[:2]
         return HandDynamics(mass, nle, jac, jdv, tips, jac.dot(v).reshape(self.m, 2))
 
     def _frame_jacobian(self) -> np.ndarray:

@@ -114,7 +114,8 @@ class Perturbation:
     def nonzero(self) -> dict[str, float | int]:
         """The perturbations this one sets (name: size), in field order."""
         return {f.name: getattr(self, f.name) for f in fields(self)
-                if getattr(self, f.name) not in (0, 0.0, None) or (f.name == "slip_threshold" and self.slip_threshold == 0.0)}
+                if getattr(self, f.name) not in (0, 0.0, None)
+                or (f.name == "slip_threshold" and self.slip_threshold == 0.0)}
 
     def describe(self) -> str:
         """One line, e.g. ``mass ±20%, contact_position ±0.2 mm, angle_noise 1 mrad, delay 1 step``."""

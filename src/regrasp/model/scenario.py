@@ -193,7 +193,8 @@ class _Reader:
         if name not in self.table:
             if default is ...:
                 near = difflib.get_close_matches(name, [k for k in self.table if isinstance(k, str)], n=1)
-                raise self.fail(name, "this key is required" + (f" (the table has {near[0]!r}: a typo?)" if near else ""))
+                raise self.fail(name, "this key is required"
+                                + (f" (the table has {near[0]!r}: a typo?)" if near else ""))
             return default
         return self.table[name]
 

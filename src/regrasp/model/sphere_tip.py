@@ -2,8 +2,8 @@ r"""The torque a spherical fingertip adds to the point-contact model's (``docs/d
 
 The control laws model each fingertip as a point, the tip frame p, touching the edge. A real fingertip is a
 sphere of radius r centred on p; with the object's edge at distance r from p (the MuJoCo plant's eroded object,
-:mod:`regrasp.plants.mujoco.mjcf`), it touches the edge at :math:`c = p + r n` (n the edge's inward normal). The contact force
-f on the object (and −f on the finger) acts at c instead of p. Moved to p it is the same force plus a couple
+:mod:`regrasp.plants.mujoco.mjcf`), it touches the edge at :math:`c = p + r n` (n the edge's inward normal). The contact
+force f on the object (and −f on the finger) acts at c instead of p. Moved to p it is the same force plus a couple
 
 .. math:: d = r\,(n \times f) = r\,f_t \qquad (f_t = t\cdot f, \ t = \perp n),
 

@@ -1,6 +1,6 @@
-"""``regrasp.plants``: The plants a controller is checked on, and the loop that drives them: the project's full-coordinate plant
-(:mod:`regrasp.plants.project`), MuJoCo (:mod:`regrasp.plants.mujoco`), which one a rollout runs on and how it
-differs from the model (:class:`PlantSpec`, :class:`ModelErrors`), the simulation loop and its records
+"""``regrasp.plants``: The plants a controller is checked on, and the loop that drives them: the project's
+full-coordinate plant (:mod:`regrasp.plants.project`), MuJoCo (:mod:`regrasp.plants.mujoco`), which one a rollout runs
+on and how it differs from the model (:class:`PlantSpec`, :class:`ModelErrors`), the simulation loop and its records
 (:func:`simulate`), a single law's closed loop (:func:`run_closed_loop`) and the noise between a plant and its
 controller (:class:`Disturbance`)."""
 

@@ -130,7 +130,8 @@ class _ControllerDriver:
         if isinstance(self.controller, Proposition2Controller):
             force = self.tangential_force if self.tangential_force is not None else meas.tangential_force[sliding]
             self.tangential_force = None  # later steps read the last plant step's friction force
-            kwargs["tangential_force"] = force + (self.noise * self.rng.standard_normal(len(sliding)) if self.noise else 0.0)
+            kwargs["tangential_force"] = force + (self.noise * self.rng.standard_normal(len(sliding)) if self.noise
+                                                  else 0.0)
         out = self.controller(S, S_dot, S_d, S_d_dot, S_d_ddot, **kwargs)
         S_d = np.asarray(S_d, dtype=float)
         desired = TrajectorySample(float(meas.t), S_d[:3], np.asarray(S_d_dot, dtype=float)[:3],
@@ -149,7 +150,8 @@ def run_closed_loop(
     on_step: Callable[[float, ControlOutput], None] | None = None,
 ) -> ClosedLoopLog:
     """Run ``controller`` on ``plant`` for ``duration`` [s] (or until the plant stops), with the one
-    simulation loop (:func:`~regrasp.plants.simulation.simulate`, the sensor :func:`~regrasp.plants.simulation.sense_projected`).
+    simulation loop (:func:`~regrasp.plants.simulation.simulate`, the sensor
+    :func:`~regrasp.plants.simulation.sense_projected`).
 
     Args:
         reference: t -> (S_d, Ṡ_d, S̈_d).
@@ -163,7 +165,8 @@ def run_closed_loop(
             controller's own error.
     """
     if not isinstance(plant, PlantLike):
-        raise InvalidParameterError("plant", plant, "a plant (regrasp.Plant or regrasp.plants.mujoco.plant.MujocoPlant)")
+        raise InvalidParameterError("plant", plant,
+                                    "a plant (regrasp.Plant or regrasp.plants.mujoco.plant.MujocoPlant)")
     if not isinstance(controller, ComputedTorqueController):
         raise InvalidParameterError("controller", controller, "a control law (regrasp.dynamics.control)")
     if not callable(reference):

@@ -1,9 +1,9 @@
 r"""What a real hand adds between the controller and the plant: sensing noise, a slip sensor with a threshold
 and a delay, torque noise and an actuation delay.
 
-:class:`~regrasp.model.noise.SensorNoise` and :class:`~regrasp.model.noise.ActuatorNoise` are the settings (value types); :class:`Disturbance` is one
-run's seeded realisation of both, which the simulation loop (:func:`~regrasp.plants.simulation.simulate`) calls at
-every control step:
+:class:`~regrasp.model.noise.SensorNoise` and :class:`~regrasp.model.noise.ActuatorNoise` are the settings (value
+types); :class:`Disturbance` is one run's seeded realisation of both, which the simulation loop
+(:func:`~regrasp.plants.simulation.simulate`) calls at every control step:
 
 * :meth:`Disturbance.measure` turns the plant's noise-free reading (the *truth*,
   :func:`~regrasp.plants.simulation.sense`) into what the controller gets: white Gaussian noise of the given standard

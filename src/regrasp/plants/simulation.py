@@ -6,7 +6,8 @@ plant at the plant's step (zero-order hold): at each step it senses a :class:`Me
 and hands one frozen :class:`StepRecord` to each consumer: the rollout's result
 (:class:`~regrasp.rollout.build.RolloutResult`), the closed-loop log
 (:class:`~regrasp.plants.closed_loop.ClosedLoopLog`) and the recorder
-(:meth:`~regrasp.rollout.recording.recorder.RolloutRecorder.log_record`) all read the same records and recompute nothing.
+(:meth:`~regrasp.rollout.recording.recorder.RolloutRecorder.log_record`) all read the same records and recompute
+nothing.
 
 The loop stops at the end, when ``check`` returns a :class:`~regrasp.core.events.Failure` for a record,
 when the driver's control law fails (:class:`~regrasp.core.exceptions.RegraspError` or a singular
@@ -52,7 +53,8 @@ __all__ = ["Command", "Driver", "InterruptAtStepEnd", "PlantLike", "SimulationOu
 @runtime_checkable
 class PlantLike(Protocol):
     """What the simulation loop, the rollout, the closed loop and the recorder read from a plant: the
-    project's :class:`~regrasp.plants.project.plant.Plant` and MuJoCo's :class:`~regrasp.plants.mujoco.plant.MujocoPlant`.
+    project's :class:`~regrasp.plants.project.plant.Plant` and MuJoCo's
+    :class:`~regrasp.plants.mujoco.plant.MujocoPlant`.
 
     Attributes:
         hand: The fingers (names, URDFs, base poses; the recorder draws them).

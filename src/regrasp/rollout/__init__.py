@@ -1,5 +1,5 @@
-"""``regrasp.rollout``: A regrasping rollout: a plant driven by the supervisor (:func:`build_rollout`, :class:`RunSpec`), its result
-(:class:`RolloutResult`), its compiled stretches, its figures and its rerun recording
+"""``regrasp.rollout``: A regrasping rollout: a plant driven by the supervisor (:func:`build_rollout`,
+:class:`RunSpec`), its result (:class:`RolloutResult`), its compiled stretches, its figures and its rerun recording
 (:class:`~regrasp.rollout.recording.RolloutRecorder`)."""
 
 from __future__ import annotations

@@ -8,8 +8,8 @@ does them in one call and stops *before* any step where the reference loop would
 (its module docstring lists what); the loop (:func:`~regrasp.plants.simulation.simulate`) then takes that step on the
 reference path, with the supervisor, the policy, the plant's event logic and every consumer. A stretch writes
 its steps' rows into the rollout's :class:`~regrasp.rollout.result.RolloutRows` itself, and hands a recorder
-the steps it logs (:meth:`~regrasp.rollout.recording.recorder.RolloutRecorder.log_stretch_step`: what the record of that step
-would give it).
+the steps it logs (:meth:`~regrasp.rollout.recording.recorder.RolloutRecorder.log_stretch_step`: what the record of that
+step would give it).
 
 **The participants** (:class:`StretchParticipant`): each gives a stretch what the kernel reads of it now, packed in
 its bundle of :mod:`regrasp.kernels.stretch_layout` (``stretch_view``; None where only the reference path serves),
@@ -31,9 +31,9 @@ ScheduledPolicy`                                       planned margins
 
 So the compiled path changes how fast a rollout runs, not what it does: ``tests/rollout/test_stretch.py`` runs the
 three-finger rollout both ways (with and without sensing noise, a slip sensor and an actuation delay: a
-stretch draws the run's noise from its generator in the same order) and compares every row and event. Where a stretch cannot serve (MuJoCo or a reference plant, a
-contact being primed or settling, a policy without ``quiet_until``, a law without a compiled step), the loop
-runs every step on the reference path, as before.
+stretch draws the run's noise from its generator in the same order) and compares every row and event. Where a stretch
+cannot serve (MuJoCo or a reference plant, a contact being primed or settling, a policy without ``quiet_until``, a law
+without a compiled step), the loop runs every step on the reference path, as before.
 
 Wall times in the rows: a stretch's steps share its wall time, half to the control and half to the plant
 (the kernel is not timed per step); their supervisor time is 0 (the supervisor did not run).

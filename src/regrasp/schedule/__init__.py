@@ -1,6 +1,6 @@
-"""``regrasp.schedule``: Paper §4, planned: the slides of every contact over the whole trajectory, jointly, with the physics as
-constraints (:func:`plan_regrasps`, :class:`RegraspSettings`), the schedule it returns (:class:`RegraspSchedule`)
-or why none exists (:class:`NoScheduleError`), and the two-finger slide rule."""
+"""``regrasp.schedule``: Paper §4, planned: the slides of every contact over the whole trajectory, jointly, with the
+physics as constraints (:func:`plan_regrasps`, :class:`RegraspSettings`), the schedule it returns
+(:class:`RegraspSchedule`) or why none exists (:class:`NoScheduleError`), and the two-finger slide rule."""
 
 from __future__ import annotations
 

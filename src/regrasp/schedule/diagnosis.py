@@ -74,7 +74,8 @@ def _rule(problem, slider: int, direction: int, when: float) -> str | None:
         return None
     holder = 1 - slider
     width = float(abs((problem.scenario.polygon.edge(problem.scenario.contacts[holder].edge).xi_origin
-                       - problem.scenario.polygon.edge(problem.scenario.contacts[slider].edge).xi_origin) @ geo.normals[0]))
+                       - problem.scenario.polygon.edge(problem.scenario.contacts[slider].edge).xi_origin)
+                      @ geo.normals[0]))
     with_gravity = direction * along > 0
     rng = two_finger_slide_range(width, problem.friction[slider], problem.friction[holder], upward=not with_gravity)
     fs, fh = problem.friction[slider], problem.friction[holder]

@@ -279,7 +279,8 @@ def force_system(geometry: ForceGeometry, beta: float, acceleration: ArrayLike, 
     # the moment row: Σ λ_i (A_i + r_i B_i - ξ_i) + Σ_fixed τ_i B_i = I α
     moment = np.zeros(d)
     for i in range(m):
-        moment[i] = geometry.moment_normal[i] - xi[i] + (0.0 if ratios[i] is None else ratios[i] * geometry.moment_tangent[i])
+        moment[i] = geometry.moment_normal[i] - xi[i] + (0.0 if ratios[i] is None
+                                                         else ratios[i] * geometry.moment_tangent[i])
     for k, i in enumerate(fixed):
         moment[m + k] = geometry.moment_tangent[i]
     A_eq = np.vstack([E[0], moment])

@@ -147,8 +147,8 @@ class Lattice:
 
 @numba.njit(cache=True, parallel=True)
 def _layer(V_old, lo_old, n_old, lo_new, n_new, env_new, prox_new, tlo_new, thi_new, tlo_old, thi_old,
-           mlo_new, mhi_new, blo_old, bhi_old, use_break, break_slot, combos, pair_ptr, pair_old, pair_starts, pair_bits,
-           pair_union, K, move_cost, moving, axis, axis_grid, other_strides, rest_only):
+           mlo_new, mhi_new, blo_old, bhi_old, use_break, break_slot, combos, pair_ptr, pair_old, pair_starts,
+           pair_bits, pair_union, K, move_cost, moving, axis, axis_grid, other_strides, rest_only):
     """One layer of the dynamic program: the new layer's values and back pointers (module docstring).
     Arrays are position-major: values (P, M), force tables (n_others, M), break-away (n_others, slots)."""
     M, m = combos.shape
@@ -362,8 +362,8 @@ def run(lat: Lattice, start: Sequence[int] | np.ndarray | None = None,
                          lat.proximity[k], lat.lo[k], lat.hi[k], lat.lo[k - 1], lat.hi[k - 1], lat.mid_lo[k],
                          lat.mid_hi[k], args[0], args[1],
                          use_break, lat.breakaway_slot, lat.combos, lat.pair_ptr, lat.pair_old, lat.pair_starts,
-                         lat.pair_bits, lat.pair_union, np.float32(lat.slide_cost), np.float32(lat.move_cost), lat.moving, lat.axis,
-                         lat.axis_grid, lat.other_strides, bool(lat.rest_only[k]))
+                         lat.pair_bits, lat.pair_union, np.float32(lat.slide_cost), np.float32(lat.move_cost),
+                         lat.moving, lat.axis, lat.axis_grid, lat.other_strides, bool(lat.rest_only[k]))
         _apply_bans(V, new_box, (bans or {}).get(k, ()))
         backs.append(back if keep_backs else None)
         boxes.append(new_box)

@@ -103,8 +103,8 @@ def _schedule(problem: Problem, cells, moves, seconds: float, lower_bound, verif
         xi_start=xi_start, slides=slides, times=times, xi=at.xi, xi_dot=at.xi_dot, xi_ddot=at.xi_ddot,
         sliding=at.direction, envelope_margin=envelope_margin, cone_margin=cone, normal_force=normal,
         required_envelope_margin=problem.settings.envelope_margin, required_cone_margin=problem.settings.cone_margin,
-        min_envelope_margin=env_min, min_envelope_margin_at=env_at, min_cone_margin=cone_min, min_cone_margin_at=cone_at,
-        planning_seconds=seconds, slides_lower_bound=lower_bound)
+        min_envelope_margin=env_min, min_envelope_margin_at=env_at, min_cone_margin=cone_min,
+        min_cone_margin_at=cone_at, planning_seconds=seconds, slides_lower_bound=lower_bound)
 
 
 def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[list, tuple]:

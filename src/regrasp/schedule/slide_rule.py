@@ -24,7 +24,7 @@ Hence the **lower** contact (Δ < 0) can never slide down, whatever :math:`\mu_s
 downward slide needs :math:`\mu_k < \mu_s`; with :math:`\mu_s = \mu_k` the upper contact
 (Δ > 0) can never slide up. A minimum push :math:`f_{min}` and a maximum :math:`f_{max}` narrow
 both ranges further (λ above is the normal force). ``docs/derivations.md`` has the derivation;
-``tests/test_slide_rule.py`` checks it against :func:`~regrasp.dynamics.sliding.sliding_feasibility`.
+``tests/schedule/test_slide_rule.py`` checks it against :func:`~regrasp.dynamics.sliding.sliding_feasibility`.
 """
 
 from __future__ import annotations

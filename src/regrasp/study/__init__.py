@@ -1,5 +1,5 @@
-"""``regrasp.study``: Robustness studies: many seeded rollouts of one scenario under model errors and noise, across processes or
-Ray (:func:`run_study`, :func:`sweep_study`), the runs' draws and the figures."""
+"""``regrasp.study``: Robustness studies: many seeded rollouts of one scenario under model errors and noise, across
+processes or Ray (:func:`run_study`, :func:`sweep_study`), the runs' draws and the figures."""
 
 from __future__ import annotations
 

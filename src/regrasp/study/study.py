@@ -185,8 +185,9 @@ class StudyResult:
         """A JSON-serialisable dict (the ``regrasp study --json`` document)."""
         lo, hi = self.interval
         return {"scenario": self.scenario, "seed": self.seed, "duration": self.duration, "workers": self.workers,
-                "backend": self.backend, "plant": self.plant, "perturbation": asdict(self.perturbation), "runs": len(self.runs),
-                "successes": self.successes, "success_rate": self.success_rate, "wilson_95": [lo, hi],
+                "backend": self.backend, "plant": self.plant, "perturbation": asdict(self.perturbation),
+                "runs": len(self.runs), "successes": self.successes, "success_rate": self.success_rate,
+                "wilson_95": [lo, hi],
                 "failures": self.failures, "wall_seconds": self.wall_seconds, "plan_seconds": self.plan_seconds,
                 "outcomes": [{**{f.name: getattr(r, f.name) for f in fields(r)}, "draw": r.draw.to_json_dict()}
                              for r in self.runs]}

@@ -1,6 +1,6 @@
-"""``regrasp.supervisor``: Paper §4, at run time: the regrasp supervisor (:class:`RegraspSupervisor`; a monitor watches the runtime
-envelopes, a policy proposes slides, an executor runs them), its settings (one tree, :class:`SupervisorSettings`)
-and value types; the policies are :mod:`regrasp.supervisor.policies`."""
+"""``regrasp.supervisor``: Paper §4, at run time: the regrasp supervisor (:class:`RegraspSupervisor`; a monitor watches
+the runtime envelopes, a policy proposes slides, an executor runs them), its settings (one tree,
+:class:`SupervisorSettings`) and value types; the policies are :mod:`regrasp.supervisor.policies`."""
 
 from __future__ import annotations
 

@@ -139,7 +139,8 @@ class SlideExecutor:
         self.phases[i] = ContactPhase.PRIMING
         self.xi = self._sensed()
         self._event(out, meas.t, i, EventKind.PRIME, f"to slide {'+' if order.direction > 0 else '-'}xi from "
-                    f"{meas.xi[i] * 1e3:.2f} mm to {order.target * 1e3:.2f} mm" + (f" ({order.why})" if order.why else ""),
+                    f"{meas.xi[i] * 1e3:.2f} mm to {order.target * 1e3:.2f} mm"
+                    + (f" ({order.why})" if order.why else ""),
                     xi=float(meas.xi[i]), target=order.target, direction=order.direction)
 
     def _sense_held(self, meas: Measurement) -> None:
@@ -287,8 +288,8 @@ class SlideExecutor:
         return self._law()
 
     def stretch_view(self) -> StretchExecutor | None:
-        """What a compiled stretch (:mod:`regrasp.rollout.stretch`) reads and updates of the executor: (held (m,) bool, the
-        law's held positions ξ [m], the filtered sensed positions [m] and ∫(X_d - X) dt, both the executor's own
+        """What a compiled stretch (:mod:`regrasp.rollout.stretch`) reads and updates of the executor: (held (m,) bool,
+        the law's held positions ξ [m], the filtered sensed positions [m] and ∫(X_d - X) dt, both the executor's own
         arrays, the sliders as :data:`~regrasp.kernels.stretch_layout.SLIDER` records); None where only the reference
         path serves: a contact being primed or settling, a slide without a planned profile
         (:class:`~regrasp.supervisor.types.SlideProfile`) or spherical tips."""

@@ -20,7 +20,7 @@ of a prior (``bound_speed``: :func:`bound_speeds` of the plan, along the planned
 the monitor has measured. It holds while the bounds move no faster than ``speed_factor`` · v. What is faster is
 seen at the next evaluation, at most (k − 1) steps late: a change of shape (an interval appearing, splitting or
 vanishing) and a ``urdf`` collision cut near a tangency (where a link's distance to the object hardly changes
-along the edge, the cut moves arbitrarily fast; no finite v bounds it). ``tests/test_monitor.py`` checks both
+along the edge, the cut moves arbitrarily fast; no finite v bounds it). ``tests/supervisor/test_monitor.py`` checks both
 against a monitor evaluating every step, on 1.5 s of the three-finger trajectory at 1 kHz with k = 10: the
 plan's fastest bound moves 127 mm/s, so the bound reaches 2.3 mm nine steps after an evaluation, while half of
 the stale margins equal the fresh ones (a margin to an edge's end does not move).
@@ -118,7 +118,8 @@ class EnvelopeMonitor:
         if speed.ndim == 0:
             speed = np.full(len(self.envelopes), float(speed))
         elif speed.shape != (len(self.envelopes),):
-            raise InvalidParameterError("bound_speed", bound_speed, f"one speed, or one per contact ({len(self.envelopes)})")
+            raise InvalidParameterError("bound_speed", bound_speed,
+                                        f"one speed, or one per contact ({len(self.envelopes)})")
         if np.any(speed < 0.0):
             raise InvalidParameterError("bound_speed", bound_speed, "speeds >= 0 [m/s]")
         self.speed_factor = as_positive_float("speed_factor", speed_factor)
@@ -162,8 +163,8 @@ class EnvelopeMonitor:
         return self._held[1], self._held[2]
 
     def stretch_view(self) -> tuple:
-        """What a compiled stretch (:mod:`regrasp.rollout.stretch`) reads and updates of the monitor, as new arrays: the held
-        samples' feasible intervals (m, k, 2) [m] with room for any evaluation's, their counts (m,), the bounds at
+        """What a compiled stretch (:mod:`regrasp.rollout.stretch`) reads and updates of the monitor, as new arrays: the
+        held samples' feasible intervals (m, k, 2) [m] with room for any evaluation's, their counts (m,), the bounds at
         the last evaluation (m, 2) [m], their rates (m, 2) [m/s], :attr:`bound_speed` (m,) [m/s], the last
         evaluation's time [s] (NaN: none) and the reads since it."""
         intervals, counts = self.held_intervals()

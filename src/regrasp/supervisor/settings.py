@@ -83,7 +83,8 @@ class ExecutorSettings:
             unfiltered). A noisy ξ sensor otherwise moves the model's lever arms, and rebuilds the law, at every
             step.
         tip_radius: The fingertips are spheres of this radius [m] (0: points): every law's torque gets the
-            couple the sphere's contact point adds on the distal link (:func:`~regrasp.model.sphere_tip.sphere_tip_torque`).
+            couple the sphere's contact point adds on the distal link
+            (:func:`~regrasp.model.sphere_tip.sphere_tip_torque`).
     """
 
     omega_n: float = 20.0

@@ -10,7 +10,8 @@ At every control step :meth:`RegraspSupervisor.step`
    sliding, settling) and tells the policy how finished slides ended;
 3. asks the policy (:mod:`regrasp.supervisor.policies.scheduled`) for new slides and starts them: the schedule-following
    :class:`~regrasp.supervisor.policies.scheduled.ScheduledPolicy`, the paper's heuristic
-   :class:`~regrasp.supervisor.policies.paper.PaperPolicy` (the default), or :class:`~regrasp.supervisor.policies.base.NoRegraspPolicy`;
+   :class:`~regrasp.supervisor.policies.paper.PaperPolicy` (the default), or
+   :class:`~regrasp.supervisor.policies.base.NoRegraspPolicy`;
 4. computes the torques with the control law of the contacts' phases
    (:meth:`~regrasp.supervisor.executor.SlideExecutor.command`).
 
@@ -64,9 +65,9 @@ class RegraspSupervisor:
         plan: The planner's result for ``trajectory`` (:func:`~regrasp.envelope.planner.plan`), or None: the
             paper's policy looks ahead on it.
         settings: :class:`SupervisorSettings`.
-        policy: A policy (:mod:`regrasp.supervisor.policies.scheduled`), or a callable ``context -> policy``; default: the
-            paper's heuristic (:class:`~regrasp.supervisor.policies.paper.PaperPolicy`; with ``settings.paper.regrasp``
-            False it reports danger and never slides).
+        policy: A policy (:mod:`regrasp.supervisor.policies.scheduled`), or a callable ``context -> policy``; default:
+            the paper's heuristic (:class:`~regrasp.supervisor.policies.paper.PaperPolicy`; with
+            ``settings.paper.regrasp`` False it reports danger and never slides).
     """
 
     def __init__(self, hand: Hand, polygon: ConvexPolygon, edges: Iterable[int], trajectory: Trajectory,
@@ -106,7 +107,8 @@ class RegraspSupervisor:
         elif callable(policy) and not hasattr(policy, "propose"):
             policy = policy(self.context)
         if not all(hasattr(policy, a) for a in ("propose", "notify", "planned_xi")):
-            raise InvalidParameterError("policy", policy, "a policy (propose, notify, planned_xi; regrasp.supervisor.policies.scheduled)")
+            raise InvalidParameterError("policy", policy, "a policy (propose, notify, planned_xi; "
+                                        "regrasp.supervisor.policies.scheduled)")
         self.policy = policy
         self.events: list[Event] = []
 

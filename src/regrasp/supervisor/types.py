@@ -27,8 +27,8 @@ if TYPE_CHECKING:
     from ..envelope.planner import PlanResult
     from ..model.hand import Hand
 
-__all__ = ["SLIPPING_PHASES", "ContactPhase", "Reference", "SlideEnd", "SlideOrder", "SlideProfile", "SupervisorContext",
-           "SupervisorOutput"]
+__all__ = ["SLIPPING_PHASES", "ContactPhase", "Reference", "SlideEnd", "SlideOrder", "SlideProfile",
+           "SupervisorContext", "SupervisorOutput"]
 
 #: t [s] -> (ξ_d [m], ξ̇_d [m/s], ξ̈_d [m/s²])
 Reference = Callable[[float], tuple[float, float, float]]

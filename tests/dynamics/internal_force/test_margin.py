@@ -1,6 +1,6 @@
 """The internal-force QP's target cone margin and several cone edges (``regrasp.dynamics.internal_force.problem``).
 
-The random cases are those of ``tests/test_internal_force.py`` (seeded states of m = 2 and m = 3
+The random cases are those of ``tests/dynamics/internal_force/test_solver.py`` (seeded states of m = 2 and m = 3
 grasps, motion forces from a controller or random). With a target cone margin the QP must give
 every fixed contact at least min(target, best achievable) newtons inside its (μ_s - margin) cone.
 The best achievable smallest margin is computed here independently, by an LP (HiGHS) over
@@ -143,14 +143,15 @@ def test_default_settings_report_the_least_squeeze_margin_and_target_zero_is_tod
                                         dataclasses.replace(settings, target_cone_margin=0.0))
     np.testing.assert_array_equal(with_zero.problem.G.toarray(), qp.problem.G.toarray())
     result = solve_internal_force_qp(qp, frames, modes, friction)
-    assert result.cone_margin == pytest.approx(margin_of(result.forces, frames, fixed, mu, settings.friction_margin), abs=1e-12)
+    assert result.cone_margin == pytest.approx(margin_of(result.forces, frames, fixed, mu, settings.friction_margin),
+                                               abs=1e-12)
     target = build_internal_force_qp(A, f_m, frames, modes, friction,
                                      dataclasses.replace(settings, target_cone_margin=0.3))
     assert target.problem.P.shape == (4, 4)  # (y, s)
 
 
-@pytest.mark.parametrize("field,value", [("f_min", -0.1), ("friction_margin", -0.01), ("tolerance", 0.0), ("f_max", 0.5),
-                                         ("target_cone_margin", -1.0), ("target_cone_margin", np.inf),
+@pytest.mark.parametrize("field,value", [("f_min", -0.1), ("friction_margin", -0.01), ("tolerance", 0.0),
+                                         ("f_max", 0.5), ("target_cone_margin", -1.0), ("target_cone_margin", np.inf),
                                          ("target_cone_margin", np.nan), ("f_min", "0.5")])
 def test_settings_are_validated(field, value):
     with pytest.raises(InvalidParameterError) as info:
@@ -183,7 +184,8 @@ def test_two_cone_edges_put_both_contacts_on_their_edges():
                 assert abs(surface[j, 1] - signs[j] * mu[j] * surface[j, 0]) <= 1e-7 * max(1.0, np.abs(surface).max())
             others = np.array([False, False, True])
             assert worst_violation(one_shot.forces, frames, others, mu, settings) <= 1e-7
-            assert one_shot.cone_margin == pytest.approx(margin_of(one_shot.forces, frames, others, mu, 0.05), abs=1e-12)
+            assert one_shot.cone_margin == pytest.approx(margin_of(one_shot.forces, frames, others, mu, 0.05),
+                                                         abs=1e-12)
             solved += 1
         single = ConeEdge(2, 1.0, mu[2])
         a = build_internal_force_qp(A, f_m, frames, modes, mu, settings, single).problem

@@ -163,7 +163,8 @@ def cone_edge_brute_force(A, f_m, frames, others, mu, settings, j, sign):
     for r in range(0, k + 1):
         for subset in itertools.combinations(range(len(rows)), r):
             E = np.vstack([A.T, e_row] + [rows[i][0] for i in subset])
-            rhs = np.concatenate([np.zeros(A.shape[1]), [-e_row @ f_m], [rows[i][1] - rows[i][0] @ f_m for i in subset]])
+            rhs = np.concatenate([np.zeros(A.shape[1]), [-e_row @ f_m],
+                                  [rows[i][1] - rows[i][0] @ f_m for i in subset]])
             f_c = np.linalg.lstsq(E, rhs, rcond=None)[0]
             if np.linalg.norm(E @ f_c - rhs) > 1e-9 * scale:
                 continue

@@ -1,7 +1,7 @@
-"""A scenario as a MuJoCo model (:mod:`regrasp.plants.mujoco.mjcf`): the fingers are the URDFs as Pinocchio reads them (masses,
-centres of mass, inertias, damping, hinge axes, the tip's forward kinematics at random postures, so the link lengths
-and base placements), the object a planar body with the polygon's mass, inertia and shape, the tips' prism eroded by
-the tip radius; the MJCF text loads back; bad settings are typed errors."""
+"""A scenario as a MuJoCo model (:mod:`regrasp.plants.mujoco.mjcf`): the fingers are the URDFs as Pinocchio reads them
+(masses, centres of mass, inertias, damping, hinge axes, the tip's forward kinematics at random postures, so the link
+lengths and base placements), the object a planar body with the polygon's mass, inertia and shape, the tips' prism
+eroded by the tip radius; the MJCF text loads back; bad settings are typed errors."""
 
 import math
 from pathlib import Path
@@ -51,7 +51,8 @@ def test_the_fingers_are_the_urdfs_as_pinocchio_reads_them():
             for k, name in enumerate(joints):
                 data.qpos[model.joint(name).qposadr[0]] = q[k]
             mujoco.mj_kinematics(model, data)
-            np.testing.assert_allclose(data.site_xpos[model.site(site).id, :2], finger.forward_kinematics(q), atol=1e-12)
+            np.testing.assert_allclose(data.site_xpos[model.site(site).id, :2], finger.forward_kinematics(q),
+                                       atol=1e-12)
         l1, l2 = finger.link_lengths
         link2 = model.body(model.joint(joints[1]).bodyid[0])
         assert np.linalg.norm(link2.pos) == pytest.approx(l1, rel=1e-12)
@@ -72,7 +73,8 @@ def test_the_object_is_a_planar_body_with_the_polygons_mass_and_shape():
     for n, x in zip(built.object_joints, X):
         data.qpos[model.joint(n).qposadr[0]] = x
     mujoco.mj_kinematics(model, data)
-    for geom, vertices in (("hull", SC3.polygon.vertices), ("object", eroded_vertices(SC3.polygon, R_TIP - MujocoSettings().contact_depth))):
+    for geom, vertices in (("hull", SC3.polygon.vertices),
+                           ("object", eroded_vertices(SC3.polygon, R_TIP - MujocoSettings().contact_depth))):
         g = model.geom(geom)
         mesh = model.mesh(g.dataid[0])
         local = model.mesh_vert[mesh.vertadr[0]:mesh.vertadr[0] + mesh.vertnum[0]]

@@ -1,4 +1,5 @@
-"""MuJoCo as a second plant (:mod:`regrasp.plants.mujoco.plant`; the model is checked in ``test_mjcf.py``).
+"""MuJoCo as a second plant (:mod:`regrasp.plants.mujoco.plant`; the model is checked in
+``tests/plants/mujoco/test_mjcf.py``).
 
 The plant's reports are checked against MuJoCo's raw contact forces and the object's weight; its events
 (a link driven into the object is a collision, a pulled contact separates); and the targets of
@@ -87,7 +88,8 @@ def test_a_static_hold_reports_mujocos_contact_forces_and_they_carry_the_weight(
     st = plant.state
     c, s = math.cos(st.X[2]), math.sin(st.X[2])
     rot = np.array([[c, -s], [s, c]])
-    frames = [np.array([rot @ SC2.polygon.edge(e).inward_normal, rot @ SC2.polygon.edge(e).xi_direction]) for e in (1, 3)]
+    frames = [np.array([rot @ SC2.polygon.edge(e).inward_normal, rot @ SC2.polygon.edge(e).xi_direction])
+              for e in (1, 3)]
     reported = log.plant_forces[-1]
     # the weight, balanced by the reported forces (the object is at rest: m a is below 1e-4 N)
     total = sum(f.T @ fs for f, fs in zip(frames, reported))
@@ -143,7 +145,8 @@ def holds():
     runs = {"project": build_rollout(SC2, RunSpec(duration=1.0), policy="none").run()}
     for name, hold in (("mujoco", 2e-6), ("mujoco, held where first touched", None)):
         settings = SupervisorSettings.robust(SC2.geometry.value, 0.2, tip_radius=R_TIP, hold_resolution=hold)
-        runs[name] = build_rollout(SC2, RunSpec(duration=1.0), policy="none", settings=settings, plant=PlantSpec("mujoco", settings=MujocoSettings(tip_radius=R_TIP))).run()
+        runs[name] = build_rollout(SC2, RunSpec(duration=1.0), policy="none", settings=settings,
+                                   plant=PlantSpec("mujoco", settings=MujocoSettings(tip_radius=R_TIP))).run()
     return runs
 
 
@@ -174,7 +177,8 @@ def figure_3_4_slide(kind: str, radius: float = R_TIP, start: float = 0.02, dura
     order = SlideOrder(0, 1, end, reference=lambda t: (XI0 + V0 * max(0.0, t - start), V0 if t >= start else 0.0, 0.0),
                        planned_start=start, planned_end=duration)
     supervisor = RegraspSupervisor(hand, SC2.polygon, [1, 3], WaypointTrajectory([0.0, 1.0], [X_HOLD, X_HOLD]),
-                                   [XI0, XI0], MU, settings=SupervisorSettings.robust("ideal", 0.2).with_executor(**settings),
+                                   [XI0, XI0], MU,
+                                   settings=SupervisorSettings.robust("ideal", 0.2).with_executor(**settings),
                                    policy=OrderedSlidesPolicy([order], 2))
     result = Rollout(plant, supervisor, duration, ("finger1", "finger2"), "ordered").run()
     kinds = [e.kind for e in result.events]
@@ -251,7 +255,8 @@ def test_a_tip_radius_needs_the_mujoco_plant(capsys):
 
 
 def test_the_command_lines_help_does_not_import_mujoco():
-    code = "import sys, regrasp.cli.main\ntry:\n    regrasp.cli.main.main(['simulate', '--help'])\nexcept SystemExit:\n    pass\n" \
+    code = "import sys, regrasp.cli.main\ntry:\n    regrasp.cli.main.main(['simulate', '--help'])\n" \
+           "except SystemExit:\n    pass\n" \
            "print('mujoco' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip().splitlines()[-1] == "False"

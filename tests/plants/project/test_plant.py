@@ -150,7 +150,8 @@ def pd(x, x_dot, ref, ref_dot, ref_ddot, wn: float = 40.0) -> np.ndarray:
     """Critically damped tracking acceleration (the torque is held over a step, so open-loop
     feedforward drifts)."""
     x, x_dot = np.asarray(x, float), np.asarray(x_dot, float)
-    return np.asarray(ref_ddot, float) + wn * wn * (np.asarray(ref, float) - x) + 2 * wn * (np.asarray(ref_dot, float) - x_dot)
+    return (np.asarray(ref_ddot, float) + wn * wn * (np.asarray(ref, float) - x)
+            + 2 * wn * (np.asarray(ref_dot, float) - x_dot))
 
 
 def object_wrench(plant: Plant, st, forces_surface) -> np.ndarray:
@@ -440,7 +441,8 @@ def test_breakaway_at_the_static_coefficient_then_sliding_at_the_kinetic_one():
         np.testing.assert_allclose(dyn.jacobian[:2, :2] @ q_ddot[:2] + dyn.jacobian_dot_v[:2], tip_acceleration,
                                    rtol=0, atol=1e-8)
         r = dyn.tips - st.X[:2]
-        wrench = [forces[:, 0].sum(), forces[:, 1].sum(), float(np.sum(r[:, 0] * forces[:, 1] - r[:, 1] * forces[:, 0]))]
+        wrench = [forces[:, 0].sum(), forces[:, 1].sum(),
+                  float(np.sum(r[:, 0] * forces[:, 1] - r[:, 1] * forces[:, 0]))]
         np.testing.assert_allclose(X_ddot, np.array(wrench) / [WALL, WALL, WALL], rtol=1e-9, atol=1e-22)
         speeds.append(step.xi_dot[0])
     assert 0.0 < speeds[0] < speeds[1] < speeds[2]  # the push exceeds the kinetic friction: it speeds up

@@ -29,8 +29,8 @@ class InternalForceSettings:
         target_cone_margin: The smallest cone margin (μ_s - margin) f_n - |f_t| [N] to reach at the fixed
             contacts, >= 0 (:mod:`regrasp.dynamics.internal_force.problem`); 0: the least squeeze only.
         fallback_friction_margin: Where no internal force keeps the fixed contacts ``friction_margin`` inside their
-            cones, the solver answers with this smaller friction margin [-] instead of failing (None: it fails). A margin
-            that covers an uncertain μ is a preference; the cone of the model's μ is the limit.
+            cones, the solver answers with this smaller friction margin [-] instead of failing (None: it fails). A
+            margin that covers an uncertain μ is a preference; the cone of the model's μ is the limit.
     """
 
     f_min: float = 0.5

@@ -160,7 +160,8 @@ class InternalForceSolver:
             # the margin is a preference: where its QP does not converge, the least squeeze that keeps the
             # constraints (the same feasible set) is the answer
             if self._plain is None:
-                self._plain = InternalForceSolver(replace(self.settings, target_cone_margin=0.0), compiled=self.compiled)
+                self._plain = InternalForceSolver(replace(self.settings, target_cone_margin=0.0),
+                                                  compiled=self.compiled)
             self.fallbacks += 1
             return self._plain.solve_floats(constraint_matrix, motion_forces, frames, modes, friction, cone_edge, start)
         surface_frames = np.array([((n_x, t_x), (n_y, t_y)) for n_x, n_y, t_x, t_y in frames])

@@ -1,5 +1,5 @@
-"""``regrasp.plants.mujoco``: MuJoCo as a second, independent plant (the ``mujoco`` extra): a scenario as MJCF (:func:`scenario_to_mjcf`,
-:class:`MujocoSettings`) stepped by MuJoCo (:class:`MujocoPlant`)."""
+"""``regrasp.plants.mujoco``: MuJoCo as a second, independent plant (the ``mujoco`` extra): a scenario as MJCF
+(:func:`scenario_to_mjcf`, :class:`MujocoSettings`) stepped by MuJoCo (:class:`MujocoPlant`)."""
 
 from __future__ import annotations
 

@@ -17,10 +17,10 @@ contact here is what the planner and the project's plant call a collision.
 X = (x, y, β) of the centre of mass in the hand frame), the polygon's mass and rotational inertia, and
 two prisms of thickness ``object_thickness`` along z:
 
-* ``object`` (the tips touch it): the polygon **eroded by r**, every edge moved inwards by r. A sphere of radius r touching an edge of the eroded polygon has its centre on
-  the original edge's line (the Minkowski sum of the eroded polygon and the sphere is the polygon, up to
-  its rounded corners), so the tip frame is where the point-contact model puts the contact, in the normal
-  direction exactly (``contact_depth`` less, 1 µm);
+* ``object`` (the tips touch it): the polygon **eroded by r**, every edge moved inwards by r. A sphere of radius r
+  touching an edge of the eroded polygon has its centre on the original edge's line (the Minkowski sum of the eroded
+  polygon and the sphere is the polygon, up to its rounded corners), so the tip frame is where the point-contact model
+  puts the contact, in the normal direction exactly (``contact_depth`` less, 1 µm);
 * ``hull`` (the links touch it): the polygon itself.
 
 **Contacts.** Each tip touches ``object`` through an explicit contact pair with the finger's friction
@@ -289,7 +289,8 @@ def _add_finger(mujoco, spec, index: int, finger: Finger, clearance: float, mass
 def _add_prism(mujoco, spec, body, name: str, vertices: np.ndarray, thickness: float, conaffinity: int) -> None:
     half = 0.5 * thickness
     points = [[float(x), float(y), z] for x, y in vertices for z in (-half, half)]
-    spec.add_mesh(name=name + "_mesh", uservert=[c for p in points for c in p], inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_CONVEX)
+    spec.add_mesh(name=name + "_mesh", uservert=[c for p in points for c in p],
+                  inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_CONVEX)
     body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name + "_mesh", contype=0,
                   conaffinity=conaffinity, density=0.0, mass=0.0, group=0)
 
@@ -387,7 +388,8 @@ def build_mjcf(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Seq
                     tuple(mus), settings)
 
 
-def scenario_to_mjcf(scenario: Scenario, settings: MujocoSettings = MujocoSettings(), path: str | Path | None = None) -> str:
+def scenario_to_mjcf(scenario: Scenario, settings: MujocoSettings = MujocoSettings(),
+                     path: str | Path | None = None) -> str:
     """The scenario's hand and object as MJCF text (and written to ``path`` if given); see :func:`build_mjcf`."""
     from ...model.scenario import Scenario  # (a runtime import: the scenario module is heavier than this one)
 

@@ -1,4 +1,5 @@
-r"""MuJoCo as a second, independent plant: the hand and the object of :mod:`regrasp.plants.mujoco.mjcf`, stepped by MuJoCo.
+r"""MuJoCo as a second, independent plant: the hand and the object of :mod:`regrasp.plants.mujoco.mjcf`, stepped by
+MuJoCo.
 
 :class:`MujocoPlant` is driven exactly like :class:`~regrasp.plants.project.plant.Plant` (the simulation loop, the
 rollout, the recorder: :class:`~regrasp.plants.simulation.PlantLike`). Its physics is MuJoCo's alone: soft
@@ -88,8 +89,8 @@ class MujocoPlant:
     """
 
     def __init__(self, hand: Hand, polygon: ConvexPolygon, contacts: Sequence[PlantContact], *,
-                 friction: FrictionLike = DEFAULT_FRICTION, object_mass: float | None = None, object_inertia: float | None = None,
-                 dt: float = 1e-3, settings: MujocoSettings = MujocoSettings(),
+                 friction: FrictionLike = DEFAULT_FRICTION, object_mass: float | None = None,
+                 object_inertia: float | None = None, dt: float = 1e-3, settings: MujocoSettings = MujocoSettings(),
                  tip_clearance: Sequence[float | None] | None = None, slip_speed: float = 2e-3,
                  stick_speed: float = 1e-3, separation_gap: float = 2.5e-5,
                  stop_on: Sequence[str] = ("separation", "left_edge", "collision", "singular")):
@@ -253,7 +254,8 @@ class MujocoPlant:
         if not n:
             return
         con, efc = data.contact, data.efc_force
-        for g, adr, frame, dist in zip(con.geom[:n].tolist(), con.efc_address[:n].tolist(), con.frame[:n], con.dist[:n]):
+        for g, adr, frame, dist in zip(con.geom[:n].tolist(), con.efc_address[:n].tolist(), con.frame[:n],
+                                       con.dist[:n]):
             first = self._geoms.get(g[0])
             finger = first if first is not None else self._geoms.get(g[1])
             if finger is None or (g[0] if first is None else g[1]) not in self._object_geoms:
@@ -350,12 +352,12 @@ class MujocoPlant:
             slip = self._slip(before[i], after)
             if c.mode is _FIXED and abs(slip) > self.slip_speed:
                 self._event(i, EventKind.SLIP, f"slip velocity {slip * 1e3:.3g} mm/s, faster than "
-                            f"{self.slip_speed * 1e3:g} mm/s (f_t = {ft:.4g} N, f_n = {fn:.4g} N)", out, normal_force=fn,
-                            tangential_force=ft)
+                            f"{self.slip_speed * 1e3:g} mm/s (f_t = {ft:.4g} N, f_n = {fn:.4g} N)", out,
+                            normal_force=fn, tangential_force=ft)
                 c.mode, c.sign = _SLIDING, math.copysign(1.0, slip)
             elif c.mode is _SLIDING and slip * c.sign < self.stick_speed:
-                self._event(i, EventKind.STICK, f"slip velocity {slip * 1e3:.3g} mm/s, below {self.stick_speed * 1e3:g} "
-                            "mm/s in the sliding direction", out, xi=xi)
+                self._event(i, EventKind.STICK, f"slip velocity {slip * 1e3:.3g} mm/s, below "
+                            f"{self.stick_speed * 1e3:g} mm/s in the sliding direction", out, xi=xi)
                 c.mode = _FIXED
             c.xi = xi  # (a fixed contact is held where its tip is: the sensor reads it there)
             lo, hi = self._edges[i].xi_range

@@ -1,5 +1,5 @@
-"""``regrasp.plants.project``: The project's own plant: the hand and the object in full coordinates, with fixed, sliding and separated
-contacts and their events (:class:`Plant`), independent of the reduced model the controllers use."""
+"""``regrasp.plants.project``: The project's own plant: the hand and the object in full coordinates, with fixed, sliding
+and separated contacts and their events (:class:`Plant`), independent of the reduced model the controllers use."""
 
 from __future__ import annotations
 

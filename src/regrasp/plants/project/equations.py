@@ -127,7 +127,7 @@ class PlantEquations:
         :math:`e_z \times (p - o_2)` (joint axes :math:`o_1` fixed, :math:`o_2` the elbow): p follows
         from :math:`o_1`, and :math:`\dot J\dot q = -\dot q_1^2 (o_2 - o_1) - (\dot q_1 + \dot q_2)^2
         (p - o_2)`, the tip's acceleration at :math:`\ddot q = 0` (Pinocchio's classical
-        acceleration; ``tests/test_plant.py`` checks both against :meth:`Hand.dynamics`)."""
+        acceleration; ``tests/plants/project/test_plant.py`` checks both against :meth:`Hand.dynamics`)."""
         damped = self.hand.damping_enabled
         model, data = self._pin_data
         pin.computeAllTerms(model, data, q, v)

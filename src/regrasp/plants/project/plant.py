@@ -184,8 +184,9 @@ class Plant:
             if len(contacts) != self.hand.m:
                 raise InvalidParameterError("contacts", contacts, f"one contact per finger ({self.hand.m})")
             self.contacts = self._copy_contacts(contacts)
-        self.state = PlantState(as_finite_float("t", t), as_finite_array("q", q, (n,)).copy(), as_finite_array("v", v, (n,)).copy(),
-                                as_finite_array("X", X, (3,)).copy(), as_finite_array("V", V, (3,)).copy())
+        self.state = PlantState(as_finite_float("t", t), as_finite_array("q", q, (n,)).copy(),
+                                as_finite_array("v", v, (n,)).copy(), as_finite_array("X", X, (3,)).copy(),
+                                as_finite_array("V", V, (3,)).copy())
         self.log.clear()
         self.max_constraint_error = self.constraint_error(self.state)
         return self.state
@@ -308,6 +309,7 @@ class Plant:
         """Kinetic + gravitational potential energy [J] of fingers and object."""
         st = self.state if st is None else st
         g = self.hand.gravity_in_hand
-        kin = self.hand.kinetic_energy(st.q, st.v) + 0.5 * (self.mass * st.V[:2] @ st.V[:2] + self.inertia * st.V[2] ** 2)
+        kin = self.hand.kinetic_energy(st.q, st.v) + 0.5 * (self.mass * st.V[:2] @ st.V[:2]
+                                                            + self.inertia * st.V[2] ** 2)
         pot = self.hand.potential_energy(st.q) - self.mass * g @ st.X[:2]
         return float(kin + pot)

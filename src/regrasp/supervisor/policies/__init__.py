@@ -1,6 +1,6 @@
-"""``regrasp.supervisor.policies``: Regrasp policies: who decides which contact slides, where and when (:class:`Policy`): the
-schedule-following :class:`ScheduledPolicy`, the paper's danger-zone :class:`PaperPolicy`, :class:`NoRegraspPolicy`
-and :class:`OrderedSlidesPolicy`."""
+"""``regrasp.supervisor.policies``: Regrasp policies: who decides which contact slides, where and when
+(:class:`Policy`): the schedule-following :class:`ScheduledPolicy`, the paper's danger-zone :class:`PaperPolicy`,
+:class:`NoRegraspPolicy` and :class:`OrderedSlidesPolicy`."""
 
 from __future__ import annotations
 

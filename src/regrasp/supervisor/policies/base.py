@@ -75,8 +75,8 @@ class NoRegraspPolicy:
 
 
 class OrderedSlidesPolicy:
-    """Starts each given :class:`~regrasp.supervisor.types.SlideOrder` at its ``planned_start`` [s] (a contact that is not
-    fixed then gets its order when it is), and nothing else.
+    """Starts each given :class:`~regrasp.supervisor.types.SlideOrder` at its ``planned_start`` [s] (a contact that is
+    not fixed then gets its order when it is), and nothing else.
 
     Args:
         orders: The slides, each with a ``planned_start``.

@@ -100,7 +100,8 @@ class PaperPolicy:
         hits = np.flatnonzero(bad)
         return float(times[k0 + hits[0]]) if hits.size else None
 
-    def kept_feasible(self, i: int, t: float, interval: tuple[float, float]) -> tuple[tuple[float, float], float | None]:
+    def kept_feasible(self, i: int, t: float,
+                      interval: tuple[float, float]) -> tuple[tuple[float, float], float | None]:
         """The widest piece of ``interval`` the plan keeps feasible for contact i over
         [t, t + target_horizon] (or its longest prefix with a non-empty intersection), and until when."""
         if self.c.plan is None:

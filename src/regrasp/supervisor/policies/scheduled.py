@@ -129,14 +129,15 @@ class ScheduledPolicy:
 
     def quiet_until(self, phases: Sequence[ContactPhase]) -> float:
         """Until when [s] :meth:`propose` is sure to return nothing while the phases stay ``phases``: the next
-        decision's time (-inf: it decides at the next step). Compiled stretches (:mod:`regrasp.rollout.stretch`) end there."""
+        decision's time (-inf: it decides at the next step). Compiled stretches (:mod:`regrasp.rollout.stretch`) end
+        there."""
         return self._next_decision if tuple(phases) == self._phases else -math.inf
 
     def stretch_view(self, t: float) -> dict | None:
-        """What a compiled stretch (:mod:`regrasp.rollout.stretch`) from time ``t`` [s] needs to take this policy's decisions
-        where they are sure to order nothing (no slide due, no re-plan pending, the margins above their threshold;
-        any other decision is handed to :meth:`propose`): when the next slide is due [s], when the stretch must end
-        at the latest (the schedule period's end, past which other slides come into view) [s], the re-plan
+        """What a compiled stretch (:mod:`regrasp.rollout.stretch`) from time ``t`` [s] needs to take this policy's
+        decisions where they are sure to order nothing (no slide due, no re-plan pending, the margins above their
+        threshold; any other decision is handed to :meth:`propose`): when the next slide is due [s], when the stretch
+        must end at the latest (the schedule period's end, past which other slides come into view) [s], the re-plan
         test's terms and the schedule's planned margins; None when a re-plan is pending."""
         if self._pending is not None:
             return None
@@ -219,7 +220,8 @@ class ScheduledPolicy:
             if abs(late) > s.time_tolerance or abs(off) > s.xi_tolerance:
                 name = self.names[order.contact]
                 self._pending = (f"{name}'s slide ended {end.kind.value} at t = {end.time:.3f} s, xi = "
-                                 f"{end.xi * 1e3:.2f} mm (planned {order.planned_end:.3f} s, {order.target * 1e3:.2f} mm)")
+                                 f"{end.xi * 1e3:.2f} mm (planned {order.planned_end:.3f} s, "
+                                 f"{order.target * 1e3:.2f} mm)")
 
     def _replan(self, meas, out: list) -> None:
         t = float(meas.t)
