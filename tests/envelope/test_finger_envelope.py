@@ -498,9 +498,10 @@ def test_closed_form_reachable_set_matches_the_elbow_margin_classifier():
 
 # --------------------------------------------------------------------------- float fast paths
 def test_float_helpers_match_numpy():
-    """The envelope's float helpers reproduce numpy's linspace and wrap_angle bit for bit."""
+    """The envelope's float helpers reproduce numpy's linspace bit for bit, and wrap_angle's float path its numpy
+    path."""
     from regrasp.core.planar import wrap_angle
-    from regrasp.envelope.floats import linspace_floats, wrap_angle_float
+    from regrasp.envelope.floats import linspace_floats
 
     rng = np.random.default_rng(7)
     for _ in range(2000):
@@ -510,7 +511,7 @@ def test_float_helpers_match_numpy():
         assert linspace_floats(lo, hi, num) == np.linspace(lo, hi, num).tolist()
     angles = np.concatenate([rng.uniform(-20.0, 20.0, 2000), np.pi * np.arange(-6, 7), [1e-300, -0.0]])
     for angle in angles.tolist():
-        assert wrap_angle_float(angle) == wrap_angle(angle)
+        assert wrap_angle(angle) == float(wrap_angle(np.array([angle]))[0])
 
 
 @pytest.mark.parametrize("bad", [[0.0, 0.1], [0.0, np.nan, 0.0], np.array([0.0, 0.1, np.inf]), "abc",

@@ -29,12 +29,13 @@ import numpy as np
 
 from ..core.exceptions import InvalidParameterError
 from ..core.intervals import Intervals, intersect, merge
+from ..core.planar import wrap_angle
 from ..core.polygon import ConvexPolygon, Edge
 from ..core.validation import as_flag
 from ..kernels.envelope import ENVELOPE_PARAMETERS, envelope_sample_into, feasible_capacity, tip_is_free, workspace_size
 from ..model.collision import UrdfCollisionChecker, segment_hits_halfplanes
 from ..model.finger import Finger
-from .floats import linspace_floats, wrap_angle_float
+from .floats import linspace_floats
 from .line import Condition, condition_of, reachable_on_line
 
 __all__ = ["ClosedForm", "EnvelopeEvaluator", "FreeTest", "UrdfCuts", "urdf_pieces"]
@@ -179,7 +180,7 @@ class EnvelopeEvaluator:
         o1x, o1y = self._joint1
         rx = x + (c * cx - s * cy) - o1x
         ry = y + (s * cx + c * cy) - o1y
-        lam = wrap_angle_float(math.atan2(ny, nx) - self._base_angle)
+        lam = wrap_angle(math.atan2(ny, nx) - self._base_angle)
         return rx * nx + ry * ny, lam, ry * nx - rx * ny, nx, ny, c, s
 
     def tip_and_elbow(self, d: float, nx: float, ny: float, s: float) -> tuple[float, float, float, float]:

@@ -13,14 +13,7 @@ from numpy.typing import ArrayLike
 
 from ..core.validation import as_finite_array
 
-__all__ = ["linspace_floats", "pose_floats", "wrap_angle_float"]
-
-
-def wrap_angle_float(angle: float) -> float:
-    """:func:`~regrasp.core.planar.wrap_angle` of one float ``angle`` [rad]: wrapped to (-π, π] (same arithmetic,
-    without numpy)."""
-    wrapped = (angle + math.pi) % (2.0 * math.pi) - math.pi
-    return math.pi if wrapped == -math.pi else wrapped
+__all__ = ["linspace_floats", "pose_floats"]
 
 
 def pose_floats(value: ArrayLike) -> tuple[float, float, float]:

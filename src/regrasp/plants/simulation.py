@@ -29,7 +29,7 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -42,9 +42,11 @@ from ..core.polygon import ConvexPolygon
 from ..core.trajectory import TrajectorySample
 from ..dynamics.control import ControlOutput
 from ..model.hand import Hand
-from ..supervisor.types import SupervisorOutput
 from .disturbance import Disturbance
 from .project.state import PlantContact, PlantState, PlantStep
+
+if TYPE_CHECKING:  # (the loop carries a supervisor's output; it never reads more of it than its events)
+    from ..supervisor.types import SupervisorOutput
 
 __all__ = ["Command", "Driver", "InterruptAtStepEnd", "PlantLike", "SimulationOutcome", "StepRecord", "sense",
            "sense_projected", "simulate"]
