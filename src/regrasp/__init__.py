@@ -43,7 +43,7 @@ if TYPE_CHECKING:
     from .model.hand import Hand  # noqa: F401
     from .model.noise import ActuatorNoise, SensorNoise  # noqa: F401
     from .model.perturbation import Perturbation  # noqa: F401
-    from .model.scenario import Scenario, load_scenario  # noqa: F401
+    from .model.scenario import FingerContact, Scenario, load_scenario  # noqa: F401
     from .plants.mujoco.mjcf import MujocoSettings  # noqa: F401
     from .plants.project.plant import Plant
     from .plants.project.state import PlantContact
