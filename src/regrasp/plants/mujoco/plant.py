@@ -318,9 +318,9 @@ class MujocoPlant:
         mj.mj_forward(model, d)  # the end state's kinematics (and its energy) for the sensors
         modes = tuple(c.mode for c in self.contacts)
         self.state = self._read_state(torque_work, damping_work)
-        events, xi, xi_dot, err = self._events(surface, links, before)
+        events, xi, xi_dot, err, gap, slip = self._events(surface, links, before)
         self.max_constraint_error = max(self.max_constraint_error, err)
-        return PlantStep(self.state, surface, np.array(xi), np.array(xi_dot), modes, err, tuple(events))
+        return PlantStep(self.state, surface, np.array(xi), np.array(xi_dot), modes, err, gap, slip, tuple(events))
 
     def _event(self, i: int, kind: EventKind, detail: str, out: list, **values) -> None:
         ev = Event(self.state.t, self.hand.fingers[i].name, kind, detail, EventSource.PLANT, values)
@@ -329,16 +329,22 @@ class MujocoPlant:
         if kind in self.stop_on:
             self.stopped = True
 
-    def _events(self, surface: np.ndarray, links: dict, before: list) -> tuple[list, list, list, float]:
-        """The events at the step's end (module docstring); ξ, ξ̇ and the constraint error there (``before``:
-        each contact's :meth:`_measure` at the step's start)."""
+    def _events(self, surface: np.ndarray, links: dict, before: list) -> tuple[list, list, list, float, np.ndarray,
+                                                                              np.ndarray]:
+        """The events at the step's end (module docstring); ξ, ξ̇, the constraint error, each tip's gap [m] (its
+        centre's distance from its edge's line: the plant's object is eroded by the tip's radius) and each contact's
+        slip over the step [m] (:meth:`_slip` × dt) there (``before``: each contact's :meth:`_measure` at the
+        step's start)."""
         out: list[Event] = []
         xis, rates, err = [], [], 0.0
+        m = len(self.contacts)
+        gaps, slips = np.empty(m), np.empty(m)
         for i, c in enumerate(self.contacts):
             after = self._measure(self.data, i)
             xi, xi_dot, gap, _ = after
             xis.append(xi)
             rates.append(xi_dot)
+            gaps[i], slips[i] = gap, self._slip(before[i], after) * self.dt
             if c.mode is _SEPARATED:
                 continue
             fn, ft = surface[i].tolist()
@@ -349,7 +355,7 @@ class MujocoPlant:
                 continue
             self.max_gap = max(self.max_gap, gap)
             err = max(err, abs(gap))
-            slip = self._slip(before[i], after)
+            slip = slips[i] / self.dt
             if c.mode is _FIXED and abs(slip) > self.slip_speed:
                 self._event(i, EventKind.SLIP, f"slip velocity {slip * 1e3:.3g} mm/s, faster than "
                             f"{self.slip_speed * 1e3:g} mm/s (f_t = {ft:.4g} N, f_n = {fn:.4g} N)", out,
@@ -373,4 +379,4 @@ class MujocoPlant:
             cond = np.linalg.cond(block)
             if not cond <= self.hand.singular_threshold:
                 self._event(i, EventKind.SINGULAR, f"Jacobian condition number {cond:.3g}", out)
-        return out, xis, rates, err
+        return out, xis, rates, err, gaps, slips

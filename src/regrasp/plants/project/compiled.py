@@ -29,7 +29,7 @@ from ...kernels.plant import (
 from ...model.hand import Hand
 from .equations import PlantEquations
 from .events import Accelerations, PlantEvents
-from .state import PlantContact, PlantState, PlantStep
+from .state import PlantContact, PlantState, PlantStep, rigid_contact_report
 
 __all__ = ["PlantKernel"]
 
@@ -137,7 +137,8 @@ class PlantKernel:
             if any_coal and checks.checkers is not None:
                 for i in np.flatnonzero(needs_coal).tolist():
                     checks.coal(new, i, tuple(posture[i].tolist()), events)
-        return PlantStep(new, surface, xi, xi_dot, modes, err, tuple(events))
+        gap, slip = rigid_contact_report(modes, xi_dot, self.dt, lambda i: self.equations.gap(new, i, contacts[i].edge))
+        return PlantStep(new, surface, xi, xi_dot, modes, err, gap, slip, tuple(events))
 
     # ------------------------------------------------------------------ stretches (regrasp.rollout.stretch)
     def stretch_view(self, state: PlantState, contacts: list[PlantContact]) -> tuple:
@@ -168,5 +169,9 @@ class PlantKernel:
         size = 2 * n + 9
         state = PlantState.from_flat(t, y.copy(), n)
         out = last_out.copy()
-        return PlantStep(state, out[size:size + 2 * m].reshape(m, 2), out[size + 6 * m:size + 7 * m],
-                         out[size + 7 * m:], tuple(c.mode for c in contacts), last_error, ())
+        modes = tuple(c.mode for c in contacts)
+        xi_dot = out[size + 7 * m:]
+        gap, slip = rigid_contact_report(modes, xi_dot, self.dt,
+                                         lambda i: self.equations.gap(state, i, contacts[i].edge))
+        return PlantStep(state, out[size:size + 2 * m].reshape(m, 2), out[size + 6 * m:size + 7 * m], xi_dot, modes,
+                         last_error, gap, slip, ())

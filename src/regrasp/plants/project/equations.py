@@ -83,6 +83,15 @@ class PlantEquations:
         tip = f.forward_kinematics(qi)
         return tip, f.tip_jacobian(qi) @ vi
 
+    def gap(self, st: PlantState, i: int, edge: int) -> float:
+        """Tip i's distance [m] from edge ``edge``'s line at state ``st``: positive outside the object."""
+        g = self.edge(edge)
+        tip = self.tip(st, i)[0].tolist()
+        X = st.X.tolist()
+        c, s = math.cos(X[2]), math.sin(X[2])
+        rx, ry = tip[0] - X[0], tip[1] - X[1]
+        return g.offset - (g.nx * (c * rx + s * ry) + g.ny * (c * ry - s * rx))
+
     def specs(self, contacts: Sequence[PlantContact]) -> tuple[tuple, ...]:
         """The active contacts as floats (a tuple): ``(i, FIXED, c_x, c_y)`` (the contact point,
         object frame) or ``(i, SLIDING, n_x, n_y, n·ξ-origin, μ_k s)`` (the edge's normal)."""

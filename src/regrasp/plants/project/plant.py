@@ -48,7 +48,17 @@ from ...model.hand import Hand
 from .compiled import PlantKernel
 from .equations import PlantEquations
 from .events import PlantEvents
-from .state import MAX_DT, PLANT_EVENT_KINDS, PlantContact, PlantLog, PlantState, PlantStep, contact_xi, surface_force
+from .state import (
+    MAX_DT,
+    PLANT_EVENT_KINDS,
+    PlantContact,
+    PlantLog,
+    PlantState,
+    PlantStep,
+    contact_xi,
+    rigid_contact_report,
+    surface_force,
+)
 
 __all__ = ["Plant"]
 
@@ -295,8 +305,13 @@ class Plant:
         err = equations.violations(specs, new.X.tolist(), [f[11:13] for f in fingers])
         self.max_constraint_error = max(self.max_constraint_error, err)
         events, xis = self.checks.detect(new, tau, end[1], fingers, self.contacts, self.accelerations)
-        return PlantStep(new, surface, np.array([x[0] for x in xis]), np.array([x[1] for x in xis]), modes, err,
-                         tuple(events))
+        xi_dot = np.array([x[1] for x in xis])
+        gap, slip = rigid_contact_report(modes, xi_dot, h, self.separated_gap)
+        return PlantStep(new, surface, np.array([x[0] for x in xis]), xi_dot, modes, err, gap, slip, tuple(events))
+
+    def separated_gap(self, i: int) -> float:
+        """Contact i's tip's distance from its edge now [m] (positive outside)."""
+        return self.equations.gap(self.state, i, self.contacts[i].edge)
 
     def adopt(self, state: PlantState, constraint_error: float) -> None:
         """Move to ``state``, reached by a compiled step or stretch whose largest constraint violation was

@@ -5,7 +5,7 @@ constants in plain floats (:class:`EdgeGeometry`) with the contact kinematics on
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -18,7 +18,7 @@ from ...core.polygon import ConvexPolygon
 from ...core.validation import as_finite_float, as_integer
 
 __all__ = ["MAX_DT", "PLANT_EVENT_KINDS", "EdgeGeometry", "PlantContact", "PlantLog", "PlantState", "PlantStep",
-           "contact_xi", "edge_geometry", "surface_force"]
+           "contact_xi", "edge_geometry", "rigid_contact_report", "surface_force"]
 
 #: The plant's largest step [s].
 MAX_DT = 0.01
@@ -99,6 +99,12 @@ class PlantStep:
         xi_dot: Each contact's relative tangential velocity ξ̇ [m/s] after the step.
         modes: Contact modes (:class:`~regrasp.core.contact.ContactMode`) during the step.
         constraint_error: Largest constraint violation [m] after the step.
+        gap: Each contact's distance from touching after the step [m], (m,): positive apart, negative
+            interpenetrating (a soft contact's depth); a rigid contact that touches has 0 (its constraint's drift
+            is ``constraint_error``).
+        slip: How far each contact's material point moved along its edge relative to the object's point during
+            the step [m], (m,): 0 for a contact that stuck (a rigid plant's fixed contact), ξ̇ dt at the step's
+            end for a rigid contact that slid, and what a slip sensor reads on a soft one.
         events: Events detected after the step (:class:`~regrasp.core.events.Event`, source ``PLANT``).
     """
 
@@ -108,6 +114,8 @@ class PlantStep:
     xi_dot: np.ndarray
     modes: tuple[ContactMode, ...]
     constraint_error: float
+    gap: np.ndarray
+    slip: np.ndarray
     events: tuple[Event, ...] = field(default_factory=tuple)
 
 
@@ -123,6 +131,21 @@ class EdgeGeometry(NamedTuple):
     offset: float
     lo: float
     hi: float
+
+
+def rigid_contact_report(modes: Sequence[ContactMode], xi_dot: np.ndarray, dt: float,
+                         separated_gap: Callable[[int], float]) -> tuple[np.ndarray, np.ndarray]:
+    """A rigid plant's :attr:`PlantStep.gap` and :attr:`PlantStep.slip` [m] for a step of ``dt`` [s] with the contact
+    ``modes`` during it and ξ̇ [m/s] at its end: a touching contact has no gap and a fixed one no slip; a sliding one
+    slips ξ̇ dt; ``separated_gap(i)``: a separated contact's distance from its edge [m]."""
+    m = len(modes)
+    gap, slip = np.zeros(m), np.zeros(m)
+    for i, mode in enumerate(modes):
+        if mode is ContactMode.SLIDING:
+            slip[i] = xi_dot[i] * dt
+        elif mode is ContactMode.SEPARATED:
+            gap[i] = separated_gap(i)
+    return gap, slip
 
 
 def edge_geometry(polygon: ConvexPolygon, k: int) -> EdgeGeometry:
