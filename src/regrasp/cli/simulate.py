@@ -117,6 +117,7 @@ def rollout_summary(result: RolloutResult, scenario: Scenario, plant_line: str) 
     ]
     w = max(len(k) for k, _ in rows)
     lines += [f"  {k:<{w}}  {v}" for k, v in rows]
+    lines += _health_lines(result)
     replans = [e for e in result.events if e.kind in (EventKind.REPLAN, EventKind.REPLAN_FAILED)]
     for e in replans[:5]:
         lines.append(f"  {e.kind.value} at t = {e.time:.3f} s: {e.detail}")
@@ -124,6 +125,25 @@ def rollout_summary(result: RolloutResult, scenario: Scenario, plant_line: str) 
         lines.append(f"  recording: {result.rrd} - open it with `rerun {result.rrd}` "
                      f"(or `rerun --web-viewer {result.rrd}` on a machine without a display)")
     return "\n".join(lines)
+
+
+def _health_lines(result) -> list[str]:
+    """Each contact's health (:class:`~regrasp.core.health.ContactHealth`) as a small table."""
+    if not result.health:
+        return []
+
+    def force(value: float, at: float) -> str:
+        return "-" if value == float("inf") else f"{value:.3f} N (t = {at:.3f} s)"
+
+    rows = [("contact", "least force held", "least force sliding (avg)", "longest without force", "largest slip held")]
+    for h in result.health:
+        zero = (f"{h.longest_zero_force * 1e3:.0f} ms (t = {h.longest_zero_force_at:.3f} s)" if h.longest_zero_force
+                else "0 ms")
+        rows.append((h.contact, force(h.least_held_force, h.least_held_force_at),
+                     force(h.least_slider_force, h.least_slider_force_at), zero,
+                     f"{h.largest_held_slip * 1e3:.4f} mm"))
+    widths = [max(len(r[j]) for r in rows) for j in range(len(rows[0]))]
+    return ["  contact health:"] + ["    " + "  ".join(f"{c:<{w}}" for c, w in zip(r, widths)).rstrip() for r in rows]
 
 
 def _no_schedule_text(error, scenario) -> str:

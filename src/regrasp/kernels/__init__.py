@@ -186,7 +186,8 @@ def _warm_stretch(fingers, plant, iks, edges, rows) -> None:
                                    np.full((m, 9), np.nan), np.zeros((m, 2)), np.empty(output_size(m)),
                                    np.empty(m, dtype=FINGER_TERMS), np.empty(m, np.bool_), np.empty((m, 7)))
     rows_out = StretchRows(np.empty((0, m)), np.empty((0, m, 2)), np.empty((0, m)), np.empty((0, 3)),
-                           np.empty((0, 3)), np.empty((0, 2 * m)), np.empty((0, m, 2)), np.empty((0, m)), np.ones(m))
+                           np.empty((0, 3)), np.empty((0, 2 * m)), np.empty((0, m, 2)), np.empty((0, m)), np.empty((0, m)),
+                           np.ones(m))
     stretch_into(np.zeros((), dtype=STRETCH_SETTINGS)[()], np.zeros(1, dtype=STRETCH_STATE), np.zeros(0),
                  np.zeros((0, 9)), executor, monitor, StretchSchedule(np.zeros(1), np.zeros((1, m))), law,
                  plant_arguments, rows_out, stretch_log(0, m, 1), 0, 0,

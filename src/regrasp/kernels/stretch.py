@@ -18,11 +18,12 @@ around :meth:`regrasp.supervisor.supervisor.RegraspSupervisor.step`) does, in th
 Before it changes anything, each step checks whether the reference loop would do something discrete there:
 a held contact outside its envelope, a held position moving past ``hold_resolution`` (a new law), a slide
 that arrives, sticks or times out, a friction estimate that rounds to a new law, a decision or monitor
-evaluation due, a law the kernel does not settle (:data:`.control.CONTROL_REFERENCE`), or a plant step that
-may have an event (its ``attention`` flag). It then stops *before* that step (:data:`STRETCH_HANDOFF`), and the
-caller takes the step on the reference path. A plant step whose collision certificate expired stops with
-:data:`STRETCH_COAL`, uncommitted: the caller asks coal and, with no collision, calls again with
-``coal_cleared``. So a rollout with stretches takes the same steps as one without
+evaluation due, a law the kernel does not settle (:data:`.control.CONTROL_REFERENCE`), a plant step that
+may have an event (its ``attention`` flag), or one that leaves a contact's normal force below the health floor
+(``force_floor``: :mod:`regrasp.core.health` judges such steps). It then stops *before* that step
+(:data:`STRETCH_HANDOFF`), and the caller takes the step on the reference path. A plant step whose collision
+certificate expired stops with :data:`STRETCH_COAL`, uncommitted: the caller asks coal and, with no collision, calls
+again with ``coal_cleared``. So a rollout with stretches takes the same steps as one without
 (``tests/rollout/test_stretch.py``).
 """
 
@@ -95,7 +96,8 @@ def stretch_into(settings, state, times, desired, executor, monitor, schedule, l
     (head, kv, ks, diagonal, object_mass, f_hat, directions, reversible, sample_time, singular_threshold, margin_mu,
      use_qp, coefficients, lower, n_ineq, is_cone, target, margin_column, weight, aim, control_out) = law
     fingers, plant_record, contacts, y, last, certificates, radii, plant_out, terms, needs_coal, posture = plant
-    rows_xi, rows_bounds, rows_margin, rows_error, rows_pose, rows_q, rows_surface, rows_cone, static_mu = rows
+    rows_xi, rows_bounds, rows_margin, rows_error, rows_pose, rows_q, rows_surface, rows_cone, rows_slip, \
+        static_mu = rows
     noise, slips, commands = disturbance
     m = fingers.shape[0]
     n2 = 2 * m
@@ -268,6 +270,9 @@ def stretch_into(settings, state, times, desired, executor, monitor, schedule, l
                                                    plant_out, terms, needs_coal, posture)
         if attention:
             return k, STRETCH_HANDOFF, worst, last_err
+        for i in range(m):  # (a contact below the health floor: the health monitor judges it on the reference path)
+            if plant_out[size + 2 * i] < settings.force_floor:
+                return k, STRETCH_HANDOFF, worst, last_err
         if any_coal and not (k == 0 and coal_cleared):
             return k, STRETCH_COAL, worst, last_err
         # commit the step
@@ -278,6 +283,7 @@ def stretch_into(settings, state, times, desired, executor, monitor, schedule, l
             fn, ft = plant_out[size + 2 * i], plant_out[size + 2 * i + 1]
             rows_surface[k, i, 0], rows_surface[k, i, 1] = fn, ft
             rows_cone[k, i] = static_mu[i] * fn - abs(ft) if held[i] and contacts[i].mode == FIXED else np.nan
+            rows_slip[k, i] = plant_out[size + 7 * m + i] * dt if contacts[i].mode == SLIDING else 0.0
         if settings.integral > 0.0:
             for a in range(3):
                 integral_x[a] = integral_new[a]

@@ -28,11 +28,14 @@ if TYPE_CHECKING:
     from .mujoco.mjcf import MujocoSettings
     from .simulation import PlantLike
 
-__all__ = ["PLANTS", "ModelErrors", "PlantSpec"]
+__all__ = ["PLANTS", "ROLLOUT_STOPS", "ModelErrors", "PlantSpec"]
 
 #: The plants a :class:`PlantSpec` knows by name: the project's (:class:`~regrasp.plants.project.plant.Plant`) and
 #: MuJoCo (:class:`~regrasp.plants.mujoco.plant.MujocoPlant`, the ``mujoco`` extra).
 PLANTS = ("project", "mujoco")
+
+#: The plant events that stop a rollout's plant: a contact off its edge, a link in the object, a singular finger.
+ROLLOUT_STOPS = ("left_edge", "collision", "singular")
 
 
 @dataclass(frozen=True)
@@ -161,8 +164,11 @@ class PlantSpec:
         plant_hand = hand if errors.link_mass_scale == 1.0 else Hand(
             list(hand.fingers), gravity_in_hand=scenario.gravity_in_hand, link_mass_scale=errors.link_mass_scale)
         contacts = [PlantContact(e, ContactMode.FIXED, x) for e, x in zip(edges, xi_plant.tolist())]
+        # (a contact's loss is the rollout's health criteria's to judge, alike on every plant: a plant's separation is
+        # an event, not a stop)
         physics = dict(friction=friction, object_mass=scenario.polygon.mass * errors.mass_scale,
-                       object_inertia=scenario.polygon.inertia * errors.object_inertia_scale, dt=dt)
+                       object_inertia=scenario.polygon.inertia * errors.object_inertia_scale, dt=dt,
+                       stop_on=ROLLOUT_STOPS)
         if self.kind == "mujoco":
             from .mujoco.mjcf import MujocoSettings
             from .mujoco.plant import MujocoPlant

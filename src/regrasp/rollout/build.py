@@ -9,8 +9,10 @@ what the controllers assume (``plant_mass_scale``, ``plant_mu_scale``: model err
 :meth:`Rollout.run` runs the one simulation loop (:func:`~regrasp.plants.simulation.simulate`) until the
 end or the first failure (:class:`~regrasp.core.events.FailureKind`):
 
-* the plant stops (separation, a contact leaving its edge, a link–object collision, a singular finger);
-* a contact slips that the supervisor holds fixed (an *unplanned slip*);
+* the plant stops (a contact leaving its edge, a link–object collision, a singular finger);
+* a contact is lost by the health criteria (:mod:`regrasp.core.health`, the run's
+  :class:`~regrasp.core.health.HealthCriteria`, the same on every plant): a held contact that carries less than the
+  force floor for too long or slips too far (an *unplanned slip*), a slider that carries too little;
 * a fixed contact leaves its feasible envelope;
 * the control law has no solution (no internal force keeps the contacts in their cones, a singular model);
 * Ctrl-C (``INTERRUPTED``: the result so far, and a complete recording).
@@ -28,6 +30,7 @@ import numpy as np
 
 from ..core.events import PLANT_FAILURES, EventKind, EventSource, Failure, FailureKind
 from ..core.exceptions import InvalidParameterError
+from ..core.health import HealthCriteria, HealthMonitor
 from ..core.measurement import Measurement
 from ..core.validation import as_finite_array, expect_type
 from ..envelope.planner import PlanResult, plan_scenario
@@ -44,7 +47,7 @@ from ..supervisor.policies.paper import PaperPolicy
 from ..supervisor.policies.scheduled import ScheduledPolicy
 from ..supervisor.settings import ExecutorSettings, SupervisorSettings
 from ..supervisor.supervisor import RegraspSupervisor
-from ..supervisor.types import SLIPPING_PHASES, ContactPhase
+from ..supervisor.types import ContactPhase
 from .result import RolloutResult, RolloutRows
 from .spec import RunSpec
 from .stretch import CompiledStretches
@@ -83,6 +86,7 @@ class Rollout:
         schedule: The schedule the run starts with (``"scheduled"``), else None.
         scenario: The scenario, with its trajectory repeated when the run is longer than it.
         disturbance: The sensing noise and actuation between the plant and the supervisor, or None.
+        health: When a contact is lost (:class:`~regrasp.core.health.HealthCriteria`).
     """
 
     plant: PlantLike
@@ -93,22 +97,20 @@ class Rollout:
     schedule: RegraspSchedule | None = None
     scenario: Scenario | None = None
     disturbance: Disturbance | None = None
+    health: HealthCriteria = field(default_factory=HealthCriteria)
     #: The last run's compiled stretches (their ``steps`` and ``calls``), or None.
     stretches: CompiledStretches | None = field(default=None, init=False, repr=False)
 
     def check(self, record: StepRecord) -> Failure | None:
-        """The failure a step's events mean, if any (module docstring)."""
-        phases = record.supervision.phases
-        index = {n: i for i, n in enumerate(self.names)}
+        """The failure a step's events mean, if any (module docstring). A contact's loss is the health monitor's
+        to judge (:mod:`regrasp.core.health`), not the plant's events: a slip or a separation the plant reports
+        fails the run only through what the contact then carries and how far it slips."""
         for e in record.events:
             if e.source is EventSource.SUPERVISOR and e.kind is EventKind.LEFT_ENVELOPE:
                 return Failure(e.time, FailureKind.LEFT_ENVELOPE, f"{e.contact} left its feasible envelope: {e.detail}",
                                e.contact)
             if e.source is not EventSource.PLANT:
                 continue
-            if e.kind is EventKind.SLIP and phases[index[e.contact]] not in SLIPPING_PHASES:
-                return Failure(e.time, FailureKind.UNPLANNED_SLIP, f"unplanned slip of {e.contact}: {e.detail}",
-                               e.contact)
             if e.kind in PLANT_FAILURES and e.kind in self.plant.stop_on:
                 return Failure(e.time, PLANT_FAILURES[e.kind], f"{e.kind.value} of {e.contact}: {e.detail}", e.contact)
         return None
@@ -139,12 +141,24 @@ class Rollout:
         stretches = None
         if compiled_stretches:
             stretches = CompiledStretches(self.supervisor, plant, rows, total, recorder=recorder,
-                                          disturbance=self.disturbance)
-        outcome = simulate(plant, SupervisorDriver(self.supervisor), total, consumers=consumers, check=self.check,
+                                          disturbance=self.disturbance, force_floor=self.health.force_floor)
+        health = HealthMonitor(self.health, self.names, plant.dt)
+        judged = 0
+
+        def check(record: StepRecord) -> Failure | None:
+            nonlocal judged
+            failure = self.check(record)
+            judged, lost = rows.judge(health, judged)  # (after the events: a plant's stop comes first)
+            return failure if failure is not None else lost
+
+        outcome = simulate(plant, SupervisorDriver(self.supervisor), total, consumers=consumers, check=check,
                            progress=progress, interruptible=interruptible, disturbance=self.disturbance,
                            stretches=stretches)
         if stretches is not None:
             stretches.finish()
+        judged, lost = rows.judge(health, judged)  # (a last stretch's rows)
+        if lost is not None and outcome.failure is None:
+            outcome = replace(outcome, failure=lost)
         self.stretches = stretches
         if recorder is not None and outcome.failure is not None:
             recorder.log_failure(outcome.failure, plant)
@@ -153,7 +167,8 @@ class Rollout:
             outcome, duration=self.duration, object_width=plant.polygon.scale, names=self.names,
             regrasps=dict(zip(self.names, self.supervisor.regrasps)), supervisor_events=tuple(self.supervisor.events),
             policy=self.policy, replans=getattr(policy, "replans", 0), schedule=self.schedule,
-            rrd=None if recorder is None or recorder.rrd_path is None else str(recorder.rrd_path))
+            rrd=None if recorder is None or recorder.rrd_path is None else str(recorder.rrd_path),
+            health=health.reports())
 
 
 def build_rollout(scenario: Scenario, run: RunSpec = RunSpec(), *, policy: str = "scheduled",
@@ -244,4 +259,4 @@ def build_rollout(scenario: Scenario, run: RunSpec = RunSpec(), *, policy: str =
                                    plan=plan, settings=settings, policy=chosen)
     t0 = traj.t_start
     built = plant.build(scenario, hand, xi0, traj.pose(t0), traj.velocity(t0), t0, run.dt)
-    return Rollout(built, supervisor, duration, names, policy, schedule, run_scenario, run.disturbance())
+    return Rollout(built, supervisor, duration, names, policy, schedule, run_scenario, run.disturbance(), run.health)

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..core.contact import ContactMode, Friction, cone_margin
 from ..core.events import Event, EventSource, Failure
+from ..core.health import ContactHealth, HealthMonitor
 from ..plants.simulation import SimulationOutcome, StepRecord
 from ..schedule.schedule import RegraspSchedule
 from ..supervisor.types import ContactPhase
@@ -59,6 +60,8 @@ class RolloutResult:
         replans: Re-plans of the schedule.
         schedule: The schedule the run started with, or None.
         rrd: Path of the recording, or None.
+        health: Each contact's :class:`~regrasp.core.health.ContactHealth`: the least force it carried held and
+            sliding, its longest time without force, its largest slip while held.
     """
 
     success: bool
@@ -92,6 +95,7 @@ class RolloutResult:
     replans: int = 0
     schedule: RegraspSchedule | None = None
     rrd: str | None = None
+    health: tuple[ContactHealth, ...] = ()
 
     @property
     def simulated_seconds(self) -> float:
@@ -131,6 +135,7 @@ class RolloutResult:
             "realtime_factor": _num(self.realtime_factor),
             "schedule": None if self.schedule is None else schedule_summary(self.schedule),
             "rrd": self.rrd,
+            "contact_health": [h.to_json_dict() for h in self.health],
         }
 
 
@@ -168,6 +173,7 @@ class RolloutRows:
         self.forces_surface = np.empty((total, m, 2))
         self.envelope_margin = np.empty((total, m))
         self.cone_margin = np.empty((total, m))
+        self.slip = np.empty((total, m))
         self.supervisor_seconds = np.empty(total)
         self.control_seconds = np.empty(total)
         self.plant_seconds = np.empty(total)
@@ -186,6 +192,7 @@ class RolloutRows:
         self.poses[k] = record.plant.state.X
         self.joint_positions[k] = record.plant.state.q
         self.forces_surface[k] = forces
+        self.slip[k] = record.plant.slip
         self.envelope_margin[k] = out.margins
         # the plant's static cone margins μ_s f_n - |f_t| at the contacts the supervisor holds fixed (a
         # contact being primed slips on purpose); NaN elsewhere
@@ -209,7 +216,8 @@ class RolloutRows:
 
     def result(self, outcome: SimulationOutcome, *, duration: float, object_width: float, names: Sequence[str],
                regrasps: dict[str, int], supervisor_events: Iterable[Event], policy: str, replans: int,
-               schedule: RegraspSchedule | None, rrd: str | None) -> RolloutResult:
+               schedule: RegraspSchedule | None, rrd: str | None,
+               health: tuple[ContactHealth, ...] = ()) -> RolloutResult:
         n = self.n
         times = self.times[:n].copy()
         err = self.object_error[:n].copy()
@@ -230,4 +238,15 @@ class RolloutRows:
             forces_surface=self.forces_surface[:n].copy(),
             supervisor_seconds=self.supervisor_seconds[:n].copy(), control_seconds=self.control_seconds[:n].copy(),
             plant_seconds=self.plant_seconds[:n].copy(), wall_seconds=outcome.wall_seconds, names=tuple(names),
-            policy=policy, replans=replans, schedule=schedule, rrd=rrd)
+            policy=policy, replans=replans, schedule=schedule, rrd=rrd, health=health)
+
+    def judge(self, monitor: HealthMonitor, start: int) -> tuple[int, Failure | None]:
+        """Hand the rows from ``start`` on to the health ``monitor`` (a contact in phase fixed is held); (the next
+        row to hand, the first contact lost or None)."""
+        fixed = ContactPhase.FIXED.value
+        for k in range(start, self.n):
+            lost = monitor.observe(float(self.times[k]), self.forces_surface[k, :, 0].tolist(), self.slip[k].tolist(),
+                                   [p == fixed for p in self.phases[k]])
+            if lost is not None:
+                return k + 1, lost
+        return self.n, None

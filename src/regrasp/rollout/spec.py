@@ -1,6 +1,6 @@
 """What one rollout runs: :class:`RunSpec` (how long, the control step, where the contacts start, the hand's
-sensing and actuation noise and the seed that draws it). A robustness study builds one per run from the run's
-seed and passes it through whole."""
+sensing and actuation noise and the seed that draws it, and when a contact counts as lost). A robustness study
+builds one per run from the run's seed and passes it through whole."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..core.exceptions import InvalidParameterError
+from ..core.health import HealthCriteria
 from ..core.trajectory import RepeatedTrajectory
 from ..core.validation import MAX_DURATION, as_duration, as_finite_array, as_integer, as_positive_float, expect_type
 from ..model.noise import ActuatorNoise, SensorNoise
@@ -32,6 +33,8 @@ class RunSpec:
             else the planner's ``initial_xi``); the plant's are there plus the plant's placement errors.
         sensor_noise, actuator_noise: The hand's sensing noise, slip sensor, torque noise and actuation delay
             (:mod:`regrasp.model.noise`); default: none.
+        health: When a contact is lost (:class:`~regrasp.core.health.HealthCriteria`): the run fails there, on
+            every plant alike.
     """
 
     duration: float | None = None
@@ -41,6 +44,7 @@ class RunSpec:
     xi0: tuple[float, ...] | None = None
     sensor_noise: SensorNoise = SensorNoise()
     actuator_noise: ActuatorNoise = ActuatorNoise()
+    health: HealthCriteria = HealthCriteria()
 
     def __post_init__(self) -> None:
         if self.periods is not None:
@@ -59,6 +63,7 @@ class RunSpec:
             object.__setattr__(self, "xi0", tuple(xi0.tolist()))
         expect_type("sensor_noise", self.sensor_noise, SensorNoise, "a SensorNoise (regrasp.model.noise)")
         expect_type("actuator_noise", self.actuator_noise, ActuatorNoise, "an ActuatorNoise (regrasp.model.noise)")
+        expect_type("health", self.health, HealthCriteria, "a HealthCriteria (regrasp.core.health)")
 
     def resolve(self, scenario: Scenario) -> tuple[Scenario, float]:
         """The scenario with its trajectory repeated to cover the run, and the run's duration [s]."""

@@ -101,10 +101,13 @@ class CompiledStretches:
         total: The run's steps (the stretches precompute every step's time and desired state).
         recorder: The rollout's recorder (a stretch hands it the steps it logs), or None.
         disturbance: The run's disturbance (a stretch draws its noise and keeps its deques), or None.
+        force_floor: The health criteria's force floor [N]: a step that leaves a contact's normal force below it is
+            the reference path's (:class:`~regrasp.core.health.HealthCriteria`).
     """
 
     def __init__(self, supervisor: RegraspSupervisor, plant: Plant, rows: RolloutRows, total: int, *,
-                 recorder: RolloutRecorder | None = None, disturbance: Disturbance | None = None):
+                 recorder: RolloutRecorder | None = None, disturbance: Disturbance | None = None,
+                 force_floor: float = 0.0):
         self.supervisor = supervisor
         self.plant = plant
         self.rows = rows
@@ -135,7 +138,7 @@ class CompiledStretches:
                 ("friction_min_force", ex.friction_min_force), ("friction_resolution", ex.friction_resolution),
                 ("arrive_tolerance", ex.arrive_tolerance), ("arrive_speed", ex.arrive_speed),
                 ("max_slide_time", ex.max_slide_time), ("control_omega", ex.control_omega),
-                ("slide_omega", ex.slide_omega), ("dt", plant.dt)):
+                ("slide_omega", ex.slide_omega), ("dt", plant.dt), ("force_floor", force_floor)):
             self._settings[name] = value
         self._static = np.array([f.static for f in plant.friction]) if self.enabled else None
         for name, value in (("every", supervisor.monitor.every), ("max_bound_step", supervisor.monitor.max_bound_step)):
@@ -261,7 +264,7 @@ class CompiledStretches:
             entries = len(logged_steps(k + 1, k + done + 1, every))  # (logged so far)
             rows_out = StretchRows(rows.xi[s], rows.bounds[s], rows.envelope_margin[s], rows.object_error[s],
                                    rows.poses[s], rows.joint_positions[s], rows.forces_surface[s], rows.cone_margin[s],
-                                   self._static)
+                                   rows.slip[s], self._static)
             taken, status, w, e = stretch_into(
                 settings, run_state, times[done:], desired[done:], executor, monitored, schedule, law_arguments,
                 plant_arguments, rows_out, StretchLog(*(a[entries:] for a in log)), every, k + done,
