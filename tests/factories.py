@@ -132,6 +132,11 @@ def force_lp(polygon, edges, pose, acc, xi, ratios, mu_s, limits, gravity, *, ma
     mass, inertia = polygon.mass, polygon.inertia
     wrench = [mass * (acc[0] - gravity[0]), mass * (acc[1] - gravity[1]), inertia * acc[2]]
     lever, normal, tangent = [], [], []
+    # the least normal forces: a contact on a cone edge pushes with slider_floor, and while one is, the fixed ones
+    # with holder_preload (each at least f_min)
+    moving = any(r is not None for r in ratios)
+    floors = [max(limits.f_min, limits.slider_floor if r is not None else
+                  (limits.holder_preload if moving else 0.0)) for r in ratios]
     for k, x in zip(edges, xi):
         e = polygon.edge(k)
         lever.append(R @ e.point(x))
@@ -149,8 +154,8 @@ def force_lp(polygon, edges, pose, acc, xi, ratios, mu_s, limits, gravity, *, ma
     for i in range(m):
         n_row, t_row = np.zeros(2 * m + 1), np.zeros(2 * m + 1)
         n_row[2 * i:2 * i + 2], t_row[2 * i:2 * i + 2] = normal[i], tangent[i]
-        rows_ub += [-n_row, n_row]  # f_min <= n.f <= f_max
-        rhs_ub += [-limits.f_min, limits.f_max]
+        rows_ub += [-n_row, n_row]  # floor <= n.f <= f_max
+        rhs_ub += [-floors[i], limits.f_max]
         if ratios[i] is None:  # |t.f| <= mu n.f - c  (c the margin variable when maximising)
             for sign in (1.0, -1.0):
                 row = sign * t_row - mu_s[i] * n_row

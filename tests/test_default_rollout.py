@@ -1,5 +1,6 @@
-"""The default three-finger rollout is the same, step for step, as when its fixture was made (c344361, before
-issue 23's restructuring): every row bitwise, the same events and summary. ``tests/fixtures/make_default_rollout.py``
+"""The default three-finger rollout is the same, step for step, as when its fixture was made (for issue 24's planned
+loads; ``tests/fixtures/make_default_rollout.py`` says when and why): every row bitwise, the same events and
+summary. ``tests/fixtures/make_default_rollout.py``
 made the fixture; a compiled kernel or BLAS may round differently on another CPU or with other library versions,
 so the bitwise comparison runs only where those match the fixture's (elsewhere it is skipped, saying why) and the
 events' kinds, contacts and times, which a last-bit difference does not move, are compared everywhere."""

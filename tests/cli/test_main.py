@@ -121,14 +121,17 @@ def verify_rrd(path):
 def test_simulate_json_and_recording_of_the_default_scenario(tmp_path):
     """The default scenario (three fingers, scheduled): one JSON document on stdout and nothing else
     (OSQP's C-level prints are kept off it), the rollout's keys, the schedule's summary, a verified .rrd."""
-    proc = simulate("--duration", "0.9", "--json", "--rrd", "out.rrd", "--decimate", "5", cwd=tmp_path)
+    proc = simulate("--duration", "1.0", "--json", "--rrd", "out.rrd", "--decimate", "5", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
-    assert doc["success"] is True and doc["policy"] == "scheduled" and doc["steps"] == 900
+    assert doc["success"] is True and doc["policy"] == "scheduled" and doc["steps"] == 1000
     assert {"failure", "max_object_error_after_transient", "regrasps", "events", "min_cone_margin",
-            "min_envelope_margin", "replans", "plant_events", "realtime_factor", "rrd"} <= set(doc)
+            "min_envelope_margin", "replans", "plant_events", "realtime_factor", "rrd", "contact_health"} <= set(doc)
+    health = {h["contact"]: h for h in doc["contact_health"]}
+    assert set(health) == {"finger1", "finger2", "palm"}
+    assert all(h["least_held_force"] >= 0.05 and h["longest_zero_force"] == 0.0 for h in health.values())
     assert doc["schedule"]["periodic"] is True and len(doc["schedule"]["slides"]) == 4
-    assert any(e["kind"] == "prime" and e["source"] == "supervisor" for e in doc["events"])  # the slides at 0.815 s
+    assert any(e["kind"] == "prime" and e["source"] == "supervisor" for e in doc["events"])  # the slides at 0.915 s
     verify_rrd(tmp_path / "out.rrd")
 
 

@@ -197,14 +197,14 @@ def test_compiled_plant_meets_every_event_kind_the_reference_does():
 
 
 def test_a_scheduled_rollout_is_the_same_on_both_paths():
-    """The three-finger scheduled rollout (collision checks, slides, sticks) for 1.4 s on each path (slips at 0.82 s,
-    sticks at 1.37 s)."""
+    """The three-finger scheduled rollout (collision checks, slides, sticks) for 1.5 s on each path (slips at 0.92 s,
+    sticks at 1.45 s)."""
     from regrasp import build_rollout
 
     sc = load_scenario(EXAMPLES / "paper_trajectory_2_three_fingers.toml")
     runs = []
     for compiled in (False, True):
-        rollout = build_rollout(sc, RunSpec(duration=1.4))
+        rollout = build_rollout(sc, RunSpec(duration=1.5))
         rollout.plant.compiled = compiled
         result = rollout.run()
         runs.append((rollout.plant.state, [(e.kind, e.contact) for e in rollout.plant.events], result.success))

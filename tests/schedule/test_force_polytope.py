@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -37,7 +38,8 @@ def _case(rng):
         ratios.append(None if choice == 0 else float(rng.choice([-1, 1])) * (f.kinetic if choice == 1 else f.static))
     if sum(r is not None for r in ratios) >= m:
         ratios[0] = None
-    limits = ForceLimits(rng.uniform(0.05, 0.3), rng.uniform(3.0, 20.0), rng.uniform(0.0, 0.2))
+    limits = ForceLimits(rng.uniform(0.05, 0.3), rng.uniform(3.0, 20.0), rng.uniform(0.0, 0.2),
+                         *rng.uniform(0.0, 0.6, 2))  # (the floors of sliders and of the holders while they slide)
     return polygon, edges, pose, acc, gravity, frictions, ratios, limits
 
 
@@ -99,8 +101,8 @@ def test_force_system_has_the_largest_smallest_margin(seed):
         polygon, edges, pose, acc, gravity, frictions, ratios, limits = _case(rng)
         mu_s = [f.static for f in frictions]
         xi = np.array([rng.uniform(*polygon.edge(k).xi_range) for k in edges])
-        best = force_lp(polygon, edges, pose, acc, xi, ratios, mu_s, ForceLimits(limits.f_min, limits.f_max, 0.0),
-                       gravity, maximise_margin=True)
+        best = force_lp(polygon, edges, pose, acc, xi, ratios, mu_s, replace(limits, cone_margin=0.0), gravity,
+                        maximise_margin=True)
         if best is not None and best > limits.cone_margin + 1e-6:
             break
     else:
@@ -125,7 +127,8 @@ def test_force_system_has_the_largest_smallest_margin(seed):
     for i, r in enumerate(ratios):
         if r is not None:
             assert system.tangential[i] == pytest.approx(r * system.normal[i], abs=1e-8)
-    assert np.all(system.normal >= limits.f_min - 1e-8) and np.all(system.normal <= limits.f_max + 1e-8)
+    assert np.all(system.normal >= np.array(limits.floors(ratios)) - 1e-8)
+    assert np.all(system.normal <= limits.f_max + 1e-8)
 
 
 def test_many_times_at_once_equal_one_at_a_time():
@@ -172,3 +175,15 @@ def test_vertices_are_on_their_active_constraints():
         d = len(edges) + sum(r is None for r in ratios)
         assert active >= d - 2
     assert list(itertools.islice(iter(keep), 1))  # (a valid polytope has vertices)
+
+
+def test_floors_load_the_sliders_and_the_holders_while_one_slides():
+    """``ForceLimits.slider_floor`` and ``holder_preload``: a contact on a cone edge pushes with at least the first,
+    the fixed ones with at least the second while any contact is on an edge; at rest only f_min."""
+    limits = ForceLimits(0.2, 20.0, 0.2, slider_floor=0.35, holder_preload=0.3)
+    assert limits.floors([None, None, None]) == [0.2, 0.2, 0.2]
+    assert limits.floors([0.5, None, None]) == [0.35, 0.3, 0.3]
+    assert ForceLimits(0.4, 20.0, 0.2, slider_floor=0.35, holder_preload=0.3).floors([None, -0.5, None]) == [0.4] * 3
+    for bad in (dict(slider_floor=-1.0), dict(holder_preload=math.inf), dict(slider_floor=20.0)):
+        with pytest.raises(InvalidParameterError):
+            ForceLimits(0.2, 20.0, 0.2, **bad)

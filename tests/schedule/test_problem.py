@@ -120,7 +120,8 @@ def test_breakaway_tables_hold_at_the_layer_and_where_it_starts(problem):
         x_axis = xi[lat.axis]
         if min(abs(x_axis - lo), abs(x_axis - hi)) < 1e-6:
             continue
-        ratios = [None if d == 0 else d * (f.static if j == i else f.kinetic)
+        overshoot = problem.settings.prime_overshoot  # (the executor's priming, planned)
+        ratios = [None if d == 0 else d * (f.static + overshoot if j == i else f.kinetic)
                   for j, (d, f) in enumerate(zip(combos[mu], problem.friction))]
         back = 0.5 * ramp / dt * h * np.where(np.arange(len(xi)) == i, 0, combos[mu])
         both = True

@@ -257,3 +257,27 @@ def test_the_plant_gets_the_drawn_errors_and_the_controllers_keep_the_model():
     plant_m = r.plant.hand.dynamics(q, np.zeros_like(q)).mass_matrix
     model_m = r.supervisor.hand.dynamics(q, np.zeros_like(q)).mass_matrix
     np.testing.assert_allclose(plant_m, 1.2 * model_m, rtol=1e-12, atol=1e-15)  # M is linear in the link inertias
+
+
+def test_softness_is_drawn_after_the_model_errors_and_only_for_a_compliant_plant():
+    """A study on MuJoCo draws each run's contact softness after its model errors (the errors are those of a study
+    without softness); a softened MuJoCo plant has the drawn solref, solimp width and tip radius; the rigid plant
+    refuses a softness."""
+    from regrasp.model.softness import SoftnessRanges
+    from regrasp.study.study import soften
+
+    p = Perturbation(mass=0.2, mu=0.2)
+    plain = draw_runs(5, 3, p, 3)
+    soft = draw_runs(5, 3, p, 3, SoftnessRanges())
+    assert [d.errors for d in plain] == [d.errors for d in soft]
+    assert all(d.softness is None for d in plain) and len({d.softness for d in soft}) == 5
+    s = soft[0].softness
+    spec = soften(PlantSpec("mujoco"), s)
+    assert (spec.settings.time_constant, spec.settings.solimp[2], spec.settings.tip_radius) == \
+        (s.time_constant, s.solimp_width, s.tip_radius)
+    assert spec.tip_radius == s.tip_radius  # (the controllers are told the radius)
+    assert soften(PlantSpec("mujoco"), None) == PlantSpec("mujoco")
+    with pytest.raises(InvalidParameterError, match="rigid"):
+        soften(PlantSpec("project"), s)
+    with pytest.raises(InvalidParameterError, match="rigid"):
+        run_study(SCENARIO, 1, softness=SoftnessRanges(), duration=0.01)

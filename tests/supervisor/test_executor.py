@@ -249,3 +249,47 @@ def test_held_positions_follow_a_noisy_sensor_through_the_filter_and_rarely_rebu
         else:
             assert moves <= most_moves
             np.testing.assert_allclose(ex.xi, truth, rtol=0, atol=1.5e-4)  # (the filtered noise: 0.03 mm)
+
+
+def test_floors_load_the_sliders_the_holders_while_one_slides_and_a_contact_the_reflex_caught():
+    """The executor's floors (``slider_floor``, ``holder_preload``, the reflex): what each contact must push with in
+    the laws at each phase, and the laws' predicted forces at or above them."""
+    ex = executor(slider_floor=0.35, holder_preload=0.3, reflex_below=0.1, reflex_floor=0.45, reflex_time=0.01,
+                  internal_force=InternalForceSettings(f_min=0.2))
+    out = []
+    assert ex.floors() == (0.0, 0.0, 0.0)
+    control, *_ = command(ex, 0.8, meas(0.8), out)
+    assert control.contact_forces_surface[:, 0].min() >= 0.2 - 1e-6
+    ex.start(SlideOrder(0, 1, 0.0, reference=lambda t: (XI[0], 0.0, 0.0)), meas(0.8), out)
+    assert ex.floors() == (0.35, 0.3, 0.3)  # (priming: the slider's floor; the holders pre-loaded)
+    control, *_ = command(ex, 0.8, meas(0.8), out)
+    normal = control.contact_forces_surface[:, 0]
+    assert normal[0] >= 0.35 - 1e-6 and normal[1:].min() >= 0.3 - 1e-6
+    # the palm sensed at 0.05 N: its reflex lasts 10 ms
+    low = meas(0.801, xi_dot=(0.001, 0.0, 0.0), sliding=(True, False, False), normal=(0.4, 0.4, 0.05))
+    ex.advance(low, out)
+    control, *_ = command(ex, 0.801, low, out)
+    assert ex.floors() == (0.35, 0.3, 0.45) and control.contact_forces_surface[2, 0] >= 0.45 - 1e-6
+    ok = meas(0.812, xi_dot=(0.001, 0.0, 0.0), sliding=(True, False, False), normal=(0.4, 0.4, 0.4))
+    ex.advance(ok, out)
+    command(ex, 0.812, ok, out)
+    assert ex.floors() == (0.35, 0.3, 0.3)
+
+
+def test_floors_no_squeeze_can_meet_give_way_to_f_min():
+    """A floor is a preference; the internal force's f_min is the limit: where no squeeze meets the floors, the law
+    runs without them (and says nothing), where f_min itself is met."""
+    ex = executor(slider_floor=15.0, holder_preload=15.0, internal_force=InternalForceSettings(f_min=0.2, f_max=16.0))
+    out = []
+    ex.start(SlideOrder(0, 1, 0.0, reference=lambda t: (XI[0], 0.0, 0.0)), meas(0.8), out)
+    control, law, _, aborted = command(ex, 0.8, meas(0.8), out)
+    assert not aborted and law == "fixed contacts (cone edge)"
+    assert 0.2 - 1e-6 <= control.contact_forces_surface[:, 0].min() < 15.0
+
+
+@pytest.mark.parametrize("bad", [dict(slider_floor=-0.1), dict(holder_preload=math.nan), dict(reflex_below="0.1"),
+                                 dict(reflex_floor=25.0, internal_force=InternalForceSettings(f_max=20.0)),
+                                 dict(reflex_time=0.0)])
+def test_floor_settings_refuse_bad_values(bad):
+    with pytest.raises(InvalidParameterError):
+        ExecutorSettings(**bad)

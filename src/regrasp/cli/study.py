@@ -93,6 +93,10 @@ def configure(p: argparse.ArgumentParser) -> None:
                    help="run on Ray: a local cluster of --workers CPUs, or the cluster at ADDRESS (ray.init's "
                         "address); the results are the same as on processes")
     add_plant_arguments(p)
+    p.add_argument("--fixed-softness", action="store_true",
+                   help="--plant mujoco: keep MuJoCo's default contact softness in every run (default: each run draws "
+                        "its solref time constant 0.25-2 ms, solimp width 0.05-0.5 mm and tip radius 0.1-1 mm; "
+                        "--tip-radius fixes the radius)")
     span = p.add_mutually_exclusive_group()
     span.add_argument("--periods", type=_count(1), metavar="P", help="each run: P periods of the trajectory")
     span.add_argument("--duration", type=_seconds, metavar="T", help="each run: T seconds")
@@ -117,7 +121,8 @@ def _summary(result: StudyResult) -> str:
     runs = result.runs
     lines = [f"regrasp study: {Path(result.scenario).name} on the {result.plant} plant, {len(runs)} runs of "
              f"{result.duration:.4g} s, seed "
-             f"{result.seed}: {result.perturbation.describe()}",
+             f"{result.seed}: {result.perturbation.describe()}"
+             + ("" if result.softness is None else f"; {result.softness.describe()}"),
              f"  success: {result.successes}/{len(runs)} = {result.success_rate:.1%} (Wilson 95 %: "
              f"[{lo:.1%}, {hi:.1%}])"]
     for kind, count in sorted(result.failures.items()):
@@ -136,6 +141,19 @@ def _summary(result: StudyResult) -> str:
     return "\n".join(lines)
 
 
+def _softness(args: argparse.Namespace):
+    """The ranges the runs draw their contact softness from: on MuJoCo unless ``--fixed-softness`` (a
+    ``--tip-radius`` fixes the radius), else None."""
+    if args.plant != "mujoco" or args.fixed_softness:
+        return None
+    from ..model.softness import SoftnessRanges
+
+    if args.tip_radius is None:
+        return SoftnessRanges()
+    radius = args.tip_radius * 1e-3
+    return SoftnessRanges(tip_radius=(radius, radius))
+
+
 def _replay(args: argparse.Namespace, scenario, perturbation, plant: PlantSpec) -> int:
     """``--replay I``: run I of the study alone, printed as ``regrasp simulate`` prints a rollout (and recorded)."""
     from ..rollout.spec import RunSpec
@@ -144,7 +162,7 @@ def _replay(args: argparse.Namespace, scenario, perturbation, plant: PlantSpec) 
     from ..study.study import build_run
     from .simulate import plant_text, rollout_summary
 
-    draw = draw_runs(args.replay + 1, args.seed, perturbation, len(scenario.contacts))[args.replay]
+    draw = draw_runs(args.replay + 1, args.seed, perturbation, len(scenario.contacts), _softness(args))[args.replay]
     schedule = plan_regrasps(scenario, progress=None if args.json else ProgressBar("planning regrasps"))
     _, duration = RunSpec(duration=args.duration, periods=args.periods).resolve(scenario)
     rollout = build_run(scenario, draw, schedule, duration, perturbation, plant=plant)
@@ -168,6 +186,10 @@ def _replay(args: argparse.Namespace, scenario, perturbation, plant: PlantSpec) 
         e = draw.errors
         factors = (f"mass x{e.mass_scale:.3f}, inertia x{e.object_inertia_scale:.3f}, mu x{e.mu_scale:.3f}, "
                    f"placement {', '.join(f'{x * 1e3:+.3f}' for x in e.xi_offset)} mm")
+        if draw.softness is not None:
+            soft = draw.softness
+            factors += (f", solref {soft.time_constant * 1e3:.3f} ms, solimp width {soft.solimp_width * 1e3:.3f} mm, "
+                        f"tip radius {soft.tip_radius * 1e3:.3f} mm")
         print(f"run {args.replay} of seed {args.seed} ({perturbation.describe()}): {factors}")
         print(rollout_summary(result, scenario, plant_text(plant.kind, rollout.plant)))
     return 0 if result.success else 1
@@ -183,7 +205,7 @@ def _sweep_study(args: argparse.Namespace, scenario, perturbation, plant: PlantS
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     results = sweep_study(scenario, args.runs, name, values, perturbation=perturbation, seed=args.seed,
                           duration=args.duration, periods=args.periods, workers=min(workers, args.runs),
-                          ray_address=args.ray, plant=plant,
+                          ray_address=args.ray, plant=plant, softness=_softness(args),
                           progress=None if args.json else ProgressBar(f"{len(values)} x {args.runs} runs"))
     doc = {"sweep": name, "values": list(values), "studies": [r.to_json_dict() for r in results]}
     if directory is not None:
@@ -234,7 +256,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     result = run_study(scenario, args.runs, seed=args.seed, perturbation=perturbation, duration=args.duration,
                        periods=args.periods, workers=min(workers, args.runs), ray_address=args.ray, plant=plant,
-                       progress=None if args.json else ProgressBar(f"{args.runs} runs"))
+                       softness=_softness(args), progress=None if args.json else ProgressBar(f"{args.runs} runs"))
     doc = result.to_json_dict()
     figures = []
     if directory is not None:

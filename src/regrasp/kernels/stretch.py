@@ -19,8 +19,9 @@ Before it changes anything, each step checks whether the reference loop would do
 a held contact outside its envelope, a held position moving past ``hold_resolution`` (a new law), a slide
 that arrives, sticks or times out, a friction estimate that rounds to a new law, a decision or monitor
 evaluation due, a law the kernel does not settle (:data:`.control.CONTROL_REFERENCE`), a plant step that
-may have an event (its ``attention`` flag), or one that leaves a contact's normal force below the health floor
-(``force_floor``: :mod:`regrasp.core.health` judges such steps). It then stops *before* that step
+may have an event (its ``attention`` flag), one that leaves a contact's normal force below the health floor
+(``force_floor``: :mod:`regrasp.core.health` judges such steps), or a sensed normal force that starts the executor's
+reflex (``reflex_below``). It then stops *before* that step
 (:data:`STRETCH_HANDOFF`), and the caller takes the step on the reference path. A plant step whose collision
 certificate expired stops with :data:`STRETCH_COAL`, uncommitted: the caller asks coal and, with no collision, calls
 again with ``coal_cleared``. So a rollout with stretches takes the same steps as one without
@@ -134,6 +135,9 @@ def stretch_into(settings, state, times, desired, executor, monitor, schedule, l
             xi[i] = contacts[i].xi if contacts[i].mode == FIXED else last[size + 6 * m + i]
         slip_count = measure_into(settings, st, contacts, y, last, xi, noise[k],
                               slips, slips_new, X_m, V_m, xi_m, xi_dot_m, fn_m, ft_m, slides_m)
+        for i in range(m):  # (a sensed force that starts the executor's reflex: the reference path's)
+            if fn_m[i] < settings.reflex_below:
+                return k, STRETCH_HANDOFF, worst, last_err
         # 2. the monitor: a decision reads fresh envelopes, as does every every-th read
         deciding = not t < st.decision_time
         fresh = deciding or st.calls >= settings.every

@@ -29,7 +29,8 @@ _F8 = np.float64
 #: [N]), whether the actuator is not ideal and its torque noise [N m]; where each noise term lies in a
 #: step's row of standard normals (-1: not drawn; :meth:`regrasp.plants.disturbance.Disturbance.stretch_noise`); and the
 #: contact-health force floor [N] (:class:`regrasp.core.health.HealthCriteria`: a step that leaves any contact below it
-#: is handed over, so the health monitor sees it on the reference path).
+#: is handed over, so the health monitor sees it on the reference path) and the executor's reflex threshold [N] (a step
+#: whose sensed normal force is below it is the reference path's).
 STRETCH_SETTINGS = np.dtype([
     ("hold_gain", _F8), ("hold_resolution", _F8), ("integral", _F8), ("friction_gain", _F8),
     ("friction_min_force", _F8), ("friction_resolution", _F8), ("arrive_tolerance", _F8), ("arrive_speed", _F8),
@@ -42,7 +43,7 @@ STRETCH_SETTINGS = np.dtype([
     ("angular_velocity", _F8), ("xi_sigma", _F8), ("xi_dot_sigma", _F8), ("force_sigma", _F8),
     ("delayed", np.bool_), ("torque_sigma", _F8),
     ("o_pose", np.int64), ("o_twist", np.int64), ("o_normal", np.int64), ("o_xi", np.int64), ("o_xi_dot", np.int64),
-    ("o_friction", np.int64), ("o_torque", np.int64), ("force_floor", _F8),
+    ("o_friction", np.int64), ("o_torque", np.int64), ("force_floor", _F8), ("reflex_below", _F8),
 ], align=True)
 
 #: What a stretch changes of the monitor and the policy (one record): the next decision's time [s], the last

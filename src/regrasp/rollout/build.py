@@ -217,7 +217,8 @@ def build_rollout(scenario: Scenario, run: RunSpec = RunSpec(), *, policy: str =
                                                                              0.5 * xi_noise)
         settings = SupervisorSettings.robust(scenario.geometry, regrasp_settings.cone_margin,
                                              actuation_delay=run.actuator_noise.delay, tip_radius=plant.tip_radius,
-                                             hold_resolution=hold)
+                                             hold_resolution=hold, slider_floor=regrasp_settings.slider_floor,
+                                             holder_preload=regrasp_settings.holder_preload)
     scenario.check_geometry(expect_type("settings", settings, SupervisorSettings, "a SupervisorSettings")
                             .monitor.geometry)
     run_scenario, duration = run.resolve(scenario)

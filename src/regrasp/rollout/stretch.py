@@ -138,7 +138,8 @@ class CompiledStretches:
                 ("friction_min_force", ex.friction_min_force), ("friction_resolution", ex.friction_resolution),
                 ("arrive_tolerance", ex.arrive_tolerance), ("arrive_speed", ex.arrive_speed),
                 ("max_slide_time", ex.max_slide_time), ("control_omega", ex.control_omega),
-                ("slide_omega", ex.slide_omega), ("dt", plant.dt), ("force_floor", force_floor)):
+                ("slide_omega", ex.slide_omega), ("dt", plant.dt), ("force_floor", force_floor),
+                ("reflex_below", ex.reflex_below)):
             self._settings[name] = value
         self._static = np.array([f.static for f in plant.friction]) if self.enabled else None
         for name, value in (("every", supervisor.monitor.every), ("max_bound_step", supervisor.monitor.max_bound_step)):

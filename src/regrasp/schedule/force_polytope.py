@@ -39,7 +39,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.optimize
@@ -60,11 +60,16 @@ class ForceLimits:
         f_min: Smallest normal force [N] (> 0).
         f_max: Largest normal force [N] (finite).
         cone_margin: Fixed contacts keep μ_s f_n - |f_t| >= this [N].
+        slider_floor: A contact on a cone edge (sliding or breaking away) pushes with at least this [N] (0: f_min).
+        holder_preload: While any contact is on a cone edge, the fixed ones push with at least this [N] (0: f_min):
+            the executor's floors (:class:`~regrasp.supervisor.settings.ExecutorSettings`), planned.
     """
 
     f_min: float
     f_max: float
     cone_margin: float
+    slider_floor: float = 0.0
+    holder_preload: float = 0.0
 
     def __post_init__(self):
         if not (math.isfinite(self.f_min) and self.f_min > 0.0):
@@ -73,6 +78,16 @@ class ForceLimits:
             raise InvalidParameterError("f_max", self.f_max, f"a finite normal force > f_min = {self.f_min} [N]")
         if not (math.isfinite(self.cone_margin) and self.cone_margin >= 0.0):
             raise InvalidParameterError("cone_margin", self.cone_margin, "a force margin >= 0 [N]")
+        for name in ("slider_floor", "holder_preload"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 <= value < self.f_max):
+                raise InvalidParameterError(name, value, f"a normal force in [0, f_max = {self.f_max}) [N]")
+
+    def floors(self, ratios: Sequence[float | None]) -> list[float]:
+        """Each contact's least normal force [N] in a mode given by its ``ratios`` (None: fixed)."""
+        moving = any(r is not None for r in ratios)
+        return [max(self.f_min, self.slider_floor) if r is not None
+                else max(self.f_min, self.holder_preload) if moving else self.f_min for r in ratios]
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,11 +155,11 @@ def _inequalities(m: int, ratios, static_mu, limits: ForceLimits):
     fixed = [i for i in range(m) if ratios[i] is None]
     d = m + len(fixed)
     rows, rhs = [], []
-    for i in range(m):
+    for i, floor in enumerate(limits.floors(ratios)):
         row = np.zeros(d)
         row[i] = 1.0
         rows += [row, -row]
-        rhs += [limits.f_min, -limits.f_max]
+        rhs += [floor, -limits.f_max]
     for k, i in enumerate(fixed):
         for sign in (-1.0, 1.0):  # μ λ - τ >= c and μ λ + τ >= c
             row = np.zeros(d)
@@ -271,7 +286,7 @@ def force_system(geometry: ForceGeometry, beta: float, acceleration: ArrayLike, 
     linear programs (HiGHS) over the constraints of the module docstring at positions ``xi`` [m]."""
     m = geometry.m
     ratios, static_mu = _check_mode(m, ratios, static_mu)
-    G, h, fixed = _inequalities(m, ratios, static_mu, ForceLimits(limits.f_min, limits.f_max, 0.0))
+    G, h, fixed = _inequalities(m, ratios, static_mu, replace(limits, cone_margin=0.0))
     d = G.shape[1]
     E, F = _balance(geometry, np.array([beta]), np.atleast_2d(acceleration), ratios, fixed)
     E, F = E[None], F  # (object frame)

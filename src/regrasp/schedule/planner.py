@@ -52,7 +52,7 @@ from numpy.typing import ArrayLike
 from ..core.exceptions import InvalidParameterError
 from ..model.scenario import Scenario
 from .diagnosis import diagnose
-from .force_polytope import ForceLimits, force_system, force_vertices
+from .force_polytope import force_system, force_vertices
 from .lattice import cells_of, flat_index, move_runs, path, run
 from .problem import Problem, RegraspSettings, build_problem, slide_ratios
 from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide, first_minimum, slides_at
@@ -86,7 +86,7 @@ def _schedule(problem: Problem, cells, moves, seconds: float, lower_bound, verif
                                 for k in range(len(times))])
     traj = problem.scenario.trajectory
     sample = traj.sample(np.clip(times, traj.t_start, traj.t_end))
-    limits = ForceLimits(problem.settings.f_min, problem.settings.f_max, problem.settings.cone_margin)
+    limits = problem.settings.force_limits()
     mu_s = [f.static for f in problem.friction]
     normal, cone = np.full((len(times), m), np.nan), np.full((len(times), m), np.nan)
     for k in range(len(times) if forces else 0):
@@ -129,10 +129,10 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
                         for j in range(len(times))])
     for k, i in zip(*np.nonzero(margins < settings.envelope_margin - 1e-12)):
         violations.append((float(times[k]), "envelope", int(i)))
-    limits = ForceLimits(settings.f_min, settings.f_max, settings.cone_margin)
+    limits = settings.force_limits()
     mu_s = [f.static for f in problem.friction]
     starts = []
-    for s in schedule.slides:  # break-away: the slider on its static edge as it starts
+    for s in schedule.slides:  # break-away: the slider primed past its static edge as it starts
         t = np.array([s.start])
         st = schedule.at(t + 1e-9)
         starts.append((s, float(s.start), st.direction[0], schedule.at(t).xi[0], traj.sample(
@@ -149,7 +149,8 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
                 violations.append((float(times[k]), "forces", None))
     for s, t, direction, xi, smp in starts:
         fv = force_vertices(problem.geometry, smp.pose[:, 2], smp.acceleration,
-                            slide_ratios(direction, problem.friction, breaking=s.contact), mu_s, limits)
+                            slide_ratios(direction, problem.friction, breaking=s.contact,
+                                         overshoot=settings.prime_overshoot), mu_s, limits)
         if not _holds(*fv.at(0), xi):
             violations.append((t, "breakaway", s.contact))
     return sorted(violations), first_minimum(margins, times, problem.names)

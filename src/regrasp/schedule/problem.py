@@ -48,6 +48,13 @@ class RegraspSettings:
             ``xi_resolution``, so that a one-cell move stays inside too).
         cone_margin: Every fixed contact keeps μ_s f_n - |f_t| ≥ this [N].
         f_min, f_max: Every contact's normal force within [f_min, f_max] [N].
+        prime_overshoot: A slide breaks away with its friction ratio up to μ_s + this [-]: the executor's priming
+            (``ExecutorSettings.prime_overshoot_max``), planned (the holders keep their margins through it).
+        slider_floor: A sliding (or breaking-away) contact pushes with at least this [N] ...
+        holder_preload: ... and the held ones with at least this while any contact slides [N] (0: ``f_min``):
+            on a compliant contact the slider is the one that loses its load first, and the holders take what a
+            slider's hop or a break-away sheds (``docs/derivations.md``, "Keeping the loads"); the executor keeps
+            the same floors (:meth:`~regrasp.supervisor.settings.SupervisorSettings.robust`).
         max_slide_speed: Fastest slide [m/s]; with ``xi_resolution`` it sets the time step.
         max_slide_acceleration: Largest slide acceleration [m/s²] (≥ max_slide_speed² /
             xi_resolution: a slide's ramps fit in one time step).
@@ -70,6 +77,9 @@ class RegraspSettings:
     cone_margin: float = DEFAULT_CONE_MARGIN
     f_min: float = 0.2
     f_max: float = 20.0
+    prime_overshoot: float = 0.05
+    slider_floor: float = 0.3
+    holder_preload: float = 0.3
     max_slide_speed: float = 0.05
     max_slide_acceleration: float = 5.0
     xi_resolution: float = 1e-3
@@ -85,12 +95,12 @@ class RegraspSettings:
     def __post_init__(self):
         for name in ("max_slide_speed", "max_slide_acceleration", "xi_resolution", "f_min", "f_max"):
             as_positive_float(name, getattr(self, name))
-        for name in ("envelope_margin", "cone_margin"):
+        for name in ("envelope_margin", "cone_margin", "prime_overshoot"):
             as_positive_float(name, getattr(self, name), allow_zero=True)
         if self.comfort_margin is None:
             object.__setattr__(self, "comfort_margin", self.envelope_margin + 4e-3)
         as_positive_float("comfort_margin", self.comfort_margin)
-        ForceLimits(self.f_min, self.f_max, self.cone_margin)
+        self.force_limits()
         if self.envelope_margin < 0.5 * self.xi_resolution:
             raise InvalidParameterError("envelope_margin", self.envelope_margin,
                                         f">= xi_resolution / 2 = {0.5 * self.xi_resolution:g} m")
@@ -118,6 +128,11 @@ class RegraspSettings:
     def time_step(self) -> float:
         """The lattice's nominal time step [s]: one cell at the fastest slide."""
         return self.xi_resolution / self.max_slide_speed
+
+    def force_limits(self, cone_margin: float | None = None) -> ForceLimits:
+        """The force limits these settings plan with (``cone_margin``: another margin [N] than theirs)."""
+        return ForceLimits(self.f_min, self.f_max, self.cone_margin if cone_margin is None else cone_margin,
+                           self.slider_floor, self.holder_preload)
 
     @property
     def ramp(self) -> float:
@@ -171,10 +186,11 @@ def _cell_margins(sample, grid: np.ndarray) -> np.ndarray:
     return out
 
 
-def slide_ratios(direction: Iterable[int], friction: Iterable[Friction], breaking: int | None = None
-                 ) -> list[float | None]:
-    """Per contact None (fixed) or the signed force ratio τ/λ = s μ_k (s μ_s for ``breaking``)."""
-    return [None if d == 0 else d * (f.static if i == breaking else f.kinetic)
+def slide_ratios(direction: Iterable[int], friction: Iterable[Friction], breaking: int | None = None,
+                 overshoot: float = 0.0) -> list[float | None]:
+    """Per contact None (fixed) or the signed force ratio τ/λ = s μ_k (s (μ_s + ``overshoot``) for ``breaking``:
+    the executor primes a break-away past the static cone's edge)."""
+    return [None if d == 0 else d * (f.static + overshoot if i == breaking else f.kinetic)
             for i, (d, f) in enumerate(zip(direction, friction))]
 
 
@@ -242,13 +258,12 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
                            inertia=scenario.polygon.inertia, gravity=scenario.gravity_in_hand)
     sample = traj.sample(np.clip(times, traj.t_start, traj.t_end))
     jerk = np.abs(np.diff(sample.acceleration[:, :2], axis=0)).max(initial=0.0)
-    limits = ForceLimits(settings.f_min, settings.f_max,
-                         settings.cone_margin * 1.02 + geo.mass * jerk + 1e-4)
+    limits = settings.force_limits(settings.cone_margin * 1.02 + geo.mass * jerk + 1e-4)
     axis = int(np.argmax([len(g) for g in grids]))
     middle = traj.sample(np.clip(np.append(times[0], 0.5 * (times[1:] + times[:-1])), traj.t_start, traj.t_end))
     early = traj.sample(np.clip(times - 0.5 * ramp, traj.t_start, traj.t_end))
     lo, hi, blo, bhi, slots, mid_lo, mid_hi = _force_tables(geo, sample, middle, early, 0.5 * ramp / dt, combos,
-                                                            friction, limits, grids, axis)
+                                                            friction, limits, grids, axis, settings.prime_overshoot)
     rest_only = np.zeros(n_steps + 1, dtype=bool)
     rest_only[[0, 1, n_steps]] = True
     move_cost = 0.05
@@ -278,12 +293,13 @@ def _envelope_tables(sub_samples, grids, q, n_steps, settings, buffer, periodic:
     return ok, proximity
 
 
-def _force_tables(geo, sample, middle, early, lead: float, combos, friction, limits, grids, axis):
+def _force_tables(geo, sample, middle, early, lead: float, combos, friction, limits, grids, axis,
+                  overshoot: float = 0.0):
     """The lattice's interval tables (float32): the modes at the layers; for two or more sliders at
     each interval's middle (``middle``: the trajectory there, layer k's entry for the interval ending
-    at it) with the sliders half a cell back; and where μ_s > μ_k the break-away of each starting
-    contact, both at the layer and where it really starts, ``early`` (the trajectory half a ramp
-    before the layer) with the other sliders ``lead`` cells back."""
+    at it) with the sliders half a cell back; and where μ_s + ``overshoot`` > μ_k the break-away of each
+    starting contact (primed to μ_s + ``overshoot``), both at the layer and where it really starts, ``early`` (the
+    trajectory half a ramp before the layer) with the other sliders ``lead`` cells back."""
     m = len(grids)
     n_layers = len(sample.pose)
     others = np.array(list(itertools.product(*[grids[i] for i in range(m) if i != axis]))).reshape(-1, m - 1)
@@ -311,7 +327,7 @@ def _force_tables(geo, sample, middle, early, lead: float, combos, friction, lim
         lo[:, :, mu], hi[:, :, mu] = table(slide_ratios(d, friction))
         if np.count_nonzero(d) >= 2:
             mid_lo[:, :, mu], mid_hi[:, :, mu] = table(slide_ratios(d, friction), middle, 0.5 * h * np.asarray(d))
-    needs = np.array([[d[i] != 0 and friction[i].static > friction[i].kinetic + 1e-12 for i in range(m)]
+    needs = np.array([[d[i] != 0 and friction[i].static + overshoot > friction[i].kinetic + 1e-12 for i in range(m)]
                       for d in combos])
     slots = np.full((M, m), -1, dtype=np.int64)
     blo = bhi = None
@@ -321,7 +337,7 @@ def _force_tables(geo, sample, middle, early, lead: float, combos, friction, lim
         bhi = np.empty_like(blo)
         for slot, (mu, i) in enumerate(pairs):
             slots[mu, i] = slot
-            ratios = slide_ratios(combos[mu], friction, breaking=int(i))
+            ratios = slide_ratios(combos[mu], friction, breaking=int(i), overshoot=overshoot)
             at_layer = table(ratios)
             others_back = lead * h * np.where(np.arange(m) == i, 0, combos[mu])
             real = table(ratios, early, others_back)

@@ -10,6 +10,7 @@ import numpy as np
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import as_integer, expect_type
 from ..model.perturbation import Perturbation
+from ..model.softness import ContactSoftness, SoftnessRanges
 from ..plants.spec import ModelErrors
 
 __all__ = ["MAX_RUNS", "RunDraw", "draw_runs"]
@@ -33,11 +34,14 @@ class RunDraw:
             seeded by ``SeedSequence(entropy)``).
         errors: How the run's plant differs from the model (:class:`~regrasp.plants.spec.ModelErrors`), passed to
             the rollout whole.
+        softness: How soft the run's compliant contacts are (:class:`~regrasp.model.softness.ContactSoftness`), or
+            None (the plant's own).
     """
 
     index: int
     entropy: tuple[int, ...]
     errors: ModelErrors = ModelErrors()
+    softness: ContactSoftness | None = None
 
     @property
     def seed(self) -> np.random.SeedSequence:
@@ -50,18 +54,23 @@ class RunDraw:
         return {"index": self.index, "entropy": list(self.entropy), "mass_scale": e.mass_scale,
                 "mu_scale": e.mu_scale, "inertia_scale": e.object_inertia_scale,
                 "link_mass_scale": e.link_mass_scale, "mu_kinetic_scale": e.mu_kinetic_scale,
-                "xi_offset": list(e.xi_offset)}
+                "xi_offset": list(e.xi_offset),
+                "softness": None if self.softness is None else self.softness.to_json_dict()}
 
 
-def draw_runs(runs: int, seed: int, perturbation: Perturbation, contacts: int = 0) -> tuple[RunDraw, ...]:
+def draw_runs(runs: int, seed: int, perturbation: Perturbation, contacts: int = 0,
+              softness: SoftnessRanges | None = None) -> tuple[RunDraw, ...]:
     """The ``runs`` draws of a study: run :math:`i` draws from ``SeedSequence(seed).spawn(runs)[i]``, so a run's
     draw does not depend on how many runs there are or who runs them. ``contacts``: the fingers to draw a
-    placement error for."""
+    placement error for; ``softness``: the ranges to draw the contacts' softness from (None: none drawn; drawn
+    after the rest, so that the model errors are the same with and without)."""
     runs = as_integer("runs", runs, 1)
     if runs > MAX_RUNS:
         raise InvalidParameterError("runs", runs, f"at most {MAX_RUNS} runs")
     expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
     contacts = as_integer("contacts", contacts)
+    if softness is not None:
+        expect_type("softness", softness, SoftnessRanges, "a SoftnessRanges (regrasp.model.softness)")
     if contacts > MAX_CONTACTS:
         raise InvalidParameterError("contacts", contacts, f"at most {MAX_CONTACTS} fingers")
     p = perturbation
@@ -74,5 +83,6 @@ def draw_runs(runs: int, seed: int, perturbation: Perturbation, contacts: int = 
         errors = ModelErrors(mass_scale=1.0 + p.mass * mass, mu_scale=1.0 + p.mu * mu,
                              inertia_scale=1.0 + p.inertia * inertia, link_mass_scale=1.0 + p.link_mass * links,
                              mu_kinetic_scale=1.0 + p.mu_kinetic * kinetic, xi_offset=tuple(offsets.tolist()))
-        out.append(RunDraw(i, tuple(int(w) for w in child.generate_state(4)), errors))
+        soft = None if softness is None else softness.draw(rng)
+        out.append(RunDraw(i, tuple(int(w) for w in child.generate_state(4)), errors, soft))
     return tuple(out)

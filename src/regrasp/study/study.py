@@ -26,9 +26,12 @@ from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from ..core.exceptions import InvalidParameterError, MissingDependencyError
 from ..core.validation import as_finite_float, as_integer, expect_type
 from ..model.perturbation import Perturbation
+from ..model.softness import ContactSoftness, SoftnessRanges
 from ..plants.spec import PlantSpec
 from .draws import RunDraw, draw_runs
 
@@ -119,7 +122,22 @@ def build_run(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | Non
     run = RunSpec(duration=duration, seed=draw.seed, sensor_noise=perturbation.sensor_noise(),
                   actuator_noise=perturbation.actuator_noise())
     return build_rollout(scenario, run, schedule=schedule, settings=settings, plan=plan,
-                         plant=replace(plant, errors=draw.errors))
+                         plant=replace(soften(plant, draw.softness), errors=draw.errors))
+
+
+def soften(plant: PlantSpec, softness: ContactSoftness | None) -> PlantSpec:
+    """``plant`` with contacts of ``softness`` (None: as it is); only a compliant plant (MuJoCo) has any."""
+    if softness is None:
+        return plant
+    if plant.kind != "mujoco":
+        raise InvalidParameterError("softness", softness, f"no contact softness on the {plant.kind} plant (its "
+                                    "contacts are rigid): a study on --plant mujoco")
+    from ..plants.mujoco.mjcf import MujocoSettings
+
+    settings = MujocoSettings() if plant.settings is None else plant.settings
+    solimp = settings.solimp[:2] + (softness.solimp_width,) + settings.solimp[3:]
+    return replace(plant, settings=replace(settings, tip_radius=softness.tip_radius,
+                                           time_constant=softness.time_constant, solimp=solimp))
 
 
 def run_once(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
@@ -150,6 +168,7 @@ class StudyResult:
         plant: ``"project"`` or ``"mujoco"``.
         wall_seconds: The study's wall time [s] (the plan included).
         plan_seconds: The plan's wall time [s].
+        softness: The ranges each run's contact softness was drawn from, or None.
     """
 
     scenario: str
@@ -162,6 +181,7 @@ class StudyResult:
     wall_seconds: float
     plan_seconds: float
     plant: str = "project"
+    softness: SoftnessRanges | None = None
 
     @property
     def successes(self) -> int:
@@ -186,6 +206,7 @@ class StudyResult:
         lo, hi = self.interval
         return {"scenario": self.scenario, "seed": self.seed, "duration": self.duration, "workers": self.workers,
                 "backend": self.backend, "plant": self.plant, "perturbation": asdict(self.perturbation),
+                "softness": None if self.softness is None else asdict(self.softness),
                 "runs": len(self.runs), "successes": self.successes, "success_rate": self.success_rate,
                 "wilson_95": [lo, hi],
                 "failures": self.failures, "wall_seconds": self.wall_seconds, "plan_seconds": self.plan_seconds,
@@ -253,6 +274,7 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
               perturbation: Perturbation = Perturbation(), duration: float | None = None, periods: int | None = None,
               workers: int = 1, ray_address: str | None = None, schedule: RegraspSchedule | None = None,
               settings: SupervisorSettings | None = None, plant: PlantSpec | str = "project",
+              softness: SoftnessRanges | None = None,
               progress: Callable[[int, int], None] | None = None) -> StudyResult:
     """Plan the schedule once, then run ``runs`` seeded rollouts (module docstring).
 
@@ -271,6 +293,8 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
         settings: The supervisor's settings in every run (None: the rollout's default).
         plant: The plant every run is on, as :func:`~regrasp.rollout.build.build_rollout` takes it (a
             :class:`~regrasp.plants.spec.PlantSpec` without model errors: each run draws its own, or a kind's name).
+        softness: The ranges each run draws its contacts' softness from (:class:`~regrasp.model.softness.SoftnessRanges`;
+            a compliant plant only), or None (the plant's own).
         progress: Called as ``progress(done, runs)`` after each run.
     """
     from ..model.scenario import Scenario, load_scenario
@@ -291,7 +315,9 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     name = str(scenario.path) if scenario.path is not None else scenario.name
-    draws = draw_runs(runs, seed, perturbation, len(scenario.contacts))
+    if softness is not None:
+        soften(plant, softness.draw(np.random.default_rng(0)))  # (a rigid plant refuses before any planning)
+    draws = draw_runs(runs, seed, perturbation, len(scenario.contacts), softness)
     if schedule is None:
         schedule = plan_regrasps(scenario)
     probe = build_rollout(scenario, RunSpec(duration=duration, periods=periods), schedule=schedule, settings=settings,
@@ -310,7 +336,7 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
             progress(len(outcomes), len(draws))
     return StudyResult(name, tuple(outcomes), perturbation, int(seed), probe.duration, workers,
                        "process" if ray_address is None else "ray", time.perf_counter() - start, plan_seconds,
-                       plant.kind)
+                       plant.kind, softness)
 
 
 def _check_offsets(scenario: Scenario, xi0, half_width: float) -> None:

@@ -114,6 +114,7 @@ class SlideExecutor:
         self._now = 0.0
         self._integral_X = np.zeros(3)          # ∫(X_d - X) dt
         self._integral_xi: dict[int, float] = {}  # ∫(ξ_d - ξ) dt per slider
+        self._reflex_until = np.full(hand.m, -math.inf)  # each contact's reflex lasts until then [s]
 
     # ------------------------------------------------------------------ state
     @property
@@ -158,6 +159,31 @@ class SlideExecutor:
             else:
                 sensed[i] = meas.xi[i]
 
+    def _reflex(self, meas: Measurement) -> None:
+        """Start the reflex of every contact whose sensed normal force fell below ``reflex_below``."""
+        below = self.settings.reflex_below
+        if below > 0.0 and meas.normal_force is not None:
+            until = float(meas.t) + self.settings.reflex_time
+            for i, fn in enumerate(meas.normal_force.tolist()):
+                if fn < below:
+                    self._reflex_until[i] = until
+
+    def floors(self) -> tuple[float, ...]:
+        """Each contact's least normal force in the laws now [N] (0: the internal force's ``f_min``): a slider's
+        ``slider_floor``, a holder's ``holder_preload`` while another contact is primed or slides, and
+        ``reflex_floor`` while a reflex lasts."""
+        s = self.settings
+        moving = any(p in (ContactPhase.PRIMING, ContactPhase.SLIDING) for p in self.phases)
+        out = []
+        for i, phase in enumerate(self.phases):
+            floor = s.holder_preload if moving else 0.0
+            if phase is not ContactPhase.FIXED:
+                floor = s.slider_floor
+            if self._now < self._reflex_until[i]:
+                floor = max(floor, s.reflex_floor)
+            out.append(floor)
+        return tuple(out)
+
     def _sensed(self) -> np.ndarray:
         """Every contact's sensed position for the model (the held ones filtered)."""
         return self._xi_sensed.copy()
@@ -167,6 +193,7 @@ class SlideExecutor:
         s = self.settings
         ends = []
         self._sense_held(meas)
+        self._reflex(meas)
         for i in list(self._active):
             a = self._active[i]
             phase = self.phases[i]
@@ -291,10 +318,10 @@ class SlideExecutor:
         """What a compiled stretch (:mod:`regrasp.rollout.stretch`) reads and updates of the executor: (held (m,) bool,
         the law's held positions ξ [m], the filtered sensed positions [m] and ∫(X_d - X) dt, both the executor's own
         arrays, the sliders as :data:`~regrasp.kernels.stretch_layout.SLIDER` records); None where only the reference
-        path serves: a contact being primed or settling, a slide without a planned profile
+        path serves: a contact being primed or settling, a reflex lasting, a slide without a planned profile
         (:class:`~regrasp.supervisor.types.SlideProfile`) or spherical tips."""
         s = self.settings
-        if s.tip_radius != 0.0:
+        if s.tip_radius != 0.0 or bool((self._reflex_until > self._now).any()):
             return None
         sliders = []
         for i, phase in enumerate(self.phases):
@@ -333,8 +360,9 @@ class SlideExecutor:
         omega = np.array([s.control_omega] * 3 + [s.slide_omega] * (n - 3))
         return Gains(2.0 * omega, omega**2)
 
-    def _law(self) -> ComputedTorqueController:
-        """The control law of the current phases (cached while they and the held positions stay)."""
+    def _law(self, floors: bool = True) -> ComputedTorqueController:
+        """The control law of the current phases (cached while they and the held positions stay); ``floors``: with
+        the contacts' floors (:meth:`floors`), else with the internal force's ``f_min`` alone."""
         s = self.settings
         edges = []
         for i, a in sorted(self._active.items()):
@@ -348,9 +376,13 @@ class SlideExecutor:
         sliders = [i for i in range(self.hand.m) if self.phases[i] is ContactPhase.SLIDING]
         friction = tuple(Friction(max(f.static, k), k) if k != f.kinetic else f
                          for f, k in zip(self.friction, (self._kinetic(i) for i in range(self.hand.m))))
-        key = (tuple(self.phases), tuple(edges), self.xi.tobytes(), friction)
+        floors = self.floors() if floors else ()
+        key = (tuple(self.phases), tuple(edges), self.xi.tobytes(), friction, floors)
         if key == self._key:
             return self._controller
+        internal_force = s.internal_force
+        if floors and any(f > internal_force.f_min for f in floors):
+            internal_force = replace(internal_force, floors=floors)
         modes = [ContactMode.SLIDING if i in sliders else ContactMode.FIXED for i in range(self.hand.m)]
         model = ReducedModel(self.hand, self.grasp.with_modes(modes), self.xi, object_mass=self.object_mass,
                              object_inertia=self.object_inertia)
@@ -361,9 +393,9 @@ class SlideExecutor:
             planned = all(self._active[i].order.reference is not None for i in sliders)
             law = Proposition3Controller(model, self._gains(3 + len(sliders)), friction,
                                          direction=directions if len(directions) > 1 else directions[0],
-                                         reversible=not planned, internal_force=s.internal_force, cone_edge=cone_edge)
+                                         reversible=not planned, internal_force=internal_force, cone_edge=cone_edge)
         else:
-            law = FixedContactController(model, self._gains(3), friction, internal_force=s.internal_force,
+            law = FixedContactController(model, self._gains(3), friction, internal_force=internal_force,
                                          cone_edge=cone_edge)
         self._controller, self._key = law, key
         return law
@@ -412,7 +444,14 @@ class SlideExecutor:
         S_d_dot = np.concatenate([desired.velocity, [r[1] for r in refs]])
         S_d_ddot = np.concatenate([desired.acceleration, [r[2] for r in refs]])
         try:
-            return self._tipped(law(S, S_dot, S_d, S_d_dot, S_d_ddot), meas), _name(law), reference, []
+            try:
+                return self._tipped(law(S, S_dot, S_d, S_d_dot, S_d_ddot), meas), _name(law), reference, []
+            except InternalForceInfeasibleError:
+                if law.internal_force is None or law.internal_force.floors == ():
+                    raise
+                # the floors are a preference (a pre-load, a reflex); the internal force's f_min is the limit
+                law = self._law(floors=False)
+                return self._tipped(law(S, S_dot, S_d, S_d_dot, S_d_ddot), meas), _name(law), reference, []
         except InternalForceInfeasibleError as exc:
             if not any(self.phases[i] in (ContactPhase.PRIMING, ContactPhase.SLIDING) for i in self._active):
                 raise

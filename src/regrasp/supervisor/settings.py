@@ -85,6 +85,15 @@ class ExecutorSettings:
         tip_radius: The fingertips are spheres of this radius [m] (0: points): every law's torque gets the
             couple the sphere's contact point adds on the distal link
             (:func:`~regrasp.model.sphere_tip.sphere_tip_torque`).
+        slider_floor: A contact being primed, slid or settled pushes with at least this [N] in the laws (0: the
+            internal force's ``f_min``): the least loaded contact is the one whose load a compliant plant loses
+            first (``docs/derivations.md``, "Keeping the loads").
+        holder_preload: While any contact is primed or slides, every held contact pushes with at least this [N]
+            (0: ``f_min``): a neighbour's break-away redistributes the load, and a soft contact's hop takes a
+            slider's load away for a moment; the holders carry it.
+        reflex_below: A contact whose sensed normal force falls below this [N] (0: never) ...
+        reflex_floor: ... pushes with at least this [N] in the laws ...
+        reflex_time: ... for this long [s] (the reflex: more internal force at once, before the contact is lost).
     """
 
     omega_n: float = 20.0
@@ -112,6 +121,11 @@ class ExecutorSettings:
     hold_resolution: float | None = 2e-6
     hold_filter_time: float | None = None
     tip_radius: float = 0.0
+    slider_floor: float = 0.0
+    holder_preload: float = 0.0
+    reflex_below: float = 0.0
+    reflex_floor: float = 0.0
+    reflex_time: float = 0.01
 
     def __post_init__(self):
         for name in ("omega_n", "zeta", "prime_time", "prime_overshoot", "settle_undershoot", "arrive_tolerance",
@@ -144,6 +158,12 @@ class ExecutorSettings:
         if self.hold_filter_time is not None:
             as_duration("hold_filter_time", self.hold_filter_time)
         as_positive_float("tip_radius", self.tip_radius, allow_zero=True)
+        for name in ("slider_floor", "holder_preload", "reflex_below", "reflex_floor"):
+            as_positive_float(name, getattr(self, name), allow_zero=True)
+            if getattr(self, name) >= self.internal_force.f_max:
+                raise InvalidParameterError(name, getattr(self, name), f"a normal force below the internal "
+                                            f"force's f_max ({self.internal_force.f_max:g} N)")
+        as_duration("reflex_time", self.reflex_time)
 
 
 @dataclass(frozen=True)
@@ -291,7 +311,8 @@ class SupervisorSettings:
     @classmethod
     def robust(cls, geometry: Geometry | str = Geometry.IDEAL, cone_margin: float = DEFAULT_CONE_MARGIN, *,
                actuation_delay: int = 0, tip_radius: float = 0.0,
-               hold_resolution: float | None = ExecutorSettings.hold_resolution) -> SupervisorSettings:
+               hold_resolution: float | None = ExecutorSettings.hold_resolution, slider_floor: float = 0.3,
+               holder_preload: float = 0.3) -> SupervisorSettings:
         """Settings for a hand whose plant differs from the model and whose sensors and actuators are not
         perfect (``docs/derivations.md``, "§4, executed" and "Robustness"): the fixed contacts kept 0.1 inside
         their cones in ratio (0.05 where no force allows more) and ``cone_margin`` [N] inside where the forces
@@ -303,7 +324,10 @@ class SupervisorSettings:
         :mod:`regrasp.supervisor.monitor`), in ``geometry``.
 
         What the hand itself determines is an argument: its ``actuation_delay`` [control steps], its fingertips'
-        sphere ``tip_radius`` [m] and the ``hold_resolution`` [m] its ξ sensor's noise calls for. Change anything
+        sphere ``tip_radius`` [m] and the ``hold_resolution`` [m] its ξ sensor's noise calls for; and what the
+        schedule was planned with, its ``slider_floor`` and ``holder_preload`` [N]
+        (:class:`~regrasp.schedule.problem.RegraspSettings`): the executor keeps the plan's loads, with a reflex
+        (a contact sensed below 0.1 N pushes with at least 0.4 N for 10 ms). Change anything
         else with :func:`dataclasses.replace` on the branch (e.g. ``replace(s, executor=replace(s.executor,
         prime_overshoot=0.01))``)."""
         executor = ExecutorSettings(
@@ -311,7 +335,8 @@ class SupervisorSettings:
             breakaway_estimate=True, settle_margin=0.05, start_speed=1e-3, hold_filter_time=0.02,
             internal_force=InternalForceSettings(f_min=0.2, friction_margin=0.1, target_cone_margin=cone_margin,
                                                  fallback_friction_margin=0.05),
-            actuation_delay=actuation_delay, tip_radius=tip_radius, hold_resolution=hold_resolution)
+            actuation_delay=actuation_delay, tip_radius=tip_radius, hold_resolution=hold_resolution,
+            slider_floor=slider_floor, holder_preload=holder_preload, reflex_below=0.1, reflex_floor=0.4)
         return cls(executor=executor, monitor=MonitorSettings(geometry=geometry, every=10))
 
     def with_executor(self, **changes: object) -> SupervisorSettings:

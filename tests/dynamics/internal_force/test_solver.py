@@ -28,11 +28,13 @@ drawn around a particular solution of :math:`G f = M_o\\ddot X - f_g`:
 from __future__ import annotations
 
 import itertools
+import math
 import warnings
 
 import numpy as np
 import pytest
 import qpsolvers
+import scipy.linalg
 import scipy.optimize
 
 from internal_force_cases import (  # noqa: F401
@@ -516,3 +518,44 @@ def test_ctrl_c_during_an_osqp_solve_reaches_python(path):
             caught += 1
         timer.join()
     assert caught == 20
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_per_contact_floors_are_met_with_the_least_squeeze(seed):
+    """``InternalForceSettings.floors``: contact i pushes with at least max(f_min, floors[i]); the least squeeze that
+    does so, checked against an independent solve (SciPy's SLSQP on scipy's own null space of Aᵀ)."""
+    case = random_case("m3p0", seed)
+    A, f_m, frames, mu = case["A"], case["f_m"], case["frames"], case["mu"]
+    floors = (0.9, 0.2, 1.4)
+    settings = InternalForceSettings(f_min=0.3, friction_margin=0.05, floors=floors)
+    assert [settings.floor(i) for i in range(3)] == [0.9, 0.3, 1.4]
+    qp = build_internal_force_qp(A, f_m, frames, case["modes"], case["friction"], settings)
+    N = scipy.linalg.null_space(A.T)
+
+    def normal_tangent(y):
+        f = (f_m + N @ y).reshape(3, 2)
+        return np.array([fr[:, 0] @ fi for fr, fi in zip(frames, f)]), np.array([fr[:, 1] @ fi for fr, fi in
+                                                                                   zip(frames, f)])
+
+    def constraints(y):
+        n, t = normal_tangent(y)
+        return np.concatenate([n - np.array([settings.floor(i) for i in range(3)]),
+                               (mu - 0.05) * n - t, (mu - 0.05) * n + t])
+
+    best = scipy.optimize.minimize(lambda y: 0.5 * y @ y, np.zeros(N.shape[1]), jac=lambda y: y,
+                                   constraints=[{"type": "ineq", "fun": constraints}], method="SLSQP",
+                                   options={"ftol": 1e-14, "maxiter": 500})
+    if not (best.success and constraints(best.x).min() > -1e-7):
+        with pytest.raises(InternalForceInfeasibleError):
+            solve_internal_force_qp(qp, frames, case["modes"], case["friction"])
+        return
+    result = solve_internal_force_qp(qp, frames, case["modes"], case["friction"])
+    normal = to_surface(frames, result.forces)[:, 0]
+    assert (normal >= np.array([0.9, 0.3, 1.4]) - 1e-7).all()
+    assert np.linalg.norm(result.f_c) == pytest.approx(np.linalg.norm(N @ best.x), rel=1e-4, abs=1e-7)
+
+
+@pytest.mark.parametrize("floors", [(-0.1,), (math.nan,), ("0.5",), 0.5, (25.0,)])
+def test_floors_refuse_bad_values(floors):
+    with pytest.raises(InvalidParameterError):
+        InternalForceSettings(f_min=0.2, f_max=20.0, floors=floors)

@@ -304,6 +304,16 @@ def test_torque_free_motion_pulls_on_contacts():
     assert kinds(step.events) == [("separation", "finger1"), ("separation", "finger2")]
     assert [c.mode for c in plant.contacts] == ["separated", "separated"]
     assert not plant.stopped  # separation not in stop_on here
+    # released, the tips leave their edges: the next step reports how far (the tips' distance from the edges'
+    # lines, written here), and no slip
+    step = plant.step(np.zeros(4))
+    tips = hand.tip_positions(step.state.q).reshape(-1, 2)
+    c, s = np.cos(step.state.X[2]), np.sin(step.state.X[2])
+    for i, k in enumerate(EDGES):
+        e = polygon().edge(k)
+        p_obj = np.array([[c, s], [-s, c]]) @ (tips[i] - step.state.X[:2])
+        assert step.gap[i] == pytest.approx(-e.inward_normal @ (p_obj - e.xi_origin), abs=1e-12)
+    assert (step.gap > 0).all() and (step.slip == 0).all()
 
 
 # ---------------------------------------------------------------------------- 2. friction

@@ -132,7 +132,7 @@ class InternalForceInfeasibleError(RegraspError):
         self.status = status
         super().__init__(
             f"internal-force QP infeasible (solver status: {status}): no squeeze keeps every contact "
-            f"pushing with >= {qp.settings.f_min} N and every fixed contact inside its friction cone "
+            f"pushing with >= {qp.settings.f_min} N (or its floor) and every fixed contact inside its friction cone "
             f"with friction margin {qp.settings.friction_margin}"
         )
 

@@ -43,7 +43,7 @@ def _constraint_rows(frames, modes, frictions, settings, cone_edges: tuple):
     on_edge = {edge.contact for edge in cone_edges}
     for i, frame in enumerate(frames):
         n, t = frame[:, 0], frame[:, 1]
-        ineq.append((i, n, settings.f_min))
+        ineq.append((i, n, settings.floor(i)))
         if np.isfinite(settings.f_max):
             ineq.append((i, -n, -settings.f_max))
         if modes[i] is ContactMode.FIXED and i not in on_edge:

@@ -21,6 +21,8 @@ __all__ = ["ConeEdge", "InternalForceSettings", "as_cone_edges"]
 class InternalForceSettings:
     """Margins of the internal-force QP.
 
+    ``floor(i)`` is contact i's least normal force.
+
     Attributes:
         f_min: Minimum normal force [N] at every contact, >= 0.
         friction_margin: A ratio [-], >= 0: fixed contacts keep |f_t| <= (μ_s - friction_margin) f_n.
@@ -31,6 +33,8 @@ class InternalForceSettings:
         fallback_friction_margin: Where no internal force keeps the fixed contacts ``friction_margin`` inside their
             cones, the solver answers with this smaller friction margin [-] instead of failing (None: it fails). A
             margin that covers an uncertain μ is a preference; the cone of the model's μ is the limit.
+        floors: Per contact, a larger minimum normal force [N] than ``f_min`` (empty: none; contact i's floor is
+            max(f_min, floors[i])): a contact pre-loaded for a neighbour's break-away, or one a reflex loads.
     """
 
     f_min: float = 0.5
@@ -39,6 +43,7 @@ class InternalForceSettings:
     f_max: float = float("inf")
     target_cone_margin: float = 0.0
     fallback_friction_margin: float | None = None
+    floors: tuple[float, ...] = ()
 
     def __post_init__(self):
         for name, low, strict in (("f_min", 0.0, False), ("friction_margin", 0.0, False), ("tolerance", 0.0, True),
@@ -54,11 +59,21 @@ class InternalForceSettings:
                 f_max = math.nan  # (the error below says what f_max may be)
         if not f_max > self.f_min:
             raise InvalidParameterError("f_max", self.f_max, f"a maximum normal force > f_min ({self.f_min}) or inf")
+        if isinstance(self.floors, (str, bytes)) or not hasattr(self.floors, "__iter__"):
+            raise InvalidParameterError("floors", self.floors, "a sequence of normal forces [N], one per contact")
+        floors = tuple(as_finite_float("floors", v) for v in self.floors)
+        if any(not 0.0 <= v < self.f_max for v in floors):
+            raise InvalidParameterError("floors", self.floors, f"normal forces in [0, f_max = {self.f_max:g}) [N]")
+        object.__setattr__(self, "floors", floors)
         fallback = self.fallback_friction_margin
         if fallback is not None and not 0.0 <= as_finite_float("fallback_friction_margin", fallback) \
                 < self.friction_margin:
             raise InvalidParameterError("fallback_friction_margin", fallback,
                                         f"None or a friction margin in [0, friction_margin = {self.friction_margin:g})")
+
+    def floor(self, i: int) -> float:
+        """Contact i's least normal force [N]: ``f_min``, or its larger entry in ``floors``."""
+        return max(self.f_min, self.floors[i]) if i < len(self.floors) else self.f_min
 
 
 @dataclass(frozen=True)
