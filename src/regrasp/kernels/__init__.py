@@ -133,6 +133,7 @@ def warm_up() -> None:
     fingers = np.zeros(1, dtype=FINGER_PARAMETERS)
     for name in ("m1", "m2", "i1", "i2", "d2x", "tx"):
         fingers[name] = 1.0
+    fingers["effort1"] = fingers["effort2"] = np.inf
     plant = np.zeros((), dtype=PLANT_PARAMETERS)
     plant["mass"], plant["inertia"], plant["dt"] = 1.0, 1.0, 1e-3
     contacts = np.zeros(1, dtype=PLANT_CONTACT)
@@ -152,7 +153,8 @@ def warm_up() -> None:
     rows = np.zeros((1, 2))
     rows[0, 0] = 1.0
     internal_force_into(np.array([[1.0], [0.0]]), zeros, np.array([[1.0, 0.0, 0.0, 1.0]]), rows, np.zeros(1), 1,
-                        np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0, np.empty(2), np.empty(2))
+                        np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0, np.zeros((1, 4)), zeros, np.full(2, np.inf),
+                        np.empty(2), np.empty(2))
     # a control step with the argument types a controller passes (its answer here: take the reference path)
     s = np.zeros((5, 3))
     s[0, 1] = 1.0
