@@ -49,7 +49,7 @@ def as_effort_limit(name: str, value: object) -> np.ndarray:
     expected = "a joint torque limit > 0 [N m] (inf: none), or one per joint (2)"
     try:
         items = [value] if np.ndim(value) == 0 else list(value)
-        if not 1 <= len(items) <= 2 or any(isinstance(v, (bool, np.bool_))
+        if len(items) != (1 if np.ndim(value) == 0 else 2) or any(isinstance(v, (bool, np.bool_))
                                            or not isinstance(v, (int, float, np.integer, np.floating)) for v in items):
             raise TypeError
         floats = [float(v) for v in items]
