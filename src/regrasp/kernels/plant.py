@@ -24,8 +24,8 @@ import numpy as np
 
 from .finger import FINGER_TERMS, condition_2x2, finger_terms_into
 
-__all__ = ["FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDING", "output_size", "plant_evaluate",
-           "plant_step_into"]
+__all__ = ["FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SATURATION_TOLERANCE", "SEPARATED", "SLIDING", "output_size",
+           "plant_evaluate", "plant_step_into"]
 
 _F8 = np.float64
 
@@ -49,6 +49,9 @@ PLANT_PARAMETERS = np.dtype([
 
 #: The tolerance [N] of the separation and slip tests (the reference path's).
 _TOL = 1e-9
+#: A torque that exceeds its limit by at most this [relative to max(1, limit)] is clipped but not called saturated:
+#: a controller that keeps the limit puts its torque on it up to round-off (:mod:`regrasp.plants.saturation`).
+SATURATION_TOLERANCE = 1e-9
 
 
 @numba.njit(cache=True)
@@ -208,8 +211,8 @@ def plant_step_into(fingers, plant, contacts, y, tau, certificates, radii, out, 
         for j in range(2):
             e = fingers[i].effort1 if j == 0 else fingers[i].effort2
             applied[2 * i + j] = min(max(tau[2 * i + j], -e), e)
-            if applied[2 * i + j] != tau[2 * i + j]:
-                attention = True  # (saturated: the caller's event logic logs it)
+            if abs(tau[2 * i + j]) - e > SATURATION_TOLERANCE * max(1.0, e):
+                attention = True  # (saturated: the caller's event logic logs it; not a round-off at the limit)
     tau = applied
     forces0 = out[size:size + 2 * m].reshape((m, 2))  # (the start's forces, then their surface components)
     forces = out[size + 2 * m:size + 4 * m].reshape((m, 2))

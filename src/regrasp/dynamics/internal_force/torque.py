@@ -72,8 +72,8 @@ class TorqueShortfall:
     excess: float
 
     def __str__(self) -> str:
-        return (f"{self.finger} joint {self.joint} needs at least {self.needed:.4f} N m against its limit of "
-                f"{self.effort:.4f} N m ({self.excess:.4f} N m short)")
+        return (f"{self.finger} joint {self.joint} needs at least {self.needed:.6g} N m against its limit of "
+                f"{self.effort:.6g} N m ({self.excess:.3g} N m short)")
 
 
 def joint_torques(torques: JointTorques, forces: Sequence[float]) -> list[float]:
