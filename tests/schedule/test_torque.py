@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 import scipy.optimize
 
-from regrasp import Grasp, NoScheduleError, RegraspSettings, ReducedModel, load_scenario, plan_regrasps
+from regrasp import Grasp, NoScheduleError, ReducedModel, RegraspSettings, load_scenario, plan_regrasps
 from regrasp.schedule.force_polytope import ForceLimits, torque_excess
 from regrasp.schedule.planner import verify
 from regrasp.schedule.problem import build_problem

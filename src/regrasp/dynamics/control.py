@@ -30,8 +30,9 @@ the :math:`G R_f B_v f_\xi` terms, which count the friction twice.
 
 The internal force :math:`J^T f_c` (3.3.7) is chosen by :mod:`regrasp.dynamics.internal_force.problem`'s QP: the
 least squeeze that keeps every contact pushing and every fixed contact inside its static friction
-cone (:math:`\mu_s`) with margins, and every joint within its torque limit (:attr:`~regrasp.model.hand.Hand.effort_limit`,
-:mod:`regrasp.dynamics.internal_force.torque`), given the contact forces :math:`f_m` the motion torque produces.
+cone (:math:`\mu_s`) with margins, and every joint within its torque limit
+(:attr:`~regrasp.model.hand.Hand.effort_limit`, :mod:`regrasp.dynamics.internal_force.torque`), given the contact
+forces :math:`f_m` the motion torque produces.
 Each controller keeps a persistent solver (:class:`~regrasp.dynamics.internal_force.solver.InternalForceSolver`).
 
 Friction (:class:`~regrasp.core.contact.Friction`): a controller's ``friction`` is what it assumes of the

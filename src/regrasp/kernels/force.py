@@ -10,7 +10,8 @@ in :math:`y` (or :math:`(y, s)` with a target cone margin: weight W on :math:`(s
 :math:`f_m + f_c` as the reference path (every row to a slack of :math:`10^{-6}\max(1, |f_m|_\infty)` N, or
 :math:`10^{-9}` of it when nothing is chosen, k = 0), with the cone margin: the least residual of the
 static-cone rows. Joint torque limits add rows :math:`|w_j + J_j^T f_i| \le e_j` where the answer without them
-exceeds one (:func:`internal_force_into`). ``f_c`` is basis-independent (the objective is :math:`\tfrac12\|N_c y\|^2 = \tfrac12\|y\|^2`),
+exceeds one (:func:`internal_force_into`). ``f_c`` is basis-independent (the objective is
+:math:`\tfrac12\|N_c y\|^2 = \tfrac12\|y\|^2`),
 so the answer is the reference's, exact where OSQP's is within its tolerance.
 """
 

@@ -202,7 +202,8 @@ def _torque_limited(problem, last: int) -> tuple[str, str] | None:
     if problem.free_tables is None:
         return None
     lat = problem.lattice
-    free = run(dataclasses.replace(lat, lo=problem.free_tables[0], hi=problem.free_tables[1]), start=problem.start_cells)
+    uncut = dataclasses.replace(lat, lo=problem.free_tables[0], hi=problem.free_tables[1])
+    free = run(uncut, start=problem.start_cells)
     if free.last_layer <= last:
         return None
     k = min(last + 1, lat.layers - 1)

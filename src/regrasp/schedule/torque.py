@@ -124,8 +124,8 @@ class TorqueModel:
             tangential = np.einsum("kji,kj->ki", jac, t.reshape(-1, 2))
         shape = (T, K, 2)
         nan = ~reachable[..., None]
-        return ContactTorques(np.where(nan, np.nan, wrench.reshape(shape)), np.where(nan, np.nan, normal.reshape(shape)),
-                              np.where(nan, np.nan, tangential.reshape(shape)), reachable)
+        return ContactTorques(*(np.where(nan, np.nan, v.reshape(shape)) for v in (wrench, normal, tangential)),
+                              reachable)
 
     def joint_angles(self, i: int, pose: np.ndarray, xi: np.ndarray) -> np.ndarray:
         """Finger i's joint angles [rad] (T, K, 2) with its tip on the contact point at positions ``xi`` [m] (T, K)

@@ -268,7 +268,8 @@ def test_the_mujoco_plant_saturates_the_torques_at_the_joints_limits():
     effort = np.array([0.05, 0.03] * 2)
     plants = []
     for e in (effort[:2], np.inf):
-        hand = Hand([c.finger.with_placement(effort_limit=e) for c in SC2.contacts], gravity_in_hand=SC2.gravity_in_hand)
+        hand = Hand([c.finger.with_placement(effort_limit=e) for c in SC2.contacts],
+                    gravity_in_hand=SC2.gravity_in_hand)
         contacts = [PlantContact(1, "fixed", XI0), PlantContact(3, "fixed", XI0)]
         plant = MujocoPlant(hand, SC2.polygon, contacts, friction=MU, stop_on=())
         model = ReducedModel(hand, Grasp(SC2.polygon, [1, 3], ["fixed", "fixed"]), [XI0, XI0])
