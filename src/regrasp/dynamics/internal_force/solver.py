@@ -54,7 +54,7 @@ class InternalForceSolver:
         self.settings = settings
         #: whether the compiled dense solver (:mod:`regrasp.kernels.force`) answers (None: yes); False: OSQP
         self.compiled = True if compiled is None else bool(compiled)
-        self._solvers: dict[tuple[int, int, int, float], osqp.OSQP] = {}
+        self._solvers: dict[tuple[int, int, int, float, int], osqp.OSQP] = {}
         self._rows: dict[tuple, ConstraintRows] = {}
         self._rows_settings = settings
         self._last_contacts = None  # (modes, friction) as last passed (tuples), and validated
@@ -96,7 +96,7 @@ class InternalForceSolver:
         """The persistent solver of this shape, set up or updated with the numbers of this problem
         (``a_t``: the constraint matrix's column-major data, rows * k, or rows * (k + 1) with the
         margin variable s; ``n_torque``: torque rows after the inequalities of ``rows``, before its equalities)."""
-        key = (k, len(lower), rows.n_eq, rows.target)
+        key = (k, len(lower), rows.n_eq, rows.target, n_torque)  # (the upper bounds' pattern is the key's)
         n_ineq = rows.n_ineq + n_torque
         upper = rows.upper
         if n_torque:
