@@ -8,6 +8,7 @@ from regrasp.core.contact import Friction
 from regrasp.core.exceptions import SingularFingerError, UnreachableError
 from regrasp.dynamics.control import Gains
 from regrasp.dynamics.grasp import Grasp
+from regrasp.dynamics.internal_force.problem import InternalForceInfeasibleError
 from regrasp.dynamics.internal_force.settings import InternalForceSettings
 from regrasp.dynamics.laws import FixedContactController, Proposition1Controller
 from regrasp.dynamics.reduced import ReducedModel
@@ -117,3 +118,61 @@ def test_compiled_sliding_step_equals_the_reference_path(kind, qp, reversible):
             np.testing.assert_allclose(got.internal.f_c, expected.internal.f_c, rtol=0, atol=1e-10 * force_scale)
         compared += 1
     assert compared >= 20
+
+
+def _limited_model(kind, rng, effort):
+    """A model of ``kind`` whose fingers' joints are limited to ``effort`` [N m], and the same without limits."""
+    from internal_force_cases import fingers
+    from regrasp.model.hand import Hand
+
+    m, modes = KINDS[kind]
+    gravity = 9.81 * np.array([np.sin(a := rng.uniform(-0.4, 0.4)), -np.cos(a)])
+    xi = rng.uniform(-0.01, 0.01, m)
+    hands = [Hand([f.with_placement(effort_limit=e) for f in fingers()[:m]], gravity_in_hand=gravity)
+             for e in (effort, np.inf)]
+    return [ReducedModel(hand, Grasp(polygon(), EDGES[m], modes), xi) for hand in hands]
+
+
+@pytest.mark.parametrize("kind,effort,binding", [("m3p0", 0.05, 3), ("m3p1-left", 0.055, 2),
+                                                  ("m3p1-bottom", 0.08, 3)])
+def test_compiled_step_equals_the_reference_path_with_torque_limits_active(kind, effort, binding):
+    """Joints limited to ``effort`` [N m], below what many random states' least squeeze needs (the fixed law, or
+    Proposition 3's sliding step): both paths keep every |τ_j| <= effort + 1e-9 N m (the QP's torque rows), agree,
+    and fail alike, naming the limit, where no squeeze keeps it."""
+    from regrasp.dynamics.laws import Proposition3Controller
+
+    rng = np.random.default_rng(5)
+    limited, free = _limited_model(kind, rng, effort)
+    gains = Gains.critically_damped(15.0, limited.n)
+    mu = [Friction(s, 0.6 * s) for s in rng.uniform(0.6, 1.0, limited.grasp.m)]
+    qp = InternalForceSettings(f_min=0.3)
+    cls = FixedContactController if limited.grasp.p == 0 else Proposition3Controller
+    fast, reference = (cls(limited, gains, mu, internal_force=qp, compiled=c) for c in (None, False))
+    unlimited = cls(free, gains, mu, internal_force=qp)
+    assert fast.compiled and not reference.compiled and fast.effort_limit == [effort] * 6
+    bound = raised = 0
+    for _ in range(40):
+        n = limited.n
+        S = np.concatenate([[rng.uniform(-0.02, 0.02), Y0 + rng.uniform(-0.015, 0.015), rng.uniform(-0.15, 0.15)],
+                            rng.uniform(-0.012, 0.012, n - 3)])
+        args = (S, rng.uniform(-0.05, 0.05, n), S + rng.uniform(-0.003, 0.003, n), rng.uniform(-0.05, 0.05, n),
+                rng.uniform(-1.0, 1.0, n))
+        try:
+            without = unlimited(*args)
+        except (UnreachableError, SingularFingerError, InternalForceInfeasibleError):
+            continue
+        try:
+            expected = reference(*args)
+        except InternalForceInfeasibleError as exc:
+            with pytest.raises(InternalForceInfeasibleError):
+                fast(*args)
+            assert exc.torque is not None and exc.torque.effort == effort
+            raised += 1
+            continue
+        got = fast(*args)
+        for out in (got, expected):
+            assert np.abs(out.tau).max() <= effort + 1e-9
+        np.testing.assert_allclose(got.tau, expected.tau, rtol=0, atol=1e-10)
+        np.testing.assert_allclose(got.contact_forces, expected.contact_forces, rtol=0, atol=1e-9)
+        bound += np.abs(without.tau).max() > effort
+    assert bound >= binding and raised >= 3

@@ -801,3 +801,21 @@ def test_property_ik_inverts_fk(key, configuration, x, y, theta, q1, q2):
     assert finger.configuration_of(q_ik) is finger.configuration
     if finger.configuration_of(q) is finger.configuration:
         assert np.max(np.abs(wrapped_diff(q_ik, q))) < 1e-9
+
+
+def test_effort_limits_come_from_the_urdf_or_an_override():
+    from regrasp.model.finger import as_effort_limit
+    from regrasp.model.finger_urdf import planar_2r_urdf
+
+    urdf = planar_2r_urdf(0.1, 0.05)
+    assert Finger.from_urdf_string(urdf).effort_limit.tolist() == [5.0, 5.0]
+    none = Finger.from_urdf_string(urdf.replace('effort="5.0"', 'effort="0"'))
+    assert np.isinf(none.effort_limit).all()  # (a URDF effort of 0: no limit)
+    limited = Finger.from_urdf_string(urdf, effort_limit=[0.3, 0.2])
+    assert limited.effort_limit.tolist() == [0.3, 0.2]
+    assert limited.with_placement(name="other").effort_limit.tolist() == [0.3, 0.2]
+    assert limited.with_placement(effort_limit=0.1).effort_limit.tolist() == [0.1, 0.1]
+    assert limited.model.effortLimit.tolist() == [0.3, 0.2]  # (the model carries them: Hand and kernels read it)
+    for bad in (0.0, -1.0, float("nan"), [0.3], [0.1, 0.2, 0.3], "1", True, [[0.1, 0.2]], [0.1, -0.2]):
+        with pytest.raises(InvalidParameterError):
+            as_effort_limit("effort_limit", bad)

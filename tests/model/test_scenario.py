@@ -170,3 +170,27 @@ def test_bad_friction_keys_name_the_key(tmp_path, where, keys, name, words):
     key = ("fingers[0]." if where == "finger" else "hand.") + name
     assert err.value.key == key
     assert key in str(err.value) and words in str(err.value)
+
+
+@pytest.mark.parametrize("finger1,hand,finger2,expected", [
+    ("", "", "", ([5.0, 5.0], [5.0, 5.0])),  # the URDF's effort
+    ("effort = 0.3", "", "", ([0.3, 0.3], [5.0, 5.0])),
+    ("effort = [0.3, 0.2]", "effort = 0.4", "", ([0.3, 0.2], [0.4, 0.4])),
+    ("", "effort = [0.4, 0.1]", "effort = inf", ([0.4, 0.1], [np.inf, np.inf])),
+])
+def test_effort_keys_per_finger_and_for_the_hand(tmp_path, finger1, hand, finger2, expected):
+    sc = load_scenario(write(tmp_path, with_friction(finger1, hand, finger2)))
+    assert [c.finger.effort_limit.tolist() for c in sc.contacts] == list(expected)
+    from regrasp.model.hand import Hand
+    assert Hand([c.finger for c in sc.contacts]).effort_limit.tolist() == expected[0] + expected[1]
+
+
+@pytest.mark.parametrize("where", ["finger", "hand"])
+@pytest.mark.parametrize("value", ["0", "-0.1", "nan", "[0.3]", "[0.3, 0.2, 0.1]", '"strong"', "true", "[[0.3, 0.2]]",
+                                   "[0.3, -1]"])
+def test_bad_effort_keys_name_the_key(tmp_path, where, value):
+    text = with_friction(**{"finger1" if where == "finger" else "hand": f"effort = {value}"})
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(write(tmp_path, text))
+    key = ("fingers[0]." if where == "finger" else "hand.") + "effort"
+    assert err.value.key == key and "torque limit > 0 [N m]" in str(err.value)

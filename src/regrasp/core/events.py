@@ -29,6 +29,7 @@ class EventKind(str, Enum):
     LEFT_EDGE = "left_edge"            #: a contact left its edge
     COLLISION = "collision"            #: a finger link penetrates the object
     SINGULAR = "singular"              #: a finger's Jacobian became singular
+    SATURATION = "saturation"          #: a commanded joint torque exceeded its limit: the motor applies the limit
     # the supervisor (regrasp.supervisor.supervisor and its policies)
     DANGER = "danger"                  #: a contact entered its danger zone (or will, by the plan)
     SLIDE_REJECTED = "slide_rejected"  #: the sliding predicate refused a slide; the policy waits

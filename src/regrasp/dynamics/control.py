@@ -30,7 +30,9 @@ the :math:`G R_f B_v f_\xi` terms, which count the friction twice.
 
 The internal force :math:`J^T f_c` (3.3.7) is chosen by :mod:`regrasp.dynamics.internal_force.problem`'s QP: the
 least squeeze that keeps every contact pushing and every fixed contact inside its static friction
-cone (:math:`\mu_s`) with margins, given the contact forces :math:`f_m` the motion torque produces.
+cone (:math:`\mu_s`) with margins, and every joint within its torque limit
+(:attr:`~regrasp.model.hand.Hand.effort_limit`, :mod:`regrasp.dynamics.internal_force.torque`), given the contact
+forces :math:`f_m` the motion torque produces.
 Each controller keeps a persistent solver (:class:`~regrasp.dynamics.internal_force.solver.InternalForceSolver`).
 
 Friction (:class:`~regrasp.core.contact.Friction`): a controller's ``friction`` is what it assumes of the
@@ -41,6 +43,7 @@ the coefficient of each contact's mode.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -56,6 +59,7 @@ from ..kernels.control import CONTROL_OK, control_layout, control_step_into
 from .internal_force.problem import InternalForceResult
 from .internal_force.settings import ConeEdge, InternalForceSettings, as_cone_edges
 from .internal_force.solver import InternalForceSolver
+from .internal_force.torque import JointTorques
 from .reduced import ReducedModel, ReducedState, ReducedTerms
 
 __all__ = ["ComputedTorqueController", "ControlOutput", "Gains"]
@@ -173,6 +177,11 @@ class ComputedTorqueController:
         self._margin_mu = coefficients(self.friction, self._modes)
         # whether the law's f̂_ξ needs the ReducedState (the base law's is zero)
         self._estimates_friction = type(self).friction_estimate is not ComputedTorqueController.friction_estimate
+        effort = model.hand.effort_limit.tolist()
+        #: The joints' torque limits [N m] the internal-force QP keeps (2m; inf: none), or None where no joint has
+        #: one: the hand's :attr:`~regrasp.model.hand.Hand.effort_limit`.
+        self.effort_limit: list[float] | None = effort if any(map(math.isfinite, effort)) else None
+        self._finger_names = tuple(f.name for f in model.hand.fingers)
         self._kernel = None if compiled is False else self.compiled_step_arguments()
 
     def compiled_step_arguments(self) -> tuple | None:
@@ -282,6 +291,13 @@ class ComputedTorqueController:
                              out[layout["error_rate"]], f_hat, forces, out[layout["surface"]].reshape(m, 2),
                              out[layout["margins"]], internal, time.perf_counter() - start)
 
+    def joint_torques(self, terms: ReducedTerms, wrench: list[float]) -> JointTorques | None:
+        """The QP's joint torque limits at ``terms`` (τ = ``wrench`` + Jᵀ f, ``wrench`` = M q̈ + N [N m]), or None
+        where no joint has one (:mod:`regrasp.dynamics.internal_force.torque`)."""
+        if self.effort_limit is None:
+            return None
+        return JointTorques(terms.jacobians, wrench, self.effort_limit, self._finger_names)
+
     def law_torque(self, terms: ReducedTerms, args: np.ndarray, command_array: np.ndarray,
                    tangential_force: ArrayLike | None) -> tuple[list[float], np.ndarray, np.ndarray, list[float],
                                                                  InternalForceResult | None]:
@@ -305,7 +321,7 @@ class ComputedTorqueController:
         if self.internal_force_solver is not None:
             internal = self.internal_force_solver.solve_floats(np.array(terms.a_rows), motion_forces, terms.frames,
                                                                self._modes, self.friction, self.cone_edges,
-                                                               time.perf_counter())
+                                                               time.perf_counter(), self.joint_torques(terms, wrench))
             f_c = internal.f_c.tolist()
             for i, (a, b, c, d) in enumerate(terms.jacobians):  # τ + J^T f_c
                 f0, f1 = f_c[2 * i], f_c[2 * i + 1]

@@ -223,16 +223,18 @@ class Proposition3Controller(ComputedTorqueController):
         if info != 0:
             raise SingularModelError("the control law's force equations are singular (a singular grasp or finger)")
         particular = edge.dot(x)  # least-norm f_p
+        q_ddot = st.H.dot(command) + st.H_dot_S_dot
+        wrench = st.hand.mass_matrix.dot(q_ddot) + st.hand.nonlinear  # τ = wrench + Jᵀ f
         internal = None
         if self.internal_force_solver is not None:
             internal = self.internal_force_solver.solve_floats(edge, particular.tolist(), terms.frames,
                                                                model.grasp.modes, self.friction,
-                                                               self.cone_edges or None, time.perf_counter())
+                                                               self.cone_edges or None, time.perf_counter(),
+                                                               self.joint_torques(terms, wrench.tolist()))
             forces = internal.forces
         else:
             forces = particular.reshape(model.grasp.m, 2)
-        q_ddot = st.H.dot(command) + st.H_dot_S_dot
-        tau = st.hand.mass_matrix.dot(q_ddot) + st.hand.nonlinear + st.hand.jacobian.T.dot(forces.reshape(-1))
+        tau = wrench + st.hand.jacobian.T.dot(forces.reshape(-1))
         f_hat = np.array([terms.frames[j][2] * forces[j, 0] + terms.frames[j][3] * forces[j, 1]
                           for j in self._sliders])
         return tau, f_hat, forces, internal

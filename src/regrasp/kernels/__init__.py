@@ -133,6 +133,7 @@ def warm_up() -> None:
     fingers = np.zeros(1, dtype=FINGER_PARAMETERS)
     for name in ("m1", "m2", "i1", "i2", "d2x", "tx"):
         fingers[name] = 1.0
+    fingers["effort1"] = fingers["effort2"] = np.inf
     plant = np.zeros((), dtype=PLANT_PARAMETERS)
     plant["mass"], plant["inertia"], plant["dt"] = 1.0, 1.0, 1e-3
     contacts = np.zeros(1, dtype=PLANT_CONTACT)
@@ -152,7 +153,8 @@ def warm_up() -> None:
     rows = np.zeros((1, 2))
     rows[0, 0] = 1.0
     internal_force_into(np.array([[1.0], [0.0]]), zeros, np.array([[1.0, 0.0, 0.0, 1.0]]), rows, np.zeros(1), 1,
-                        np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0, np.empty(2), np.empty(2))
+                        np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0, np.zeros((1, 4)), zeros, np.full(2, np.inf),
+                        np.empty(2), np.empty(2))
     # a control step with the argument types a controller passes (its answer here: take the reference path)
     s = np.zeros((5, 3))
     s[0, 1] = 1.0
@@ -186,8 +188,8 @@ def _warm_stretch(fingers, plant, iks, edges, rows) -> None:
                                    np.full((m, 9), np.nan), np.zeros((m, 2)), np.empty(output_size(m)),
                                    np.empty(m, dtype=FINGER_TERMS), np.empty(m, np.bool_), np.empty((m, 7)))
     rows_out = StretchRows(np.empty((0, m)), np.empty((0, m, 2)), np.empty((0, m)), np.empty((0, 3)),
-                           np.empty((0, 3)), np.empty((0, 2 * m)), np.empty((0, m, 2)), np.empty((0, m)), np.empty((0, m)),
-                           np.ones(m))
+                           np.empty((0, 3)), np.empty((0, 2 * m)), np.empty((0, m, 2)), np.empty((0, m)),
+                           np.empty((0, m)), np.ones(m))
     stretch_into(np.zeros((), dtype=STRETCH_SETTINGS)[()], np.zeros(1, dtype=STRETCH_STATE), np.zeros(0),
                  np.zeros((0, 9)), executor, monitor, StretchSchedule(np.zeros(1), np.zeros((1, m))), law,
                  plant_arguments, rows_out, stretch_log(0, m, 1), 0, 0,

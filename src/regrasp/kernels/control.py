@@ -10,7 +10,8 @@ terms (:func:`.reduced.reduced_terms`, called from here):
 
 with :math:`\ddot q = H a + \dot H \dot S` (:func:`regrasp.dynamics.control._computed_torque`, the paper's (3.2.12)
 as corrected in ``docs/derivations.md``), then the internal force (:func:`.force.internal_force_into`),
-:math:`\tau = \tau_m + J^T f_c`, the predicted forces in each surface frame and their cone margins
+:math:`\tau = \tau_m + J^T f_c` (the QP keeping every :math:`|\tau_j|` within the finger records' ``effort``),
+the predicted forces in each surface frame and their cone margins
 :math:`\mu f_n - |f_t|`. Anything but the plain case (an unreachable contact, a finger near a singularity, a
 QP the kernel does not settle) is reported, and the caller takes the reference path, which raises or falls
 back exactly as before. :func:`sliding_step_into` is Proposition 3 with m > 2 (the sliders on their kinetic
@@ -140,16 +141,26 @@ def _finish(tau, forces, f_c, frames, margin_mu, n, out):
 
 
 @numba.njit(cache=True)
+def _effort(fingers):
+    """The joints' torque limits (2m) [N m] of the fingers' records (inf: none)."""
+    effort = np.empty(2 * fingers.shape[0])
+    for i in range(fingers.shape[0]):
+        effort[2 * i], effort[2 * i + 1] = fingers[i].effort1, fingers[i].effort2
+    return effort
+
+
+@numba.njit(cache=True)
 def _internal_force(use_qp, A, f_m, frames, coefficients, lower, n_ineq, is_cone, target, margin_column, weight,
-                    aim):
+                    aim, jac, wrench, fingers):
     """(whether settled, k, the QP's cone margin, f_c, f = f_m + f_c): the internal force of
-    :func:`.force.internal_force_into` in the null space of Aᵀ, or none (f = f_m) without ``use_qp``."""
+    :func:`.force.internal_force_into` in the null space of Aᵀ, within the fingers' joint torque limits
+    (τ = ``wrench`` + Jᵀ f), or none (f = f_m) without ``use_qp``."""
     f_c = np.zeros(f_m.size)
     forces = f_m.copy()
     if not use_qp:
         return True, 0, np.nan, f_c, forces
     status, k, margin = internal_force_into(A, f_m, frames, coefficients, lower, n_ineq, is_cone, target,
-                                            margin_column, weight, aim, f_c, forces)
+                                            margin_column, weight, aim, jac, wrench, _effort(fingers), f_c, forces)
     return status == FORCE_SOLVED, k, margin, f_c, forces
 
 
@@ -190,7 +201,8 @@ def control_step_into(fingers, iks, edges, gravity, damped, xi_model, slide_colu
         f_m[2 * i] = inv[i, 0] * d0 + inv[i, 2] * d1
         f_m[2 * i + 1] = inv[i, 1] * d0 + inv[i, 3] * d1
     solved, k, qp_margin, f_c, forces = _internal_force(use_qp, a_rows, f_m, frames, coefficients, lower, n_ineq,
-                                                        is_cone, target, margin_column, weight, aim)
+                                                        is_cone, target, margin_column, weight, aim, jac, wrench,
+                                                        fingers)
     if not solved:
         return CONTROL_REFERENCE, k, qp_margin
     if use_qp:
@@ -245,11 +257,12 @@ def sliding_step_into(fingers, iks, edges, gravity, damped, xi_model, slide_colu
     if x.size == 0:
         return CONTROL_REFERENCE, 0, np.nan
     particular = matvec(edge, x)  # the least-norm f_p
+    tau = _wrench(h_rows, h_dot, mass, nonlinear, command)
     solved, k, qp_margin, f_c, forces = _internal_force(use_qp, edge, particular, frames, coefficients, lower,
-                                                        n_ineq, is_cone, target, margin_column, weight, aim)
+                                                        n_ineq, is_cone, target, margin_column, weight, aim, jac, tau,
+                                                        fingers)
     if not solved:
         return CONTROL_REFERENCE, k, qp_margin
-    tau = _wrench(h_rows, h_dot, mass, nonlinear, command)
     _add_jt(tau, jac, forces)
     _finish(tau, forces, f_c, frames, margin_mu, n, out)
     o_hat = 4 * m2 + 3 * n + m2 // 2

@@ -4,7 +4,8 @@ r"""A planar 2R finger's dynamics in closed form (compiled), with parameters rea
 joint 1's axis :math:`o_1` and angle :math:`a_1` in the hand frame (the URDF's origin composed with the
 finger's base pose), joint 2's origin :math:`d_2` and angle :math:`a_2` in joint 1's frame, per link k its
 mass :math:`m_k`, centre of mass :math:`c_k` (joint frame) and rotational inertia :math:`I_k` about the
-z axis through :math:`c_k`, the tip :math:`t` in joint 2's frame, the joints' armature and viscous damping.
+z axis through :math:`c_k`, the tip :math:`t` in joint 2's frame, the joints' armature and viscous damping, and
+their torque limits (``effortLimit``; inf where it is 0 or less: none).
 Pinocchio merges fixed links into their parent body, so two bodies describe the finger exactly.
 
 **Terms** at (q, q̇) (:data:`FINGER_TERMS`, :func:`finger_terms`). With the link angles
@@ -46,6 +47,7 @@ FINGER_PARAMETERS = np.dtype([
     ("m2", _F8), ("c2x", _F8), ("c2y", _F8), ("i2", _F8),  # link 2
     ("tx", _F8), ("ty", _F8),  # the tip in joint 2's frame
     ("armature1", _F8), ("armature2", _F8), ("damping1", _F8), ("damping2", _F8),
+    ("effort1", _F8), ("effort2", _F8),  # the joints' torque limits [N m] (inf: none)
 ], align=True)
 
 #: One finger's dynamics at a state: M (upper triangle), N (Coriolis, gravity, damping), the tip Jacobian J
@@ -77,6 +79,8 @@ def finger_parameters(model: pin.Model, tip_frame: int, first_joint: int = 1) ->
         values.update({f"m{k}": inertia.mass, f"c{k}x": inertia.lever[0], f"c{k}y": inertia.lever[1],
                        f"i{k}": inertia.inertia[2, 2], f"armature{k}": model.armature[model.idx_vs[j]],
                        f"damping{k}": model.damping[model.idx_vs[j]]})
+        effort = float(model.effortLimit[model.idx_vs[j]])
+        values[f"effort{k}"] = effort if math.isfinite(effort) and effort > 0.0 else math.inf
     for name, value in values.items():
         out[name] = float(value)
     return out

@@ -24,8 +24,8 @@ import numpy as np
 
 from .finger import FINGER_TERMS, condition_2x2, finger_terms_into
 
-__all__ = ["FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDING", "output_size", "plant_evaluate",
-           "plant_step_into"]
+__all__ = ["FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SATURATION_TOLERANCE", "SEPARATED", "SLIDING", "output_size",
+           "plant_evaluate", "plant_step_into"]
 
 _F8 = np.float64
 
@@ -49,6 +49,9 @@ PLANT_PARAMETERS = np.dtype([
 
 #: The tolerance [N] of the separation and slip tests (the reference path's).
 _TOL = 1e-9
+#: A torque that exceeds its limit by at most this [relative to max(1, limit)] is clipped but not called saturated:
+#: a controller that keeps the limit puts its torque on it up to round-off (:mod:`regrasp.plants.saturation`).
+SATURATION_TOLERANCE = 1e-9
 
 
 @numba.njit(cache=True)
@@ -181,7 +184,8 @@ def output_size(m: int) -> int:
 
 @numba.njit(cache=True)
 def plant_step_into(fingers, plant, contacts, y, tau, certificates, radii, out, terms, needs_coal, posture):
-    """One RK4 step of ``plant.dt`` from the flat state ``y`` with constant torques ``tau``, written into
+    """One RK4 step of ``plant.dt`` from the flat state ``y`` with constant torques ``tau`` saturated at the joints'
+    limits (clip(τ, -effort, effort), the finger records' ``effort1``, ``effort2``), written into
     ``out`` (:func:`output_size`: the new state, the surface forces (normal, tangential) at the step's start
     (its first stage, at the start pose), and at its end the forces on the object (hand frame), their surface
     components, every contact's ξ [m] and ξ̇ [m/s] on its edge's line), ``terms`` (the fingers' terms at the
@@ -193,13 +197,23 @@ def plant_step_into(fingers, plant, contacts, y, tau, certificates, radii, out, 
     in the object frame: a new certificate's first seven entries).
 
     Returns the largest violation [m] of the active constraints, whether an event may have happened (a contact
-    that separates, slips, may stick or left its edge, or a singular finger: the caller's event logic then
+    that separates, slips, may stick or left its edge, a singular finger, or a saturated torque: the caller's
+    event logic then
     runs; collisions are the caller's), and whether any finger needs coal. No array is allocated for the
     caller (numba's boxing of returned arrays costs more than the step's arithmetic)."""
     m = fingers.shape[0]
     size = y.shape[0]
     n = 2 * m
     h = plant.dt
+    attention = False
+    applied = np.empty(n)  # the motors' torques: clip(τ, -effort, effort) (the finger records' limits)
+    for i in range(m):
+        for j in range(2):
+            e = fingers[i].effort1 if j == 0 else fingers[i].effort2
+            applied[2 * i + j] = min(max(tau[2 * i + j], -e), e)
+            if abs(tau[2 * i + j]) - e > SATURATION_TOLERANCE * max(1.0, e):
+                attention = True  # (saturated: the caller's event logic logs it; not a round-off at the limit)
+    tau = applied
     forces0 = out[size:size + 2 * m].reshape((m, 2))  # (the start's forces, then their surface components)
     forces = out[size + 2 * m:size + 4 * m].reshape((m, 2))
     k1, k2, k3, k4 = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
@@ -227,7 +241,6 @@ def plant_step_into(fingers, plant, contacts, y, tau, certificates, radii, out, 
     vx, vy, w = new[2 * n + 3], new[2 * n + 4], new[2 * n + 5]
     c, s = math.cos(beta), math.sin(beta)
     worst = 0.0
-    attention = False
     any_coal = False
     for i in range(m):
         _posture(fingers[i], terms[i], new[2 * i], new[2 * i + 1], x, yo, beta, c, s, posture[i])

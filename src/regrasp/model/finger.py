@@ -13,6 +13,12 @@ joint 2) to the second link's direction (joint 2 → tip). For URDFs whose links
 along x with identity joint origins it equals the joint coordinate ``q2``; otherwise it
 differs by a constant offset read from the model (see :attr:`Finger.theta2_offset`).
 
+**Actuator limits.** Each joint's torque limit [N m] is the URDF's ``effort`` (Pinocchio's
+``model.effortLimit``); an ``effort`` of 0 or less, or none, means no limit (inf). ``effort_limit`` overrides
+it (a scenario's ``effort`` key): one value for both joints or one per joint, each > 0 (inf: no limit). The
+finger's own model carries the limits in its ``effortLimit``, so a :class:`~regrasp.model.hand.Hand` and the
+compiled kernels read them from there (:attr:`Finger.effort_limit`).
+
 All positions are in the hand frame [m]. The caller's ``pin.Model`` is never mutated:
 the finger keeps its own copy with the base pose folded into the first joint's
 placement. The model is parsed and checked by :mod:`regrasp.model.finger_model`.
@@ -34,7 +40,32 @@ from ..core.planar import se3_from_planar, wrap_angle
 from ..core.validation import as_finite_array, as_name, expect_type, file_problem
 from .finger_model import parse_finger_urdf, planar_angle, validate_finger_model
 
-__all__ = ["Configuration", "Finger", "LinkShape"]
+__all__ = ["Configuration", "Finger", "LinkShape", "as_effort_limit", "urdf_effort_limit"]
+
+
+def as_effort_limit(name: str, value: object) -> np.ndarray:
+    """``value`` (one number for both joints, or one per joint) as a (2,) array of torque limits [N m], each > 0
+    (inf: no limit); else an :class:`~regrasp.core.exceptions.InvalidParameterError` naming ``name``."""
+    expected = "a joint torque limit > 0 [N m] (inf: none), or one per joint (2)"
+    try:
+        items = [value] if np.ndim(value) == 0 else list(value)
+        if len(items) != (1 if np.ndim(value) == 0 else 2) or any(isinstance(v, (bool, np.bool_))
+                                           or not isinstance(v, (int, float, np.integer, np.floating)) for v in items):
+            raise TypeError
+        floats = [float(v) for v in items]
+    except (TypeError, ValueError, OverflowError):
+        raise InvalidParameterError(name, value, expected) from None
+    if not all(v > 0.0 for v in floats):  # (NaN fails too)
+        raise InvalidParameterError(name, value, expected)
+    return np.array(floats * (2 // len(floats)))
+
+
+def urdf_effort_limit(model: pin.Model) -> np.ndarray:
+    """The (2,) torque limits [N m] of a finger's model, from its ``effortLimit`` (the URDF's ``effort``): inf
+    where it is 0 or less, or not finite (no limit)."""
+    effort = np.asarray(model.effortLimit, dtype=float)[:2].copy()
+    effort[~(np.isfinite(effort) & (effort > 0.0))] = np.inf
+    return effort
 
 
 class Configuration(str, Enum):
@@ -88,6 +119,8 @@ class Finger:
         name: Finger name used in messages and results.
         tip_frame: Name of the fingertip frame.
         source: Where the model came from (for error messages).
+        effort_limit: The joints' torque limits [N m], one for both or one per joint, > 0 (inf: none); None: the
+            model's ``effortLimit`` (the URDF's ``effort``; 0 or less: none). See the module docstring.
     """
 
     def __init__(
@@ -100,6 +133,7 @@ class Finger:
         name: str = "finger",
         tip_frame: str = "tip",
         source: str | Path = "<model>",
+        effort_limit: ArrayLike | None = None,
     ):
         self.source = str(source)
         expect_type("model", model, pin.Model, "a Pinocchio model (pin.Model)")
@@ -110,7 +144,9 @@ class Finger:
         self.tip_frame = tip_frame
 
         self._model_unplaced = pin.Model(model)
-        self.model = pin.Model(model)
+        effort = urdf_effort_limit(model) if effort_limit is None else as_effort_limit("effort_limit", effort_limit)
+        self._model_unplaced.effortLimit = effort.copy()
+        self.model = pin.Model(self._model_unplaced)
         self.model.jointPlacements[1] = se3_from_planar(self.base_in_hand) * self.model.jointPlacements[1]
         self.data = self.model.createData()
         self.tip_frame_id = self.model.getFrameId(tip_frame)
@@ -148,8 +184,9 @@ class Finger:
         configuration: Configuration | str = Configuration.LEFT,
         name: str | None = None,
         tip_frame: str = "tip",
+        effort_limit: ArrayLike | None = None,
     ) -> "Finger":
-        """Load a finger from a URDF file (kinematics, dynamics and collision geometry)."""
+        """Load a finger from a URDF file (kinematics, dynamics, torque limits and collision geometry)."""
         if not isinstance(path, (str, Path)):
             raise InvalidParameterError("path", path, "a URDF file's path (str or pathlib.Path)")
         path = Path(path)
@@ -167,6 +204,7 @@ class Finger:
             name=name if name is not None else path.stem,
             tip_frame=tip_frame,
             source=path,
+            effort_limit=effort_limit,
         )
 
     @classmethod
@@ -178,6 +216,7 @@ class Finger:
         configuration: Configuration | str = Configuration.LEFT,
         name: str = "finger",
         tip_frame: str = "tip",
+        effort_limit: ArrayLike | None = None,
     ) -> "Finger":
         """Build a finger from URDF text (for generated fingers, see :mod:`regrasp.model.finger_urdf`)."""
         if not isinstance(urdf, str):
@@ -193,11 +232,12 @@ class Finger:
             name=name,
             tip_frame=tip_frame,
             source="<string>",
+            effort_limit=effort_limit,
         )
 
     def with_placement(self, base_in_hand: ArrayLike | None = None, configuration: Configuration | str | None = None,
-                       name: str | None = None) -> "Finger":
-        """A copy of this finger with another base pose, configuration or name."""
+                       name: str | None = None, effort_limit: ArrayLike | None = None) -> "Finger":
+        """A copy of this finger with another base pose, configuration, name or torque limits [N m]."""
         return Finger(
             self._model_unplaced,
             self.collision_model,
@@ -206,9 +246,15 @@ class Finger:
             name=self.name if name is None else name,
             tip_frame=self.tip_frame,
             source=self.source,
+            effort_limit=self.effort_limit if effort_limit is None else effort_limit,
         )
 
     # ------------------------------------------------------------------ geometry
+    @property
+    def effort_limit(self) -> np.ndarray:
+        """The joints' torque limits (2,) [N m]: |τ_j| <= effort_limit[j] (inf: none); module docstring."""
+        return np.asarray(self.model.effortLimit, dtype=float)[:2].copy()
+
     @property
     def link_lengths(self) -> tuple[float, float]:
         """(l1, l2) [m]: joint 1 to joint 2, and joint 2 to the tip frame, read from the model."""

@@ -174,6 +174,12 @@ class Hand:
             model.gravity = pin.Motion(np.array([g[0], g[1], 0.0, 0.0, 0.0, 0.0]))
 
     @property
+    def effort_limit(self) -> np.ndarray:
+        """Every joint's torque limit [N m], (2m,), finger by finger: |τ_j| <= effort_limit[j] (inf: none); from each
+        finger's :attr:`~regrasp.model.finger.Finger.effort_limit` (the URDF's ``effort`` or the scenario's)."""
+        return np.concatenate([np.asarray(model.effortLimit, dtype=float)[:2] for model in self.finger_models])
+
+    @property
     def damping(self) -> np.ndarray:
         """Viscous joint damping [N m s/rad] of every joint, (2m,) (zeros when disabled)."""
         if not self.damping_enabled:

@@ -33,6 +33,8 @@ Unknown keys are errors (they are usually typos). Every error is a
     gravity = [0.0, -9.81]               # [m/s^2] in the hand frame
     mu = 0.5                             # optional: Coulomb friction of every fingertip [-] (mu_s = mu_k),
     # or: mu_static = 0.8 and mu_kinetic = 0.4 together (0 <= mu_kinetic <= mu_static); default mu = 0.5
+    effort = 0.5                         # optional: every joint's torque limit [N m] (> 0), or [joint 1, joint 2];
+                                         # default: each URDF's <limit effort> (0 or none there: no limit)
 
     [[fingers]]                          # one table per finger
     name = "finger1"
@@ -43,6 +45,7 @@ Unknown keys are errors (they are usually typos). Every error is a
     tip_clearance = 0.015                # optional, [m], 'urdf' geometry only
     mu = 0.8                             # optional: this fingertip's friction, overriding [hand]'s;
     # or: mu_static and mu_kinetic together, as in [hand]
+    effort = [0.3, 0.2]                  # optional: this finger's joint torque limits [N m], overriding [hand]'s
 
     [planner]                            # optional
     samples = 401                        # time samples over the trajectory's domain
@@ -79,7 +82,7 @@ from ..core.exceptions import (
 from ..core.polygon import ConvexPolygon
 from ..core.trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
 from ..core.validation import MAX_SAMPLES, as_finite_array, as_positive_float, file_problem
-from .finger import Finger
+from .finger import Finger, as_effort_limit
 from .geometry import Geometry
 from .perturbation import Perturbation
 
@@ -315,7 +318,21 @@ def _friction(r: _Reader, default: Friction) -> Friction:
     return Friction(*values)
 
 
-def _fingers(path: Path, tables: Any, polygon: ConvexPolygon, friction: Friction) -> tuple[FingerContact, ...]:
+def _effort(r: _Reader, default: np.ndarray | None) -> np.ndarray | None:
+    """A table's ``effort`` key: the joints' torque limits [N m], a number > 0 for both or one per joint
+    (:func:`~regrasp.model.finger.as_effort_limit`); ``default`` when it has none (None: the URDF's)."""
+    if not r.has("effort"):
+        return default
+    value = r.get("effort")
+    try:
+        return as_effort_limit(r.key("effort"), value)
+    except InvalidParameterError:
+        raise r.fail("effort", f"expected a joint torque limit > 0 [N m] or a list of two (joint 1, joint 2), "
+                               f"got {short_repr(value)}") from None
+
+
+def _fingers(path: Path, tables: Any, polygon: ConvexPolygon, friction: Friction,
+             effort: np.ndarray | None = None) -> tuple[FingerContact, ...]:
     if not isinstance(tables, list) or not tables or not all(isinstance(t, dict) for t in tables):
         raise ScenarioError(path, "fingers", "expected one or more [[fingers]] tables")
     contacts = []
@@ -341,8 +358,9 @@ def _fingers(path: Path, tables: Any, polygon: ConvexPolygon, friction: Friction
         if clearance is not None and clearance < 0.0:
             raise r.fail("tip_clearance", f"expected a length >= 0 [m], got {clearance!r}")
         own = _friction(r, friction)
+        limits = _effort(r, effort)
         finger = _wrap(r, "urdf", lambda: Finger.from_urdf(
-            urdf, base_in_hand=base, configuration=configuration, name=name))
+            urdf, base_in_hand=base, configuration=configuration, name=name, effort_limit=limits))
         r.finish()
         contacts.append(FingerContact(finger, edge, clearance, own))
     return tuple(contacts)
@@ -386,8 +404,9 @@ def load_scenario(path: str | Path) -> Scenario:
     hand = _Reader(path, hand_table, "hand.")
     gravity = hand.array("gravity", (2,), [0.0, -9.81])
     friction = _friction(hand, DEFAULT_FRICTION)
+    effort = _effort(hand, None)
     hand.finish()
-    contacts = _fingers(path, top.get("fingers"), polygon, friction)
+    contacts = _fingers(path, top.get("fingers"), polygon, friction, effort)
 
     planner_table = top.get("planner", {})
     if not isinstance(planner_table, dict):

@@ -7,7 +7,10 @@ survives is known. Which constraint ran out is found by relaxing them in turn:
    (e.g. condition I of paper §2.1, or a set narrower than twice the margin);
 2. **speed**: without the force constraints the program dies as early: the feasible sets move
    faster than slides can follow (per contact, a one-dimensional reachability check names it);
-3. **forces**: otherwise. The relaxed program's path shows the slide the envelopes need next; for
+3. **torque**: where the joints' torque limits cut the force tables (:mod:`regrasp.schedule.torque`) and the
+   program with the uncut tables survives longer, the limits ran out: the finger, the joint and the time, with
+   the least torque it needs at any admissible position;
+4. **forces**: otherwise. The relaxed program's path shows the slide the envelopes need next; for
    two fingers on parallel edges the two-finger slide rule (:mod:`regrasp.schedule.slide_rule`) says why
    that slide is impossible.
 
@@ -147,6 +150,10 @@ def diagnose(problem: Problem, free: LatticeRun, partial: RegraspSchedule | None
                                    f"at t = {times[k]:.3f} s no position of {', '.join(why)} keeps the envelope "
                                    f"margin of {em:.2f} mm (the latest admissible time is t = {latest:.3f} s)",
                                    partial=partial)
+    torque = _torque_limited(problem, last)
+    if torque is not None:
+        return NoScheduleError(latest, ScheduleLimit.TORQUE, (torque[0],), torque[1],
+                               partial=partial if last >= 0 else None)
     if last < 0:
         return NoScheduleError(latest, ScheduleLimit.FORCES, names,
                                f"no start state at t = {latest:.3f} s has a force system with the required margins",
@@ -184,6 +191,51 @@ def diagnose(problem: Problem, free: LatticeRun, partial: RegraspSchedule | None
                            f"after t = {latest:.3f} s the envelopes need {names[i]} to slide {sign}xi "
                            f"(in [{times[max(first - 1, 0)]:.3f}, {when:.3f}] s), and {how}"
                            + _along_gravity(problem, when), rule=rule, partial=partial)
+
+
+def _torque_limited(problem, last: int) -> tuple[str, str] | None:
+    """(the finger, the reason) where the joint torque limits are what ran out: the program on the force tables
+    as they were before the limits cut them (``problem.free_tables``) survives beyond layer ``last``; else None.
+    The reason names the joint and the time (the first layer no state survives), and the least torque that joint
+    needs over its contact's envelope-admissible positions (the lattice's necessary condition,
+    ``problem.torque_excess``), against its limit."""
+    if problem.free_tables is None:
+        return None
+    lat = problem.lattice
+    uncut = dataclasses.replace(lat, lo=problem.free_tables[0], hi=problem.free_tables[1])
+    free = run(uncut, start=problem.start_cells)
+    if free.last_layer <= last:
+        return None
+    k = min(last + 1, lat.layers - 1)
+    effort = problem.torque.effort
+    best = None  # (least excess over the admissible cells, contact, joint)
+    for i, grid in enumerate(problem.grids):
+        cells = lat.env_ok[k, i, :len(grid)]
+        for j in range(2):
+            if not np.isfinite(effort[i, j]) or not cells.any():
+                continue
+            excess = problem.torque_excess[k, :, i, :len(grid), j][:, cells]  # (modes, admissible cells)
+            with np.errstate(all="ignore"):
+                least = float(np.nanmin(excess)) if np.isfinite(excess).any() else np.nan
+            worst = float(np.nanmax(excess)) if np.isfinite(excess).any() else np.nan
+            key = (least, worst)
+            if np.isfinite(least) and (best is None or key > best[0]):
+                best = (key, i, j)
+    when = float(problem.times[k])
+    if best is None:
+        return problem.names[0], f"at t = {when:.3f} s the joint torque limits leave no force system"
+    (least, worst), i, j = best
+    name, limit = problem.names[i], float(effort[i, j])
+    if least > 0.0:
+        what = (f"at t = {when:.3f} s no envelope-admissible position of {name} keeps its joint {j + 1} within its "
+                f"torque limit of {limit:.4f} N m: it needs at least {limit + least:.4f} N m "
+                f"({least:.4f} N m more)")
+    else:
+        what = (f"at t = {when:.3f} s the joint torque limits leave no force system for the admissible positions: "
+                f"{name} joint {j + 1} (limit {limit:.4f} N m) would need up to {limit + worst:.4f} N m at some")
+    latest = float(problem.times[max(last, 0)])
+    return name, (f"{what} (joint torque limit; the latest admissible time is t = {latest:.3f} s, and without the "
+                  f"limits a schedule survives until t = {float(problem.times[free.last_layer]):.3f} s)")
 
 
 def _never_allowed(problem, i: int, d: int, k0: int, k1: int) -> bool:

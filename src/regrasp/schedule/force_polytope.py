@@ -32,6 +32,11 @@ extremes over a polytope at vertices).
 :func:`force_vertices` enumerates P's vertices (every choice of active inequalities, solved for all
 times at once): the planner then classifies whole grids of contact positions with a few products.
 :func:`force_system` solves one sample's forces as a linear program instead (the reported forces).
+
+**Joint torque limits** (:mod:`regrasp.schedule.torque`): contact i's joint torques are affine in its own
+(λ_i, τ_i), with coefficients that depend on ξ_i: they are not part of P. :func:`force_system` takes them as
+rows, and :func:`torque_excess` finds the least excess over them of any force system at given positions (a linear
+program: the planner's verification, and its diagnosis).
 """
 
 from __future__ import annotations
@@ -49,7 +54,8 @@ from ..core.contact import cone_margin
 from ..core.exceptions import InvalidParameterError
 from ..core.polygon import ConvexPolygon
 
-__all__ = ["ForceGeometry", "ForceLimits", "ForceVertices", "force_system", "force_vertices", "xi_intervals"]
+__all__ = ["ForceGeometry", "ForceLimits", "ForceVertices", "TorqueExcess", "force_system", "force_vertices",
+           "torque_excess", "xi_intervals"]
 
 
 @dataclass(frozen=True)
@@ -278,32 +284,108 @@ class ForceSystem:
     cone_margins: np.ndarray
 
 
-def force_system(geometry: ForceGeometry, beta: float, acceleration: ArrayLike, xi: ArrayLike,
-                 ratios: Sequence[float | None], static_mu: Sequence[float] | np.ndarray,
-                 limits: ForceLimits) -> ForceSystem:
-    r"""The forces that keep the fixed contacts deepest inside their cones (the largest smallest cone
-    margin, at least ``limits.cone_margin``), and among those the least squeeze (smallest Σ λ): two
-    linear programs (HiGHS) over the constraints of the module docstring at positions ``xi`` [m]."""
+def _equalities(geometry: ForceGeometry, beta: float, acceleration: ArrayLike, xi: ArrayLike, ratios, fixed, d: int):
+    """The force balance at positions ``xi`` as A_eq x = b_eq (3, d): the force in the object frame and the
+    moment, Σ λ_i (A_i + r_i B_i - ξ_i) + Σ_fixed τ_i B_i = I α."""
     m = geometry.m
-    ratios, static_mu = _check_mode(m, ratios, static_mu)
-    G, h, fixed = _inequalities(m, ratios, static_mu, replace(limits, cone_margin=0.0))
-    d = G.shape[1]
     E, F = _balance(geometry, np.array([beta]), np.atleast_2d(acceleration), ratios, fixed)
-    E, F = E[None], F  # (object frame)
     xi = np.asarray(xi, dtype=float)
-    # the moment row: Σ λ_i (A_i + r_i B_i - ξ_i) + Σ_fixed τ_i B_i = I α
     moment = np.zeros(d)
     for i in range(m):
         moment[i] = geometry.moment_normal[i] - xi[i] + (0.0 if ratios[i] is None
                                                          else ratios[i] * geometry.moment_tangent[i])
     for k, i in enumerate(fixed):
         moment[m + k] = geometry.moment_tangent[i]
-    A_eq = np.vstack([E[0], moment])
-    b_eq = np.append(F[0], geometry.inertia * float(np.atleast_2d(acceleration)[0, 2]))
+    return np.vstack([E, moment]), np.append(F[0], geometry.inertia * float(np.atleast_2d(acceleration)[0, 2]))
+
+
+def _torque_rows(torques: np.ndarray, effort: np.ndarray, ratios, fixed, d: int):
+    """The torque limits as rows A x <= b: ±(w_j + a_j λ_i + b_j τ_i) <= e_j per limited joint, with τ_i = r_i λ_i
+    on a cone edge; ``torques`` (m, 2, 3): per contact and joint (w [N m], a, b [m]); and each row's (i, j)."""
+    m = len(ratios)
+    col = {i: m + k for k, i in enumerate(fixed)}
+    rows, rhs, which = [], [], []
+    for i in range(m):
+        for j in range(2):
+            w, a, b = torques[i, j]
+            if not (np.isfinite(effort[i, j]) and np.isfinite(w)):
+                continue
+            row = np.zeros(d)
+            row[i] = a + (0.0 if ratios[i] is None else ratios[i] * b)
+            if ratios[i] is None:
+                row[col[i]] = b
+            for sign in (1.0, -1.0):
+                rows.append(sign * row)
+                rhs.append(effort[i, j] - sign * w)
+                which.append((i, j))
+    return np.array(rows).reshape(-1, d), np.array(rhs), which
+
+
+@dataclass(frozen=True)
+class TorqueExcess:
+    """The least excess over the joint torque limits of a force system (:func:`torque_excess`).
+
+    Attributes:
+        excess: The least t [N m] such that a force system has every |τ_ij| <= e_ij + t (<= 0: one within the
+            limits; inf: no force system at all, whatever the torques).
+        contact, joint: A joint (0-based contact, joint 0 or 1) at that bound, or -1.
+        torque: Its |τ| there [N m].
+    """
+
+    excess: float
+    contact: int
+    joint: int
+    torque: float
+
+
+def torque_excess(geometry: ForceGeometry, beta: float, acceleration: ArrayLike, xi: ArrayLike,
+                  ratios: Sequence[float | None], static_mu: Sequence[float] | np.ndarray, limits: ForceLimits,
+                  torques: np.ndarray, effort: np.ndarray) -> TorqueExcess:
+    r"""The least excess t over the joint torque limits of the force systems at positions ``xi`` [m] (the
+    constraints of the module docstring, with ``limits.cone_margin``): the linear program min t s.t.
+    :math:`|w_{ij} + a_{ij}\lambda_i + b_{ij}	au_i| \le e_{ij} + t`. ``torques`` (m, 2, 3): per contact and joint
+    (w [N m], a [m], b [m]) (:class:`~regrasp.schedule.torque.ContactTorques`); ``effort`` (m, 2) [N m]."""
+    m = geometry.m
+    ratios, static_mu = _check_mode(m, ratios, static_mu)
+    G, h, fixed = _inequalities(m, ratios, static_mu, limits)
+    d = G.shape[1]
+    A_eq, b_eq = _equalities(geometry, beta, acceleration, xi, ratios, fixed, d)
+    T, b_t, which = _torque_rows(np.asarray(torques, dtype=float), np.asarray(effort, dtype=float), ratios, fixed, d)
+    if not which:
+        return TorqueExcess(-math.inf, -1, -1, math.nan)
+    A_ub = np.vstack([np.hstack([-G, np.zeros((len(G), 1))]), np.hstack([T, -np.ones((len(T), 1))])])
+    result = scipy.optimize.linprog(np.append(np.zeros(d), 1.0), A_ub=A_ub, b_ub=np.concatenate([-h, b_t]),
+                                    A_eq=np.hstack([A_eq, np.zeros((3, 1))]), b_eq=b_eq,
+                                    bounds=[(None, None)] * (d + 1), method="highs")
+    if result.status != 0:
+        return TorqueExcess(math.inf, -1, -1, math.nan)
+    x, t = result.x[:d], float(result.x[-1])
+    slack = b_t + t - T @ x  # the rows at the bound have no slack
+    r = int(np.argmin(slack))
+    i, j = which[r]
+    return TorqueExcess(t, i, j, float(effort[i, j] + t))
+
+
+def force_system(geometry: ForceGeometry, beta: float, acceleration: ArrayLike, xi: ArrayLike,
+                 ratios: Sequence[float | None], static_mu: Sequence[float] | np.ndarray,
+                 limits: ForceLimits, torques: np.ndarray | None = None,
+                 effort: np.ndarray | None = None) -> ForceSystem:
+    r"""The forces that keep the fixed contacts deepest inside their cones (the largest smallest cone
+    margin, at least ``limits.cone_margin``), and among those the least squeeze (smallest Σ λ): two
+    linear programs (HiGHS) over the constraints of the module docstring at positions ``xi`` [m], and the joint
+    torque limits where ``torques`` (m, 2, 3) and ``effort`` (m, 2) are given (:func:`torque_excess`)."""
+    m = geometry.m
+    ratios, static_mu = _check_mode(m, ratios, static_mu)
+    G, h, fixed = _inequalities(m, ratios, static_mu, replace(limits, cone_margin=0.0))
+    d = G.shape[1]
+    A_eq, b_eq = _equalities(geometry, beta, acceleration, xi, ratios, fixed, d)
     # variables (x, c): cone rows read μ λ ∓ τ - c >= 0; maximize c
     cone = np.array([r >= 2 * m for r in range(len(G))])
     G_c = np.hstack([G, -cone[:, None].astype(float)])
     h_c = np.where(cone, 0.0, h)
+    if torques is not None and effort is not None:  # -T x >= -b_t
+        T, b_t, _ = _torque_rows(np.asarray(torques, dtype=float), np.asarray(effort, dtype=float), ratios, fixed, d)
+        G_c, h_c = np.vstack([G_c, np.hstack([-T, np.zeros((len(T), 1))])]), np.concatenate([h_c, -b_t])
     A_eq_c = np.hstack([A_eq, np.zeros((3, 1))])
     bounds = [(None, None)] * d + [(None, None) if fixed else (0.0, 0.0)]
     first = scipy.optimize.linprog(np.append(np.zeros(d), -1.0), A_ub=-G_c, b_ub=-h_c, A_eq=A_eq_c, b_eq=b_eq,

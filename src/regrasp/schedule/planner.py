@@ -52,10 +52,11 @@ from numpy.typing import ArrayLike
 from ..core.exceptions import InvalidParameterError
 from ..model.scenario import Scenario
 from .diagnosis import diagnose
-from .force_polytope import force_system, force_vertices
+from .force_polytope import force_system, force_vertices, torque_excess
 from .lattice import cells_of, flat_index, move_runs, path, run
 from .problem import Problem, RegraspSettings, build_problem, slide_ratios
 from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide, first_minimum, slides_at
+from .torque import TorqueModel
 
 __all__ = ["RegraspSettings", "plan_regrasps"]
 
@@ -89,9 +90,12 @@ def _schedule(problem: Problem, cells, moves, seconds: float, lower_bound, verif
     limits = problem.settings.force_limits()
     mu_s = [f.static for f in problem.friction]
     normal, cone = np.full((len(times), m), np.nan), np.full((len(times), m), np.nan)
+    torque = problem.torque if forces and problem.torque is not None and problem.torque.limited else None
+    torques = _schedule_torques(torque, sample, at) if torque is not None else None
     for k in range(len(times) if forces else 0):
         system = force_system(problem.geometry, sample.pose[k, 2], sample.acceleration[k], at.xi[k],
-                              slide_ratios(at.direction[k], problem.friction), mu_s, limits)
+                              slide_ratios(at.direction[k], problem.friction), mu_s, limits,
+                              *((torques[k], torque.effort) if torque is not None else ()))
         normal[k] = system.normal
         cone[k] = np.where(at.direction[k] == 0, system.cone_margins, np.nan)
     env_min, env_at = verified_min if verified_min is not None else first_minimum(envelope_margin, times,
@@ -140,6 +144,9 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
     groups: dict[tuple, list] = {}  # the sample times by mode
     for k in range(len(times)):
         groups.setdefault(tuple(at.direction[k]), []).append(k)
+    torque = problem.torque if problem.torque is not None and problem.torque.limited else None
+    if torque is not None:  # each contact's torques at the schedule's exact positions, rates and accelerations
+        torques = _schedule_torques(torque, sample, at)
     for direction, ks in groups.items():
         ks = np.array(ks)
         fv = force_vertices(problem.geometry, sample.pose[ks, 2], sample.acceleration[ks],
@@ -147,6 +154,11 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
         for j, k in enumerate(ks):
             if not _holds(*fv.at(j), at.xi[k]):
                 violations.append((float(times[k]), "forces", None))
+            elif torque is not None:
+                why = _torque_violation(problem, torque, fv, j, torques[k], sample.pose[k, 2], sample.acceleration[k],
+                                        at.xi[k], slide_ratios(direction, problem.friction), mu_s, limits)
+                if why is not None:
+                    violations.append((float(times[k]), *why))
     for s, t, direction, xi, smp in starts:
         fv = force_vertices(problem.geometry, smp.pose[:, 2], smp.acceleration,
                             slide_ratios(direction, problem.friction, breaking=s.contact,
@@ -154,6 +166,39 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
         if not _holds(*fv.at(0), xi):
             violations.append((t, "breakaway", s.contact))
     return sorted(violations), first_minimum(margins, times, problem.names)
+
+
+def _schedule_torques(torque: TorqueModel, sample, at) -> np.ndarray:
+    """Per sample, contact and joint the torque map (w, a, b) of :class:`~regrasp.schedule.torque.ContactTorques` at
+    the schedule's positions, rates and accelerations ``at``: (n, m, 2, 3)."""
+    out = np.empty((len(at.xi), at.xi.shape[1], 2, 3))
+    for i in range(at.xi.shape[1]):
+        c = torque.contact(i, sample.pose, sample.velocity, sample.acceleration, at.xi[:, i:i + 1],
+                           at.xi_dot[:, i:i + 1], at.xi_ddot[:, i:i + 1])
+        out[:, i] = np.stack([c.wrench[:, 0], c.normal[:, 0], c.tangential[:, 0]], axis=-1)
+    return out
+
+
+def _torque_violation(problem: Problem, torque: TorqueModel, fv, j: int, torques: np.ndarray, beta: float,
+                      acceleration: np.ndarray, xi: np.ndarray, ratios, mu_s, limits) -> tuple[str, int] | None:
+    """Whether no force system at positions ``xi`` keeps the joints within their torque limits (``torques``
+    (m, 2, 3) as :func:`_schedule_torques` gives them): (what, contact) of the violation, or None. Where every
+    vertex of the polytope (``fv`` at its sample j) keeps them, every force system does (|τ_j| is convex); else a
+    linear program decides (:func:`~regrasp.schedule.force_polytope.torque_excess`)."""
+    keep = fv.valid[j]
+    lam, tau = fv.normal[j, keep], fv.tangential[j, keep]  # (V, m)
+    values = torques[None, :, :, 0] + torques[None, :, :, 1] * lam[:, :, None] + torques[None, :, :, 2] \
+        * tau[:, :, None]
+    if np.all(np.abs(values) <= torque.effort[None]):
+        return None
+    found = torque_excess(problem.geometry, beta, acceleration, xi, ratios, mu_s, limits, torques, torque.effort)
+    if not found.excess > 1e-9:
+        return None
+    if found.contact < 0:  # (no force system at all: the forces check's business)
+        return None
+    i, joint = found.contact, found.joint
+    return (f"torque limit ({problem.names[i]} joint {joint + 1} needs at least {found.torque:.4f} N m, "
+            f"its limit is {torque.effort[i, joint]:.4f} N m)", i)
 
 
 def _holds(lam: np.ndarray, offset: np.ndarray, xi: np.ndarray) -> bool:
@@ -318,7 +363,8 @@ def plan_regrasps(scenario: Scenario, settings: RegraspSettings = RegraspSetting
             return schedule
         bans = _merge(bans, _bans(problem, violations, cells, moves))
     t, what, i = violations[0]
-    raise NoScheduleError(t, ScheduleLimit.VERIFICATION, problem.names if i is None else (problem.names[i],),
+    limit = ScheduleLimit.TORQUE if what.startswith("torque") else ScheduleLimit.VERIFICATION
+    raise NoScheduleError(t, limit, problem.names if i is None else (problem.names[i],),
                           f"the schedule still fails its verification after {settings.max_repairs} re-plans "
                           f"({len(violations)} violations, the first: {what} at t = {t:.3f} s)")
 

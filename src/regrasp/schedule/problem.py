@@ -3,7 +3,9 @@ r"""The regrasp planner's problem: its settings, and the lattice built from a sc
 :func:`build_problem` samples each contact's feasible envelope on a fine time grid, turns it into
 the lattice's envelope tables (admissible cells over each layer's window, with the planning buffer,
 and the proximity cost), and computes the force tables of every move vector from the force
-polytope (:mod:`regrasp.schedule.force_polytope`), as :mod:`regrasp.schedule.lattice` reads them. The
+polytope (:mod:`regrasp.schedule.force_polytope`), as :mod:`regrasp.schedule.lattice` reads them. Where a joint has a
+torque limit, the tables also drop the cells that no force within it allows (:func:`_torque_tables`: a necessary
+condition; the planner's verification checks the limits exactly, :mod:`regrasp.schedule.torque`). The
 method and its buffers are described in :mod:`regrasp.schedule.planner` and ``docs/derivations.md``
 ("§4, planned ahead").
 """
@@ -27,6 +29,7 @@ from ..model.geometry import Geometry, as_geometry
 from ..model.scenario import Scenario
 from .force_polytope import ForceGeometry, ForceLimits, force_vertices, xi_intervals
 from .lattice import Lattice, motion_combos
+from .torque import TorqueModel
 
 if TYPE_CHECKING:
     from ..core.contact import Friction
@@ -157,7 +160,10 @@ class Problem:
 
     Attributes (besides the scenario's): ``times`` the layers [s], ``dt`` the step [s], ``grids``
     the contact cells [m], ``envelopes`` per contact, ``sub_samples`` its envelope samples at the
-    sub-sample times ``sub_times``, ``lattice``, ``limits`` (the planning limits, with buffers).
+    sub-sample times ``sub_times``, ``lattice``, ``limits`` (the planning limits, with buffers), ``torque`` the
+    fingers' joint torque limits (:class:`~regrasp.schedule.torque.TorqueModel`), ``torque_excess`` the lattice's
+    torque table where a joint has a limit (:meth:`~regrasp.schedule.torque.TorqueModel.cell_excess`) and
+    ``free_tables`` the force tables (lo, hi) before the limits cut them (None: they cut nothing).
     """
 
     scenario: Scenario
@@ -176,6 +182,9 @@ class Problem:
     envelope_buffer: float
     lattice: Lattice
     start_cells: np.ndarray | None
+    torque: TorqueModel | None = None
+    torque_excess: np.ndarray | None = None
+    free_tables: tuple | None = None
 
 
 def _cell_margins(sample, grid: np.ndarray) -> np.ndarray:
@@ -262,8 +271,15 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
     axis = int(np.argmax([len(g) for g in grids]))
     middle = traj.sample(np.clip(np.append(times[0], 0.5 * (times[1:] + times[:-1])), traj.t_start, traj.t_end))
     early = traj.sample(np.clip(times - 0.5 * ramp, traj.t_start, traj.t_end))
-    lo, hi, blo, bhi, slots, mid_lo, mid_hi = _force_tables(geo, sample, middle, early, 0.5 * ramp / dt, combos,
-                                                            friction, limits, grids, axis, settings.prime_overshoot)
+    lo, hi, blo, bhi, slots, mid_lo, mid_hi, vertices = _force_tables(geo, sample, middle, early, 0.5 * ramp / dt,
+                                                                      combos, friction, limits, grids, axis,
+                                                                      settings.prime_overshoot)
+    torque = TorqueModel(scenario)
+    torque_excess, free_tables = None, None
+    if torque.limited:
+        torque_excess, free_tables = _torque_tables(torque, sample, grids, combos, vertices, speed, axis, lo, hi,
+                                                    lattice_env)
+    del vertices
     rest_only = np.zeros(n_steps + 1, dtype=bool)
     rest_only[[0, 1, n_steps]] = True
     move_cost = 0.05
@@ -271,7 +287,8 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
                       rest_only,
                       slide_cost=1.0 + (n_steps + 1) * m * (1.0 + move_cost), move_cost=move_cost)
     return Problem(scenario, settings, tuple(c.finger.name for c in contacts), friction, bool(periodic), times, dt,
-                   grids, envelopes, sub_times, sub_samples, geo, limits, envelope_buffer, lattice, start_cells)
+                   grids, envelopes, sub_times, sub_samples, geo, limits, envelope_buffer, lattice, start_cells, torque,
+                   torque_excess, free_tables)
 
 
 def _envelope_tables(sub_samples, grids, q, n_steps, settings, buffer, periodic: bool):
@@ -302,16 +319,20 @@ def _force_tables(geo, sample, middle, early, lead: float, combos, friction, lim
     trajectory half a ramp before the layer) with the other sliders ``lead`` cells back."""
     m = len(grids)
     n_layers = len(sample.pose)
+    vertices: list = []  # per move vector, the polytope's vertices at the layers
     others = np.array(list(itertools.product(*[grids[i] for i in range(m) if i != axis]))).reshape(-1, m - 1)
     mu_s = np.array([f.static for f in friction])
     M = len(combos)
     h = grids[0][1] - grids[0][0] if len(grids[0]) > 1 else 0.0
     columns = [i for i in range(m) if i != axis]
 
-    def table(ratios, smp=sample, shift=None):
-        """(lo, hi) per layer and cell of the others, with the positions ``shift`` [m] (m,) back."""
+    def table(ratios, smp=sample, shift=None, keep=None):
+        """(lo, hi) per layer and cell of the others, with the positions ``shift`` [m] (m,) back (``keep``: a list
+        to append the polytope's vertices to)."""
         grid = others if shift is None else others - np.array([shift[i] for i in columns])
         fv = force_vertices(geo, smp.pose[:, 2], smp.acceleration, ratios, mu_s, limits)
+        if keep is not None:
+            keep.append(fv)
         out = np.empty((2, n_layers, len(others)), dtype=np.float32)
         back = 0.0 if shift is None else shift[axis]  # the axis position x - back must be inside
         for k in range(n_layers):
@@ -324,7 +345,7 @@ def _force_tables(geo, sample, middle, early, lead: float, combos, friction, lim
     mid_lo = np.full_like(lo, -np.inf)
     mid_hi = np.full_like(lo, np.inf)
     for mu, d in enumerate(combos):
-        lo[:, :, mu], hi[:, :, mu] = table(slide_ratios(d, friction))
+        lo[:, :, mu], hi[:, :, mu] = table(slide_ratios(d, friction), keep=vertices)
         if np.count_nonzero(d) >= 2:
             mid_lo[:, :, mu], mid_hi[:, :, mu] = table(slide_ratios(d, friction), middle, 0.5 * h * np.asarray(d))
     needs = np.array([[d[i] != 0 and friction[i].static + overshoot > friction[i].kinetic + 1e-12 for i in range(m)]
@@ -343,4 +364,36 @@ def _force_tables(geo, sample, middle, early, lead: float, combos, friction, lim
             real = table(ratios, early, others_back)
             blo[:, :, slot] = np.maximum(at_layer[0], real[0])
             bhi[:, :, slot] = np.minimum(at_layer[1], real[1])
-    return lo, hi, blo, bhi, slots, mid_lo, mid_hi
+    return lo, hi, blo, bhi, slots, mid_lo, mid_hi, vertices
+
+
+def _torque_tables(torque: TorqueModel, sample, grids, combos, vertices, speed: float, axis: int, lo: np.ndarray,
+                   hi: np.ndarray, env_ok: np.ndarray) -> tuple[np.ndarray, tuple | None]:
+    """The joint torque limits' necessary condition in the force tables (module docstring of
+    :mod:`regrasp.schedule.torque`): per layer and move vector, a state whose other contacts sit on a cell that no
+    force within a joint's limit allows is dropped (its interval emptied), and the axis's interval is cut to the
+    span of its allowed cells (a superset: the verification checks exactly). Changes ``lo`` and ``hi`` in place;
+    returns the excess table (:meth:`~regrasp.schedule.torque.TorqueModel.cell_excess`) and the tables as they were
+    (None when the limits excluded no cell); ``env_ok``: the envelope tables (a cell they exclude is not cut
+    again)."""
+    excess = torque.cell_excess(sample, grids, combos, vertices, speed)
+    # (N + 1, M, m, n_max); NaN: unreachable, and cells outside the envelopes: the envelope's business
+    allowed = ~(excess > 0.0).any(axis=-1) | ~env_ok[:, None]
+    if allowed.all():
+        return excess, None
+    free = (lo.copy(), hi.copy())
+    m = len(grids)
+    columns = [i for i in range(m) if i != axis]
+    axis_grid = np.asarray(grids[axis])
+    for k, mu in zip(*np.nonzero(~allowed.all(axis=(2, 3)))):
+        ok_others = np.ones(1, dtype=bool)
+        for i in columns:
+            ok_others = np.outer(ok_others, allowed[k, mu, i, :len(grids[i])]).reshape(-1)
+        cells = np.flatnonzero(allowed[k, mu, axis, :len(axis_grid)])
+        lo[k, ~ok_others, mu], hi[k, ~ok_others, mu] = np.inf, -np.inf
+        if cells.size == 0:
+            lo[k, :, mu], hi[k, :, mu] = np.inf, -np.inf
+        else:
+            lo[k, :, mu] = np.maximum(lo[k, :, mu], axis_grid[cells[0]] - 1e-6)
+            hi[k, :, mu] = np.minimum(hi[k, :, mu], axis_grid[cells[-1]] + 1e-6)
+    return excess, free

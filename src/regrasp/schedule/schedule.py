@@ -287,6 +287,7 @@ class ScheduleLimit(str, Enum):
     FORCES = "forces"        #: no force system allows the slides the envelopes require
     PERIODIC = "periodic"    #: schedules exist, but none ends a period where it starts
     VERIFICATION = "verification"  #: the planner's schedules keep failing its fine-grid check
+    TORQUE = "torque"        #: no force system within the joints' torque limits (the finger, joint and time named)
 
 
 class NoScheduleError(RegraspError):

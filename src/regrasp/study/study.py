@@ -293,8 +293,8 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
         settings: The supervisor's settings in every run (None: the rollout's default).
         plant: The plant every run is on, as :func:`~regrasp.rollout.build.build_rollout` takes it (a
             :class:`~regrasp.plants.spec.PlantSpec` without model errors: each run draws its own, or a kind's name).
-        softness: The ranges each run draws its contacts' softness from (:class:`~regrasp.model.softness.SoftnessRanges`;
-            a compliant plant only), or None (the plant's own).
+        softness: The ranges each run draws its contacts' softness from
+            (:class:`~regrasp.model.softness.SoftnessRanges`; a compliant plant only), or None (the plant's own).
         progress: Called as ``progress(done, runs)`` after each run.
     """
     from ..model.scenario import Scenario, load_scenario

@@ -49,7 +49,7 @@ from regrasp.plants.mujoco.plant import MujocoPlant  # noqa: E402
 from regrasp.plants.project.plant import Plant  # noqa: E402
 from regrasp.plants.simulation import PlantLike  # noqa: E402
 from regrasp.rollout.build import Rollout  # noqa: E402
-from regrasp.supervisor.policies.base import OrderedSlidesPolicy
+from regrasp.supervisor.policies.base import OrderedSlidesPolicy  # noqa: E402
 from regrasp.supervisor.types import SlideOrder  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -262,3 +262,27 @@ def test_the_command_lines_help_does_not_import_mujoco():
            "print('mujoco' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip().splitlines()[-1] == "False"
+
+
+def test_the_mujoco_plant_saturates_the_torques_at_the_joints_limits():
+    """clip(τ, -effort, effort) before ``qfrc_applied``: a limited plant driven beyond its limits steps exactly as
+    an unlimited one driven with the clipped torques, and logs each joint's saturation when it starts."""
+    effort = np.array([0.05, 0.03] * 2)
+    plants = []
+    for e in (effort[:2], np.inf):
+        hand = Hand([c.finger.with_placement(effort_limit=e) for c in SC2.contacts],
+                    gravity_in_hand=SC2.gravity_in_hand)
+        contacts = [PlantContact(1, "fixed", XI0), PlantContact(3, "fixed", XI0)]
+        plant = MujocoPlant(hand, SC2.polygon, contacts, friction=MU, stop_on=())
+        model = ReducedModel(hand, Grasp(SC2.polygon, [1, 3], ["fixed", "fixed"]), [XI0, XI0])
+        st = model.state(X_HOLD, np.zeros(3))
+        plant.reset(st.q, st.q_dot, X_HOLD, np.zeros(3))
+        plants.append(plant)
+    for k, tau in enumerate([np.array([0.2, -0.1, -0.2, 0.01])] * 2 + [np.array([0.01, 0.0, -0.01, 0.0])]):
+        step = plants[0].step(tau)
+        expected = plants[1].step(np.clip(tau, -effort, effort))
+        assert np.array_equal(step.state.q, expected.state.q) and np.array_equal(step.state.X, expected.state.X)
+        saturation = [(e.contact, int(e.values["joint"])) for e in step.events if e.kind is EventKind.SATURATION]
+        assert saturation == ([(SC2.contacts[0].finger.name, 1), (SC2.contacts[0].finger.name, 2),
+                               (SC2.contacts[1].finger.name, 1)] if k == 0 else [])
+    assert plants[0].saturation.saturated == (False,) * 4

@@ -34,6 +34,7 @@ import numpy as np
 import pytest
 
 from regrasp import ContactMode, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+from regrasp.core.events import EventKind
 from regrasp.core.exceptions import InvalidParameterError, UnknownEdgeError
 from regrasp.core.planar import rotation
 from regrasp.model import UrdfCollisionChecker
@@ -893,3 +894,54 @@ def test_private_dynamics_pass_matches_the_hand(damping, link_mass_scale):
             np.testing.assert_allclose(f[15:18], [inverse[0, 0], inverse[0, 1], inverse[1, 1]], rtol=1e-12)
             tip_space = jac @ inverse @ jac.T
             np.testing.assert_allclose(f[18:21], [tip_space[0, 0], tip_space[0, 1], tip_space[1, 1]], rtol=1e-12)
+
+
+# ---------------------------------------------------------------------------- actuator limits
+EFFORT = (0.05, 0.03)  # [N m] per joint of both fingers
+
+
+def _limited_hand(effort) -> Hand:
+    return Hand([c.finger.with_placement(effort_limit=effort) for c in scenario().contacts],
+                gravity_in_hand=(0.0, -GRAVITY))
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_plant_saturates_the_torques_at_the_joints_limits(compiled):
+    """The torque the plant applies is clip(τ, -effort, effort): a limited plant driven beyond its limits steps
+    exactly as an unlimited one driven with the clipped torques; a joint's saturation is an event when it starts,
+    once until it is back within its limit."""
+    limited, free = _limited_hand(EFFORT), _limited_hand(np.inf)
+    assert limited.effort_limit.tolist() == list(EFFORT) * 2 and np.isinf(free.effort_limit).all()
+    xi = [0.0, 0.005]
+    plants = [start(hand, ["fixed", "fixed"], xi, [0.0, 0.12, 0.0], [0.0, 0.0, 0.0], friction=1.0,
+                    compiled=compiled, collision_check=False, stop_on=())[0] for hand in (limited, free)]
+    assert plants[0].compiled == compiled
+    rng = np.random.default_rng(3)
+    commands = [np.array([0.2, -0.1, -0.2, 0.1])] * 3 + [np.array([0.01, 0.01, -0.01, 0.0])] \
+        + [np.array([0.2, 0.02, -0.02, -0.1])] + [rng.uniform(-0.08, 0.08, 4) for _ in range(5)]
+    effort = np.array(EFFORT * 2)
+    onsets = []
+    for tau in commands:
+        step = plants[0].step(tau)
+        clipped = np.clip(tau, -effort, effort)
+        expected = plants[1].step(clipped)
+        assert np.array_equal(step.state.q, expected.state.q) and np.array_equal(step.state.X, expected.state.X)
+        assert step.state.torque_work == expected.state.torque_work  # (the work of the applied torques)
+        assert plants[0].saturated == tuple(bool(s) for s in (clipped != tau))
+        onsets.append([(e.contact, int(e.values["joint"]), e.values["torque"]) for e in step.events
+                       if e.kind is EventKind.SATURATION])
+    names = [f.name for f in limited.fingers]
+    assert onsets[0] == [(names[0], 1, 0.2), (names[0], 2, -0.1), (names[1], 1, -0.2), (names[1], 2, 0.1)]
+    assert onsets[1] == onsets[2] == onsets[3] == []  # (still saturated, then within)
+    assert onsets[4] == [(names[0], 1, 0.2), (names[1], 2, -0.1)]
+    assert all(e.source.value == "plant" for e in plants[0].events)
+    assert sum(e.kind is EventKind.SATURATION for e in plants[0].events) == sum(map(len, onsets))
+
+
+def test_the_compiled_and_reference_plants_saturate_alike():
+    plants = [start(_limited_hand(EFFORT), ["fixed", "fixed"], [0.0, 0.005], [0.0, 0.12, 0.0], [0.0, 0.0, 0.0],
+                    friction=1.0, compiled=c, collision_check=False, stop_on=())[0] for c in (True, False)]
+    for tau in ([0.2, -0.1, -0.2, 0.1], [0.04, 0.0, -0.06, 0.02]):
+        a, b = (p.step(tau) for p in plants)
+        np.testing.assert_allclose(a.state.q, b.state.q, rtol=0, atol=1e-12)
+        assert [e.detail for e in a.events] == [e.detail for e in b.events]

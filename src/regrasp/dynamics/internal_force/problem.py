@@ -19,6 +19,10 @@ exactly on a cone edge in a given direction, :math:`t_j^T f_j = s_j \mu_j n_j^T 
 :math:`\mu_j` the ConeEdge carries (the caller's choice: the kinetic coefficient for a slider, :math:`\mu_s` + an
 overshoot for the transition before a slide, §4); such a contact gets no static-cone rows.
 
+**Joint torque limits** (``torques``, :mod:`regrasp.dynamics.internal_force.torque`): with
+:math:`\tau_i = w_i + J_i^T f_i`, two more inequalities per limited joint, :math:`|\tau_{ij}| \le e_{ij}`.
+Where none keeps them, :class:`InternalForceInfeasibleError` names the joint and the least shortfall.
+
 **A margin instead of the least squeeze** (the paper's "γ large"). With
 ``settings.target_cone_margin`` = :math:`\bar s > 0` [N] the QP gains one variable s [N]:
 
@@ -51,6 +55,7 @@ from __future__ import annotations
 
 import ctypes
 import functools
+import math
 import signal
 import time
 import warnings
@@ -66,6 +71,7 @@ from ...core.exceptions import RegraspError
 from ...model.hand import block_diagonal
 from .rows import MARGIN_AIM, MARGIN_WEIGHT, ConstraintRows, null_basis
 from .settings import ConeEdge, InternalForceSettings, as_cone_edges
+from .torque import JointTorques, TorqueShortfall, torque_matrix, torque_shortfall, within_limits
 
 __all__ = [
     "InternalForceInfeasibleError",
@@ -73,6 +79,7 @@ __all__ = [
     "InternalForceResult",
     "build_internal_force_qp",
     "hand_on_ctrl_c",
+    "qp_shortfall",
     "solve_internal_force_qp",
 ]
 
@@ -87,12 +94,18 @@ class InternalForceQP:
         null_basis: N_c, (2m, k), orthonormal columns.
         motion_forces: f_m, (2m,), hand frame.
         settings: The margins used.
+        rows: The rows but the torque limits' in the hand frame, (C (r, 2m), lower (r,), n_ineq): C f >= lower in
+            the first n_ineq, = lower in the rest (f = f_m + N_c y).
+        torques: The joint torque limits (:mod:`regrasp.dynamics.internal_force.torque`; their rows are in
+            ``problem``), or None.
     """
 
     problem: qpsolvers.Problem | None
     null_basis: np.ndarray
     motion_forces: np.ndarray
     settings: InternalForceSettings
+    rows: tuple = ()
+    torques: JointTorques | None = None
 
 
 @dataclass(frozen=True)
@@ -120,21 +133,26 @@ class InternalForceResult:
 
 
 class InternalForceInfeasibleError(RegraspError):
-    """No internal force keeps every contact inside its cone with the requested margins.
+    """No internal force keeps every contact inside its cone with the requested margins (and every joint within its
+    torque limit).
 
     Attributes:
         qp: The :class:`InternalForceQP` (its ``problem`` is the qpsolvers problem).
         status: The solver's status string.
+        torque: Where the joint torque limits are the reason (a force keeps the other rows, none within the limits):
+            the :class:`~regrasp.dynamics.internal_force.torque.TorqueShortfall`, the finger and joint that fall
+            short and by how much; else None.
     """
 
-    def __init__(self, qp: InternalForceQP, status: str):
+    def __init__(self, qp: InternalForceQP, status: str, torque: TorqueShortfall | None = None):
         self.qp = qp
         self.status = status
-        super().__init__(
-            f"internal-force QP infeasible (solver status: {status}): no squeeze keeps every contact "
-            f"pushing with >= {qp.settings.f_min} N (or its floor) and every fixed contact inside its friction cone "
-            f"with friction margin {qp.settings.friction_margin}"
-        )
+        self.torque = torque
+        what = (f"no squeeze keeps every contact pushing with >= {qp.settings.f_min} N (or its floor) and every fixed "
+                f"contact inside its friction cone with friction margin {qp.settings.friction_margin}")
+        if torque is not None:
+            what = f"joint torque limit: {torque}, whatever the squeeze ({what} otherwise)"
+        super().__init__(f"internal-force QP infeasible (solver status: {status}): {what}")
 
 
 def _rows(m: int, modes, friction, settings: InternalForceSettings, cone_edge) -> ConstraintRows:
@@ -149,6 +167,7 @@ def build_internal_force_qp(
     friction: FrictionLike,
     settings: InternalForceSettings = InternalForceSettings(),
     cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None,
+    torques: JointTorques | None = None,
 ) -> InternalForceQP:
     r"""Build the QP of the module docstring.
 
@@ -162,13 +181,17 @@ def build_internal_force_qp(
         settings: Margins (and the target cone margin: then the problem is in (y, s)).
         cone_edge: Optional contacts to put on a cone edge (each at its ConeEdge's coefficient): a
             :class:`ConeEdge` or a tuple of them on distinct contacts.
+        torques: The joint torque limits, |τ_j| <= e_j with τ = w + Jᵀ f
+            (:class:`~regrasp.dynamics.internal_force.torque.JointTorques`), or None: no such rows.
     """
-    rows = _rows(len(surface_frames), modes, friction, settings, cone_edge)
+    m = len(surface_frames)
+    rows = _rows(m, modes, friction, settings, cone_edge)
     null = null_basis(constraint_matrix)
     k = null.shape[1]
-    if k == 0:
-        return InternalForceQP(None, null, motion_forces, settings)
     C = rows.matrix(block_diagonal(np.asarray(surface_frames, dtype=float)))
+    plain = (C, rows.lower, rows.n_ineq)
+    if k == 0:
+        return InternalForceQP(None, null, motion_forces, settings, plain, torques)
     a = C @ null
     rhs = rows.lower - C @ motion_forces  # a y >= rhs (inequalities), a y = rhs (equalities)
     ineq = slice(0, rows.n_ineq)
@@ -181,16 +204,33 @@ def build_internal_force_qp(
         G, h = np.vstack([G, a[rows.n_ineq - 1]]), np.append(h, rows.target)  # s <= target
     else:
         G, h = -a[ineq], -rhs[ineq]
+    if torques is not None:  # the limits' rows: C_τ (f_m + N_c y) >= lo_τ
+        C_t, lower_t = torque_matrix(torques, m)
+        a_t = C_t @ null
+        if rows.target > 0.0:
+            a_t = np.hstack([a_t, np.zeros((len(a_t), 1))])
+        G, h = np.vstack([G, -a_t]), np.append(h, C_t @ motion_forces - lower_t)
     problem_args = dict(P=sp.csc_matrix(P), q=q, G=sp.csc_matrix(G), h=h)
     if rows.n_eq:
         problem_args.update(A=sp.csc_matrix(a[rows.n_ineq:]), b=rhs[rows.n_ineq:])
-    return InternalForceQP(qpsolvers.Problem(**problem_args), null, motion_forces, settings)
+    return InternalForceQP(qpsolvers.Problem(**problem_args), null, motion_forces, settings, plain, torques)
+
+
+def qp_shortfall(qp: InternalForceQP) -> TorqueShortfall | None:
+    """How far a built QP's joint torque limits fall short at the least
+    (:func:`~regrasp.dynamics.internal_force.torque.torque_shortfall`), or None (no limits, or not the reason)."""
+    if qp.torques is None or not any(map(math.isfinite, qp.torques.effort)):
+        return None
+    return torque_shortfall(qp.null_basis, qp.motion_forces, *qp.rows, qp.torques)
 
 
 def _check(qp: InternalForceQP, forces, frames, modes, friction, cone_edge, slack) -> tuple[bool, float]:
     rows = _rows(len(frames), modes, friction, qp.settings, cone_edge)
     C = rows.matrix(block_diagonal(np.asarray(frames, dtype=float)))
-    return rows.check(C, np.asarray(forces).reshape(-1), slack)
+    ok, margin = rows.check(C, np.asarray(forces).reshape(-1), slack)
+    if qp.torques is not None:
+        ok = ok and within_limits(qp.torques, np.asarray(forces).reshape(-1).tolist(), slack)
+    return ok, margin
 
 
 _OSQP_INTERRUPTED = "interrupted"
@@ -251,11 +291,11 @@ def solve_internal_force_qp(
         if not hand_on_ctrl_c(status):
             break
     if not solution.found or solution.x is None:
-        raise InternalForceInfeasibleError(qp, status)
+        raise InternalForceInfeasibleError(qp, status, qp_shortfall(qp))
     k = qp.null_basis.shape[1]
     f_c = qp.null_basis @ solution.x[:k]
     forces = (qp.motion_forces + f_c).reshape(m, 2)
     ok, margin = _check(qp, forces, surface_frames, modes, friction, cone_edge, 1e-6 * scale)
     if not ok:
-        raise InternalForceInfeasibleError(qp, f"{status} (solution violates the constraints)")
+        raise InternalForceInfeasibleError(qp, f"{status} (solution violates the constraints)", qp_shortfall(qp))
     return InternalForceResult(f_c, forces, k, True, status, time.perf_counter() - start, margin)

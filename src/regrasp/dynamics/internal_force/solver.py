@@ -23,9 +23,16 @@ from ...kernels.force import (
     FORCE_SOLVED,
     internal_force_into,
 )
-from .problem import InternalForceInfeasibleError, InternalForceResult, build_internal_force_qp, hand_on_ctrl_c
+from .problem import (
+    InternalForceInfeasibleError,
+    InternalForceResult,
+    build_internal_force_qp,
+    hand_on_ctrl_c,
+    qp_shortfall,
+)
 from .rows import MARGIN_AIM, MARGIN_WEIGHT, OSQP_INFTY, ConstraintRows, as_contacts, null_basis
 from .settings import ConeEdge, InternalForceSettings, as_cone_edges
+from .torque import JointTorques, torque_rows, within_limits
 
 __all__ = ["InternalForceSolver"]
 
@@ -47,7 +54,7 @@ class InternalForceSolver:
         self.settings = settings
         #: whether the compiled dense solver (:mod:`regrasp.kernels.force`) answers (None: yes); False: OSQP
         self.compiled = True if compiled is None else bool(compiled)
-        self._solvers: dict[tuple[int, int, int, float], osqp.OSQP] = {}
+        self._solvers: dict[tuple[int, int, int, float, int], osqp.OSQP] = {}
         self._rows: dict[tuple, ConstraintRows] = {}
         self._rows_settings = settings
         self._last_contacts = None  # (modes, friction) as last passed (tuples), and validated
@@ -85,15 +92,18 @@ class InternalForceSolver:
         (after its first three arguments: coefficients, lower, n_ineq, is_cone, target, σ, W, δ)."""
         return self._rows_for(m, modes, friction, cone_edge).arrays()
 
-    def _osqp(self, k: int, rows: ConstraintRows, a_t: np.ndarray, lower: np.ndarray) -> osqp.OSQP:
+    def _osqp(self, k: int, rows: ConstraintRows, a_t: np.ndarray, lower: np.ndarray, n_torque: int = 0) -> osqp.OSQP:
         """The persistent solver of this shape, set up or updated with the numbers of this problem
         (``a_t``: the constraint matrix's column-major data, rows * k, or rows * (k + 1) with the
-        margin variable s)."""
-        key = (k, len(lower), rows.n_eq, rows.target)
+        margin variable s; ``n_torque``: torque rows after the inequalities of ``rows``, before its equalities)."""
+        key = (k, len(lower), rows.n_eq, rows.target, n_torque)  # (the upper bounds' pattern is the key's)
+        n_ineq = rows.n_ineq + n_torque
         upper = rows.upper
+        if n_torque:
+            upper = np.concatenate([upper[:rows.n_ineq], np.full(n_torque, OSQP_INFTY), upper[rows.n_ineq:]])
         if rows.n_eq:
             upper = upper.copy()
-            upper[rows.n_ineq:] = lower[rows.n_ineq:]
+            upper[n_ineq:] = lower[n_ineq:]
         solver = self._solvers.get(key)
         if solver is None:
             # a dense pattern, so that later updates keep the sparsity structure
@@ -122,27 +132,28 @@ class InternalForceSolver:
         return tuple(self._solvers.values())
 
     def solve(self, constraint_matrix: ArrayLike, motion_forces: ArrayLike, surface_frames: ArrayLike,
-              modes: ModesLike, friction: FrictionLike,
-              cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None) -> InternalForceResult:
+              modes: ModesLike, friction: FrictionLike, cone_edge: ConeEdge | tuple[ConeEdge, ...] | None = None,
+              torques: JointTorques | None = None) -> InternalForceResult:
         """Solve the QP of :mod:`regrasp.dynamics.internal_force.problem`; see
         :func:`~regrasp.dynamics.internal_force.problem.build_internal_force_qp` for the arguments."""
         frames = [(n_x, n_y, t_x, t_y) for (n_x, t_x), (n_y, t_y) in np.asarray(surface_frames, dtype=float).tolist()]
         return self.solve_floats(constraint_matrix, np.asarray(motion_forces, dtype=float).reshape(-1).tolist(), frames,
-                                 modes, friction, cone_edge, time.perf_counter())
+                                 modes, friction, cone_edge, time.perf_counter(), torques)
 
     def solve_floats(self, constraint_matrix: ArrayLike, motion_forces: list[float],
                      frames: list[tuple[float, float, float, float]], modes: ModesLike, friction: FrictionLike,
-                     cone_edge: ConeEdge | tuple[ConeEdge, ...] | None, start: float) -> InternalForceResult:
+                     cone_edge: ConeEdge | tuple[ConeEdge, ...] | None, start: float,
+                     torques: JointTorques | None = None) -> InternalForceResult:
         """:meth:`solve` with f_m (2m) [N] and the surface frames, per contact (n_x, n_y, t_x, t_y) in the hand frame,
         as floats (hot paths; not validated); ``start``: the ``time.perf_counter()`` the result's ``seconds``
-        count from."""
+        count from; ``torques``: the joint torque limits (:mod:`regrasp.dynamics.internal_force.torque`), or None."""
         m = len(frames)
         rows = self._rows_for(m, modes, friction, cone_edge)
         outcome = None
         if self.compiled:
-            outcome = self._solve_compiled(constraint_matrix, motion_forces, frames, rows, start)
+            outcome = self._solve_compiled(constraint_matrix, motion_forces, frames, rows, start, torques)
         if outcome is None:  # (the reference path, or a rank-deficient A)
-            outcome = self._solve_osqp(constraint_matrix, motion_forces, frames, rows, start)
+            outcome = self._solve_osqp(constraint_matrix, motion_forces, frames, rows, start, torques)
         if isinstance(outcome, InternalForceResult):
             return outcome
         status = outcome
@@ -155,7 +166,7 @@ class InternalForceSolver:
                             fallback_friction_margin=None), compiled=self.compiled)
             self.relaxations += 1
             return self._relaxed.solve_floats(constraint_matrix, motion_forces, frames, modes, friction, cone_edge,
-                                              start)
+                                              start, torques)
         if rows.target > 0.0:
             # the margin is a preference: where its QP does not converge, the least squeeze that keeps the
             # constraints (the same feasible set) is the answer
@@ -163,14 +174,15 @@ class InternalForceSolver:
                 self._plain = InternalForceSolver(replace(self.settings, target_cone_margin=0.0),
                                                   compiled=self.compiled)
             self.fallbacks += 1
-            return self._plain.solve_floats(constraint_matrix, motion_forces, frames, modes, friction, cone_edge, start)
+            return self._plain.solve_floats(constraint_matrix, motion_forces, frames, modes, friction, cone_edge, start,
+                                            torques)
         surface_frames = np.array([((n_x, t_x), (n_y, t_y)) for n_x, n_y, t_x, t_y in frames])
         qp = build_internal_force_qp(constraint_matrix, np.array(motion_forces), surface_frames, modes, friction,
-                                     self.settings, cone_edge)
-        raise InternalForceInfeasibleError(qp, status)
+                                     self.settings, cone_edge, torques)
+        raise InternalForceInfeasibleError(qp, status, qp_shortfall(qp))
 
     def _solve_compiled(self, constraint_matrix, motion_forces: list, frames: list, rows: ConstraintRows,
-                        start: float) -> InternalForceResult | str | None:
+                        start: float, torques: JointTorques | None) -> InternalForceResult | str | None:
         """The compiled path (:func:`regrasp.kernels.force.internal_force_into`): the result, the failure's
         status, or None where the kernel does not apply (a rank-deficient A, a non-finite input: the reference
         path decides, as it did before the kernel)."""
@@ -178,8 +190,14 @@ class InternalForceSolver:
         f_m = np.array(motion_forces, dtype=float)
         f_c, forces = np.empty(2 * m), np.empty(2 * m)
         arrays = rows.arrays()
+        if torques is None:
+            jac, wrench, effort = np.zeros((m, 4)), np.zeros(2 * m), np.full(2 * m, np.inf)
+        else:
+            jac, wrench = np.array(torques.jacobians, dtype=float), np.array(torques.wrench, dtype=float)
+            effort = np.array(torques.effort, dtype=float)
         status, k, margin = internal_force_into(np.ascontiguousarray(constraint_matrix, dtype=float), f_m,
-                                                np.array(frames, dtype=float), *arrays, f_c, forces)
+                                                np.array(frames, dtype=float), *arrays, jac, wrench, effort, f_c,
+                                                forces)
         if status == FORCE_NOT_APPLICABLE:
             return None
         if k == 0:
@@ -191,8 +209,9 @@ class InternalForceSolver:
         return _COMPILED_STATUS[status]
 
     def _solve_osqp(self, constraint_matrix, motion_forces: list, frames: list, rows: ConstraintRows,
-                    start: float) -> InternalForceResult | str:
-        """The reference path (OSQP, warm-started): the result or the failure's status."""
+                    start: float, torques: JointTorques | None) -> InternalForceResult | str:
+        """The reference path (OSQP, warm-started): the result or the failure's status. With ``torques``, the
+        problem is solved again with the torque rows where its answer exceeds a limit (as the compiled path)."""
         m = len(frames)
         null = null_basis(constraint_matrix)
         k = null.shape[1]
@@ -201,15 +220,30 @@ class InternalForceSolver:
         scale = max(1.0, max(map(abs, f_m), default=0.0))
         if k == 0:
             ok, margin = rows.check_at(C, f_m, 1e-9 * scale)
+            ok = ok and (torques is None or within_limits(torques, f_m, 1e-9 * scale))
             return InternalForceResult(np.zeros(2 * m), np.array(f_m).reshape(m, 2), 0, ok, "empty null space",
                                        time.perf_counter() - start, margin)
+        outcome = self._osqp_rows(null, f_m, C, rows, 0, scale, start)
+        if torques is None or not isinstance(outcome, InternalForceResult) \
+                or within_limits(torques, outcome.forces.reshape(-1).tolist()):
+            return outcome
+        limits = torque_rows(torques)
+        C = C[:rows.n_ineq] + limits + C[rows.n_ineq:]
+        return self._osqp_rows(null, f_m, C, rows, len(limits), scale, start)
+
+    def _osqp_rows(self, null: np.ndarray, f_m: list, C: list, rows: ConstraintRows, n_torque: int, scale: float,
+                   start: float) -> InternalForceResult | str:
+        """OSQP on the rows ``C`` (:meth:`ConstraintRows.rows_at`'s format: those of ``rows``, with ``n_torque``
+        torque rows after its inequalities): the result or the failure's status."""
+        m, k = len(f_m) // 2, null.shape[1]
         # a y >= lo - C f_m, with a = C N_c; OSQP takes a column by column, i.e. a^T's rows
         lower = [v if (v := lo - (cx * f_m[i2] + cy * f_m[i2 + 1])) >= -OSQP_INFTY else -OSQP_INFTY
                  for i2, cx, cy, lo in C]  # (NaN stays NaN)
         a_t = [cx * b[i2] + cy * b[i2 + 1] for b in null.T.tolist() for i2, cx, cy, _ in C]
-        if rows.target > 0.0:
-            a_t += rows.margin_column  # s's column
-        solver = self._osqp(k, rows, np.array(a_t), np.array(lower))
+        if rows.target > 0.0:  # s's column
+            column = rows.margin_column
+            a_t += column[:rows.n_ineq] + [0.0] * n_torque + column[rows.n_ineq:] if n_torque else column
+        solver = self._osqp(k, rows, np.array(a_t), np.array(lower), n_torque)
         result = solver.solve(raise_error=False)
         while hand_on_ctrl_c(str(result.info.status)):
             result = solver.solve(raise_error=False)
@@ -218,9 +252,12 @@ class InternalForceSolver:
         if status in ("solved", "solved inaccurate") and x is not None and all(map(math.isfinite, x.tolist())):
             f_c = null.dot(x[:k] if rows.target > 0.0 else x)
             forces = [a + b for a, b in zip(f_m, f_c.tolist())]
-            ok, margin = rows.check_at(C, forces, 1e-6 * scale)
+            ok, margin = rows.check_at(C[:rows.n_ineq] + C[rows.n_ineq + n_torque:], forces, 1e-6 * scale)
+            ok = ok and all(cx * forces[i2] + cy * forces[i2 + 1] - lo >= -1e-6 * scale
+                            for i2, cx, cy, lo in C[rows.n_ineq:rows.n_ineq + n_torque])
             if ok:
                 return InternalForceResult(f_c, np.array(forces).reshape(m, 2), k, True, status,
                                            time.perf_counter() - start, margin)
             status = f"{status} (solution violates the constraints)"
         return status
+

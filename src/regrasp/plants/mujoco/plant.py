@@ -7,7 +7,9 @@ contacts with elliptic friction cones between sphere tips and the object (``docs
 "A second plant: MuJoCo"); it shares no equation with the project's reduced model or plant.
 
 **Stepping.** Each control step of ``dt`` holds the joint torques τ (``qfrc_applied``, zero-order hold)
-over ``round(dt / timestep)`` MuJoCo steps.
+over ``round(dt / timestep)`` MuJoCo steps, saturated at the joints' limits first: clip(τ, -effort, effort), with a
+``saturation`` event where a joint starts to saturate (:mod:`regrasp.plants.saturation`, as the project's plant;
+``actuatorfrcrange`` would limit only actuators' forces, and this plant applies joint forces directly).
 
 **What it reports** (:class:`~regrasp.plants.project.state.PlantStep`), all of it what a hand could sense:
 
@@ -52,13 +54,14 @@ from ...core.polygon import ConvexPolygon
 from ...core.validation import as_finite_array, as_finite_float, as_positive_float, expect_sequence_of, expect_type
 from ...model.hand import Hand
 from ..project.state import MAX_DT, PlantContact, PlantState, PlantStep
+from ..saturation import Saturation
 from .mjcf import MujocoSettings, build_mjcf, require_mujoco
 
 __all__ = ["MujocoPlant"]
 
 _FIXED, _SLIDING, _SEPARATED = ContactMode.FIXED, ContactMode.SLIDING, ContactMode.SEPARATED
 _STOP_KINDS = frozenset(k.value for k in (EventKind.SEPARATION, EventKind.SLIP, EventKind.STICK, EventKind.LEFT_EDGE,
-                                          EventKind.COLLISION, EventKind.SINGULAR))
+                                          EventKind.COLLISION, EventKind.SINGULAR, EventKind.SATURATION))
 
 
 class MujocoPlant:
@@ -149,6 +152,8 @@ class MujocoPlant:
         self.stopped = False
         self.max_constraint_error = 0.0
         self._energy0 = 0.0
+        #: The motors' torque limits (the module docstring).
+        self.saturation = Saturation(hand.effort_limit.tolist())
 
     def _copy_contacts(self, contacts: Sequence[PlantContact]) -> list[PlantContact]:
         out = [PlantContact(c.edge, c.mode, c.xi, c.sign) for c in contacts]
@@ -187,6 +192,7 @@ class MujocoPlant:
         self._energy0 = float(self.data.energy[0] + self.data.energy[1])
         self.state = self._read_state(0.0, 0.0)
         self.events, self.stopped, self.max_gap = [], False, -np.inf
+        self.saturation.clear()
         for i, c in enumerate(self.contacts):  # a fixed contact is held where its tip is
             c.xi = self._measure(self.data, i)[0]
         self.max_constraint_error = self.constraint_error(self.state)
@@ -279,7 +285,8 @@ class MujocoPlant:
             raise InvalidParameterError("modes", modes, "None: the MuJoCo plant's contacts are MuJoCo's")
         data = self._scratch
         data.qfrc_applied[:] = 0.0
-        data.qfrc_applied[self._finger_v] = as_finite_array("tau", tau, (self.hand.nq,))
+        tau = as_finite_array("tau", tau, (self.hand.nq,)).tolist()
+        data.qfrc_applied[self._finger_v] = self.saturation.clip(tau)[0]
         self._load(data, st.q, st.v, st.X, st.V, st.t)
         forces = np.zeros((self.hand.m, 2))
         self._contact_forces(data, forces, {})
@@ -292,7 +299,12 @@ class MujocoPlant:
             raise InvalidParameterError("state", None, "a state: call reset() first")
         if self.stopped:
             raise InvalidParameterError("plant", "stopped", "a running plant (it stopped on an event)")
-        tau = as_finite_array("tau", tau, (self.hand.nq,))
+        commanded = as_finite_array("tau", tau, (self.hand.nq,)).tolist()
+        applied, saturated = self.saturation.clip(commanded)
+        saturation: list[Event] = []
+        for i, detail, values in self.saturation.onsets(commanded, saturated):  # (at the step's start)
+            self._event(i, EventKind.SATURATION, detail, saturation, **values)
+        tau = np.array(applied)
         mj, model, d = self._mj, self.model, self.data
         d.qfrc_applied[self._finger_v] = tau
         h = model.opt.timestep
@@ -320,7 +332,8 @@ class MujocoPlant:
         self.state = self._read_state(torque_work, damping_work)
         events, xi, xi_dot, err, gap, slip = self._events(surface, links, before)
         self.max_constraint_error = max(self.max_constraint_error, err)
-        return PlantStep(self.state, surface, np.array(xi), np.array(xi_dot), modes, err, gap, slip, tuple(events))
+        return PlantStep(self.state, surface, np.array(xi), np.array(xi_dot), modes, err, gap, slip,
+                         (*saturation, *events))
 
     def _event(self, i: int, kind: EventKind, detail: str, out: list, **values) -> None:
         ev = Event(self.state.t, self.hand.fingers[i].name, kind, detail, EventSource.PLANT, values)

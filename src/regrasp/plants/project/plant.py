@@ -18,10 +18,18 @@ energy-balance checks.
 
 **Events** (separation, slip, stick, left edge, collision, singular; :mod:`regrasp.plants.project.events`) are
 checked after every step; kinds in ``stop_on`` stop the simulation.
+
+**Actuator limits.** The motors saturate: a step applies :math:`\mathrm{clip}(\tau, -e, e)`, e the hand's
+:attr:`~regrasp.model.hand.Hand.effort_limit` [N m] (the URDF's ``effort`` or the scenario's), on the reference
+path and in the compiled kernel alike. A joint whose commanded torque starts to exceed its limit logs a
+``saturation`` event (at the step's start, with the commanded ``torque`` and the ``effort`` [N m] and the
+``joint``, 1 or 2), once until it is back within the limit (:mod:`regrasp.plants.saturation`);
+:attr:`Plant.saturated` is the last step's mask.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -45,6 +53,7 @@ from ...core.validation import (
 from ...kernels import warm_up
 from ...model.collision import UrdfCollisionChecker
 from ...model.hand import Hand
+from ..saturation import Saturation
 from .compiled import PlantKernel
 from .equations import PlantEquations
 from .events import PlantEvents
@@ -151,6 +160,8 @@ class Plant:
         self.compiled = hand.use_kernels(compiled)
         if self.compiled:
             warm_up()
+        #: The motors' torque limits (module docstring).
+        self.saturation = Saturation(hand.effort_limit.tolist())
 
     @property
     def mass(self) -> float:
@@ -198,6 +209,7 @@ class Plant:
                                 as_finite_array("v", v, (n,)).copy(), as_finite_array("X", X, (3,)).copy(),
                                 as_finite_array("V", V, (3,)).copy())
         self.log.clear()
+        self.saturation.clear()
         self.max_constraint_error = self.constraint_error(self.state)
         return self.state
 
@@ -240,9 +252,9 @@ class Plant:
         """(q̈, Ẍ, forces) at state ``st`` for torques ``tau``: ``forces`` (m, 2) are the contact
         forces on the object in the hand frame (zeros for separated contacts)."""
         contacts = self.contacts if modes is None else modes
+        tau = self.saturation.clip(self.torques(tau))[0]
         if self.compiled:
-            return self.kernel.accelerations(st, self.torques(tau), contacts)
-        tau = self.torques(tau)
+            return self.kernel.accelerations(st, tau, contacts)
         equations = self.equations
         fingers = equations.pin_pass(st.q, st.v)
         qdd, Xdd, forces = equations.solve(fingers, equations.specs(contacts), st.X.tolist(), st.V.tolist(), tau)
@@ -263,17 +275,27 @@ class Plant:
                 return out
         return tuple(as_finite_array("tau", tau, (self.hand.nq,)).tolist())
 
+    @property
+    def saturated(self) -> tuple[bool, ...]:
+        """Which joints' commanded torques the last step clipped to their limits (2m; module docstring)."""
+        return self.saturation.saturated
+
     def step(self, tau: ArrayLike) -> PlantStep:
-        """Advance one time step with constant joint torques ``tau`` [N m] (RK4)."""
+        """Advance one time step with constant joint torques ``tau`` [N m] (RK4), saturated at the joints' limits
+        (module docstring)."""
         if self.state is None:
             raise InvalidParameterError("state", None, "a state: call reset() first")
         if self.stopped:
             raise InvalidParameterError("plant", "stopped", "a running plant (it stopped on an event)")
-        tau = self.torques(tau)
+        commanded = self.torques(tau)
+        tau, saturated = self.saturation.clip(commanded)
+        saturation: list[Event] = []
+        for i, detail, values in self.saturation.onsets(commanded, saturated):  # (at the step's start)
+            self.log.add(self.state.t, i, EventKind.SATURATION, detail, saturation, **values)
         if self.compiled:
             step = self.kernel.step(self.state, self.contacts, tau, self.accelerations)
             self.adopt(step.state, step.constraint_error)
-            return step
+            return dataclasses.replace(step, events=(*saturation, *step.events)) if saturation else step
         st, h, n, hand = self.state, self.dt, self.hand.nq, self.hand
         equations = self.equations
         specs = equations.specs(self.contacts)
@@ -307,7 +329,8 @@ class Plant:
         events, xis = self.checks.detect(new, tau, end[1], fingers, self.contacts, self.accelerations)
         xi_dot = np.array([x[1] for x in xis])
         gap, slip = rigid_contact_report(modes, xi_dot, h, self.separated_gap)
-        return PlantStep(new, surface, np.array([x[0] for x in xis]), xi_dot, modes, err, gap, slip, tuple(events))
+        return PlantStep(new, surface, np.array([x[0] for x in xis]), xi_dot, modes, err, gap, slip,
+                         (*saturation, *events))
 
     def separated_gap(self, i: int) -> float:
         """Contact i's tip's distance from its edge now [m] (positive outside)."""

@@ -25,7 +25,8 @@ MAX_DT = 0.01
 
 #: The kinds of event a plant reports (and may stop on).
 PLANT_EVENT_KINDS = frozenset(k.value for k in (EventKind.SEPARATION, EventKind.SLIP, EventKind.STICK,
-                                                EventKind.LEFT_EDGE, EventKind.COLLISION, EventKind.SINGULAR))
+                                                EventKind.LEFT_EDGE, EventKind.COLLISION, EventKind.SINGULAR,
+                                                EventKind.SATURATION))
 
 
 @dataclass
