@@ -147,7 +147,7 @@ class StudyResult:
         duration: Each run's simulated time [s].
         workers: The processes that ran it (Ray: the cluster's CPUs).
         backend: ``"process"`` or ``"ray"``.
-        plant: ``"project"`` or ``"mujoco"``.
+        plant: ``"project"``, ``"mujoco"`` or ``"drake"``.
         wall_seconds: The study's wall time [s] (the plan included).
         plan_seconds: The plan's wall time [s].
     """
