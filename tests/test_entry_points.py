@@ -24,8 +24,8 @@ from regrasp.study.study import wilson_interval
 
 #: Where the public names are: the package and every subpackage's exports.
 PACKAGES = ("regrasp", "regrasp.core", "regrasp.model", "regrasp.envelope", "regrasp.dynamics",
-            "regrasp.dynamics.internal_force", "regrasp.plants", "regrasp.plants.mujoco", "regrasp.schedule",
-            "regrasp.supervisor", "regrasp.supervisor.policies", "regrasp.rollout", "regrasp.study")
+            "regrasp.dynamics.internal_force", "regrasp.plants", "regrasp.plants.mujoco", "regrasp.plants.drake",
+            "regrasp.schedule", "regrasp.supervisor", "regrasp.supervisor.policies", "regrasp.rollout", "regrasp.study")
 
 
 class _Public:
@@ -162,6 +162,19 @@ else:
      "eroded_vertices": (eroded_vertices, [BOX, 2.5e-4], {}),
      "MujocoPlant": (R.MujocoPlant, [HAND, BOX, [R.PlantContact(1, "fixed", 0.0), R.PlantContact(3, "fixed", 0.0)]],
                      dict(friction=0.5, dt=1e-3, slip_speed=2e-3, stick_speed=1e-3, separation_gap=2.5e-5)),
+    })
+
+try:  # the Drake plant's entry points, with the extra installed
+    import pydrake  # noqa: F401
+except ImportError:
+    pass
+else:
+    ENTRIES.update({
+     "DrakeSettings": (R.DrakeSettings, [], dict(tip_radius=2.5e-4, time_step=1e-4, point_contact_stiffness=1e7,
+                                                 hunt_crossley_dissipation=10.0, stiction_tolerance=1e-5,
+                                                 near_rigid_threshold=1.0, object_thickness=0.02, contact_depth=4e-7)),
+     "DrakePlant": (R.DrakePlant, [HAND, BOX, [R.PlantContact(1, "fixed", 0.0), R.PlantContact(3, "fixed", 0.0)]],
+                    dict(friction=0.5, dt=1e-3, slip_speed=2e-3, stick_speed=1e-3, separation_gap=2.5e-5)),
     })
 
 

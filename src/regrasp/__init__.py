@@ -7,7 +7,7 @@ The package is laid out by concern, after the paper's sections:
 * :mod:`regrasp.model`: fingers from URDF, the hand, collision geometry, scenarios, a real hand's noise;
 * :mod:`regrasp.envelope` (§2): where a fingertip may touch, and the planner over a trajectory;
 * :mod:`regrasp.dynamics` (§3): grasp matrices, the reduced model, the control laws, the internal-force QP;
-* :mod:`regrasp.plants`: the project's plant, MuJoCo, the simulation loop;
+* :mod:`regrasp.plants`: the project's plant, MuJoCo, Drake, the simulation loop;
 * :mod:`regrasp.schedule` (§4, planned): the slides of every contact, planned jointly;
 * :mod:`regrasp.supervisor` (§4, at run time): monitor, policies, executor, and their settings;
 * :mod:`regrasp.rollout`, :mod:`regrasp.study`: one run, recorded; many runs under model errors and noise;

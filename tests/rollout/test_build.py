@@ -93,7 +93,7 @@ def test_the_summary_is_json_with_the_documented_keys(two_fingers_run):
                                   lambda: build_rollout(load_scenario(SCENARIOS / "paper_trajectory_2.toml"),
                                                         RunSpec(xi0=[-0.01, 0.01]), policy="greedy"),
                                   lambda: ModelErrors(mass_scale=0.0), lambda: ModelErrors(mu_scale=np.inf),
-                                  lambda: PlantSpec("drake"), lambda: PlantSpec(errors=1.0)])
+                                  lambda: PlantSpec("bullet"), lambda: PlantSpec(errors=1.0)])
 def test_bad_durations_and_options_are_rejected(make):
     with pytest.raises(InvalidParameterError):
         make()

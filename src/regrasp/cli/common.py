@@ -93,25 +93,23 @@ def output_directory(option: str, path: str | os.PathLike[str]) -> Path:
 
 def add_plant_arguments(p: argparse.ArgumentParser) -> None:
     """``--plant`` and ``--tip-radius`` (read back by :func:`plant_spec`)."""
-    p.add_argument("--plant", choices=("project", "mujoco"), default="project",
+    p.add_argument("--plant", choices=("project", "mujoco", "drake"), default="project",
                    help="project: the full-coordinate plant with point contacts (default); mujoco: MuJoCo with sphere "
-                        "tips and soft contacts (pip install 'regrasp[mujoco]')")
+                        "tips and soft contacts (pip install 'regrasp[mujoco]'); drake: Drake with sphere tips and "
+                        "compliant point contacts (pip install 'regrasp[drake]')")
     p.add_argument("--tip-radius", type=positive(float), metavar="MM",
-                   help="--plant mujoco: the fingertips' sphere radius [mm] (default 0.25)")
+                   help="--plant mujoco or drake: the fingertips' sphere radius [mm] (default 0.25)")
 
 
 def plant_spec(args: argparse.Namespace) -> PlantSpec:
-    """The plant ``--plant`` and ``--tip-radius`` ask for; a missing ``mujoco`` or a radius without MuJoCo is an
-    error before any work."""
+    """The plant ``--plant`` and ``--tip-radius`` ask for; a missing extra (``mujoco``, ``drake``) or a radius on the
+    project's plant is an error before any work."""
     from ..plants.spec import PlantSpec
 
-    if args.tip_radius is not None and args.plant != "mujoco":
-        raise InvalidParameterError("--tip-radius", args.tip_radius, "no radius unless --plant mujoco (the project's "
-                                    "plant has point contacts)")
-    if args.plant != "mujoco":
-        return PlantSpec(args.plant)
-    from ..plants.mujoco.mjcf import MujocoSettings
-
-    # (PlantSpec checks for mujoco before any planning: it says at once that the extra is missing)
-    return PlantSpec("mujoco", MujocoSettings() if args.tip_radius is None else
-                     MujocoSettings(tip_radius=args.tip_radius * 1e-3))
+    if args.tip_radius is not None and args.plant not in ("mujoco", "drake"):
+        raise InvalidParameterError("--tip-radius", args.tip_radius, "no radius unless --plant mujoco or drake (the "
+                                    "project's plant has point contacts)")
+    spec = PlantSpec(args.plant)  # (checks for the extra before any planning: it says at once that it is missing)
+    if args.tip_radius is None or args.plant == "project":
+        return spec
+    return PlantSpec(args.plant, spec.settings_class()(tip_radius=args.tip_radius * 1e-3))

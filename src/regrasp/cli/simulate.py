@@ -1,7 +1,7 @@
 """``regrasp simulate``: run a regrasping rollout on the plant, print what happened, record it.
 
 ``regrasp simulate [SCENARIO] [--periods N | --duration T] [--policy scheduled|paper|none]
-[--plant project|mujoco [--tip-radius MM]] [--rrd FILE] [--decimate K] [--spawn | --connect ADDR] [--json]
+[--plant project|mujoco|drake [--tip-radius MM]] [--rrd FILE] [--decimate K] [--spawn | --connect ADDR] [--json]
 [--plant-mass-scale S] [--plant-mu-scale S] [--envelope-margin M] [--cone-margin N] [--plot DIR]``
 
 Default: the shipped three-finger trajectory-2 scenario, the scheduled policy, the scenario's
@@ -75,11 +75,17 @@ def configure(p: argparse.ArgumentParser) -> None:
 
 
 def plant_text(name: str, plant: PlantLike) -> str:
-    """One line on the plant ``name`` (``"project"`` or ``"mujoco"``) built as ``plant``."""
-    if name != "mujoco":
-        return "project (point contacts, rigid)"
-    s = plant.settings
-    return f"mujoco (sphere tips r = {s.tip_radius * 1e3:g} mm, soft contacts, MuJoCo step {s.timestep * 1e3:g} ms)"
+    """One line on the plant ``name`` (``"project"``, ``"mujoco"`` or ``"drake"``) built as ``plant``."""
+    if name == "mujoco":
+        s = plant.settings
+        return (f"mujoco (sphere tips r = {s.tip_radius * 1e3:g} mm, soft contacts, MuJoCo step "
+                f"{s.timestep * 1e3:g} ms)")
+    if name == "drake":
+        s = plant.settings
+        return (f"drake (sphere tips r = {s.tip_radius * 1e3:g} mm, compliant point contacts k = "
+                f"{s.point_contact_stiffness:g} N/m, d = {s.hunt_crossley_dissipation:g} s/m, {s.approximation} "
+                f"approximation, Drake step {s.time_step * 1e3:g} ms)")
+    return "project (point contacts, rigid)"
 
 
 def rollout_summary(result: RolloutResult, scenario: Scenario, plant_line: str) -> str:

@@ -1,6 +1,6 @@
 """``regrasp study``: many seeded rollouts under model errors and noise; the success rate and why runs failed.
 
-``regrasp study [SCENARIO] --runs N [--seed S] [--workers K] [--ray [ADDRESS]] [--plant project|mujoco]
+``regrasp study [SCENARIO] --runs N [--seed S] [--workers K] [--ray [ADDRESS]] [--plant project|mujoco|drake]
 [--periods P | --duration T] [--mass H] [--mu H] ... [--delay STEPS] [--json] [--plot DIR]
 [--sweep NAME=V1,V2,... | --replay I [--rrd FILE]]``
 

@@ -6,8 +6,9 @@ whose commanded torque starts to exceed its limit (by more than round-off:
 :data:`~regrasp.kernels.plant.SATURATION_TOLERANCE` relative to max(1, e), which a controller that keeps the
 limit reaches when its torque sits on it) is reported once (a ``saturation`` plant event, with the
 ``joint`` (1 or 2), the commanded ``torque`` and the ``effort`` [N m]), until it is back within the limit.
-Both plants (:class:`~regrasp.plants.project.plant.Plant`, whose compiled kernel clips the same way, and
-:class:`~regrasp.plants.mujoco.plant.MujocoPlant`, which clips before ``qfrc_applied``) use :class:`Saturation`.
+Every plant (:class:`~regrasp.plants.project.plant.Plant`, whose compiled kernel clips the same way,
+:class:`~regrasp.plants.mujoco.plant.MujocoPlant`, which clips before ``qfrc_applied``, and
+:class:`~regrasp.plants.drake.plant.DrakePlant`, before its applied generalized forces) uses :class:`Saturation`.
 """
 
 from __future__ import annotations

@@ -55,8 +55,8 @@ __all__ = ["Command", "Driver", "InterruptAtStepEnd", "PlantLike", "SimulationOu
 @runtime_checkable
 class PlantLike(Protocol):
     """What the simulation loop, the rollout, the closed loop and the recorder read from a plant: the
-    project's :class:`~regrasp.plants.project.plant.Plant` and MuJoCo's
-    :class:`~regrasp.plants.mujoco.plant.MujocoPlant`.
+    project's :class:`~regrasp.plants.project.plant.Plant`, MuJoCo's :class:`~regrasp.plants.mujoco.plant.MujocoPlant`
+    and Drake's :class:`~regrasp.plants.drake.plant.DrakePlant`.
 
     Attributes:
         hand: The fingers (names, URDFs, base poses; the recorder draws them).

@@ -25,14 +25,19 @@ from .project.state import PlantContact
 
 if TYPE_CHECKING:
     from ..model.scenario import Scenario
+    from .drake.model import DrakeSettings
     from .mujoco.mjcf import MujocoSettings
     from .simulation import PlantLike
 
 __all__ = ["PLANTS", "ROLLOUT_STOPS", "ModelErrors", "PlantSpec"]
 
-#: The plants a :class:`PlantSpec` knows by name: the project's (:class:`~regrasp.plants.project.plant.Plant`) and
-#: MuJoCo (:class:`~regrasp.plants.mujoco.plant.MujocoPlant`, the ``mujoco`` extra).
-PLANTS = ("project", "mujoco")
+#: The plants a :class:`PlantSpec` knows by name: the project's (:class:`~regrasp.plants.project.plant.Plant`),
+#: MuJoCo (:class:`~regrasp.plants.mujoco.plant.MujocoPlant`, the ``mujoco`` extra) and Drake
+#: (:class:`~regrasp.plants.drake.plant.DrakePlant`, the ``drake`` extra).
+PLANTS = ("project", "mujoco", "drake")
+
+#: Each optional plant's settings class: (module under regrasp.plants, class name).
+_SETTINGS = {"mujoco": ("mujoco.mjcf", "MujocoSettings"), "drake": ("drake.model", "DrakeSettings")}
 
 #: The plant events that stop a rollout's plant: a contact off its edge, a link in the object, a singular finger.
 ROLLOUT_STOPS = ("left_edge", "collision", "singular")
@@ -94,17 +99,20 @@ class PlantSpec:
     """The plant a rollout runs on.
 
     Attributes:
-        kind: ``"project"`` (:class:`~regrasp.plants.project.plant.Plant`) or ``"mujoco"``
-            (:class:`~regrasp.plants.mujoco.plant.MujocoPlant`: sphere tips, soft contacts; the ``mujoco`` extra).
-        settings: The MuJoCo plant's :class:`~regrasp.plants.mujoco.mjcf.MujocoSettings` (tip radius, contact
-            parameters, MuJoCo's step; None: the defaults). Only with ``kind="mujoco"``.
+        kind: ``"project"`` (:class:`~regrasp.plants.project.plant.Plant`), ``"mujoco"``
+            (:class:`~regrasp.plants.mujoco.plant.MujocoPlant`: sphere tips, soft contacts; the ``mujoco`` extra) or
+            ``"drake"`` (:class:`~regrasp.plants.drake.plant.DrakePlant`: sphere tips, compliant point contacts; the
+            ``drake`` extra).
+        settings: The MuJoCo plant's :class:`~regrasp.plants.mujoco.mjcf.MujocoSettings` or the Drake plant's
+            :class:`~regrasp.plants.drake.model.DrakeSettings` (tip radius, contact parameters, the engine's step;
+            None: the defaults), of the kind's class.
         errors: How the plant differs from the model (:class:`ModelErrors`).
         friction: The plant's friction outright, anything :class:`~regrasp.plants.project.plant.Plant` takes
             (None: the scenario's, with ``errors``' scales).
     """
 
     kind: str = "project"
-    settings: MujocoSettings | None = None
+    settings: MujocoSettings | DrakeSettings | None = None
     errors: ModelErrors = field(default_factory=ModelErrors)
     friction: FrictionLike | None = None
 
@@ -115,21 +123,44 @@ class PlantSpec:
             from .mujoco.mjcf import require_mujoco
 
             require_mujoco()
-        if self.settings is not None:
-            from .mujoco.mjcf import MujocoSettings
+        elif self.kind == "drake":
+            from .drake.model import require_drake
 
-            expect_type("settings", self.settings, MujocoSettings, "a MujocoSettings (regrasp.plants.mujoco.mjcf)")
-            if self.kind != "mujoco":
-                raise InvalidParameterError("settings", self.settings, "None unless kind='mujoco'")
+            require_drake()
+        if self.settings is not None:
+            if self.kind not in _SETTINGS:
+                raise InvalidParameterError("settings", self.settings, "None unless kind='mujoco' or 'drake'")
+            where, name = _SETTINGS[self.kind]
+            expect_type("settings", self.settings, self.settings_class(), f"a {name} (regrasp.plants.{where})")
         expect_type("errors", self.errors, ModelErrors, "a ModelErrors")
         if self.friction is not None:  # (checked now, whatever the scenario: one value for all, or one per finger)
             f = self.friction
             per_finger = not isinstance(f, (Friction, str, bytes)) and np.ndim(f) != 0
             as_frictions(f, len(f) if per_finger else 1)
 
+    def settings_class(self) -> type:
+        """The kind's settings class (:class:`~regrasp.plants.mujoco.mjcf.MujocoSettings` or
+        :class:`~regrasp.plants.drake.model.DrakeSettings`); the project's plant has none."""
+        if self.kind == "mujoco":
+            from .mujoco.mjcf import MujocoSettings
+
+            return MujocoSettings
+        if self.kind == "drake":
+            from .drake.model import DrakeSettings
+
+            return DrakeSettings
+        raise InvalidParameterError("kind", self.kind, "a plant with settings ('mujoco' or 'drake')")
+
+    @property
+    def resolved_settings(self) -> MujocoSettings | DrakeSettings | None:
+        """The settings the plant is built with: ``settings``, or the kind's defaults (None for the project's)."""
+        if self.settings is not None or self.kind not in _SETTINGS:
+            return self.settings
+        return self.settings_class()()
+
     @classmethod
     def of(cls, plant: PlantSpec | str) -> PlantSpec:
-        """``plant`` as a spec: a :class:`PlantSpec`, or a kind's name (``"project"``, ``"mujoco"``)."""
+        """``plant`` as a spec: a :class:`PlantSpec`, or a kind's name (``"project"``, ``"mujoco"``, ``"drake"``)."""
         if isinstance(plant, PlantSpec):
             return plant
         if isinstance(plant, str) and plant in PLANTS:
@@ -139,13 +170,8 @@ class PlantSpec:
     @property
     def tip_radius(self) -> float:
         """The plant's fingertip radius [m] (0: point contacts)."""
-        if self.kind != "mujoco":
-            return 0.0
-        if self.settings is not None:
-            return self.settings.tip_radius
-        from .mujoco.mjcf import MujocoSettings
-
-        return MujocoSettings().tip_radius
+        settings = self.resolved_settings
+        return 0.0 if settings is None else settings.tip_radius
 
     def build(self, scenario: Scenario, hand: Hand, xi: ArrayLike, X: ArrayLike, V: ArrayLike, t: float,
               dt: float) -> PlantLike:
@@ -169,13 +195,17 @@ class PlantSpec:
         physics = dict(friction=friction, object_mass=scenario.polygon.mass * errors.mass_scale,
                        object_inertia=scenario.polygon.inertia * errors.object_inertia_scale, dt=dt,
                        stop_on=ROLLOUT_STOPS)
+        clearance = [c.tip_clearance for c in scenario.contacts]
         if self.kind == "mujoco":
-            from .mujoco.mjcf import MujocoSettings
             from .mujoco.plant import MujocoPlant
 
             plant: PlantLike = MujocoPlant(plant_hand, scenario.polygon, contacts, **physics,
-                                           settings=MujocoSettings() if self.settings is None else self.settings,
-                                           tip_clearance=[c.tip_clearance for c in scenario.contacts])
+                                           settings=self.resolved_settings, tip_clearance=clearance)
+        elif self.kind == "drake":
+            from .drake.plant import DrakePlant
+
+            plant = DrakePlant(plant_hand, scenario.polygon, contacts, **physics, settings=self.resolved_settings,
+                               tip_clearance=clearance)
         else:
             plant = Plant(plant_hand, scenario.polygon, contacts, **physics)
         plant.reset(state.q, state.q_dot, X, V, t=t)

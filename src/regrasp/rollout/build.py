@@ -184,19 +184,19 @@ def build_rollout(scenario: Scenario, run: RunSpec = RunSpec(), *, policy: str =
         policy: ``"scheduled"`` (plan the slides ahead, follow and re-plan them), ``"paper"`` (the
             danger-zone heuristic) or ``"none"`` (never slide).
         settings: Supervisor settings (default :meth:`SupervisorSettings.robust` with the scenario's geometry,
-            the schedule's cone margin, the run's actuation delay and, on MuJoCo, the tips' radius); the scheduled
-            policy's are its ``scheduled`` branch.
+            the schedule's cone margin, the run's actuation delay and, on MuJoCo or Drake, the tips' radius); the
+            scheduled policy's are its ``scheduled`` branch.
         regrasp_settings: The schedule planner's settings (``"scheduled"``; default :class:`RegraspSettings`).
         schedule: A schedule planned already (``"scheduled"``; default: planned here).
         plan: The scenario's envelope plan (:func:`~regrasp.envelope.planner.plan_scenario`) computed already (a
             study plans it once for all its runs; default: planned here).
         plant: The plant (:class:`~regrasp.plants.spec.PlantSpec`: its kind, settings and model errors), or a
-            kind's name (``"project"``, ``"mujoco"``).
+            kind's name (``"project"``, ``"mujoco"``, ``"drake"``).
         plan_progress: Passed to :func:`~regrasp.schedule.planner.plan_regrasps` as ``progress``.
 
     Raises:
         NoScheduleError: ``"scheduled"`` and no schedule exists (the planner's diagnosis).
-        MissingDependencyError: a MuJoCo plant and the ``mujoco`` package is not installed.
+        MissingDependencyError: a MuJoCo or Drake plant and its package (``mujoco``, ``drake``) is not installed.
     """
     if not isinstance(scenario, Scenario):
         raise InvalidParameterError("scenario", scenario, "a Scenario (regrasp.load_scenario)")
@@ -209,9 +209,9 @@ def build_rollout(scenario: Scenario, run: RunSpec = RunSpec(), *, policy: str =
     if schedule is not None:
         expect_type("schedule", schedule, RegraspSchedule, "a RegraspSchedule (regrasp.plan_regrasps)")
     if settings is None:  # the supervisor's runtime envelopes use the scenario's planner geometry; the laws know
-        # the MuJoCo plant's sphere tips and the hand's actuation delay (a latency is measured, unlike a friction)
-        # and its sensors' noise: a held contact's model position moves when its filtered reading moved by
-        # half the noise's standard deviation, not at every step
+        # the MuJoCo or Drake plant's sphere tips and the hand's actuation delay (a latency is measured, unlike a
+        # friction) and its sensors' noise: a held contact's model position moves when its filtered reading moved
+        # by half the noise's standard deviation, not at every step
         xi_noise = run.sensor_noise.xi
         hold = ExecutorSettings.hold_resolution if xi_noise == 0.0 else max(ExecutorSettings.hold_resolution,
                                                                              0.5 * xi_noise)

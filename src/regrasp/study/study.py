@@ -130,8 +130,9 @@ def soften(plant: PlantSpec, softness: ContactSoftness | None) -> PlantSpec:
     if softness is None:
         return plant
     if plant.kind != "mujoco":
-        raise InvalidParameterError("softness", softness, f"no contact softness on the {plant.kind} plant (its "
-                                    "contacts are rigid): a study on --plant mujoco")
+        raise InvalidParameterError("softness", softness, f"no drawn contact softness on the {plant.kind} plant "
+                                    "(solref and solimp are MuJoCo's; the project plant's contacts are rigid): a study "
+                                    "on --plant mujoco")
     from ..plants.mujoco.mjcf import MujocoSettings
 
     settings = MujocoSettings() if plant.settings is None else plant.settings
@@ -165,7 +166,7 @@ class StudyResult:
         duration: Each run's simulated time [s].
         workers: The processes that ran it (Ray: the cluster's CPUs).
         backend: ``"process"`` or ``"ray"``.
-        plant: ``"project"`` or ``"mujoco"``.
+        plant: ``"project"``, ``"mujoco"`` or ``"drake"``.
         wall_seconds: The study's wall time [s] (the plan included).
         plan_seconds: The plan's wall time [s].
         softness: The ranges each run's contact softness was drawn from, or None.
