@@ -131,7 +131,7 @@ def test_simulate_json_and_recording_of_the_default_scenario(tmp_path):
     assert set(health) == {"finger1", "finger2", "palm"}
     assert all(h["least_held_force"] >= 0.05 and h["longest_zero_force"] == 0.0 for h in health.values())
     assert doc["schedule"]["periodic"] is True and len(doc["schedule"]["slides"]) == 4
-    assert any(e["kind"] == "prime" and e["source"] == "supervisor" for e in doc["events"])  # the slides at 0.915 s
+    assert any(e["kind"] == "prime" and e["source"] == "supervisor" for e in doc["events"])  # the slides at 0.815 s
     verify_rrd(tmp_path / "out.rrd")
 
 

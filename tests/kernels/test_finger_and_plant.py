@@ -197,8 +197,8 @@ def test_compiled_plant_meets_every_event_kind_the_reference_does():
 
 
 def test_a_scheduled_rollout_is_the_same_on_both_paths():
-    """The three-finger scheduled rollout (collision checks, slides, sticks) for 1.5 s on each path (slips at 0.92 s,
-    sticks at 1.45 s)."""
+    """The three-finger scheduled rollout (collision checks, slides, sticks) for 1.5 s on each path (slips at 0.82 s,
+    sticks at 1.37 s)."""
     from regrasp import build_rollout
 
     sc = load_scenario(EXAMPLES / "paper_trajectory_2_three_fingers.toml")

@@ -98,6 +98,22 @@ def test_middle_tables_hold_the_middle_of_two_slider_moves(problem):
 
 
 def test_breakaway_tables_hold_at_the_layer_and_where_it_starts(problem):
+    _check_breakaway(problem)
+
+
+def test_a_planned_priming_overshoot_gets_breakaway_tables_where_mu_s_is_mu_k():
+    """``RegraspSettings.prime_overshoot``: with μ_s = μ_k a break-away needs no table of its own, unless the
+    executor's priming overshoot is planned; then each starting slider's ratio is μ_s + the overshoot, and the
+    tables say what the LP says there."""
+    sc = load_scenario(SCENARIO)
+    sc = dataclasses.replace(sc, contacts=tuple(dataclasses.replace(c, friction=Friction(0.5, 0.5))
+                                                for c in sc.contacts))
+    plain = build_problem(sc, RegraspSettings(periodic=False), t_end=0.6)
+    assert (plain.lattice.breakaway_slot < 0).all()
+    _check_breakaway(build_problem(sc, RegraspSettings(periodic=False, prime_overshoot=0.05), t_end=0.6))
+
+
+def _check_breakaway(problem):
     rng = np.random.default_rng(2)
     lat = problem.lattice
     combos = lat.combos

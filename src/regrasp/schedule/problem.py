@@ -51,8 +51,11 @@ class RegraspSettings:
             ``xi_resolution``, so that a one-cell move stays inside too).
         cone_margin: Every fixed contact keeps μ_s f_n - |f_t| ≥ this [N].
         f_min, f_max: Every contact's normal force within [f_min, f_max] [N].
-        prime_overshoot: A slide breaks away with its friction ratio up to μ_s + this [-]: the executor's priming
-            (``ExecutorSettings.prime_overshoot_max``), planned (the holders keep their margins through it).
+        prime_overshoot: Plan each break-away with the slider's friction ratio at μ_s + this [-] (the executor's
+            priming overshoot, ``ExecutorSettings.prime_overshoot``), so that the holders keep their margins through
+            it. Off by default: on the default scenario 0.05 tightens the schedule (3.0 mm of envelope margin instead
+            of 5.0 mm), which under model error costs more than it buys (``docs/derivations.md``, "Contact health
+            and keeping the loads").
         slider_floor: A sliding (or breaking-away) contact pushes with at least this [N] ...
         holder_preload: ... and the held ones with at least this while any contact slides [N] (0: ``f_min``):
             on a compliant contact the slider is the one that loses its load first, and the holders take what a
@@ -80,7 +83,7 @@ class RegraspSettings:
     cone_margin: float = DEFAULT_CONE_MARGIN
     f_min: float = 0.2
     f_max: float = 20.0
-    prime_overshoot: float = 0.05
+    prime_overshoot: float = 0.0
     slider_floor: float = 0.3
     holder_preload: float = 0.3
     max_slide_speed: float = 0.05
