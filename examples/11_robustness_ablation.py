@@ -1,4 +1,4 @@
-"""What each robustness change bought: one study's draws under seven supervisors, each adding one change.
+"""What each robustness change bought: one study's draws under eight supervisors, each adding one change.
 
 Run: python examples/11_robustness_ablation.py [--runs N] [--periods P | --duration T] [--workers K] [--seed S]
 
@@ -15,7 +15,10 @@ fingertip placed up to 0.2 mm off its plan, ξ sensed with 0.2 mm of noise, the 
 4. + the priming lasts until the contact moves the right way at 1 mm/s (``start_speed``);
 5. + fixed contacts kept 0.1 inside their cones in ratio, 0.05 where no force allows more (``fallback_margin``);
 6. + held contacts follow their sensed positions through a 20 ms filter (``hold_filter_time``, with a
-   resolution of half the ξ noise): today's ``SupervisorSettings.robust``, as ``build_rollout`` sets it.
+   resolution of half the ξ noise);
+7. + the loads kept (issue 24): sliders push >= 0.3 N, holders >= 0.3 N while a contact slides, the reflex:
+   today's ``SupervisorSettings.robust``, as ``build_rollout`` sets it (the schedule is planned with today's
+   ``RegraspSettings`` for every row).
 
 Each row: successes, their Wilson 95 % interval, the smallest cone margin of any run, and the medians over the
 runs of the largest object position and orientation errors after the first 0.5 s. The default (4 runs of
@@ -50,7 +53,8 @@ def variants(geometry: str, delay: int, hold_resolution: float) -> list[tuple[st
     before = today.with_executor(settle_margin=0.0, actuation_delay=0, breakaway_estimate=False, start_speed=None,
                                  internal_force=InternalForceSettings(f_min=0.2,
                                                                       target_cone_margin=DEFAULT_CONE_MARGIN),
-                                 hold_resolution=None, hold_filter_time=None)
+                                 hold_resolution=None, hold_filter_time=None, slider_floor=0.0, holder_preload=0.0,
+                                 reflex_below=0.0, reflex_floor=0.0)
     steps = [("0 issue 12's robust settings", before)]
     steps.append(("1 + settle margin 0.05 N", steps[-1][1].with_executor(settle_margin=now.settle_margin)))
     steps.append(("2 + the delay told", steps[-1][1].with_executor(actuation_delay=now.actuation_delay)))
@@ -59,6 +63,9 @@ def variants(geometry: str, delay: int, hold_resolution: float) -> list[tuple[st
     steps.append(("5 + cone ratio margin 0.1", steps[-1][1].with_executor(internal_force=now.internal_force)))
     steps.append(("6 + held positions filtered", steps[-1][1].with_executor(hold_resolution=now.hold_resolution,
                                                                             hold_filter_time=now.hold_filter_time)))
+    steps.append(("7 + the loads kept (issue 24)", steps[-1][1].with_executor(
+        slider_floor=now.slider_floor, holder_preload=now.holder_preload, reflex_below=now.reflex_below,
+        reflex_floor=now.reflex_floor)))
     if steps[-1][1] != today:
         raise SystemExit("the last variant is not SupervisorSettings.robust: update this example")
     return steps
