@@ -194,3 +194,27 @@ def test_bad_effort_keys_name_the_key(tmp_path, where, value):
         load_scenario(write(tmp_path, text))
     key = ("fingers[0]." if where == "finger" else "hand.") + "effort"
     assert err.value.key == key and "torque limit > 0 [N m]" in str(err.value)
+
+
+# ---------------------------------------------------------------------------- the fingertips' pad
+def test_pad_table(tmp_path):
+    """No [pad]: rigid contacts (None); a [pad] table: a Pad with its keys, the rest the defaults."""
+    from regrasp.core.pad import DEFAULT_PAD_PRELOAD, Pad
+
+    assert load_scenario(write(tmp_path, VALID)).pad is None
+    sc = load_scenario(write(tmp_path, VALID + "\n[pad]\nstiffness = 1e5\ndamping = 60\n", "a.toml"))
+    assert sc.pad == Pad(1e5, 60.0, DEFAULT_PAD_PRELOAD)
+    sc = load_scenario(write(tmp_path, VALID + "\n[pad]\nstiffness = 2e4\npreload = 1\nsubsteps = 4\n", "b.toml"))
+    assert sc.pad == Pad(2e4, 0.0, 1.0, substeps=4)
+
+
+@pytest.mark.parametrize("body,key", [("damping = 1", "pad.stiffness"), ("stiffness = 0", "pad.stiffness"),
+                                      ("stiffness = 1e5\ndamping = -1", "pad.damping"),
+                                      ('stiffness = "soft"', "pad.stiffness"),
+                                      ("stiffness = 1e5\nsubsteps = 0.5", "pad.substeps"),
+                                      ("stiffness = 1e5\nsubsteps = 0", "pad.substeps"),
+                                      ("stiffness = 1e5\nstifness = 1", "pad.stifness")])
+def test_bad_pad_keys_name_the_key(tmp_path, body, key):
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(write(tmp_path, VALID + f"\n[pad]\n{body}\n"))
+    assert err.value.key == key

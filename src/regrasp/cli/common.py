@@ -14,10 +14,11 @@ from typing import TYPE_CHECKING, TextIO, TypeVar
 from ..core.exceptions import InvalidParameterError
 
 if TYPE_CHECKING:
+    from ..core.pad import Pad
     from ..plants.spec import PlantSpec
 
 __all__ = ["DEFAULT_SCENARIO", "ProgressBar", "add_plant_arguments", "nonnegative", "number_argument",
-           "output_directory", "plant_spec", "positive"]
+           "output_directory", "pad_option", "plant_spec", "positive"]
 
 T = TypeVar("T", int, float)
 
@@ -92,24 +93,52 @@ def output_directory(option: str, path: str | os.PathLike[str]) -> Path:
 
 
 def add_plant_arguments(p: argparse.ArgumentParser) -> None:
-    """``--plant`` and ``--tip-radius`` (read back by :func:`plant_spec`)."""
+    """``--plant``, ``--tip-radius`` and the pad options (read back by :func:`plant_spec`)."""
     p.add_argument("--plant", choices=("project", "mujoco", "drake"), default="project",
                    help="project: the full-coordinate plant with point contacts (default); mujoco: MuJoCo with sphere "
                         "tips and soft contacts (pip install 'regrasp[mujoco]'); drake: Drake with sphere tips and "
                         "compliant point contacts (pip install 'regrasp[drake]')")
     p.add_argument("--tip-radius", type=positive(float), metavar="MM",
                    help="--plant mujoco or drake: the fingertips' sphere radius [mm] (default 0.25)")
+    p.add_argument("--pad-stiffness", type=positive(float), metavar="N_PER_M",
+                   help="--plant project: compliant fingertip pads of this stiffness [N/m] (Kelvin-Voigt; the "
+                        "reference path; default: the scenario's [pad], else rigid contacts)")
+    p.add_argument("--pad-damping", type=nonnegative, metavar="N_S_PER_M",
+                   help="with --pad-stiffness: the pads' damping [N s/m] (default 0)")
+    p.add_argument("--pad-preload", type=nonnegative, metavar="N",
+                   help="with --pad-stiffness: the force [N] of a tip placed on its edge (default 0.5)")
 
 
 def plant_spec(args: argparse.Namespace) -> PlantSpec:
-    """The plant ``--plant`` and ``--tip-radius`` ask for; a missing extra (``mujoco``, ``drake``) or a radius on the
-    project's plant is an error before any work."""
+    """The plant ``--plant``, ``--tip-radius`` and the pad options (:func:`pad_option`) ask for; a missing extra
+    (``mujoco``, ``drake``), a radius on the project's plant or a pad on another is an error before any work."""
     from ..plants.spec import PlantSpec
 
     if args.tip_radius is not None and args.plant not in ("mujoco", "drake"):
         raise InvalidParameterError("--tip-radius", args.tip_radius, "no radius unless --plant mujoco or drake (the "
                                     "project's plant has point contacts)")
     spec = PlantSpec(args.plant)  # (checks for the extra before any planning: it says at once that it is missing)
+    pad = pad_option(args)
+    if pad is not None:
+        return PlantSpec(args.plant, pad=pad)
     if args.tip_radius is None or args.plant == "project":
         return spec
     return PlantSpec(args.plant, spec.settings_class()(tip_radius=args.tip_radius * 1e-3))
+
+
+def pad_option(args: argparse.Namespace) -> Pad | None:
+    """The pad ``--pad-stiffness``, ``--pad-damping`` and ``--pad-preload`` ask for (None: none asked); the last two
+    need the first, and all need ``--plant project``."""
+    from ..core.pad import DEFAULT_PAD_PRELOAD, Pad
+
+    stiffness = getattr(args, "pad_stiffness", None)
+    damping, preload = getattr(args, "pad_damping", None), getattr(args, "pad_preload", None)
+    if stiffness is None:
+        for name, value in (("--pad-damping", damping), ("--pad-preload", preload)):
+            if value is not None:
+                raise InvalidParameterError(name, value, "no pad option without --pad-stiffness")
+        return None
+    if args.plant != "project":
+        raise InvalidParameterError("--pad-stiffness", stiffness, "no pad unless --plant project (MuJoCo and Drake "
+                                    "have their own contact laws)")
+    return Pad(stiffness, 0.0 if damping is None else damping, DEFAULT_PAD_PRELOAD if preload is None else preload)

@@ -85,6 +85,10 @@ def plant_text(name: str, plant: PlantLike) -> str:
         return (f"drake (sphere tips r = {s.tip_radius * 1e3:g} mm, compliant point contacts k = "
                 f"{s.point_contact_stiffness:g} N/m, d = {s.hunt_crossley_dissipation:g} s/m, {s.approximation} "
                 f"approximation, Drake step {s.time_step * 1e3:g} ms)")
+    pad = getattr(plant, "pad", None)
+    if pad is not None:
+        return (f"project (point contacts on compliant pads k = {pad.stiffness:g} N/m, c = {pad.damping:g} N s/m, "
+                f"preload {pad.preload:g} N; the reference path)")
     return "project (point contacts, rigid)"
 
 

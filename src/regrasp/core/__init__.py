@@ -26,6 +26,7 @@ if TYPE_CHECKING:
         UnreachableError,
     )
     from .measurement import Measurement  # noqa: F401
+    from .pad import Pad  # noqa: F401
     from .polygon import ConvexPolygon, Edge  # noqa: F401
     from .trajectory import EllipseTrajectory, Trajectory, TrajectorySample, WaypointTrajectory  # noqa: F401
 

@@ -47,6 +47,11 @@ Unknown keys are errors (they are usually typos). Every error is a
     # or: mu_static and mu_kinetic together, as in [hand]
     effort = [0.3, 0.2]                  # optional: this finger's joint torque limits [N m], overriding [hand]'s
 
+    [pad]                                # optional: a compliant pad on every fingertip (the project plant's
+    stiffness = 1e5                      # soft normal contacts, regrasp.core.pad): k [N/m]; damping [N s/m]
+    damping = 63.2                       # (default 0); preload [N], a tip on its edge's line carries it
+    preload = 0.5                        # (default 0.5); substeps: RK4 steps per control step (default: from k)
+
     [planner]                            # optional
     samples = 401                        # time samples over the trajectory's domain
     geometry = "ideal"                   # "ideal" or "urdf"
@@ -79,6 +84,7 @@ from ..core.exceptions import (
     ScenarioError,
     short_repr,
 )
+from ..core.pad import Pad
 from ..core.polygon import ConvexPolygon
 from ..core.trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
 from ..core.validation import MAX_SAMPLES, as_finite_array, as_positive_float, file_problem
@@ -134,6 +140,8 @@ class Scenario:
     samples: int = 401
     geometry: Geometry = Geometry.IDEAL
     study: Perturbation = Perturbation()
+    #: The fingertips' compliant pad (the ``[pad]`` table), or None: rigid contacts on the project's plant.
+    pad: Pad | None = None
 
     def check_geometry(self, geometry: Geometry | str) -> Geometry:
         """``geometry`` as a :class:`~regrasp.model.geometry.Geometry` every finger of this scenario can be planned
@@ -381,6 +389,23 @@ def _study(path: Path, table: Any) -> Perturbation:
     return _wrap(r, None, lambda: Perturbation(**values))
 
 
+def _pad(path: Path, table: Any) -> Pad | None:
+    """The ``[pad]`` table: a :class:`~regrasp.core.pad.Pad`'s stiffness, damping, preload and substeps, or None."""
+    if table is None:
+        return None
+    if not isinstance(table, dict):
+        raise ScenarioError(path, "pad", "expected a table [pad]")
+    r = _Reader(path, table, "pad.")
+    values: dict[str, Any] = {"stiffness": r.number("stiffness")}
+    for name in ("damping", "preload"):
+        if r.has(name):
+            values[name] = r.number(name)
+    if r.has("substeps"):
+        values["substeps"] = r.integer("substeps")
+    r.finish()
+    return _wrap(r, None, lambda: Pad(**values))
+
+
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file; raises ScenarioError naming the file and key."""
     if not isinstance(path, (str, Path)):
@@ -418,6 +443,7 @@ def load_scenario(path: str | Path) -> Scenario:
     geometry = Geometry(planner.string("geometry", "ideal", choices=("ideal", "urdf")))
     planner.finish()
     study = _study(path, top.get("study", {}))
+    pad = _pad(path, top.get("pad", None))
     top.finish()
     scenario = Scenario(
         path=path,
@@ -430,6 +456,7 @@ def load_scenario(path: str | Path) -> Scenario:
         samples=samples,
         geometry=geometry,
         study=study,
+        pad=pad,
     )
     scenario.check_geometry(geometry)
     return scenario

@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike
 
 from ..core.contact import ContactMode, Friction, FrictionLike, as_frictions
 from ..core.exceptions import InvalidParameterError
+from ..core.pad import Pad
 from ..core.validation import as_finite_array, as_positive_float, expect_type
 from ..model.hand import Hand
 from .project.plant import Plant
@@ -109,12 +110,17 @@ class PlantSpec:
         errors: How the plant differs from the model (:class:`ModelErrors`).
         friction: The plant's friction outright, anything :class:`~regrasp.plants.project.plant.Plant` takes
             (None: the scenario's, with ``errors``' scales).
+        pad: ``"project"`` only: a compliant pad on every fingertip (:class:`~regrasp.core.pad.Pad`: the project's
+            plant with soft normal contacts, on its reference path). None (default): the scenario's ``[pad]``, and
+            rigid contacts when it has none. The MuJoCo and Drake plants have their own contact laws and ignore a
+            scenario's pad.
     """
 
     kind: str = "project"
     settings: MujocoSettings | DrakeSettings | None = None
     errors: ModelErrors = field(default_factory=ModelErrors)
     friction: FrictionLike | None = None
+    pad: Pad | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.kind, str) or self.kind not in PLANTS:
@@ -133,6 +139,11 @@ class PlantSpec:
             where, name = _SETTINGS[self.kind]
             expect_type("settings", self.settings, self.settings_class(), f"a {name} (regrasp.plants.{where})")
         expect_type("errors", self.errors, ModelErrors, "a ModelErrors")
+        if self.pad is not None:
+            expect_type("pad", self.pad, Pad, "a Pad (regrasp.core.pad) or None")
+            if self.kind != "project":
+                raise InvalidParameterError("pad", self.pad, "None unless kind='project' (MuJoCo and Drake have "
+                                            "their own contact laws)")
         if self.friction is not None:  # (checked now, whatever the scenario: one value for all, or one per finger)
             f = self.friction
             per_finger = not isinstance(f, (Friction, str, bytes)) and np.ndim(f) != 0
@@ -207,6 +218,7 @@ class PlantSpec:
             plant = DrakePlant(plant_hand, scenario.polygon, contacts, **physics, settings=self.resolved_settings,
                                tip_clearance=clearance)
         else:
-            plant = Plant(plant_hand, scenario.polygon, contacts, **physics)
+            pad = self.pad if self.pad is not None else scenario.pad
+            plant = Plant(plant_hand, scenario.polygon, contacts, **physics, pad=pad)
         plant.reset(state.q, state.q_dot, X, V, t=t)
         return plant

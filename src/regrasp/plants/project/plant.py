@@ -25,6 +25,15 @@ path and in the compiled kernel alike. A joint whose commanded torque starts to 
 ``saturation`` event (at the step's start, with the commanded ``torque`` and the ``effort`` [N m] and the
 ``joint``, 1 or 2), once until it is back within the limit (:mod:`regrasp.plants.saturation`);
 :attr:`Plant.saturated` is the last step's mask.
+
+**Compliant contacts.** With a :class:`~regrasp.core.pad.Pad` every fingertip touches through a Kelvin–Voigt pad
+(:mod:`regrasp.plants.project.soft`): a touching contact's normal force is the pad's, a fixed contact keeps one
+bilateral row along its edge's tangent and a sliding one none (its friction is explicit). Such a plant runs the
+reference path only (the compiled kernel has rigid contacts), with RK4 substeps for the pad's stiffness; a touching
+contact whose pad ends a step more than ``Pad.separation_gap`` off its edge separates (within it the tip may leave
+and touch again, carrying no force while off), :attr:`PlantStep.gap` is each pad's distance from its edge,
+:math:`-\delta`, and :attr:`PlantStep.forces_surface` the forces averaged over the step (as the MuJoCo and Drake
+plants report them: a pad's force can change within a step).
 """
 
 from __future__ import annotations
@@ -39,6 +48,7 @@ from numpy.typing import ArrayLike
 from ...core.contact import DEFAULT_FRICTION, ContactMode, FrictionLike, as_frictions
 from ...core.events import Event, EventKind
 from ...core.exceptions import InvalidParameterError
+from ...core.pad import Pad
 from ...core.polygon import ConvexPolygon
 from ...core.validation import (
     as_finite_array,
@@ -57,6 +67,7 @@ from ..saturation import Saturation
 from .compiled import PlantKernel
 from .equations import PlantEquations
 from .events import PlantEvents
+from .soft import PadEquations
 from .state import (
     MAX_DT,
     PLANT_EVENT_KINDS,
@@ -100,7 +111,10 @@ class Plant:
         compiled: Step with the compiled kernel (:mod:`regrasp.kernels.plant`; the same equations,
             ``tests/kernels/test_finger_and_plant.py`` checks it against the reference path). None (default):
             when the hand's kernels agree with Pinocchio (``hand.kernel_parameters``); False: the
-            reference path (Pinocchio and plain floats).
+            reference path (Pinocchio and plain floats). A plant with a ``pad`` runs the reference path (None
+            or False; True is an error): the kernel has rigid contacts only.
+        pad: A compliant pad on every fingertip (:class:`~regrasp.core.pad.Pad`; module docstring), or None
+            (default): rigid contacts.
     """
 
     def __init__(
@@ -119,6 +133,7 @@ class Plant:
         stop_on: Sequence[str] = ("separation", "left_edge", "collision", "singular"),
         contact_events: bool = True,
         compiled: bool | None = None,
+        pad: Pad | None = None,
     ):
 
         expect_type("hand", hand, Hand, "a Hand")
@@ -144,8 +159,18 @@ class Plant:
         self.contact_events = as_flag("contact_events", contact_events)
         #: The events since the last reset, and whether one stopped the plant.
         self.log = PlantLog([f.name for f in hand.fingers], self.stop_on)
+        if pad is not None:
+            expect_type("pad", pad, Pad, "a Pad (regrasp.core.pad) or None")
+            if compiled is not None and as_flag("compiled", compiled):
+                raise InvalidParameterError("compiled", compiled, "None or False with a pad (the compiled kernel "
+                                            "has rigid contacts only)")
+            compiled = False
+        #: The fingertips' compliant pad, or None (rigid contacts).
+        self.pad = pad
+        kinetic = [f.kinetic for f in self.friction]
         #: The equations of motion (the reference path).
-        self.equations = PlantEquations(hand, polygon, [f.kinetic for f in self.friction], mass, inertia, alpha)
+        self.equations = (PlantEquations(hand, polygon, kinetic, mass, inertia, alpha) if pad is None
+                          else PadEquations(hand, polygon, kinetic, mass, inertia, alpha, pad))
         #: The event checks after each step (and the links' collision checks).
         self.checks = PlantEvents(hand, polygon, self.friction, self.equations, self.log,
                                   contact_events=self.contact_events,
@@ -305,32 +330,62 @@ class Plant:
         # state, τ, the modes and the parameters are the same (its Pinocchio pass, when the state is)
         params = (hand.gravity_in_hand.tobytes(), hand.damping_enabled, self.mass, self.inertia, self.alpha)
         if (y, params) != self._last_key[:2]:
-            k1, forces0, _ = equations.evaluate(y, tau, specs)
+            k1, forces0, fingers0 = equations.evaluate(y, tau, specs)
         elif (tau, specs) != self._last_key[2:]:
-            k1, forces0, _ = equations.evaluate(y, tau, specs, fingers=self._last_evaluation[2])
+            k1, forces0, fingers0 = equations.evaluate(y, tau, specs, fingers=self._last_evaluation[2])
         else:
-            k1, forces0, _ = self._last_evaluation
-        half = h / 2
-        k2 = equations.evaluate([a + half * b for a, b in zip(y, k1)], tau, specs)[0]
-        k3 = equations.evaluate([a + half * b for a, b in zip(y, k2)], tau, specs)[0]
-        k4 = equations.evaluate([a + h * b for a, b in zip(y, k3)], tau, specs)[0]
-        y = [a + h * ((b1 + 2 * b2 + 2 * b3 + b4) / 6.0) for a, b1, b2, b3, b4 in zip(y, k1, k2, k3, k4)]
+            k1, forces0, fingers0 = self._last_evaluation
+        if self.pad is not None:
+            y, forces0 = equations.integrate(y, k1, forces0, fingers0, tau, specs, h)
+        else:
+            half = h / 2
+            k2 = equations.evaluate([a + half * b for a, b in zip(y, k1)], tau, specs)[0]
+            k3 = equations.evaluate([a + half * b for a, b in zip(y, k2)], tau, specs)[0]
+            k4 = equations.evaluate([a + h * b for a, b in zip(y, k3)], tau, specs)[0]
+            y = [a + h * ((b1 + 2 * b2 + 2 * b3 + b4) / 6.0) for a, b1, b2, b3, b4 in zip(y, k1, k2, k3, k4)]
         new = PlantState(st.t + h, np.array(y[:n]), np.array(y[n:2 * n]), np.array(y[2 * n:2 * n + 3]),
                          np.array(y[2 * n + 3:2 * n + 6]), *y[2 * n + 6:])
         self.state = new
         modes = tuple(c.mode for c in self.contacts)
-        c0, s0 = math.cos(st.X[2]), math.sin(st.X[2])
+        beta = st.X[2] if self.pad is None else 0.5 * (st.X[2] + y[2 * n + 2])  # (a pad's: the step's mean force)
+        c0, s0 = math.cos(beta), math.sin(beta)
         surface = np.array([surface_force(equations.edge(c.edge), c0, s0, f) for c, f in zip(self.contacts, forces0)])
         end = equations.evaluate(y, tau, specs, new.q, new.v)
         self._last_key, self._last_evaluation = (y, params, tau, specs), end
         fingers = end[2]
         err = equations.violations(specs, new.X.tolist(), [f[11:13] for f in fingers])
         self.max_constraint_error = max(self.max_constraint_error, err)
+        released = self.release_pads(new, specs, fingers) if self.pad is not None else []
         events, xis = self.checks.detect(new, tau, end[1], fingers, self.contacts, self.accelerations)
+        events = released + events
         xi_dot = np.array([x[1] for x in xis])
         gap, slip = rigid_contact_report(modes, xi_dot, h, self.separated_gap)
+        if self.pad is not None:
+            depth0 = self.pad.preload_depth
+            gap = np.array([self.separated_gap(i) - depth0 for i in range(self.hand.m)])
         return PlantStep(new, surface, np.array([x[0] for x in xis]), xi_dot, modes, err, gap, slip,
                          (*saturation, *events))
+
+    def release_pads(self, st: PlantState, specs: tuple, fingers: list[tuple]) -> list[Event]:
+        """With a pad and contact events: separate each touching contact whose pad is more than
+        ``Pad.separation_gap`` off its edge at ``st`` (a ``separation`` event; module docstring)."""
+        out: list[Event] = []
+        if not self.contact_events:
+            return out
+        for i, depth, *_ in self.equations.depths(specs, st.X.tolist(), st.V.tolist(), fingers):
+            if -depth > self.pad.separation_gap:
+                self.log.add(st.t, i, "separation", f"the pad is {-depth * 1e6:.3g} um off its edge", out, gap=-depth)
+                self.contacts[i].mode = _MODE_SEPARATED
+        return out
+
+    def pad_energy(self, st: PlantState | None = None) -> float:
+        """The touching pads' elastic energy [J] (0 without a pad)."""
+        st = self.state if st is None else st
+        if self.pad is None:
+            return 0.0
+        equations = self.equations
+        X, V = st.X.tolist(), st.V.tolist()
+        return equations.pad_energy(equations.specs(self.contacts), X, V, equations.pin_pass(st.q, st.v))
 
     def separated_gap(self, i: int) -> float:
         """Contact i's tip's distance from its edge now [m] (positive outside)."""

@@ -95,7 +95,8 @@ class PlantStep:
     Attributes:
         state: The state after the step.
         forces_surface: Each contact's force on the object in its surface frame
-            (normal, tangential) [N], at the step's start; zeros when separated.
+            (normal, tangential) [N], at the step's start (a plant with a compliant pad: averaged over the step);
+            zeros when separated.
         xi: Each contact's ξ [m] after the step.
         xi_dot: Each contact's relative tangential velocity ξ̇ [m/s] after the step.
         modes: Contact modes (:class:`~regrasp.core.contact.ContactMode`) during the step.
