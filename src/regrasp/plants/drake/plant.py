@@ -43,13 +43,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ...core.contact import DEFAULT_FRICTION, ContactMode, Friction, FrictionLike, as_frictions
-from ...core.events import Event, EventKind, EventSource
+from ...core.events import Event, EventKind
 from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
 from ...core.validation import as_finite_array, as_finite_float, as_positive_float, expect_sequence_of, expect_type
 from ...model.hand import Hand
 from ..project.state import MAX_DT, PLANT_EVENT_KINDS, PlantContact, PlantState, PlantStep
 from ..saturation import Saturation
+from ..sphere_sensing import SphereTipSensing
 from .model import DrakeSettings, build_drake, require_drake
 
 __all__ = ["DrakePlant"]
@@ -57,7 +58,7 @@ __all__ = ["DrakePlant"]
 _FIXED, _SLIDING, _SEPARATED = ContactMode.FIXED, ContactMode.SLIDING, ContactMode.SEPARATED
 
 
-class DrakePlant:
+class DrakePlant(SphereTipSensing):
     r"""The hand and the object in Drake, with the project plant's interface (module docstring).
 
     Args:
@@ -138,7 +139,7 @@ class DrakePlant:
                              .CalcRotationalInertia().get_moments()[2])
         self._fq, self._fv, self._oq, self._ov = built.finger_q, built.finger_v, built.object_q, built.object_v
         self._damping = self._joint_damping()
-        self._edges = [polygon.edge(c.edge) for c in contacts]
+        self.contact_edges = [polygon.edge(c.edge) for c in contacts]
         self.contacts = self._copy_contacts(contacts)
         self.state: PlantState | None = None
         self.events: list[Event] = []
@@ -159,10 +160,15 @@ class DrakePlant:
                 by_v[joint.velocity_start()] = float(joint.default_damping())
         return np.array([by_v[v] for v in self._fv.tolist()])
 
+    @property
+    def tip_radius(self) -> float:
+        """The fingertips' sphere radius r [m]."""
+        return self.settings.tip_radius
+
     def _copy_contacts(self, contacts: Sequence[PlantContact]) -> list[PlantContact]:
         out = [PlantContact(c.edge, c.mode, c.xi, c.sign) for c in contacts]
         for i, c in enumerate(out):
-            self._edges[i] = self.polygon.edge(c.edge)
+            self.contact_edges[i] = self.polygon.edge(c.edge)
         return out
 
     # ------------------------------------------------------------------ state
@@ -209,7 +215,7 @@ class DrakePlant:
     def _measure(self, context, i: int) -> tuple[float, float, float, float]:
         r"""(ξ, ξ̇, the distance of the tip's centre from the edge's line (positive outside), the distal link's
         angle relative to the object φ) of tip i in ``context`` [m, m/s, m, rad]."""
-        plant, edge = self._plant, self._edges[i]
+        plant, edge = self._plant, self.contact_edges[i]
         q, v = plant.GetPositions(context), plant.GetVelocities(context)
         x, y, beta = q[self._oq].tolist()
         vx, vy, w = v[self._ov].tolist()
@@ -225,12 +231,6 @@ class DrakePlant:
         (nx, ny), (tx, ty), origin = edge.inward_normal.tolist(), edge.xi_direction.tolist(), edge.xi_origin
         return (tx * (ox - origin[0]) + ty * (oy - origin[1]), tx * (c * ux + s * uy) + ty * (c * uy - s * ux),
                 -(nx * (ox - origin[0]) + ny * (oy - origin[1])), math.atan2(rot[1, 0], rot[0, 0]) - beta)
-
-    def _slip(self, before: tuple, after: tuple) -> float:
-        r"""The slip velocity over a control step [m/s] from a contact's :meth:`_measure` before and after it: the
-        displacement along the edge of the tip's material point at the contact, :math:`\xi + r\varphi`, over dt."""
-        turn = (after[3] - before[3] + math.pi) % (2.0 * math.pi) - math.pi
-        return (after[0] - before[0] + self.settings.tip_radius * turn) / self.dt
 
     def _context_at(self, st: PlantState):
         if st is self.state:
@@ -254,7 +254,7 @@ class DrakePlant:
         """Contact forces (m, 2) on the object, hand frame, in each contact's surface frame (normal, tangential)."""
         c, s = math.cos(st.X[2]), math.sin(st.X[2])
         rot = np.array([[c, -s], [s, c]])
-        frames = [np.array([rot @ e.inward_normal, rot @ e.xi_direction]) for e in self._edges]
+        frames = [np.array([rot @ e.inward_normal, rot @ e.xi_direction]) for e in self.contact_edges]
         return np.array([f @ force for f, force in zip(frames, np.asarray(forces, dtype=float))])
 
     def _advance(self, context) -> tuple[np.ndarray, np.ndarray, dict]:
@@ -309,7 +309,7 @@ class DrakePlant:
         clipped, saturated = self.saturation.clip(commanded)  # (the motors' limits, as every plant's)
         saturation: list[Event] = []
         for i, detail, values in self.saturation.onsets(commanded, saturated):  # (at the step's start)
-            self._event(i, EventKind.SATURATION, detail, saturation, **values)
+            self.log_event(i, EventKind.SATURATION, detail, saturation, **values)
         tau = np.array(clipped)
         applied = np.zeros(self._nv)
         applied[self._fv] = tau
@@ -319,7 +319,7 @@ class DrakePlant:
         surface = np.zeros((m, 2))
         links: dict[int, tuple[int, float]] = {}
         torque_work, damping_work = self.state.torque_work, self.state.damping_work
-        frames = [np.array([e.inward_normal, e.xi_direction]) for e in self._edges]
+        frames = [np.array([e.inward_normal, e.xi_direction]) for e in self.contact_edges]
         before = [self._measure(ctx, i) for i in range(m)]
         t0 = float(ctx.get_time())
         for k in range(self.substeps):
@@ -345,54 +345,12 @@ class DrakePlant:
         return PlantStep(self.state, surface, np.array(xi), np.array(xi_dot), modes, err, gap, slip,
                          (*saturation, *events))
 
-    def _event(self, i: int, kind: EventKind, detail: str, out: list, **values) -> None:
-        ev = Event(self.state.t, self.hand.fingers[i].name, kind, detail, EventSource.PLANT, values)
-        out.append(ev)
-        self.events.append(ev)
-        if kind in self.stop_on:
-            self.stopped = True
-
     def _events(self, surface: np.ndarray, links: dict, before: list) -> tuple[list, list, list, float, np.ndarray,
                                                                               np.ndarray]:
         """The events at the step's end (module docstring); ξ, ξ̇, the constraint error, each tip's gap [m] and
         each contact's slip over the step [m] there (``before``: each contact's :meth:`_measure` at its start)."""
-        out: list[Event] = []
-        xis, rates, err = [], [], 0.0
-        m = len(self.contacts)
-        gaps, slips = np.empty(m), np.empty(m)
-        for i, c in enumerate(self.contacts):
-            after = self._measure(self.context, i)
-            xi, xi_dot, gap, _ = after
-            xis.append(xi)
-            rates.append(xi_dot)
-            gaps[i], slips[i] = gap, self._slip(before[i], after) * self.dt
-            if c.mode is _SEPARATED:
-                continue
-            fn, ft = surface[i].tolist()
-            if fn <= 0.0 and gap > self.separation_gap:
-                self._event(i, EventKind.SEPARATION, f"no contact force over the step and the tip {gap * 1e6:.1f} um "
-                            f"off the edge (more than {self.separation_gap * 1e6:g} um)", out, normal_force=fn, gap=gap)
-                c.mode = _SEPARATED
-                continue
-            self.max_gap = max(self.max_gap, gap)
-            err = max(err, abs(gap))
-            slip = slips[i] / self.dt
-            if c.mode is _FIXED and abs(slip) > self.slip_speed:
-                self._event(i, EventKind.SLIP, f"slip velocity {slip * 1e3:.3g} mm/s, faster than "
-                            f"{self.slip_speed * 1e3:g} mm/s (f_t = {ft:.4g} N, f_n = {fn:.4g} N)", out,
-                            normal_force=fn, tangential_force=ft)
-                c.mode, c.sign = _SLIDING, math.copysign(1.0, slip)
-            elif c.mode is _SLIDING and slip * c.sign < self.stick_speed:
-                self._event(i, EventKind.STICK, f"slip velocity {slip * 1e3:.3g} mm/s, below "
-                            f"{self.stick_speed * 1e3:g} mm/s in the sliding direction", out, xi=xi)
-                c.mode = _FIXED
-            c.xi = xi  # (a fixed contact is held where its tip is: the sensor reads it there)
-            lo, hi = self._edges[i].xi_range
-            if not lo <= xi <= hi:
-                self._event(i, EventKind.LEFT_EDGE, f"xi = {xi:.5g} m outside [{lo:.5g}, {hi:.5g}]", out, xi=xi)
-        for i, (link, depth) in sorted(links.items()):
-            self._event(i, EventKind.COLLISION, f"link {link + 1} penetrates the object by {depth:.3g} m", out,
-                        link=link, depth=depth)
+        out, xis, rates, err, gaps, slips = self.contact_events(surface, links, before,
+                                                               lambda i: self._measure(self.context, i))
         self._check_singular(out)
         return out, xis, rates, err, gaps, slips
 
@@ -405,4 +363,4 @@ class DrakePlant:
                                                           np.zeros(3), world, world)
             cond = np.linalg.cond(jac[:2, self._fv[2 * i:2 * i + 2]])
             if not cond <= self.hand.singular_threshold:
-                self._event(i, EventKind.SINGULAR, f"Jacobian condition number {cond:.3g}", out)
+                self.log_event(i, EventKind.SINGULAR, f"Jacobian condition number {cond:.3g}", out)

@@ -48,13 +48,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ...core.contact import DEFAULT_FRICTION, ContactMode, Friction, FrictionLike, as_frictions
-from ...core.events import Event, EventKind, EventSource
+from ...core.events import Event, EventKind
 from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
 from ...core.validation import as_finite_array, as_finite_float, as_positive_float, expect_sequence_of, expect_type
 from ...model.hand import Hand
 from ..project.state import MAX_DT, PlantContact, PlantState, PlantStep
 from ..saturation import Saturation
+from ..sphere_sensing import SphereTipSensing
 from .mjcf import MujocoSettings, build_mjcf, require_mujoco
 
 __all__ = ["MujocoPlant"]
@@ -64,7 +65,7 @@ _STOP_KINDS = frozenset(k.value for k in (EventKind.SEPARATION, EventKind.SLIP, 
                                           EventKind.COLLISION, EventKind.SINGULAR, EventKind.SATURATION))
 
 
-class MujocoPlant:
+class MujocoPlant(SphereTipSensing):
     r"""The hand and the object in MuJoCo, with the project plant's interface (module docstring).
 
     Args:
@@ -145,7 +146,7 @@ class MujocoPlant:
         self._geoms.update({model.geom(name).id: ("link", i, link) for i, links in enumerate(built.link_geoms)
                             for name, link in links})
         self._object_geoms = {model.geom(built.object_geom).id, model.geom(built.hull_geom).id}
-        self._edges = [polygon.edge(c.edge) for c in contacts]
+        self.contact_edges = [polygon.edge(c.edge) for c in contacts]
         self.contacts = self._copy_contacts(contacts)
         self.state: PlantState | None = None
         self.events: list[Event] = []
@@ -155,10 +156,15 @@ class MujocoPlant:
         #: The motors' torque limits (the module docstring).
         self.saturation = Saturation(hand.effort_limit.tolist())
 
+    @property
+    def tip_radius(self) -> float:
+        """The fingertips' sphere radius r [m]."""
+        return self.settings.tip_radius
+
     def _copy_contacts(self, contacts: Sequence[PlantContact]) -> list[PlantContact]:
         out = [PlantContact(c.edge, c.mode, c.xi, c.sign) for c in contacts]
         for i, c in enumerate(out):
-            self._edges[i] = self.polygon.edge(c.edge)
+            self.contact_edges[i] = self.polygon.edge(c.edge)
         return out
 
     # ------------------------------------------------------------------ state
@@ -202,7 +208,7 @@ class MujocoPlant:
     def _measure(self, data, i: int) -> tuple[float, float, float, float]:
         r"""(ξ, ξ̇, the distance of the tip's centre from the edge's line (positive outside), the distal link's
         angle relative to the object φ = θ₂ − β) of tip i in ``data`` [m, m/s, m, rad]."""
-        edge = self._edges[i]
+        edge = self.contact_edges[i]
         x, y, beta = data.qpos[self._object_q].tolist()
         vx, vy, w = data.qvel[self._object_v].tolist()
         c, s = math.cos(beta), math.sin(beta)
@@ -217,16 +223,6 @@ class MujocoPlant:
         xmat = data.site_xmat[site]
         return (tx * (ox - origin[0]) + ty * (oy - origin[1]), tx * (c * ux + s * uy) + ty * (c * uy - s * ux),
                 -(nx * (ox - origin[0]) + ny * (oy - origin[1])), math.atan2(xmat[3], xmat[0]) - beta)
-
-    def _slip(self, before: tuple, after: tuple) -> float:
-        r"""The slip velocity over a control step [m/s] from a contact's :meth:`_measure` before and after it:
-        the displacement along the edge of the tip's material point at the contact relative to the object's,
-        over ``dt``. That point is r n from the centre (n the inward normal), so its coordinate along the edge
-        is :math:`\xi + r\varphi`: a sphere that rolls without slipping moves its centre by −r Δφ and does
-        not slip. (An average over the step, as a sampled sensor reads it: MuJoCo's sliding contacts hop at
-        the 0.1 ms scale, and the instantaneous velocities with them.)"""
-        turn = (after[3] - before[3] + math.pi) % (2.0 * math.pi) - math.pi
-        return (after[0] - before[0] + self.settings.tip_radius * turn) / self.dt
 
     def _data_at(self, st: PlantState):
         if st is self.state:
@@ -250,7 +246,7 @@ class MujocoPlant:
         """Contact forces (m, 2) on the object, hand frame, in each contact's surface frame (normal, tangential)."""
         c, s = math.cos(st.X[2]), math.sin(st.X[2])
         rot = np.array([[c, -s], [s, c]])
-        frames = [np.array([rot @ e.inward_normal, rot @ e.xi_direction]) for e in self._edges]
+        frames = [np.array([rot @ e.inward_normal, rot @ e.xi_direction]) for e in self.contact_edges]
         return np.array([f @ force for f, force in zip(frames, np.asarray(forces, dtype=float))])
 
     def _contact_forces(self, data, forces: np.ndarray, links: dict) -> None:
@@ -303,7 +299,7 @@ class MujocoPlant:
         applied, saturated = self.saturation.clip(commanded)
         saturation: list[Event] = []
         for i, detail, values in self.saturation.onsets(commanded, saturated):  # (at the step's start)
-            self._event(i, EventKind.SATURATION, detail, saturation, **values)
+            self.log_event(i, EventKind.SATURATION, detail, saturation, **values)
         tau = np.array(applied)
         mj, model, d = self._mj, self.model, self.data
         d.qfrc_applied[self._finger_v] = tau
@@ -312,7 +308,7 @@ class MujocoPlant:
         surface = np.zeros((m, 2))
         links: dict[int, tuple[int, float]] = {}
         torque_work, damping_work = self.state.torque_work, self.state.damping_work
-        frames = [np.array([e.inward_normal, e.xi_direction]) for e in self._edges]
+        frames = [np.array([e.inward_normal, e.xi_direction]) for e in self.contact_edges]
         before = [self._measure(d, i) for i in range(m)]  # (d is at the step's start: see below)
         for _ in range(self.substeps):
             v = d.qvel[self._finger_v]
@@ -335,61 +331,19 @@ class MujocoPlant:
         return PlantStep(self.state, surface, np.array(xi), np.array(xi_dot), modes, err, gap, slip,
                          (*saturation, *events))
 
-    def _event(self, i: int, kind: EventKind, detail: str, out: list, **values) -> None:
-        ev = Event(self.state.t, self.hand.fingers[i].name, kind, detail, EventSource.PLANT, values)
-        out.append(ev)
-        self.events.append(ev)
-        if kind in self.stop_on:
-            self.stopped = True
-
     def _events(self, surface: np.ndarray, links: dict, before: list) -> tuple[list, list, list, float, np.ndarray,
                                                                               np.ndarray]:
         """The events at the step's end (module docstring); ξ, ξ̇, the constraint error, each tip's gap [m] (its
         centre's distance from its edge's line: the plant's object is eroded by the tip's radius) and each contact's
-        slip over the step [m] (:meth:`_slip` × dt) there (``before``: each contact's :meth:`_measure` at the
+        slip over the step [m] (:meth:`slip_velocity` × dt) there (``before``: each contact's :meth:`_measure` at the
         step's start)."""
-        out: list[Event] = []
-        xis, rates, err = [], [], 0.0
-        m = len(self.contacts)
-        gaps, slips = np.empty(m), np.empty(m)
-        for i, c in enumerate(self.contacts):
-            after = self._measure(self.data, i)
-            xi, xi_dot, gap, _ = after
-            xis.append(xi)
-            rates.append(xi_dot)
-            gaps[i], slips[i] = gap, self._slip(before[i], after) * self.dt
-            if c.mode is _SEPARATED:
-                continue
-            fn, ft = surface[i].tolist()
-            if fn <= 0.0 and gap > self.separation_gap:
-                self._event(i, EventKind.SEPARATION, f"no contact force over the step and the tip {gap * 1e6:.1f} um "
-                            f"off the edge (more than {self.separation_gap * 1e6:g} um)", out, normal_force=fn, gap=gap)
-                c.mode = _SEPARATED
-                continue
-            self.max_gap = max(self.max_gap, gap)
-            err = max(err, abs(gap))
-            slip = slips[i] / self.dt
-            if c.mode is _FIXED and abs(slip) > self.slip_speed:
-                self._event(i, EventKind.SLIP, f"slip velocity {slip * 1e3:.3g} mm/s, faster than "
-                            f"{self.slip_speed * 1e3:g} mm/s (f_t = {ft:.4g} N, f_n = {fn:.4g} N)", out,
-                            normal_force=fn, tangential_force=ft)
-                c.mode, c.sign = _SLIDING, math.copysign(1.0, slip)
-            elif c.mode is _SLIDING and slip * c.sign < self.stick_speed:
-                self._event(i, EventKind.STICK, f"slip velocity {slip * 1e3:.3g} mm/s, below "
-                            f"{self.stick_speed * 1e3:g} mm/s in the sliding direction", out, xi=xi)
-                c.mode = _FIXED
-            c.xi = xi  # (a fixed contact is held where its tip is: the sensor reads it there)
-            lo, hi = self._edges[i].xi_range
-            if not lo <= xi <= hi:
-                self._event(i, EventKind.LEFT_EDGE, f"xi = {xi:.5g} m outside [{lo:.5g}, {hi:.5g}]", out, xi=xi)
-        for i, (link, depth) in sorted(links.items()):
-            self._event(i, EventKind.COLLISION, f"link {link + 1} penetrates the object by {depth:.3g} m", out,
-                        link=link, depth=depth)
+        out, xis, rates, err, gaps, slips = self.contact_events(surface, links, before,
+                                                               lambda i: self._measure(self.data, i))
         jac = np.empty((3, self.model.nv))
         for i in range(self.hand.m):
             self._mj.mj_jacSite(self.model, self.data, jac, None, self._sites[i])
             block = jac[:2, self._finger_v[2 * i:2 * i + 2]]
             cond = np.linalg.cond(block)
             if not cond <= self.hand.singular_threshold:
-                self._event(i, EventKind.SINGULAR, f"Jacobian condition number {cond:.3g}", out)
+                self.log_event(i, EventKind.SINGULAR, f"Jacobian condition number {cond:.3g}", out)
         return out, xis, rates, err, gaps, slips
