@@ -281,3 +281,22 @@ def test_softness_is_drawn_after_the_model_errors_and_only_for_a_compliant_plant
         soften(PlantSpec("project"), s)
     with pytest.raises(InvalidParameterError, match="rigid"):
         run_study(SCENARIO, 1, softness=SoftnessRanges(), duration=0.01)
+
+
+def test_a_study_that_drew_softness_plots_the_success_rate_against_it():
+    """A study with drawn contact softness shows it in its success figure: one panel per softness range wider than a
+    point (the tip radius fixed here: no panel), after the model errors."""
+    from regrasp.model.softness import SoftnessRanges
+    from regrasp.study.plots import drawn_factors
+    from regrasp.study.study import RunOutcome, StudyResult
+
+    p = Perturbation(mass=0.2)
+    ranges = SoftnessRanges(tip_radius=(5e-4, 5e-4))
+    draws = draw_runs(6, 2, p, 3, ranges)
+    runs = tuple(RunOutcome(d, i % 2 == 0, None, None, None, 0.1, 1e-3, None, None, 0, 0, 1.0)
+                 for i, d in enumerate(draws))
+    result = StudyResult("x", runs, p, 2, 1.0, 1, "process", 1.0, 0.0, "mujoco", ranges)
+    factors = drawn_factors(result)
+    assert list(factors) == ["mass", "time_constant", "solimp_width"]
+    np.testing.assert_allclose(factors["time_constant"][1], [1e3 * d.softness.time_constant for d in draws])
+    assert list(result.to_json_dict()["softness"]["tip_radius"]) == [5e-4, 5e-4]

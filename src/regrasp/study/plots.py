@@ -27,11 +27,26 @@ _DRAWN = (
 )
 
 
+#: The drawn contact softness a figure can show (a study with ``softness``): (name, the axis label, the run's value).
+_SOFTNESS = (
+    ("time_constant", "contact solref time constant [ms]", lambda d: 1e3 * d.softness.time_constant),
+    ("solimp_width", "contact solimp width [mm]", lambda d: 1e3 * d.softness.solimp_width),
+    ("tip_radius", "tip radius [mm]", lambda d: 1e3 * d.softness.tip_radius),
+)
+
+
 def drawn_factors(result: StudyResult) -> dict[str, tuple[str, np.ndarray]]:
-    """Each model error the study drew (its perturbation is not zero): name -> (axis label, value per run)."""
+    """Each model error the study drew (its perturbation is not zero), then each contact softness it drew (a range
+    wider than a point): name -> (axis label, value per run)."""
     sizes = result.perturbation.nonzero()
-    return {name: (label, np.array([value(r.draw) for r in result.runs]))
-            for name, label, value in _DRAWN if name in sizes}
+    out = {name: (label, np.array([value(r.draw) for r in result.runs]))
+           for name, label, value in _DRAWN if name in sizes}
+    if result.softness is not None:
+        for name, label, value in _SOFTNESS:
+            lo, hi = getattr(result.softness, name)
+            if hi > lo:
+                out[name] = (label, np.array([value(r.draw) for r in result.runs]))
+    return out
 
 
 def _binned(ax, x: np.ndarray, ok: np.ndarray, bins: int) -> None:
