@@ -243,7 +243,8 @@ def test_a_one_step_delay_slips_issue_12s_supervisor_and_not_todays(three_finger
     plant = PlantSpec(errors=ModelErrors(mass_scale=1.0796, inertia_scale=1.058, mu_scale=0.8697))
     today = SupervisorSettings.robust(sc.geometry.value, 0.2, actuation_delay=1)
     before = today.with_executor(settle_margin=0.0, actuation_delay=0, breakaway_estimate=False, start_speed=None,
-                                 hold_resolution=None, hold_filter_time=None,
+                                 hold_resolution=None, hold_filter_time=None, slider_floor=0.0, holder_preload=0.0,
+                                 reflex_below=0.0, reflex_floor=0.0,
                                  internal_force=InternalForceSettings(f_min=0.2, target_cone_margin=0.2))
     slipped = build_rollout(sc, run, settings=before, plant=plant, schedule=schedule).run()
     held_slips = [e for e in slipped.events if e.kind is EventKind.SLIP and e.contact == "finger1"

@@ -22,6 +22,7 @@ necessary condition per cell) and in its verification (exact, a linear program):
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +30,9 @@ from ..core.exceptions import UnreachableError
 from ..kernels.finger import finger_terms_at
 from ..model.hand import Hand
 from ..model.scenario import Scenario
+
+if TYPE_CHECKING:
+    from ..core.trajectory import TrajectorySample
 
 __all__ = ["ContactTorques", "TorqueModel"]
 
@@ -167,8 +171,8 @@ class TorqueModel:
                 dyn.jacobian_dot_v[sl]
         return jac, {"M": mass, "N": nle, "jdv": jdv}
 
-    def cell_excess(self, sample, grids: list[np.ndarray], combos: np.ndarray, vertices: list, speed: float
-                    ) -> np.ndarray:
+    def cell_excess(self, sample: TrajectorySample, grids: list[np.ndarray], combos: np.ndarray, vertices: list,
+                    speed: float) -> np.ndarray:
         r"""The lattice's necessary condition (:mod:`regrasp.schedule.problem`): per layer, move vector, contact,
         cell and joint, the least :math:`|\tau_{ij}| - e_{ij}` [N m] over the force polytope's vertices at the layer
         (``vertices``: per move vector its :class:`~regrasp.schedule.force_polytope.ForceVertices` at the layers of
