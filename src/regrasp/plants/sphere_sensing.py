@@ -12,12 +12,15 @@ mode; a rollout's verdict is :mod:`regrasp.core.health`'s), ``slip`` / ``stick``
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from ..core.contact import ContactMode
 from ..core.events import Event, EventKind, EventSource
+from ..core.exceptions import InvalidParameterError
+from ..core.validation import as_positive_float
+from .project.state import MAX_DT, PlantContact, PlantState
 
 __all__ = ["SphereTipSensing"]
 
@@ -29,9 +32,56 @@ Measure = tuple[float, float, float, float]
 
 
 class SphereTipSensing:
-    """The shared sensing of the sphere-tip plants (module docstring). A plant using it has ``hand``, ``state``,
-    ``contacts``, ``events``, ``stop_on``, ``stopped``, ``max_gap``, ``dt``, ``slip_speed``, ``stick_speed``,
-    ``separation_gap``, its tips' radius ``tip_radius`` [m] and each contact's edge in ``contact_edges``."""
+    """The shared sensing of the sphere-tip plants (module docstring). A plant using it has ``hand``, ``polygon``,
+    ``state``, ``contacts``, ``events``, ``stop_on``, ``stopped`` and its tips' radius ``tip_radius`` [m], and calls
+    :meth:`configure_sensing` (``dt``, ``substeps``, the thresholds, ``max_gap``) and :meth:`copy_contacts` (the
+    contacts and their edges, ``contact_edges``) as it is built."""
+
+    def configure_sensing(self, dt: float, engine_step: float, engine: str, slip_speed: float, stick_speed: float,
+                          separation_gap: float) -> None:
+        """The control step ``dt`` [s] as a whole number of the engine's steps ``engine_step`` [s] (``engine``: how
+        an error names that step), and the slip sensor's and the separation's thresholds (the plants' docstrings)."""
+        self.dt = as_positive_float("dt", dt)
+        substeps = self.dt / engine_step
+        if self.dt > MAX_DT or abs(substeps - round(substeps)) > 1e-6 * substeps:
+            raise InvalidParameterError("dt", dt, f"a step of at most {MAX_DT} s and a multiple of {engine} "
+                                        f"({engine_step:g} s)")
+        self.substeps = int(round(substeps))
+        self.slip_speed = as_positive_float("slip_speed", slip_speed)
+        self.stick_speed = as_positive_float("stick_speed", stick_speed)
+        self.separation_gap = as_positive_float("separation_gap", separation_gap)
+        if not self.stick_speed <= self.slip_speed:
+            raise InvalidParameterError("stick_speed", stick_speed, f"at most slip_speed ({self.slip_speed:g} m/s)")
+        #: The largest distance [m] a touching tip's centre ended a step off its edge since the last reset.
+        self.max_gap = -np.inf
+
+    def copy_contacts(self, contacts: Sequence[PlantContact]) -> list[PlantContact]:
+        """Copies of ``contacts`` (the plant switches their modes), and each one's edge in ``contact_edges``."""
+        out = [PlantContact(c.edge, c.mode, c.xi, c.sign) for c in contacts]
+        self.contact_edges = [self.polygon.edge(c.edge) for c in out]
+        return out
+
+    def edge_measure(self, i: int, X: Sequence[float], V: Sequence[float], tip: Sequence[float],
+                     tip_velocity: Sequence[float], tip_angle: float) -> Measure:
+        """Contact i's measurement (:data:`Measure`) from the object's pose X and twist V (hand frame), its tip
+        centre's position [m] and velocity [m/s] (hand frame) and the distal link's angle [rad] (hand frame)."""
+        edge = self.contact_edges[i]
+        x, y, beta = X
+        vx, vy, w = V
+        c, s = math.cos(beta), math.sin(beta)
+        rx, ry = tip[0] - x, tip[1] - y
+        ux, uy = tip_velocity[0] - (vx - w * ry), tip_velocity[1] - (vy + w * rx)  # relative to the object's point
+        ox, oy = c * rx + s * ry, c * ry - s * rx  # in the object frame
+        (nx, ny), (tx, ty), origin = edge.inward_normal.tolist(), edge.xi_direction.tolist(), edge.xi_origin
+        return (tx * (ox - origin[0]) + ty * (oy - origin[1]), tx * (c * ux + s * uy) + ty * (c * uy - s * ux),
+                -(nx * (ox - origin[0]) + ny * (oy - origin[1])), tip_angle - beta)
+
+    def surface_forces(self, st: PlantState, forces: np.ndarray) -> np.ndarray:
+        """Contact forces (m, 2) on the object, hand frame, in each contact's surface frame (normal, tangential)."""
+        c, s = math.cos(st.X[2]), math.sin(st.X[2])
+        rot = np.array([[c, -s], [s, c]])
+        frames = [np.array([rot @ e.inward_normal, rot @ e.xi_direction]) for e in self.contact_edges]
+        return np.array([f @ force for f, force in zip(frames, np.asarray(forces, dtype=float))])
 
     def log_event(self, i: int, kind: EventKind, detail: str, out: list, **values: float) -> None:
         """Log contact ``i``'s event at the state's time, here and in ``out``; a kind in ``stop_on`` stops the

@@ -46,9 +46,9 @@ from ...core.contact import DEFAULT_FRICTION, ContactMode, Friction, FrictionLik
 from ...core.events import Event, EventKind
 from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
-from ...core.validation import as_finite_array, as_finite_float, as_positive_float, expect_sequence_of, expect_type
+from ...core.validation import as_finite_array, as_finite_float, expect_sequence_of, expect_type
 from ...model.hand import Hand
-from ..project.state import MAX_DT, PLANT_EVENT_KINDS, PlantContact, PlantState, PlantStep
+from ..project.state import PLANT_EVENT_KINDS, PlantContact, PlantState, PlantStep
 from ..saturation import Saturation
 from ..sphere_sensing import SphereTipSensing
 from .model import DrakeSettings, build_drake, require_drake
@@ -99,17 +99,7 @@ class DrakePlant(SphereTipSensing):
         if len(contacts) != hand.m:
             raise InvalidParameterError("contacts", contacts, f"one contact per finger ({hand.m})")
         self.hand, self.polygon, self.settings = hand, polygon, settings
-        self.dt = as_positive_float("dt", dt)
-        substeps = self.dt / settings.time_step
-        if self.dt > MAX_DT or abs(substeps - round(substeps)) > 1e-6 * substeps:
-            raise InvalidParameterError("dt", dt, f"a step of at most {MAX_DT} s and a multiple of Drake's "
-                                        f"time step ({settings.time_step:g} s)")
-        self.substeps = int(round(substeps))
-        self.slip_speed = as_positive_float("slip_speed", slip_speed)
-        self.stick_speed = as_positive_float("stick_speed", stick_speed)
-        self.separation_gap = as_positive_float("separation_gap", separation_gap)
-        if not self.stick_speed <= self.slip_speed:
-            raise InvalidParameterError("stick_speed", stick_speed, f"at most slip_speed ({self.slip_speed:g} m/s)")
+        self.configure_sensing(dt, settings.time_step, "Drake's time step", slip_speed, stick_speed, separation_gap)
         if isinstance(stop_on, str) or not all(isinstance(k, str) and k in PLANT_EVENT_KINDS for k in stop_on):
             raise InvalidParameterError("stop_on", stop_on, f"a sequence of plant event kinds "
                                         f"({', '.join(sorted(PLANT_EVENT_KINDS))})")
@@ -139,13 +129,11 @@ class DrakePlant(SphereTipSensing):
                              .CalcRotationalInertia().get_moments()[2])
         self._fq, self._fv, self._oq, self._ov = built.finger_q, built.finger_v, built.object_q, built.object_v
         self._damping = self._joint_damping()
-        self.contact_edges = [polygon.edge(c.edge) for c in contacts]
-        self.contacts = self._copy_contacts(contacts)
+        self.contacts = self.copy_contacts(contacts)
         self.state: PlantState | None = None
         self.events: list[Event] = []
         self.stopped = False
         self.max_constraint_error = 0.0
-        self.max_gap = -np.inf
         #: The motors' torque limits (:mod:`regrasp.plants.saturation`).
         self.saturation = Saturation(hand.effort_limit.tolist())
         self._energy0 = 0.0
@@ -164,12 +152,6 @@ class DrakePlant(SphereTipSensing):
     def tip_radius(self) -> float:
         """The fingertips' sphere radius r [m]."""
         return self.settings.tip_radius
-
-    def _copy_contacts(self, contacts: Sequence[PlantContact]) -> list[PlantContact]:
-        out = [PlantContact(c.edge, c.mode, c.xi, c.sign) for c in contacts]
-        for i, c in enumerate(out):
-            self.contact_edges[i] = self.polygon.edge(c.edge)
-        return out
 
     # ------------------------------------------------------------------ state
     def _load(self, context, q, v, X, V, t: float) -> None:
@@ -198,7 +180,7 @@ class DrakePlant(SphereTipSensing):
             contacts = expect_sequence_of("contacts", contacts, PlantContact, "PlantContact")
             if len(contacts) != self.hand.m:
                 raise InvalidParameterError("contacts", contacts, f"one contact per finger ({self.hand.m})")
-            self.contacts = self._copy_contacts(contacts)
+            self.contacts = self.copy_contacts(contacts)
         values = (as_finite_array("q", q, (n,)), as_finite_array("v", v, (n,)), as_finite_array("X", X, (3,)),
                   as_finite_array("V", V, (3,)))
         self._load(self.context, *values, as_finite_float("t", t))
@@ -215,22 +197,14 @@ class DrakePlant(SphereTipSensing):
     def _measure(self, context, i: int) -> tuple[float, float, float, float]:
         r"""(ξ, ξ̇, the distance of the tip's centre from the edge's line (positive outside), the distal link's
         angle relative to the object φ) of tip i in ``context`` [m, m/s, m, rad]."""
-        plant, edge = self._plant, self.contact_edges[i]
+        plant = self._plant
         q, v = plant.GetPositions(context), plant.GetVelocities(context)
-        x, y, beta = q[self._oq].tolist()
-        vx, vy, w = v[self._ov].tolist()
-        c, s = math.cos(beta), math.sin(beta)
         body = self.built.tip_bodies[i]
         pose = body.EvalPoseInWorld(context)
-        px, py, _ = pose.translation().tolist()
-        vel = body.EvalSpatialVelocityInWorld(context).translational()
         rot = pose.rotation().matrix()
-        rx, ry = px - x, py - y
-        ux, uy = vel[0] - (vx - w * ry), vel[1] - (vy + w * rx)  # tip velocity relative to the object's point
-        ox, oy = c * rx + s * ry, c * ry - s * rx  # in the object frame
-        (nx, ny), (tx, ty), origin = edge.inward_normal.tolist(), edge.xi_direction.tolist(), edge.xi_origin
-        return (tx * (ox - origin[0]) + ty * (oy - origin[1]), tx * (c * ux + s * uy) + ty * (c * uy - s * ux),
-                -(nx * (ox - origin[0]) + ny * (oy - origin[1])), math.atan2(rot[1, 0], rot[0, 0]) - beta)
+        return self.edge_measure(i, q[self._oq].tolist(), v[self._ov].tolist(), pose.translation().tolist(),
+                                 body.EvalSpatialVelocityInWorld(context).translational().tolist(),
+                                 math.atan2(rot[1, 0], rot[0, 0]))
 
     def _context_at(self, st: PlantState):
         if st is self.state:
@@ -249,13 +223,6 @@ class DrakePlant(SphereTipSensing):
         context = self._context_at(st)
         return max((abs(self._measure(context, i)[2]) for i, c in enumerate(self.contacts)
                     if c.mode is not _SEPARATED), default=0.0)
-
-    def surface_forces(self, st: PlantState, forces: np.ndarray) -> np.ndarray:
-        """Contact forces (m, 2) on the object, hand frame, in each contact's surface frame (normal, tangential)."""
-        c, s = math.cos(st.X[2]), math.sin(st.X[2])
-        rot = np.array([[c, -s], [s, c]])
-        frames = [np.array([rot @ e.inward_normal, rot @ e.xi_direction]) for e in self.contact_edges]
-        return np.array([f @ force for f, force in zip(frames, np.asarray(forces, dtype=float))])
 
     def _advance(self, context) -> tuple[np.ndarray, np.ndarray, dict]:
         """Drake's discrete update from ``context``'s state: (the next [q; v], each tip's contact force on the object

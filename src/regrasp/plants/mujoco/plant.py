@@ -51,9 +51,9 @@ from ...core.contact import DEFAULT_FRICTION, ContactMode, Friction, FrictionLik
 from ...core.events import Event, EventKind
 from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
-from ...core.validation import as_finite_array, as_finite_float, as_positive_float, expect_sequence_of, expect_type
+from ...core.validation import as_finite_array, as_finite_float, expect_sequence_of, expect_type
 from ...model.hand import Hand
-from ..project.state import MAX_DT, PlantContact, PlantState, PlantStep
+from ..project.state import PlantContact, PlantState, PlantStep
 from ..saturation import Saturation
 from ..sphere_sensing import SphereTipSensing
 from .mjcf import MujocoSettings, build_mjcf, require_mujoco
@@ -106,18 +106,7 @@ class MujocoPlant(SphereTipSensing):
         if len(contacts) != hand.m:
             raise InvalidParameterError("contacts", contacts, f"one contact per finger ({hand.m})")
         self.hand, self.polygon, self.settings = hand, polygon, settings
-        self.dt = as_positive_float("dt", dt)
-        substeps = self.dt / settings.timestep
-        if self.dt > MAX_DT or abs(substeps - round(substeps)) > 1e-6 * substeps:
-            raise InvalidParameterError("dt", dt, f"a step of at most {MAX_DT} s and a multiple of MuJoCo's "
-                                        f"timestep ({settings.timestep:g} s)")
-        self.substeps = int(round(substeps))
-        self.slip_speed = as_positive_float("slip_speed", slip_speed)
-        self.stick_speed = as_positive_float("stick_speed", stick_speed)
-        self.separation_gap = as_positive_float("separation_gap", separation_gap)
-        self.max_gap = -np.inf
-        if not self.stick_speed <= self.slip_speed:
-            raise InvalidParameterError("stick_speed", stick_speed, f"at most slip_speed ({self.slip_speed:g} m/s)")
+        self.configure_sensing(dt, settings.timestep, "MuJoCo's timestep", slip_speed, stick_speed, separation_gap)
         if isinstance(stop_on, str) or not all(isinstance(k, str) and k in _STOP_KINDS for k in stop_on):
             raise InvalidParameterError("stop_on", stop_on, f"a sequence of plant event kinds "
                                         f"({', '.join(sorted(_STOP_KINDS))})")
@@ -146,8 +135,7 @@ class MujocoPlant(SphereTipSensing):
         self._geoms.update({model.geom(name).id: ("link", i, link) for i, links in enumerate(built.link_geoms)
                             for name, link in links})
         self._object_geoms = {model.geom(built.object_geom).id, model.geom(built.hull_geom).id}
-        self.contact_edges = [polygon.edge(c.edge) for c in contacts]
-        self.contacts = self._copy_contacts(contacts)
+        self.contacts = self.copy_contacts(contacts)
         self.state: PlantState | None = None
         self.events: list[Event] = []
         self.stopped = False
@@ -160,12 +148,6 @@ class MujocoPlant(SphereTipSensing):
     def tip_radius(self) -> float:
         """The fingertips' sphere radius r [m]."""
         return self.settings.tip_radius
-
-    def _copy_contacts(self, contacts: Sequence[PlantContact]) -> list[PlantContact]:
-        out = [PlantContact(c.edge, c.mode, c.xi, c.sign) for c in contacts]
-        for i, c in enumerate(out):
-            self.contact_edges[i] = self.polygon.edge(c.edge)
-        return out
 
     # ------------------------------------------------------------------ state
     def _load(self, data, q, v, X, V, t: float) -> None:
@@ -190,7 +172,7 @@ class MujocoPlant(SphereTipSensing):
             contacts = expect_sequence_of("contacts", contacts, PlantContact, "PlantContact")
             if len(contacts) != self.hand.m:
                 raise InvalidParameterError("contacts", contacts, f"one contact per finger ({self.hand.m})")
-            self.contacts = self._copy_contacts(contacts)
+            self.contacts = self.copy_contacts(contacts)
         values = (as_finite_array("q", q, (n,)), as_finite_array("v", v, (n,)), as_finite_array("X", X, (3,)),
                   as_finite_array("V", V, (3,)))
         self._mj.mj_resetData(self.model, self.data)
@@ -208,21 +190,12 @@ class MujocoPlant(SphereTipSensing):
     def _measure(self, data, i: int) -> tuple[float, float, float, float]:
         r"""(ξ, ξ̇, the distance of the tip's centre from the edge's line (positive outside), the distal link's
         angle relative to the object φ = θ₂ − β) of tip i in ``data`` [m, m/s, m, rad]."""
-        edge = self.contact_edges[i]
-        x, y, beta = data.qpos[self._object_q].tolist()
-        vx, vy, w = data.qvel[self._object_v].tolist()
-        c, s = math.cos(beta), math.sin(beta)
         site = self._sites[i]
-        px, py = data.site_xpos[site, :2].tolist()
         vel = np.empty(6)
         self._mj.mj_objectVelocity(self.model, data, self._mj.mjtObj.mjOBJ_SITE, site, vel, 0)
-        rx, ry = px - x, py - y
-        ux, uy = vel[3] - (vx - w * ry), vel[4] - (vy + w * rx)  # tip velocity relative to the object's point
-        ox, oy = c * rx + s * ry, c * ry - s * rx  # in the object frame
-        (nx, ny), (tx, ty), origin = edge.inward_normal.tolist(), edge.xi_direction.tolist(), edge.xi_origin
         xmat = data.site_xmat[site]
-        return (tx * (ox - origin[0]) + ty * (oy - origin[1]), tx * (c * ux + s * uy) + ty * (c * uy - s * ux),
-                -(nx * (ox - origin[0]) + ny * (oy - origin[1])), math.atan2(xmat[3], xmat[0]) - beta)
+        return self.edge_measure(i, data.qpos[self._object_q].tolist(), data.qvel[self._object_v].tolist(),
+                                 data.site_xpos[site, :2].tolist(), vel[3:5].tolist(), math.atan2(xmat[3], xmat[0]))
 
     def _data_at(self, st: PlantState):
         if st is self.state:
@@ -241,13 +214,6 @@ class MujocoPlant(SphereTipSensing):
         data = self._data_at(st)
         return max((abs(self._measure(data, i)[2]) for i, c in enumerate(self.contacts) if c.mode is not _SEPARATED),
                    default=0.0)
-
-    def surface_forces(self, st: PlantState, forces: np.ndarray) -> np.ndarray:
-        """Contact forces (m, 2) on the object, hand frame, in each contact's surface frame (normal, tangential)."""
-        c, s = math.cos(st.X[2]), math.sin(st.X[2])
-        rot = np.array([[c, -s], [s, c]])
-        frames = [np.array([rot @ e.inward_normal, rot @ e.xi_direction]) for e in self.contact_edges]
-        return np.array([f @ force for f, force in zip(frames, np.asarray(forces, dtype=float))])
 
     def _contact_forces(self, data, forces: np.ndarray, links: dict) -> None:
         """Add each tip's contact force on the object (hand frame) at ``data``'s step to ``forces`` (m, 2),
