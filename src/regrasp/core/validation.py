@@ -163,6 +163,20 @@ def as_integer(name: str, value: object, least: int = 0) -> int:
     return int(value)
 
 
+#: The largest count (of periods, substeps, candidates, re-plans, steps between samples...) a setting takes: far
+#: above any useful value, and low enough that a product of two counts stays an exact float.
+MAX_COUNT = 10**6
+
+
+def as_count(name: str, value: object, least: int = 0, most: int = MAX_COUNT) -> int:
+    """``value`` as an int in [``least``, ``most``] (Python's or numpy's integer; not a bool, a float, a NaN or
+    a string): the one check of every count a setting or a command line takes."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
+            or not least <= value <= most:
+        raise InvalidParameterError(name, value, f"an integer in [{least}, {most}]")
+    return int(value)
+
+
 def as_flag(name: str, value: object) -> bool:
     """``value`` if it is True or False (Python's or numpy's), else an error (no truthiness of other values)."""
     if not isinstance(value, (bool, np.bool_)):
