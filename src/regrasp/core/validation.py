@@ -8,6 +8,8 @@ accept them are refused, and so is an integer too large for a float (``10**400``
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Set as AbstractSet
 from pathlib import Path
 from typing import TypeVar
 
@@ -35,9 +37,9 @@ def _has_non_numbers(value) -> bool:
     return value is None or isinstance(value, _NOT_NUMBERS)
 
 
-def as_finite_array(name: str, value: object, shape: tuple[int, ...] | None = None) -> np.ndarray:
-    """``value`` as a float array of the given shape with only finite entries (numbers only: no bool,
-    string or complex entries)."""
+def as_number_array(name: str, value: object, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    """``value`` as a float array of the given shape (-1: any length) of numbers (no bool, string or complex
+    entries; NaN and inf are numbers here: :func:`as_finite_array` refuses them)."""
     if _has_non_numbers(value):
         raise InvalidParameterError(name, value, "an array of numbers (no booleans, strings or complex numbers)")
     try:
@@ -50,6 +52,13 @@ def as_finite_array(name: str, value: object, shape: tuple[int, ...] | None = No
         if len(shape) != arr.ndim or any(s != -1 and s != a for s, a in zip(shape, arr.shape)):
             want = "x".join("n" if s == -1 else str(s) for s in shape)
             raise InvalidParameterError(name, value, f"an array of shape ({want})")
+    return arr
+
+
+def as_finite_array(name: str, value: object, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    """``value`` as a float array of the given shape with only finite entries (numbers only: no bool,
+    string or complex entries)."""
+    arr = as_number_array(name, value, shape)
     if not np.all(np.isfinite(arr)):
         raise InvalidParameterError(name, value, "finite numbers (no NaN or inf)")
     return arr
@@ -134,9 +143,21 @@ def expect_type(name: str, value: _T, kind: type | tuple[type, ...], what: str) 
     return value
 
 
+def check_fields(instance: object, check: Callable[..., object], names: Iterable[str], *args: object,
+                 optional: bool = False, **options: object) -> None:
+    """Set each field ``name`` of the frozen dataclass ``instance`` to ``check(name, value, *args, **options)``
+    (a None left as it is when ``optional``): how a settings type checks, and normalises, its fields on
+    construction (``check_fields(self, as_count, ("every",), 1)``)."""
+    for name in names:
+        value = getattr(instance, name)
+        if not (optional and value is None):
+            object.__setattr__(instance, name, check(name, value, *args, **options))
+
+
 def expect_sequence_of(name: str, values: object, kind: type, what: str) -> tuple:
-    """``values`` as a tuple whose items are all instances of ``kind`` (a list, a tuple...; not a string)."""
-    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+    """``values`` as a tuple whose items are all instances of ``kind`` (a list, a tuple...; not a string, nor a
+    mapping or a set, whose order is not the caller's)."""
+    if isinstance(values, (str, bytes, Mapping, AbstractSet)) or not hasattr(values, "__iter__"):
         raise InvalidParameterError(name, values, f"a sequence of {what}")
     out = tuple(values)
     for v in out:
