@@ -4,6 +4,7 @@ import math
 
 import pytest
 
+from field_checks import field_tests, fields_of
 from regrasp.core.events import FailureKind
 from regrasp.core.exceptions import InvalidParameterError
 from regrasp.core.health import HealthCriteria, HealthMonitor
@@ -85,3 +86,9 @@ def test_reports_keep_the_least_forces_and_the_longest_window():
     assert b.longest_zero_force == pytest.approx(DT) and b.longest_zero_force_at == DT
     assert b.least_held_force == 0.4 and b.least_slider_force == pytest.approx(0.15)
     assert a.to_json_dict()["contact"] == "a" and b.to_json_dict()["least_held_force_at"] == 3 * DT
+
+
+CRITERIA_TABLE = fields_of(HealthCriteria(), {
+    "pos": ("force_floor", "held_window", "held_slip", "slider_window", "zero_window")})
+
+test_each_criterion_refuses_bad_values, test_each_criterion_refuses_generated_bad_values = field_tests(CRITERIA_TABLE)

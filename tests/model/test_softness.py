@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from field_checks import field_tests, fields_of
 from regrasp.core.exceptions import InvalidParameterError
 from regrasp.model.softness import ContactSoftness, SoftnessRanges
 
@@ -35,3 +36,9 @@ def test_ranges_refuse_bad_values(bad):
 def test_a_softness_refuses_bad_values():
     with pytest.raises(InvalidParameterError):
         ContactSoftness(1e-3, -1e-4, 1e-3)
+
+
+TABLE = [*fields_of(SoftnessRanges(), {"other": ("time_constant", "solimp_width", "tip_radius")}),
+         *fields_of(ContactSoftness(1e-3, 1e-4, 5e-4), {"pos": ("time_constant", "solimp_width", "tip_radius")})]
+
+test_each_field_refuses_bad_values, test_each_field_refuses_generated_bad_values = field_tests(TABLE)

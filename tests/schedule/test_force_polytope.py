@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from factories import force_lp, random_polygon, rot
+from field_checks import field_tests, fields_of
 from regrasp.core.contact import Friction
 from regrasp.core.exceptions import InvalidParameterError
 from regrasp.schedule.force_polytope import ForceGeometry, ForceLimits, force_system, force_vertices, xi_intervals
@@ -187,3 +188,9 @@ def test_floors_load_the_sliders_and_the_holders_while_one_slides():
     for bad in (dict(slider_floor=-1.0), dict(holder_preload=math.inf), dict(slider_floor=20.0)):
         with pytest.raises(InvalidParameterError):
             ForceLimits(0.2, 20.0, 0.2, **bad)
+
+
+LIMITS_TABLE = fields_of(ForceLimits(0.2, 20.0, 0.2, 0.3, 0.3), {
+    "pos": ("f_min", "f_max"), "nonneg": ("cone_margin", "slider_floor", "holder_preload")})
+
+test_each_limit_refuses_bad_values, test_each_limit_refuses_generated_bad_values = field_tests(LIMITS_TABLE)

@@ -17,7 +17,9 @@ import numpy as np
 import pytest
 
 from factories import force_lp
+from field_checks import field_tests, fields_of
 from regrasp import Friction, load_scenario
+from regrasp.core.exceptions import InvalidParameterError
 from regrasp.schedule.problem import RegraspSettings, build_problem, trajectory_period
 
 SCENARIO = Path(__file__).resolve().parents[2] / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
@@ -188,3 +190,24 @@ def test_a_lattice_too_large_for_memory_is_refused_up_front():
     with pytest.raises(InvalidParameterError) as info:
         build_problem(four, RegraspSettings())
     assert "GiB" in str(info.value) and "xi_resolution" in str(info.value)
+
+
+SETTINGS_TABLE = fields_of(RegraspSettings(), {
+    "nonneg": ("envelope_margin", "cone_margin", "prime_overshoot", "slider_floor", "holder_preload"),
+    "pos": ("f_min", "f_max", "max_slide_speed", "max_slide_acceleration", "xi_resolution", "comfort_margin"),
+    "count1": ("max_sliders", "envelope_substeps", "verify_substeps", "period_candidates"), "count0": ("max_repairs",),
+    "flag": ("periodic",), "geometry": ("geometry",)},
+    optional=("max_sliders", "comfort_margin", "periodic", "geometry"),
+    good={"max_sliders": 2, "periodic": True, "geometry": "urdf"})
+
+test_each_setting_refuses_bad_values, test_each_setting_refuses_generated_bad_values = field_tests(SETTINGS_TABLE)
+
+
+@pytest.mark.parametrize("name", ["envelope_substeps", "verify_substeps", "max_repairs", "period_candidates",
+                                  "max_sliders"])
+def test_counts_are_bounded_and_numpy_integers_are_counts(name):
+    """Issue 25: ``envelope_substeps=10**400`` was an OverflowError, ``np.int64(2)`` refused."""
+    with pytest.raises(InvalidParameterError, match=name):
+        RegraspSettings(**{name: 10**400})
+    value = getattr(RegraspSettings(**{name: np.int64(2)}), name)
+    assert value == 2 and type(value) is int

@@ -53,6 +53,7 @@ from numpy.typing import ArrayLike
 from ..core.contact import cone_margin
 from ..core.exceptions import InvalidParameterError
 from ..core.polygon import ConvexPolygon
+from ..core.validation import as_positive_float, check_fields
 
 __all__ = ["ForceGeometry", "ForceLimits", "ForceVertices", "TorqueExcess", "force_system", "force_vertices",
            "torque_excess", "xi_intervals"]
@@ -78,15 +79,13 @@ class ForceLimits:
     holder_preload: float = 0.0
 
     def __post_init__(self):
-        if not (math.isfinite(self.f_min) and self.f_min > 0.0):
-            raise InvalidParameterError("f_min", self.f_min, "a normal force > 0 [N]")
-        if not (math.isfinite(self.f_max) and self.f_max > self.f_min):
+        check_fields(self, as_positive_float, ("f_min", "f_max"))
+        check_fields(self, as_positive_float, ("cone_margin", "slider_floor", "holder_preload"), allow_zero=True)
+        if not self.f_max > self.f_min:
             raise InvalidParameterError("f_max", self.f_max, f"a finite normal force > f_min = {self.f_min} [N]")
-        if not (math.isfinite(self.cone_margin) and self.cone_margin >= 0.0):
-            raise InvalidParameterError("cone_margin", self.cone_margin, "a force margin >= 0 [N]")
         for name in ("slider_floor", "holder_preload"):
             value = getattr(self, name)
-            if not (math.isfinite(value) and 0.0 <= value < self.f_max):
+            if not value < self.f_max:
                 raise InvalidParameterError(name, value, f"a normal force in [0, f_max = {self.f_max}) [N]")
 
     def floors(self, ratios: Sequence[float | None]) -> list[float]:

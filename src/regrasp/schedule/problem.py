@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 
 from ..core.contact import DEFAULT_CONE_MARGIN
 from ..core.exceptions import InvalidParameterError
-from ..core.validation import as_finite_array, as_positive_float
+from ..core.validation import as_count, as_finite_array, as_flag, as_positive_float, check_fields
 from ..envelope.finger_envelope import FingerEnvelope
 from ..model.geometry import Geometry, as_geometry
 from ..model.scenario import Scenario
@@ -99,13 +99,19 @@ class RegraspSettings:
     period_candidates: int = 3
 
     def __post_init__(self):
-        for name in ("max_slide_speed", "max_slide_acceleration", "xi_resolution", "f_min", "f_max"):
-            as_positive_float(name, getattr(self, name))
-        for name in ("envelope_margin", "cone_margin", "prime_overshoot"):
-            as_positive_float(name, getattr(self, name), allow_zero=True)
+        check_fields(self, as_positive_float, ("max_slide_speed", "max_slide_acceleration", "xi_resolution", "f_min",
+                                               "f_max"))
+        check_fields(self, as_positive_float, ("envelope_margin", "cone_margin", "prime_overshoot", "slider_floor",
+                                               "holder_preload"), allow_zero=True)
         if self.comfort_margin is None:
             object.__setattr__(self, "comfort_margin", self.envelope_margin + 4e-3)
-        as_positive_float("comfort_margin", self.comfort_margin)
+        check_fields(self, as_positive_float, ("comfort_margin",))
+        check_fields(self, as_count, ("envelope_substeps", "verify_substeps", "period_candidates"), 1)
+        check_fields(self, as_count, ("max_repairs",))
+        check_fields(self, as_count, ("max_sliders",), 1, optional=True)
+        check_fields(self, as_flag, ("periodic",), optional=True)
+        if self.geometry is not None:
+            object.__setattr__(self, "geometry", as_geometry("geometry", self.geometry, "'ideal', 'urdf' or None"))
         self.force_limits()
         if self.envelope_margin < 0.5 * self.xi_resolution:
             raise InvalidParameterError("envelope_margin", self.envelope_margin,
@@ -117,18 +123,6 @@ class RegraspSettings:
             raise InvalidParameterError(
                 "max_slide_acceleration", self.max_slide_acceleration,
                 f">= max_slide_speed^2 / xi_resolution = {self.max_slide_speed ** 2 / self.xi_resolution:g} m/s^2")
-        for name, least in (("envelope_substeps", 1), ("verify_substeps", 1), ("max_repairs", 0),
-                            ("period_candidates", 1)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < least:
-                raise InvalidParameterError(name, value, f"an integer >= {least}")
-        if self.max_sliders is not None and (isinstance(self.max_sliders, bool) or not isinstance(self.max_sliders, int)
-                                             or self.max_sliders < 1):
-            raise InvalidParameterError("max_sliders", self.max_sliders, "an integer >= 1, or None")
-        if self.periodic not in (None, True, False):
-            raise InvalidParameterError("periodic", self.periodic, "True, False or None")
-        if self.geometry is not None:
-            object.__setattr__(self, "geometry", as_geometry("geometry", self.geometry, "'ideal', 'urdf' or None"))
 
     @property
     def time_step(self) -> float:

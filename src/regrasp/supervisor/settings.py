@@ -13,7 +13,15 @@ from dataclasses import dataclass, field, replace
 
 from ..core.contact import DEFAULT_CONE_MARGIN
 from ..core.exceptions import InvalidParameterError
-from ..core.validation import as_duration, as_finite_float, as_flag, as_integer, as_positive_float, expect_type
+from ..core.validation import (
+    as_count,
+    as_duration,
+    as_finite_float,
+    as_flag,
+    as_positive_float,
+    check_fields,
+    expect_type,
+)
 from ..dynamics.internal_force.settings import InternalForceSettings
 from ..model.geometry import Geometry, as_geometry
 
@@ -128,42 +136,30 @@ class ExecutorSettings:
     reflex_time: float = 0.01
 
     def __post_init__(self):
-        for name in ("omega_n", "zeta", "prime_time", "prime_overshoot", "settle_undershoot", "arrive_tolerance",
-                     "arrive_speed", "max_slide_time", "control_omega", "slide_omega"):
-            as_positive_float(name, getattr(self, name))
+        check_fields(self, as_positive_float, ("omega_n", "zeta", "prime_overshoot", "prime_overshoot_max",
+                                               "settle_undershoot", "arrive_tolerance", "arrive_speed", "control_omega",
+                                               "slide_omega", "friction_min_force", "friction_resolution"))
         for name in ("omega_n", "control_omega", "slide_omega"):  # (their squares are gains)
             if getattr(self, name) > 1e6:
                 raise InvalidParameterError(name, getattr(self, name), "a frequency of at most 1e6 rad/s")
-        for name in ("prime_time", "max_slide_time"):
-            as_duration(name, getattr(self, name))
-        as_positive_float("integral", self.integral, allow_zero=True)
-        as_positive_float("settle_margin", self.settle_margin, allow_zero=True)
-        if self.start_speed is not None:
-            as_positive_float("start_speed", self.start_speed, allow_zero=True)
-        if self.friction_filter_time is not None:
-            as_positive_float("friction_filter_time", self.friction_filter_time)
-        for name in ("friction_min_force", "friction_resolution", "control_period"):
-            as_positive_float(name, getattr(self, name))
-        as_integer("max_reprimes", self.max_reprimes)
-        as_integer("actuation_delay", self.actuation_delay)
-        as_flag("breakaway_estimate", self.breakaway_estimate)
+        check_fields(self, as_duration, ("prime_time", "max_slide_time", "control_period", "reflex_time"))
+        check_fields(self, as_duration, ("friction_filter_time", "hold_filter_time"), optional=True)
+        check_fields(self, as_positive_float, ("integral", "settle_margin", "tip_radius", "slider_floor",
+                                               "holder_preload", "reflex_below", "reflex_floor"), allow_zero=True)
+        check_fields(self, as_positive_float, ("start_speed",), allow_zero=True, optional=True)
+        check_fields(self, as_positive_float, ("hold_resolution",), optional=True)
+        check_fields(self, as_count, ("max_reprimes", "actuation_delay"))
+        check_fields(self, as_flag, ("breakaway_estimate",))
+        expect_type("internal_force", self.internal_force, InternalForceSettings, "an InternalForceSettings")
         if not self.prime_overshoot_max >= self.prime_overshoot:
             raise InvalidParameterError("prime_overshoot_max", self.prime_overshoot_max,
                                         f"at least prime_overshoot = {self.prime_overshoot}")
         if self.integral >= 2.0:
             raise InvalidParameterError("integral", self.integral, "a gain fraction in [0, 2) (stability)")
-        expect_type("internal_force", self.internal_force, InternalForceSettings, "an InternalForceSettings")
-        if self.hold_resolution is not None:
-            as_positive_float("hold_resolution", self.hold_resolution)
-        if self.hold_filter_time is not None:
-            as_duration("hold_filter_time", self.hold_filter_time)
-        as_positive_float("tip_radius", self.tip_radius, allow_zero=True)
         for name in ("slider_floor", "holder_preload", "reflex_below", "reflex_floor"):
-            as_positive_float(name, getattr(self, name), allow_zero=True)
             if getattr(self, name) >= self.internal_force.f_max:
                 raise InvalidParameterError(name, getattr(self, name), f"a normal force below the internal "
                                             f"force's f_max ({self.internal_force.f_max:g} N)")
-        as_duration("reflex_time", self.reflex_time)
 
 
 @dataclass(frozen=True)
@@ -188,8 +184,8 @@ class MonitorSettings:
 
     def __post_init__(self):
         object.__setattr__(self, "geometry", as_geometry("geometry", self.geometry))
-        as_integer("every", self.every, 1)
-        as_flag("track", self.track)
+        check_fields(self, as_count, ("every",), 1)
+        check_fields(self, as_flag, ("track",))
 
 
 @dataclass(frozen=True)
@@ -234,15 +230,13 @@ class PaperSettings:
     enabling_recheck_time: float = 0.05
 
     def __post_init__(self):
-        for name in ("reaction_time", "target_horizon", "recheck_time", "enabling_recheck_time"):
-            as_duration(name, getattr(self, name))
-        as_integer("path_checks", self.path_checks, 1)
-        as_integer("enabling_candidates", self.enabling_candidates, 1)
-        if not 0.0 < as_finite_float("danger_fraction", self.danger_fraction) < 0.5:
+        check_fields(self, as_duration, ("reaction_time", "target_horizon", "recheck_time", "enabling_recheck_time"))
+        check_fields(self, as_count, ("path_checks", "enabling_candidates"), 1)
+        check_fields(self, as_finite_float, ("danger_fraction",))
+        if not 0.0 < self.danger_fraction < 0.5:
             raise InvalidParameterError("danger_fraction", self.danger_fraction, "a fraction in (0, 0.5)")
         expect_type("feasibility", self.feasibility, InternalForceSettings, "an InternalForceSettings")
-        as_flag("regrasp", self.regrasp)
-        as_flag("enabling", self.enabling)
+        check_fields(self, as_flag, ("regrasp", "enabling"))
 
 
 @dataclass(frozen=True)
@@ -276,13 +270,13 @@ class ScheduledSettings:
     replan: bool = True
 
     def __post_init__(self):
-        for name in ("prime_lead", "time_tolerance", "xi_tolerance", "replan_cooldown", "decision_period"):
-            as_positive_float(name, getattr(self, name), allow_zero=True)
-        if not 0.0 <= as_finite_float("margin_fraction", self.margin_fraction) < 1.0:
+        check_fields(self, as_positive_float, ("prime_lead", "time_tolerance", "xi_tolerance", "replan_cooldown",
+                                               "decision_period"), allow_zero=True)
+        check_fields(self, as_finite_float, ("margin_fraction",))
+        if not 0.0 <= self.margin_fraction < 1.0:
             raise InvalidParameterError("margin_fraction", self.margin_fraction, "a fraction in [0, 1)")
-        if isinstance(self.max_replans, bool) or int(self.max_replans) != self.max_replans or self.max_replans < 0:
-            raise InvalidParameterError("max_replans", self.max_replans, "an integer >= 0")
-        as_flag("replan", self.replan)
+        check_fields(self, as_count, ("max_replans",))
+        check_fields(self, as_flag, ("replan",))
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ import pytest
 
 mujoco = pytest.importorskip("mujoco")
 
+from field_checks import field_tests, fields_of  # noqa: E402
 from regrasp import load_scenario  # noqa: E402
 from regrasp.core.exceptions import InvalidParameterError  # noqa: E402
 from regrasp.plants.mujoco.mjcf import MujocoSettings, build_mjcf, eroded_vertices, scenario_to_mjcf  # noqa: E402
@@ -111,3 +112,14 @@ def test_bad_mujoco_settings_are_typed_errors(kwargs):
         MujocoSettings(**kwargs)
 
 
+TABLE = fields_of(MujocoSettings(), {
+    "pos": ("tip_radius", "timestep", "time_constant", "damping_ratio", "impratio", "tolerance", "object_thickness"),
+    "nonneg": ("contact_depth",), "count0": ("noslip_iterations",), "count1": ("iterations",), "flag": ("erode",),
+    "choice": ("integrator",), "other": ("solimp",)},
+    choices={"integrator": ("euler", "implicit", "implicitfast", "rk4")})
+
+test_each_field_refuses_bad_values, test_each_field_refuses_generated_bad_values = field_tests(TABLE)
+
+
+def test_solimp_is_stored_as_a_tuple_of_floats():
+    assert MujocoSettings(solimp=[0.9, 0.95, 1e-3, 0.5, 2]).solimp == (0.9, 0.95, 1e-3, 0.5, 2.0)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.exceptions import InvalidParameterError
-from ...core.validation import as_finite_float
+from ...core.validation import as_finite_float, as_positive_float, check_fields, expect_sequence_of
 
 __all__ = ["ConeEdge", "InternalForceSettings", "as_cone_edges"]
 
@@ -46,11 +46,8 @@ class InternalForceSettings:
     floors: tuple[float, ...] = ()
 
     def __post_init__(self):
-        for name, low, strict in (("f_min", 0.0, False), ("friction_margin", 0.0, False), ("tolerance", 0.0, True),
-                                  ("target_cone_margin", 0.0, False)):
-            value = as_finite_float(name, getattr(self, name))
-            if value < low or (strict and value == low):
-                raise InvalidParameterError(name, value, f"a finite value {'>' if strict else '>='} {low:g}")
+        check_fields(self, as_positive_float, ("f_min", "friction_margin", "target_cone_margin"), allow_zero=True)
+        check_fields(self, as_positive_float, ("tolerance",))
         f_max = self.f_max
         if not (isinstance(f_max, float) and f_max == math.inf):  # inf: no upper bound
             try:
@@ -59,15 +56,15 @@ class InternalForceSettings:
                 f_max = math.nan  # (the error below says what f_max may be)
         if not f_max > self.f_min:
             raise InvalidParameterError("f_max", self.f_max, f"a maximum normal force > f_min ({self.f_min}) or inf")
-        if isinstance(self.floors, (str, bytes)) or not hasattr(self.floors, "__iter__"):
-            raise InvalidParameterError("floors", self.floors, "a sequence of normal forces [N], one per contact")
-        floors = tuple(as_finite_float("floors", v) for v in self.floors)
+        object.__setattr__(self, "f_max", float(f_max))
+        floors = expect_sequence_of("floors", self.floors, object, "normal forces [N], one per contact")
+        floors = tuple(as_finite_float("floors", v) for v in floors)
         if any(not 0.0 <= v < self.f_max for v in floors):
             raise InvalidParameterError("floors", self.floors, f"normal forces in [0, f_max = {self.f_max:g}) [N]")
         object.__setattr__(self, "floors", floors)
+        check_fields(self, as_finite_float, ("fallback_friction_margin",), optional=True)
         fallback = self.fallback_friction_margin
-        if fallback is not None and not 0.0 <= as_finite_float("fallback_friction_margin", fallback) \
-                < self.friction_margin:
+        if fallback is not None and not 0.0 <= fallback < self.friction_margin:
             raise InvalidParameterError("fallback_friction_margin", fallback,
                                         f"None or a friction margin in [0, friction_margin = {self.friction_margin:g})")
 

@@ -46,7 +46,7 @@ import numpy as np
 from ...core.contact import Friction
 from ...core.exceptions import FingerModelError, InvalidParameterError, MissingDependencyError
 from ...core.polygon import ConvexPolygon
-from ...core.validation import as_finite_float, as_positive_float, expect_sequence_of, expect_type
+from ...core.validation import as_finite_float, as_positive_float, check_fields, expect_sequence_of, expect_type
 from ...model.collision import checked_link_shapes, default_tip_clearance
 from ...model.finger import Finger
 from ..mujoco.mjcf import eroded_vertices
@@ -101,18 +101,15 @@ class DrakeSettings:
     contact_depth: float = 4e-7
 
     def __post_init__(self):
-        as_positive_float("tip_radius", self.tip_radius)
-        if not 1e-6 <= as_positive_float("time_step", self.time_step) <= 1e-3:
+        check_fields(self, as_positive_float, ("tip_radius", "time_step", "point_contact_stiffness",
+                                               "stiction_tolerance", "object_thickness"))
+        check_fields(self, as_positive_float, ("hunt_crossley_dissipation", "near_rigid_threshold", "contact_depth"),
+                     allow_zero=True)
+        if not 1e-6 <= self.time_step <= 1e-3:
             raise InvalidParameterError("time_step", self.time_step, "a step from 1e-6 to 1e-3 s")
-        as_positive_float("point_contact_stiffness", self.point_contact_stiffness)
-        as_positive_float("hunt_crossley_dissipation", self.hunt_crossley_dissipation, allow_zero=True)
         if not isinstance(self.approximation, str) or self.approximation not in APPROXIMATIONS:
             raise InvalidParameterError("approximation", self.approximation, f"one of {', '.join(APPROXIMATIONS)} "
                                         "(the convex approximations with Hunt-Crossley dissipation)")
-        as_positive_float("stiction_tolerance", self.stiction_tolerance)
-        as_positive_float("near_rigid_threshold", self.near_rigid_threshold, allow_zero=True)
-        as_positive_float("object_thickness", self.object_thickness)
-        as_positive_float("contact_depth", self.contact_depth, allow_zero=True)
 
 
 def require_drake() -> ModuleType:

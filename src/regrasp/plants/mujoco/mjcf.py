@@ -45,7 +45,15 @@ import numpy as np
 from ...core.contact import Friction
 from ...core.exceptions import FingerModelError, InvalidParameterError, MissingDependencyError
 from ...core.polygon import ConvexPolygon
-from ...core.validation import as_finite_float, as_integer, as_positive_float, expect_sequence_of, expect_type
+from ...core.validation import (
+    as_count,
+    as_finite_float,
+    as_flag,
+    as_positive_float,
+    check_fields,
+    expect_sequence_of,
+    expect_type,
+)
 from ...model.collision import checked_link_shapes, default_tip_clearance
 from ...model.finger import Finger
 
@@ -107,28 +115,25 @@ class MujocoSettings:
     integrator: str = "implicitfast"
 
     def __post_init__(self):
-        as_positive_float("tip_radius", self.tip_radius)
-        if not 1e-7 <= as_positive_float("timestep", self.timestep) <= 1e-3:
+        check_fields(self, as_positive_float, ("tip_radius", "timestep", "time_constant", "damping_ratio", "impratio",
+                                               "tolerance", "object_thickness"))
+        check_fields(self, as_positive_float, ("contact_depth",), allow_zero=True)
+        if not 1e-7 <= self.timestep <= 1e-3:
             raise InvalidParameterError("timestep", self.timestep, "a step from 1e-7 to 1e-3 s")
-        if not as_positive_float("time_constant", self.time_constant) >= 2.0 * self.timestep:
+        if not self.time_constant >= 2.0 * self.timestep:
             raise InvalidParameterError("time_constant", self.time_constant,
                                         f"at least 2 timesteps ({2.0 * self.timestep:.3g} s): MuJoCo's stable minimum")
-        as_positive_float("damping_ratio", self.damping_ratio)
         solimp = tuple(as_finite_float("solimp", v) for v in self.solimp) if isinstance(self.solimp, (tuple, list)) \
             else None
         if solimp is None or len(solimp) != 5 or not (0.0 < solimp[0] <= solimp[1] < 1.0 and solimp[2] > 0.0
                                                       and 0.0 < solimp[3] < 1.0 and solimp[4] >= 1.0):
             raise InvalidParameterError("solimp", self.solimp, "(d_min, d_max, width, midpoint, power) with "
                                         "0 < d_min <= d_max < 1, width > 0, 0 < midpoint < 1, power >= 1")
-        as_positive_float("impratio", self.impratio)
-        as_integer("noslip_iterations", self.noslip_iterations)
-        as_integer("iterations", self.iterations, least=1)
-        as_positive_float("tolerance", self.tolerance)
-        as_positive_float("object_thickness", self.object_thickness)
-        as_positive_float("contact_depth", self.contact_depth, allow_zero=True)
-        if not isinstance(self.erode, bool):
-            raise InvalidParameterError("erode", self.erode, "True or False")
-        if self.integrator not in _INTEGRATORS:
+        object.__setattr__(self, "solimp", solimp)
+        check_fields(self, as_count, ("noslip_iterations",))
+        check_fields(self, as_count, ("iterations",), 1)
+        check_fields(self, as_flag, ("erode",))
+        if not isinstance(self.integrator, str) or self.integrator not in _INTEGRATORS:
             raise InvalidParameterError("integrator", self.integrator, f"one of {', '.join(_INTEGRATORS)}")
 
 
