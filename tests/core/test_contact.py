@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import regrasp
+from field_checks import field_tests, fields_of
 from regrasp.core.contact import ContactMode, Friction, as_frictions, as_modes, coefficients, cone_margin
 from regrasp.core.exceptions import InvalidParameterError, RegraspError
 
@@ -55,6 +56,31 @@ def test_friction_rejects_bad_coefficients_with_typed_errors(static, kinetic, na
     with pytest.raises(InvalidParameterError) as err:
         Friction(static, kinetic)
     assert err.value.name == name and isinstance(err.value, RegraspError)
+
+
+FRICTION_TABLE = fields_of(Friction(0.5, 0.4), {"nonneg": ("static", "kinetic")}, optional=("kinetic",),
+                           names={"static": "mu_static", "kinetic": "mu_kinetic"})
+
+test_each_coefficient_refuses_bad_values, test_each_coefficient_refuses_generated_bad_values = \
+    field_tests(FRICTION_TABLE)
+
+
+@pytest.mark.parametrize("static,kinetic,name", [
+    ("0.5", None, "mu_static"), (0.5, "0.4", "mu_kinetic"), (np.bool_(True), None, "mu_static"),
+    (1 + 0j, None, "mu_static"), (10**400, None, "mu_static"), (np.array([0.5]), None, "mu_static")])
+def test_a_coefficient_is_a_number_not_a_string_or_a_bool(static, kinetic, name):
+    """Issue 25: ``Friction('0.5')``, ``Friction(0.5, '0.4')`` and ``Friction(np.bool_(True))`` were accepted."""
+    with pytest.raises(InvalidParameterError) as err:
+        Friction(static, kinetic)
+    assert err.value.name == name
+
+
+@pytest.mark.parametrize("factor", ["2", None, math.nan, math.inf, 0.0, -1.0, True, 1e308])
+def test_scaled_takes_a_positive_number_that_keeps_the_coefficients_finite(factor):
+    """Issue 25: ``Friction(0.5).scaled('2')`` was a TypeError."""
+    with pytest.raises(InvalidParameterError, match="factor"):
+        Friction(5.0).scaled(factor)
+    assert Friction(0.5, 0.25).scaled(np.int64(2)) == Friction(1.0, 0.5)
 
 
 def test_coefficient_is_static_when_fixed_and_kinetic_when_sliding():

@@ -25,6 +25,7 @@ from typing import TypeAlias
 import numpy as np
 
 from .exceptions import InvalidParameterError
+from .validation import as_finite_float, as_positive_float
 
 __all__ = ["DEFAULT_CONE_MARGIN", "DEFAULT_FRICTION", "ContactMode", "Friction", "FrictionLike", "ModesLike",
            "as_frictions", "as_modes", "coefficients", "cone_margin"]
@@ -63,14 +64,12 @@ def as_modes(modes: ModesLike, m: int | None = None) -> tuple[ContactMode, ...]:
     return out
 
 
-def _coefficient(name: str, value) -> float:
-    if isinstance(value, bool):
-        raise InvalidParameterError(name, value, "a friction coefficient >= 0")
+def _coefficient(name: str, value: object) -> float:
     try:
-        out = float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise InvalidParameterError(name, value, "a friction coefficient >= 0") from None
-    if not math.isfinite(out) or out < 0.0:
+        out = as_finite_float(name, value)
+    except InvalidParameterError:
+        raise InvalidParameterError(name, value, "a finite friction coefficient >= 0 (a number)") from None
+    if out < 0.0:
         raise InvalidParameterError(name, value, "a finite friction coefficient >= 0")
     return out
 
@@ -108,7 +107,10 @@ class Friction:
         return 0.0
 
     def scaled(self, factor: float) -> "Friction":
-        """Both coefficients times ``factor`` (> 0)."""
+        """Both coefficients times ``factor`` (a number > 0)."""
+        factor = as_positive_float("factor", factor)
+        if not self.static * factor < math.inf:
+            raise InvalidParameterError("factor", factor, f"a factor that keeps mu_s = {self.static:g} finite")
         return Friction(self.static * factor, self.kinetic * factor)
 
     def __str__(self) -> str:
