@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
 import numpy as np
 import pytest
 
+from field_checks import field_tests, fields_of, short_id
 from regrasp.core.exceptions import InvalidParameterError
 from regrasp.schedule.schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide, slides_at
 
@@ -110,3 +112,82 @@ def test_no_schedule_error_carries_its_diagnosis():
     doc = err.to_json_dict()
     assert doc["found"] is False and doc["limit"] == "forces" and doc["rule"] == "the rule"
     json.dumps(doc)
+
+
+BASE = _schedule((_slide(contact=0, name="a", start=0.1, end=0.3, start_xi=0.0, end_xi=0.01),),
+                 np.array([0.0, 0.005]), periodic=True, t_end=1.0)
+SHAPE = (len(BASE.times), BASE.m)
+TABLE = [
+    *fields_of(BASE, {
+        "names": ("names",), "other": ("edges", "slides"), "real": ("t_start", "t_end"), "flag": ("periodic",),
+        "array": ("xi_start", "times", "xi", "xi_dot", "xi_ddot", "sliding", "envelope_margin", "cone_margin",
+                  "normal_force"),
+        "nonneg": ("required_envelope_margin", "required_cone_margin", "planning_seconds"),
+        "real+inf": ("min_envelope_margin", "min_cone_margin"), "at": ("min_envelope_margin_at", "min_cone_margin_at"),
+        "count0": ("slides_lower_bound",)},
+        optional=("slides_lower_bound",), empty_ok=("slides",),
+        shapes={"xi_start": (BASE.m,), "times": SHAPE[:1], **{name: SHAPE for name in (
+            "xi", "xi_dot", "xi_ddot", "sliding", "envelope_margin", "cone_margin", "normal_force")}}),
+    *fields_of(_slide(), {"count0": ("contact",), "name": ("name",), "sign": ("direction",),
+                          "real": ("start", "end", "start_xi", "end_xi"), "pos": ("ramp",)}),
+]
+
+test_each_field_refuses_bad_values, test_each_field_refuses_generated_bad_values = field_tests(TABLE)
+
+
+@pytest.mark.parametrize("xi_start", [[0.0, 0.0, 0.0], None, {}, [0.0, math.nan], ["0", "1"]], ids=short_id)
+def test_a_schedule_refuses_a_bad_start_on_construction(xi_start):
+    """Issue 25: ``replace(schedule, xi_start=[0.0, 0.0, 0.0])`` (or None, {}) was accepted, and its rollout an
+    AttributeError ('list' object has no attribute 'tolist')."""
+    with pytest.raises(InvalidParameterError, match="xi_start"):
+        dataclasses.replace(BASE, xi_start=xi_start)
+    made = dataclasses.replace(BASE, xi_start=[0.0, 0.005])  # a list of the right length: an array
+    assert isinstance(made.xi_start, np.ndarray) and made.at(0.05).xi.tolist() == [0.0, 0.005]
+
+
+@pytest.mark.parametrize("field,value", [
+    ("times", np.linspace(1.0, 0.0, 11)), ("times", np.linspace(0.0, 2.0, 11)), ("t_end", 0.0),
+    ("sliding", np.full(SHAPE, 2)), ("sliding", np.full(SHAPE, 0.5)), ("envelope_margin", np.full(SHAPE, math.nan)),
+    ("cone_margin", np.full(SHAPE, math.inf)), ("edges", (1,)), ("names", ("a",)), ("names", "ab"),
+    ("slides", (_slide(contact=2),)), ("slides", (_slide(start=0.5, end=0.7), _slide(start=0.2, end=0.4))),
+    ("min_cone_margin", math.nan), ("min_cone_margin_at", (0.0, "c")), ("min_cone_margin_at", (math.inf, "a"))],
+    ids=str)
+def test_a_schedule_refuses_inconsistent_fields(field, value):
+    with pytest.raises(InvalidParameterError):
+        dataclasses.replace(BASE, **{field: value})
+
+
+def test_the_documented_non_finite_values_are_accepted():
+    """NaN cone margins and forces (sliding contacts, drafts), a -inf envelope margin (no feasible interval), no
+    minimum (inf at (NaN, ''))."""
+    made = dataclasses.replace(BASE, cone_margin=np.full(SHAPE, math.nan), normal_force=np.full(SHAPE, math.nan),
+                               envelope_margin=np.full(SHAPE, -math.inf), min_cone_margin=math.inf,
+                               min_cone_margin_at=(math.nan, ""), sliding=np.zeros(SHAPE, dtype=np.int8))
+    assert made.sliding.dtype == int and made.min_cone_margin_at[1] == ""
+
+
+@pytest.mark.parametrize("t", ["abc", object(), 1 + 2j, [[0.1], [0.1, 0.2]], "1.0", True, np.bool_(False), None,
+                               math.inf, [0.1, math.nan], np.array([[0.1, 0.2]]), ["0.1"]], ids=short_id)
+def test_at_takes_finite_times_only(t):
+    """Issue 25: ``at('abc' | object() | 1+2j | ragged)`` were ValueError/TypeError, ``at('1.0')`` and ``at(True)``
+    accepted."""
+    with pytest.raises(InvalidParameterError) as err:
+        BASE.at(t)
+    assert err.value.name == "t"
+
+
+@pytest.mark.parametrize("t", [np.full(2, math.inf), math.nan, "1.0", True, [0.1, None]], ids=short_id)
+def test_local_time_takes_finite_times_only(t):
+    """Issue 25: ``local_time(np.full(2, inf))`` returned t_end."""
+    with pytest.raises(InvalidParameterError):
+        BASE.local_time(t)
+    if np.ndim(t) == 0:
+        with pytest.raises(InvalidParameterError):
+            BASE.local_time_at(t)
+
+
+def test_numbers_of_any_kind_are_times():
+    for t in (0.25, 1, np.int64(1), np.float32(0.25), np.array(0.25)):
+        assert BASE.at(t).xi.tolist() == BASE.at(float(t)).xi.tolist()
+        assert float(BASE.local_time(t)) == BASE.local_time_at(t if np.ndim(t) == 0 else float(t))
+    assert BASE.at([0.25, 1.25]).xi.shape == (2, 2) and BASE.local_time([0.25, 1.25]).tolist() == [0.25, 0.25]

@@ -29,13 +29,26 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.exceptions import InvalidParameterError, RegraspError
+from ..core.validation import (
+    as_count,
+    as_finite_array,
+    as_finite_float,
+    as_flag,
+    as_name,
+    as_number_array,
+    as_positive_float,
+    as_sign,
+    check_fields,
+    expect_sequence_of,
+)
 
 __all__ = ["NoScheduleError", "RegraspSchedule", "ScheduleLimit", "ScheduleSample", "Slide", "slides_at"]
 
 
 @dataclass(frozen=True)
 class Slide:
-    """One slide of one contact.
+    """One slide of one contact (its fields checked on construction: a ramp shorter than the slide, a direction
+    that is the sign of ``end_xi - start_xi``).
 
     Attributes:
         contact: Index of the contact (finger order).
@@ -56,6 +69,19 @@ class Slide:
     start_xi: float
     end_xi: float
     ramp: float
+
+    def __post_init__(self):
+        check_fields(self, as_count, ("contact",))
+        check_fields(self, as_name, ("name",))
+        object.__setattr__(self, "direction", int(as_sign("direction", self.direction)))
+        check_fields(self, as_finite_float, ("start", "end", "start_xi", "end_xi"))
+        check_fields(self, as_positive_float, ("ramp",))
+        if not self.end > self.start:
+            raise InvalidParameterError("end", self.end, f"a time after start = {self.start:g} s")
+        if not (self.ramp < self.duration and math.isfinite(self.speed)):
+            raise InvalidParameterError("ramp", self.ramp, f"a ramp shorter than the slide ({self.duration:g} s)")
+        if (self.end_xi - self.start_xi) * self.direction < 0.0:
+            raise InvalidParameterError("direction", self.direction, "the sign of end_xi - start_xi")
 
     @property
     def duration(self) -> float:
@@ -127,6 +153,10 @@ class ScheduleSample:
 class RegraspSchedule:
     """A planned regrasp schedule (module docstring).
 
+    Its fields are checked on construction, and normalised (the arrays to float arrays of their shapes, ``sliding``
+    to ints, the sequences to tuples): a bad one is an :class:`~regrasp.core.exceptions.InvalidParameterError`
+    naming it.
+
     Attributes:
         names: Finger names (contact order).
         edges: Contact edge of each finger.
@@ -145,7 +175,8 @@ class RegraspSchedule:
         required_envelope_margin, required_cone_margin: The margins the planner guaranteed [m], [N].
         min_envelope_margin: Smallest envelope margin [m] on the planner's verification grid (finer
             than ``times``), with when [s] and which contact (``min_envelope_margin_at``).
-        min_cone_margin: Smallest cone margin [N] of a fixed contact over ``times``, when and which.
+        min_cone_margin: Smallest cone margin [N] of a fixed contact over ``times``, when and which (inf at
+            (NaN, "") when there is none).
         planning_seconds: Wall time of planning [s].
         slides_lower_bound: The fewest slides any schedule over the horizon needs with a free start
             and end (a periodic schedule can need more), or None.
@@ -175,6 +206,9 @@ class RegraspSchedule:
     planning_seconds: float
     slides_lower_bound: int | None = None
 
+    def __post_init__(self):
+        _check_schedule(self)
+
     @property
     def m(self) -> int:
         return len(self.names)
@@ -188,14 +222,18 @@ class RegraspSchedule:
         """Number of slides of each contact over the horizon."""
         return {name: sum(1 for s in self.slides if s.contact == i) for i, name in enumerate(self.names)}
 
-    def local_time(self, t: np.ndarray) -> np.ndarray:
-        """Times ``t`` [s] mapped into the horizon: modulo the period when periodic, else clipped to it."""
+    def local_time(self, t: ArrayLike) -> np.ndarray:
+        """Times ``t`` [s] (finite numbers: one, or an array of them) mapped into the horizon: modulo the period
+        when periodic, else clipped to it."""
+        t = as_finite_array("t", t)
         if self.periodic:
             return self.t_start + np.mod(t - self.t_start, self.t_end - self.t_start)
         return np.clip(t, self.t_start, self.t_end)
 
     def local_time_at(self, t: float) -> float:
-        """:meth:`local_time` of one time [s], in floats."""
+        """:meth:`local_time` of one time [s] (a finite number), in floats."""
+        if not (type(t) is float and t - t == 0.0):  # (the common case: a finite float)
+            t = as_finite_float("t", t)
         if self.periodic:
             return self.t_start + (t - self.t_start) % (self.t_end - self.t_start)
         return min(max(t, self.t_start), self.t_end)
@@ -203,10 +241,12 @@ class RegraspSchedule:
     def at(self, t: ArrayLike) -> ScheduleSample:
         """ξ_d, ξ̇_d, ξ̈_d and the sliding directions at time(s) ``t`` [s]; a periodic schedule repeats
         past ``t_end``, another holds its last positions (and its first before ``t_start``)."""
-        if type(t) is float and math.isfinite(t):  # one time: in floats (the supervisor's every step)
+        if type(t) is float and t - t == 0.0:  # one finite time: in floats (the supervisor's every step)
             return self._at_scalar(t)
-        arr = np.asarray(t, dtype=float)
-        if arr.ndim > 1 or not np.all(np.isfinite(arr)):
+        if not isinstance(t, (np.ndarray, list, tuple)):
+            return self._at_scalar(as_finite_float("t", t))
+        arr = as_finite_array("t", t)
+        if arr.ndim > 1:
             raise InvalidParameterError("t", t, "a finite time [s] or a 1-D array of them")
         if arr.ndim == 0:
             return self._at_scalar(float(arr))
@@ -257,6 +297,61 @@ class RegraspSchedule:
             "planning_seconds": self.planning_seconds,
             "slides_lower_bound": self.slides_lower_bound,
         }
+
+
+def _check_schedule(s: RegraspSchedule) -> None:
+    """Check, and normalise, the fields of the schedule ``s`` (:class:`RegraspSchedule`'s construction): m names and
+    edges, a horizon, the slides of those contacts by start time, and k increasing sample times with (k, m)
+    arrays of finite numbers (NaN where the fields' documentation allows it)."""
+    names = tuple(str(as_name("names", name)) for name in expect_sequence_of("names", s.names, str, "finger names"))
+    m = len(names)
+    if m == 0:
+        raise InvalidParameterError("names", s.names, "at least one finger name")
+    edges = tuple(as_count("edges", edge) for edge in expect_sequence_of("edges", s.edges, object, "edge indices"))
+    if len(edges) != m:
+        raise InvalidParameterError("edges", s.edges, f"one edge index per finger ({m})")
+    for name, value in (("names", names), ("edges", edges), ("xi_start", as_finite_array("xi_start", s.xi_start, (m,))),
+                        ("slides", expect_sequence_of("slides", s.slides, Slide, "Slide"))):
+        object.__setattr__(s, name, value)
+    check_fields(s, as_finite_float, ("t_start", "t_end"))
+    check_fields(s, as_flag, ("periodic",))
+    if not (s.t_end > s.t_start or (s.t_end == s.t_start and not s.periodic)):
+        raise InvalidParameterError("t_end", s.t_end, f"a time after t_start = {s.t_start:g} s")
+    if any(slide.contact >= m for slide in s.slides) or any(b.start < a.start for a, b in zip(s.slides, s.slides[1:])):
+        raise InvalidParameterError("slides", s.slides, f"slides of contacts 0..{m - 1} by start time")
+    times = as_finite_array("times", s.times, (-1,))
+    if not (len(times) and times[0] >= s.t_start and times[-1] <= s.t_end and np.all(np.diff(times) > 0.0)):
+        raise InvalidParameterError("times", s.times, f"increasing sample times in [t_start, t_end] = "
+                                    f"[{s.t_start:g}, {s.t_end:g}] s")
+    object.__setattr__(s, "times", times)
+    shape = (len(times), m)
+    for name in ("xi", "xi_dot", "xi_ddot"):
+        object.__setattr__(s, name, as_finite_array(name, getattr(s, name), shape))
+    sliding = as_number_array("sliding", s.sliding, shape)
+    if not np.isin(sliding, (-1.0, 0.0, 1.0)).all():
+        raise InvalidParameterError("sliding", s.sliding, "sliding directions -1, 0 or +1")
+    object.__setattr__(s, "sliding", sliding.astype(int))
+    for name, infinite, what in (("envelope_margin", -math.inf, "margins [m] or -inf (no feasible interval)"),
+                                 ("cone_margin", math.nan, "finite margins [N] or NaN"),
+                                 ("normal_force", math.nan, "finite forces [N] or NaN")):
+        arr = as_number_array(name, getattr(s, name), shape)
+        if not (np.isfinite(arr) | (arr == infinite) | (np.isnan(arr) & math.isnan(infinite))).all():
+            raise InvalidParameterError(name, getattr(s, name), what)
+        object.__setattr__(s, name, arr)
+    check_fields(s, as_positive_float, ("required_envelope_margin", "required_cone_margin", "planning_seconds"),
+                 allow_zero=True)
+    for name in ("min_envelope_margin", "min_cone_margin"):
+        value, where = float(as_number_array(name, getattr(s, name), ())), getattr(s, name + "_at")
+        if math.isnan(value):
+            raise InvalidParameterError(name, value, "a number or inf (none)")
+        pair = isinstance(where, (tuple, list)) and len(where) == 2 and isinstance(where[1], str) \
+            and where[1] in (*names, "")
+        time = float(as_number_array(name + "_at", where[0], ())) if pair else math.inf
+        if math.isinf(time):
+            raise InvalidParameterError(name + "_at", where, "(a finite time [s] or NaN, a finger's name or '')")
+        object.__setattr__(s, name, value)
+        object.__setattr__(s, name + "_at", (time, str(where[1])))
+    check_fields(s, as_count, ("slides_lower_bound",), optional=True)
 
 
 def slides_at(xi_start: np.ndarray, slides: Iterable[Slide], t: np.ndarray) -> ScheduleSample:
