@@ -117,7 +117,15 @@ class UnknownEdgeError(RegraspError, IndexError):
 
 
 class TrajectoryError(RegraspError, ValueError):
-    """A trajectory is ill-defined (bad waypoints, time outside its domain...)."""
+    """A trajectory is ill-defined (bad waypoints, time outside its domain...).
+
+    Attributes:
+        name: The argument at fault (``"times"``, ``"poses"``), or None when it is not one argument.
+    """
+
+    def __init__(self, message: str, *, name: str | None = None):
+        self.name = name
+        super().__init__(message)
 
 
 class ScenarioError(RegraspError):
