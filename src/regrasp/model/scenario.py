@@ -324,7 +324,11 @@ def _friction(r: _Reader, default: Friction) -> Friction:
             raise r.fail(name, f"expected a friction coefficient >= 0, got {value!r}")
     if len(values) == 2 and values[1] > values[0]:
         raise r.fail("mu_kinetic", f"expected a kinetic coefficient <= mu_static = {values[0]:g}, got {values[1]!r}")
-    return Friction(*values)
+    try:
+        return Friction(*values)
+    except InvalidParameterError as exc:  # (Friction's own bounds, at the key that set the coefficient)
+        raise r.fail(exc.name if exc.name in names else names[0], f"expected {exc.expected}, got "
+                                                                   f"{short_repr(exc.value)}") from None
 
 
 def _effort(r: _Reader, default: np.ndarray | None) -> np.ndarray | None:
