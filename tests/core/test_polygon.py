@@ -165,6 +165,21 @@ def test_rectangle_mass_properties_from_density(w, h, rho):
     assert rect.inertia == pytest.approx(rho * w * h * (w**2 + h**2) / 12.0, rel=1e-13)
 
 
+@pytest.mark.parametrize("w, h, name, expected", [
+    (0.1, 1e-300, "height", r"invalid height = 1e-300: expected a length in \[1e-06, 1000\] m"),  # issue 25
+    (1e-300, 0.04, "width", r"invalid width = 1e-300: expected a length in \[1e-06, 1000\] m"),
+    (1e-150, 1e-150, "width", "a length in"),  # (its area, mass and inertia round to 0)
+    (0.1, 1e308, "height", r"a length in \[1e-06, 1000\] m"),
+    (1000.0, 1e-4, "height", r"invalid height = 0.0001: expected at least 1/1e\+06 of the width = 1000 m"),
+    (1e-4, 1000.0, "width", r"invalid width = 0.0001: expected at least 1/1e\+06 of the height = 1000 m"),
+])
+def test_a_rectangle_side_out_of_bounds_is_named(w, h, name, expected):
+    """The side at fault is named: the one out of [1e-6, 1000] m, or the thin one of a rectangle too thin."""
+    with pytest.raises(InvalidParameterError, match=expected) as info:
+        ConvexPolygon.rectangle(w, h, mass=0.08)
+    assert info.value.name == name
+
+
 def test_mass_only_gives_uniform_density_inertia():
     mass = 1.7
     rect = ConvexPolygon.rectangle(W, H, mass=mass)

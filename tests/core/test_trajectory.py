@@ -293,6 +293,43 @@ def test_bad_waypoints(times, poses, boundary, error, expected):
         WaypointTrajectory(times, poses, boundary=boundary)
 
 
+@pytest.mark.parametrize("times, poses, error, name, expected", [
+    # issue 25: times spanning ±1.7e308 (scipy's "dydx must contain only finite values" traceback before)
+    ([-1.7e308, 0.0, 1.7e308], GOOD_POSES, InvalidParameterError, "times", "a domain of at most 3600 s"),
+    # times 1e-300 s apart (scipy's overflow warnings, then a NaN pose in `plan`, before)
+    ([0.0, 1e-300, 2e-300], GOOD_POSES, TrajectoryError, "times", r"at least 1e-06 s apart: times\[0\] = 0\.0 s"),
+    ([0.0, 1.0, 1.0 + 5e-7], GOOD_POSES, TrajectoryError, "times", r"times\[1\] = 1\.0 s and times\[2\]"),
+    ([1e9, 1e9 + 1.0, 1e9 + 2.0], GOOD_POSES, InvalidParameterError, "times", "within ±3600 s of 0"),
+    ([-4000.0, -3999.0, -3998.0], GOOD_POSES, InvalidParameterError, "times", "within ±3600 s of 0"),
+    # poses that change too fast for their times: the spline's derivatives would overflow
+    ([0.0, 1e-6, 2e-6], [[0.0, 0.0, 0.0], [1e200, 0.0, 0.0], [0.0, 0.0, 0.0]], TrajectoryError, "poses",
+     r"exceeds 1e\+150 between times\[0\] = 0\.0 s and times\[1\] = 1e-06 s"),
+    ([0.0, 1e-6, 2e-6], [[0.0, 0.0, 0.0], [1e308, 0.0, 0.0], [-1e308, 0.0, 0.0]], TrajectoryError, "poses",
+     "exceeds 1e\\+150"),
+    ([0.0, 1.0, 2.0], [[0.0, 0.0, 0.0], [0.0, 1e300, 0.0], [0.0, 0.0, 0.0]], TrajectoryError, "poses",
+     "exceeds 1e\\+150"),
+], ids=["span ±1.7e308", "1e-300 apart", "5e-7 apart", "at 1e9 s", "at -4000 s", "1e200 in 1 us",
+        "±1e308 in 1 us", "1e300 in 1 s"])
+def test_waypoint_times_and_poses_whose_spline_cannot_be_represented(times, poses, error, name, expected):
+    with pytest.raises(error, match=expected) as info:
+        WaypointTrajectory(times, poses)
+    assert info.value.name == name and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("boundary", ["natural", "clamped", "periodic"])
+def test_waypoints_a_microsecond_apart_near_the_largest_times_are_a_finite_spline(boundary):
+    """The bounds' edge cases are accepted: a microsecond apart, at ±3600 s, with derivatives finite."""
+    for times in ([0.0, 1e-6, 2e-6], [3600.0 - 2e-3, 3600.0 - 1e-3, 3600.0], [-3600.0, -1800.0, 0.0]):
+        traj = WaypointTrajectory(times, [[0.0, 0.1, 0.0], [0.001, 0.1, 0.01], [0.0, 0.1, 0.0]], boundary=boundary)
+        t = traj.times(11)
+        assert all(np.isfinite(f(t)).all() for f in (traj.pose, traj.velocity, traj.acceleration))
+
+
+def test_an_ellipse_far_from_time_0_is_refused_at_its_key():
+    with pytest.raises(InvalidParameterError, match="invalid t_start = 1000000000.0: expected a time within ±3600 s"):
+        EllipseTrajectory(**PAPER_1, t_start=1e9, t_end=1e9 + 1.0)
+
+
 def test_waypoint_inputs_are_copied():
     times, poses = np.array(GOOD_TIMES), np.array(GOOD_POSES)
     traj = WaypointTrajectory(times, poses)

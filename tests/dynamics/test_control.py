@@ -226,6 +226,12 @@ def test_proposition3_checks_its_arguments():
         Proposition3Controller(model, gains, direction=0.0)
     with pytest.raises(InvalidParameterError, match="cone_edge"):
         Proposition3Controller(model, gains, cone_edge=ConeEdge(0, 1.0, 0.5))
+    # issue 25: sample_time=object() was a TypeError from np.isfinite
+    for sample_time in (object(), None, "1e-3", True, 1 + 0j, [1e-3], 0.0, -1e-3, float("nan"), float("inf"),
+                        10**400):
+        with pytest.raises(InvalidParameterError, match="invalid sample_time = "):
+            Proposition3Controller(model, gains, sample_time=sample_time)
+    assert Proposition3Controller(model, gains, sample_time=np.float32(2e-3)).sample_time == float(np.float32(2e-3))
 
 
 @pytest.mark.parametrize("name", ["prop3_up_kinetic", "prop3_m3_kinetic"])

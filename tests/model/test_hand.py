@@ -112,6 +112,31 @@ def test_link_mass_scale_scales_M_and_gravity_but_not_the_callers_model():
     assert base.fingers[0].model.inertias[1].mass == pytest.approx(make_hand().fingers[0].model.inertias[1].mass)
 
 
+@pytest.mark.parametrize("q, v, name", [
+    (np.zeros(4), np.full(4, 1e308), "v"),  # issue 25: the kinetic energy was NaN
+    (np.zeros(4), np.full(4, 1e160), "v"),  # (its square overflows)
+    (np.full(4, 1e308), np.zeros(4), "q"),  # (q1 + q2 overflows)
+    (np.array([0.0, 0.0, 0.0, -2e4]), np.zeros(4), "q"),
+])
+def test_joint_states_beyond_the_physical_bounds_are_named(q, v, name):
+    from regrasp.core.exceptions import InvalidParameterError
+
+    hand = make_hand()
+    unit = "rad/s" if name == "v" else "rad"
+    for energy in (lambda: hand.kinetic_energy(q, v), lambda: hand.dynamics(q, v)):
+        with pytest.raises(InvalidParameterError, match=rf"invalid {name} = .*: expected entries of magnitude at most "
+                                                        rf"10000 \[{unit}\]"):
+            energy()
+    if name == "q":
+        with pytest.raises(InvalidParameterError, match="invalid q"):
+            hand.potential_energy(q)
+
+
+def test_kinetic_energy_at_the_largest_joint_speed_is_finite():
+    energy = make_hand().kinetic_energy(np.array([0.1, -0.5, 0.2, 0.6]), np.full(4, 1e4))
+    assert np.isfinite(energy) and energy > 0.0
+
+
 def test_closed_form_condition_number_matches_numpy():
     from regrasp.model.hand import condition_2x2
 

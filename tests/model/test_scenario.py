@@ -90,6 +90,11 @@ CASES = [
     ('name = "f2"', 'name = "f1"', "fingers[1].name", "unique"),
     ("width = 0.1\nheight = 0.04", "vertices = [[0, 0], [1, 0], [0.2, 0.2], [0, 1]]", "object.vertices", "convex"),
     ("width = 0.1\nheight = 0.04", "vertices = [[0, 0], [1, 0]]", "object.vertices", "3"),
+    # issue 25: the key at fault, not its partner
+    ("height = 0.04", "height = 1e-300", "object.height", "a length in [1e-06, 1000] m"),
+    ("width = 0.1", "width = 1e-300", "object.width", "a length in [1e-06, 1000] m"),
+    ("width = 0.1\nheight = 0.04", "width = 2.0\nheight = 1e-6", "object.height", "at least 1/1e+06 of the width"),
+    ("omega = 2.0", "omega = 2.0\nt_start = -1e6\nt_end = -999999.0", "trajectory.t_start", "within ±3600 s of 0"),
 ]
 
 
@@ -103,6 +108,46 @@ def test_malformed_scenarios_name_file_key_and_expectation(tmp_path, old, new, k
     msg = str(err.value)
     assert str(path) in msg and key in msg
     assert words.lower() in msg.lower()
+
+
+WAYPOINTS = 'type = "waypoints"\ntimes = TIMES\nposes = POSES'
+ELLIPSE = 'type = "ellipse"\ncx = 0.0\ncy = 0.12\na = 0.09\nb = 0.05\nomega = 2.0'
+
+
+@pytest.mark.parametrize("times, poses, key, words", [
+    ("[-1.7e308, 0.0, 1.7e308]", "[[0, 0.12, 0], [0.01, 0.12, 0], [0, 0.12, 0]]", "trajectory.times",
+     "a domain of at most 3600 s"),
+    ("[0.0, 1e-300, 2e-300, 3e-300]", "[[0, 0.12, 0], [0.01, 0.12, 0], [0, 0.12, 0], [0.01, 0.12, 0]]",
+     "trajectory.times", "at least 1e-06 s apart"),
+    ("[0.0, 2.0, 1.0]", "[[0, 0.12, 0], [0.01, 0.12, 0], [0, 0.12, 0]]", "trajectory.times", "strictly increasing"),
+    ("[5000.0, 5001.0]", "[[0, 0.12, 0], [0.01, 0.12, 0]]", "trajectory.times", "within ±3600 s of 0"),
+    ("[0.0, 1e-6, 2e-6]", "[[0, 0.12, 0], [1e200, 0.12, 0], [0, 0.12, 0]]", "trajectory.poses", "exceeds 1e+150"),
+], ids=["span ±1.7e308", "1e-300 apart", "decreasing", "at 5000 s", "overflowing spline"])
+def test_waypoint_errors_name_the_times_or_the_poses(tmp_path, times, poses, key, words):
+    """Issue 25: waypoint times spanning ±1.7e308 (a scipy traceback before) or 1e-300 s apart (a NaN pose in
+    ``plan`` before) are one-line errors at the key at fault."""
+    path = write(tmp_path, VALID.replace(ELLIPSE, WAYPOINTS.replace("TIMES", times).replace("POSES", poses)))
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(path)
+    assert err.value.key == key and words in str(err.value) and "\n" not in str(err.value), str(err.value)
+
+
+@pytest.mark.parametrize("absolute", [False, True])
+def test_a_urdf_path_that_is_a_symlink_loop_is_no_file(tmp_path, absolute):
+    """Issue 25: a relative URDF path that is a symlink loop was a ``RuntimeError: Symlink loop`` traceback."""
+    loop = tmp_path / "loop.urdf"
+    loop.symlink_to(loop)
+    path = write(tmp_path, VALID.replace(f'urdf = "{URDF}"', f'urdf = "{loop if absolute else "loop.urdf"}"', 1))
+    with pytest.raises(ScenarioError, match="URDF file not found") as err:
+        load_scenario(path)
+    assert err.value.key == "fingers[0].urdf" and str(loop) in str(err.value)
+
+
+def test_a_relative_urdf_path_is_resolved(tmp_path):
+    (tmp_path / "urdf").mkdir()
+    (tmp_path / "urdf" / "f.urdf").symlink_to(URDF)
+    sc = load_scenario(write(tmp_path, VALID.replace(f'urdf = "{URDF}"', 'urdf = "./urdf/../urdf/f.urdf"', 1)))
+    assert sc.contacts[0].finger.source == str(URDF)
 
 
 def test_not_toml_and_missing_file(tmp_path):

@@ -15,6 +15,7 @@ if TYPE_CHECKING:
         FingerModelError,
         InvalidParameterError,
         MissingDependencyError,
+        PlantStateError,
         PolygonError,
         RegraspError,
         ScenarioError,

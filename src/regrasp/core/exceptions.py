@@ -117,7 +117,15 @@ class UnknownEdgeError(RegraspError, IndexError):
 
 
 class TrajectoryError(RegraspError, ValueError):
-    """A trajectory is ill-defined (bad waypoints, time outside its domain...)."""
+    """A trajectory is ill-defined (bad waypoints, time outside its domain...).
+
+    Attributes:
+        name: The argument at fault (``"times"``, ``"poses"``), or None when it is not one argument.
+    """
+
+    def __init__(self, message: str, *, name: str | None = None):
+        self.name = name
+        super().__init__(message)
 
 
 class ScenarioError(RegraspError):
@@ -177,6 +185,21 @@ class SingularFingerError(RegraspError):
 
 class SingularModelError(RegraspError, np.linalg.LinAlgError):
     """A control law's equations are singular (a singular grasp or finger posture): no torque."""
+
+
+class PlantStateError(RegraspError, np.linalg.LinAlgError):
+    """A plant cannot step from its state: its equations are singular or overflow there (a reset to a state far
+    from any the hand can hold, or a run that diverged); a :class:`numpy.linalg.LinAlgError` as the singular solve
+    it replaces was.
+
+    Attributes:
+        t: The state's time [s].
+        reason: What failed.
+    """
+
+    def __init__(self, t: float, reason: str):
+        self.t, self.reason = t, reason
+        super().__init__(f"the plant cannot step from its state at t = {t:.6g} s: {reason}")
 
 
 class MissingDependencyError(RegraspError, ImportError):

@@ -358,12 +358,12 @@ class ConvexPolygon:
         w = as_positive_float("width", width)
         h = as_positive_float("height", height)
         for name, value in (("width", w), ("height", h)):
-            if value > MAX_LENGTH:
-                raise InvalidParameterError(name, value, f"a length of at most {MAX_LENGTH:g} m")
-        if max(w, h) > MAX_ASPECT * min(w, h):
-            raise InvalidParameterError("height" if h > w else "width", max(w, h),
-                                        f"at most {MAX_ASPECT:g} times the other side (a rectangle that thin is a "
-                                        "segment)")
+            if not MIN_LENGTH <= value <= MAX_LENGTH:
+                raise InvalidParameterError(name, value, f"a length in [{MIN_LENGTH:g}, {MAX_LENGTH:g}] m")
+        if max(w, h) > MAX_ASPECT * min(w, h):  # (the thin side is at fault: the other is a length like any object's)
+            thin, other = ("height", "width") if h < w else ("width", "height")
+            raise InvalidParameterError(thin, min(w, h), f"at least 1/{MAX_ASPECT:g} of the {other} = "
+                                        f"{max(w, h):g} m (a rectangle that thin is a segment)")
         verts = 0.5 * np.array([[w, h], [-w, h], [-w, -h], [w, -h]])
         return cls.from_vertices(verts, mass=mass, inertia=inertia, density=density)
 
@@ -465,5 +465,8 @@ __all__ = ["Edge", "ConvexPolygon"]
 
 #: The largest object coordinate or side [m] (a hand's object, not a building).
 MAX_LENGTH = 1e3
+#: A rectangle's shortest side [m] (a micrometre: a foil, not a sheet of atoms; shorter sides round its area, mass
+#: and inertia to nothing).
+MIN_LENGTH = 1e-6
 #: A rectangle's largest side / smallest side [-].
 MAX_ASPECT = 1e6

@@ -136,14 +136,19 @@ class Trajectory(ABC):
         return np.linspace(self.t_start, self.t_end, as_sample_count("n", n))
 
 
-def _check_domain(t_start: float, t_end: float) -> None:
+def _check_domain(t_start: float, t_end: float, start: str = "t_start", end: str = "t_end") -> None:
     """A domain is t_start < t_end <= t_start + :data:`~regrasp.core.validation.MAX_DURATION` (an hour of motion
-    is far longer than any hand's task, and a longer one sampled by a planner is sampled too coarsely)."""
+    is far longer than any hand's task, and a longer one sampled by a planner is sampled too coarsely), within
+    ±``MAX_DURATION`` of time 0 (a time that large has so few digits left that a millisecond's phase or a
+    microsecond's interval is lost); ``start``, ``end``: the parameters named by an error."""
     if not t_end > t_start:
-        raise InvalidParameterError("t_end", t_end, f"a time [s] > t_start = {t_start!r} s")
+        raise InvalidParameterError(end, t_end, f"a time [s] > t_start = {t_start!r} s")
     if t_end - t_start > MAX_DURATION:
-        raise InvalidParameterError("t_end", t_end, f"a domain of at most {MAX_DURATION:g} s "
-                                    f"(t_end - t_start = {t_end - t_start:.4g} s)")
+        raise InvalidParameterError(end, t_end, f"a domain of at most {MAX_DURATION:g} s "
+                                    f"(this one runs from {t_start:.4g} s to {t_end:.4g} s)")
+    for name, t in ((start, t_start), (end, t_end)):
+        if abs(t) > MAX_DURATION:
+            raise InvalidParameterError(name, t, f"a time within ±{MAX_DURATION:g} s of 0 (shift the time origin)")
 
 
 class EllipseTrajectory(Trajectory):
@@ -272,6 +277,39 @@ class EllipseTrajectory(Trajectory):
 
 _BOUNDARIES = ("natural", "clamped", "periodic")
 
+#: The shortest interval [s] between two waypoints: a microsecond, far below any control period (1 ms), and long
+#: enough that the spline's slopes (a pose's change over the interval) stay representable.
+MIN_WAYPOINT_INTERVAL = 1e-6
+#: The largest pose, velocity and acceleration a waypoint spline may reach (as the ellipse's amplitudes): far from
+#: overflow when squared or multiplied by a mass.
+MAX_SPLINE_EXTENT = 1e150
+
+
+def _fitted_spline(t: np.ndarray, p: np.ndarray, boundary: str) -> CubicSpline:
+    """The cubic spline through the poses ``p`` at the times ``t``, if its pose, velocity and acceleration stay
+    within :data:`MAX_SPLINE_EXTENT` over every interval, else a :class:`TrajectoryError` naming the poses."""
+    h = np.diff(t)
+    with np.errstate(all="ignore"):  # (an overflow is reported below, as an error)
+        try:
+            spline = CubicSpline(t, p, axis=0, bc_type=boundary, extrapolate=False)
+        except ValueError:  # (scipy: "dydx must contain only finite values")
+            k = int(np.argmax(np.max(np.abs(np.diff(p, axis=0)), axis=1) / h))
+            spline = None
+        else:
+            # on an interval of length h the spline is c0 x³ + c1 x² + c2 x + c3 (0 <= x <= h): each derivative's
+            # magnitude is at most the sum of its terms' at x = h (NaN and inf fail the test)
+            c0, c1, c2, c3 = np.abs(spline.c)
+            hh = h[:, None]
+            bounds = (((c0 * hh + c1) * hh + c2) * hh + c3, (3.0 * c0 * hh + 2.0 * c1) * hh + c2,
+                      6.0 * c0 * hh + 2.0 * c1)
+            ok = np.all([np.all(b <= MAX_SPLINE_EXTENT, axis=1) for b in bounds], axis=0)
+            if ok.all():
+                return spline
+            k = int(np.flatnonzero(~ok)[0])
+    raise TrajectoryError(f"the waypoint spline's pose, velocity or acceleration exceeds {MAX_SPLINE_EXTENT:g} "
+                          f"between times[{k}] = {float(t[k])!r} s and times[{k + 1}] = {float(t[k + 1])!r} s: the "
+                          "poses change too much for their times", name="poses")
+
 
 class WaypointTrajectory(Trajectory):
     r"""C² cubic spline through time-stamped poses (one ``scipy`` CubicSpline per coordinate).
@@ -316,8 +354,15 @@ class WaypointTrajectory(Trajectory):
             k = int(np.flatnonzero(steps <= 0.0)[0])
             raise TrajectoryError(
                 f"waypoint times must be strictly increasing: times[{k}] = {float(t[k])!r} s and "
-                f"times[{k + 1}] = {float(t[k + 1])!r} s"
+                f"times[{k + 1}] = {float(t[k + 1])!r} s", name="times"
             )
+        if np.any(steps < MIN_WAYPOINT_INTERVAL):
+            k = int(np.flatnonzero(steps < MIN_WAYPOINT_INTERVAL)[0])
+            raise TrajectoryError(
+                f"waypoint times must be at least {MIN_WAYPOINT_INTERVAL:g} s apart: times[{k}] = {float(t[k])!r} s "
+                f"and times[{k + 1}] = {float(t[k + 1])!r} s", name="times"
+            )
+        _check_domain(float(t[0]), float(t[-1]), "times", "times")
         if unwrap_angle:
             p = p.copy()
             p[:, 2] = np.unwrap(p[:, 2])
@@ -341,7 +386,7 @@ class WaypointTrajectory(Trajectory):
         self._times.setflags(write=False)
         self._poses.setflags(write=False)
         self._boundary = boundary
-        self._spline = CubicSpline(t, p, axis=0, bc_type=boundary, extrapolate=False)
+        self._spline = _fitted_spline(t, p, boundary)
 
     @property
     def t_start(self) -> float:
@@ -376,7 +421,7 @@ class WaypointTrajectory(Trajectory):
         )
 
 
-__all__ = ["Trajectory", "TrajectorySample", "EllipseTrajectory", "WaypointTrajectory"]
+__all__ = ["MIN_WAYPOINT_INTERVAL", "Trajectory", "TrajectorySample", "EllipseTrajectory", "WaypointTrajectory"]
 
 
 class RepeatedTrajectory(Trajectory):

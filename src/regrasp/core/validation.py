@@ -166,6 +166,18 @@ def expect_sequence_of(name: str, values: object, kind: type, what: str) -> tupl
     return out
 
 
+def expect_choices(name: str, values: object, choices: frozenset[str], what: str) -> tuple[str, ...]:
+    """``values`` as a tuple of strings, each one of ``choices`` (a list, a tuple, a set...; not a string, None or
+    another object): a plant's ``stop_on`` kinds, for example."""
+    expected = f"a sequence of {what} ({', '.join(sorted(choices))})"
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+        raise InvalidParameterError(name, values, expected)
+    out = tuple(values)
+    if not all(isinstance(v, str) and v in choices for v in out):
+        raise InvalidParameterError(name, values, expected)
+    return out
+
+
 def file_problem(path: Path, what: str = "file") -> str | None:
     """Why ``path`` cannot be read as a file (``"<what> not found"``, ``"not a usable file name (...)"`` for a
     name too long for the file system or with a NUL byte), or None when it is a file."""
@@ -227,6 +239,26 @@ def as_mass(name: str, value: object) -> float:
 def as_inertia(name: str, value: object) -> float:
     """``value`` as a rotational inertia [kg m^2] in (0, :data:`MAX_INERTIA`]."""
     return _positive_at_most(name, value, MAX_INERTIA, f"an inertia of at most {MAX_INERTIA:g} kg m^2")
+
+
+#: The largest position [m], angle [rad] and speed [m/s or rad/s] a mechanical state takes (a hand's joints, an
+#: object's pose and twist): far beyond any hand's (a workspace of a kilometre, a thousand turns, a motor at 100 000
+#: rpm is 1e4 rad/s), and low enough that an angle's sine stays precise (q1 + q2 finite) and squares of speeds
+#: (kinetic energies, Coriolis terms) stay far from overflow.
+MAX_POSITION = 1e3
+MAX_ANGLE = 1e4
+MAX_SPEED = 1e4
+
+
+def as_bounded_array(name: str, value: object, shape: tuple[int, ...], limit: float | tuple[float, ...],
+                     unit: str) -> np.ndarray:
+    """:func:`as_finite_array` with every entry's magnitude at most ``limit`` (one for all entries, or one per entry
+    of the last axis), else an error saying the limit and its ``unit``."""
+    arr = as_finite_array(name, value, shape)
+    if not np.all(np.abs(arr) <= np.asarray(limit)):
+        bound = f"{limit:g}" if isinstance(limit, (int, float)) else "(" + ", ".join(f"{v:g}" for v in limit) + ")"
+        raise InvalidParameterError(name, value, f"entries of magnitude at most {bound} [{unit}]")
+    return arr
 
 
 def as_sign(name: str, value: object) -> float:

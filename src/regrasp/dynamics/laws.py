@@ -21,7 +21,7 @@ from scipy.linalg import lapack
 
 from ..core.contact import DEFAULT_FRICTION, FrictionLike
 from ..core.exceptions import InvalidParameterError, SingularModelError
-from ..core.validation import as_finite_array, expect_type
+from ..core.validation import as_finite_array, as_positive_float, expect_type
 from ..kernels.control import CONTROL_OK, sliding_step_into
 from .control import ComputedTorqueController, ControlOutput, Gains
 from .internal_force.problem import InternalForceResult
@@ -105,8 +105,7 @@ class Proposition3Controller(ComputedTorqueController):
             raise InvalidParameterError("model", model.grasp.modes,
                                         "m >= 2 fingers with p >= 1 sliding contacts (p = 1 for m = 2), 2m >= 3 + p")
         super().__init__(model, gains, friction, compiled=compiled, **kwargs)
-        if not np.isfinite(sample_time) or sample_time <= 0:
-            raise InvalidParameterError("sample_time", sample_time, "a control period > 0 [s]")
+        sample_time = as_positive_float("sample_time", sample_time)  # (a control period [s])
         directions = [direction] * p if np.ndim(direction) == 0 else list(direction)
         if len(directions) != p or not all(d in (-1, 1, -1.0, 1.0) for d in directions):
             raise InvalidParameterError("direction", direction, f"+1 or -1, or one of them per slider ({p})")
@@ -115,7 +114,7 @@ class Proposition3Controller(ComputedTorqueController):
                                         "(the sliding contacts are on their kinetic edges already)")
         if not isinstance(reversible, bool):
             raise InvalidParameterError("reversible", reversible, "True or False")
-        self.sample_time = float(sample_time)
+        self.sample_time = sample_time
         self.reversible = reversible
         self._directions = [float(d) for d in directions]
         self._sliders = model.grasp.sliding

@@ -33,7 +33,15 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..core.exceptions import InvalidParameterError, SingularFingerError
-from ..core.validation import as_finite_array, as_flag, as_positive_float, expect_sequence_of
+from ..core.validation import (
+    MAX_ANGLE,
+    MAX_SPEED,
+    as_bounded_array,
+    as_finite_array,
+    as_flag,
+    as_positive_float,
+    expect_sequence_of,
+)
 from ..kernels.finger import condition_2x2 as _compiled_condition
 from .finger import Finger
 
@@ -186,12 +194,14 @@ class Hand:
             return np.zeros(self.nq)
         return np.concatenate([np.asarray(model.damping, dtype=float) for model in self.finger_models])
 
-    def _split(self, name: str, value) -> np.ndarray:
-        return as_finite_array(name, value, (self.nq,)).reshape(self.m, 2)
+    def _split(self, name: str, value, limit: float = MAX_ANGLE, unit: str = "rad") -> np.ndarray:
+        """Joint positions [rad] (at most ``MAX_ANGLE``), or velocities with ``limit = MAX_SPEED`` [rad/s]
+        (:mod:`~regrasp.core.validation`: beyond them an energy or the Coriolis terms overflow), as (m, 2)."""
+        return as_bounded_array(name, value, (self.nq,), limit, unit).reshape(self.m, 2)
 
     def dynamics(self, q: ArrayLike, v: ArrayLike) -> HandDynamics:
         """M, N, J, J̇q̇ and the tips at joint positions ``q`` [rad] and velocities ``v`` [rad/s]."""
-        return self._dynamics(self._split("q", q), self._split("v", v))
+        return self._dynamics(self._split("q", q), self._split("v", v, MAX_SPEED, "rad/s"))
 
     def _dynamics(self, qs: np.ndarray, vs: np.ndarray, kinematics=None) -> HandDynamics:
         """:meth:`dynamics` on already validated (m, 2) arrays (hot paths); ``kinematics``: J and the
@@ -252,7 +262,7 @@ class Hand:
 
     def kinetic_energy(self, q: ArrayLike, v: ArrayLike) -> float:
         """Kinetic energy [J] of the fingers."""
-        qs, vs = self._split("q", q), self._split("v", v)
+        qs, vs = self._split("q", q), self._split("v", v, MAX_SPEED, "rad/s")
         return float(sum(pin.computeKineticEnergy(model, data, qs[i], vs[i])
                          for i, (model, data) in enumerate(zip(self.finger_models, self._datas))))
 

@@ -82,6 +82,7 @@ from ..core.exceptions import (
     PolygonError,
     RegraspError,
     ScenarioError,
+    TrajectoryError,
     short_repr,
 )
 from ..core.pad import Pad
@@ -257,8 +258,8 @@ def _wrap(reader: _Reader, name: str | None, build):
         raise
     except RegraspError as exc:
         param = getattr(exc, "name", None)
-        if isinstance(exc, InvalidParameterError) and param in reader.table:
-            name = param  # e.g. a negative mass is reported at object.mass
+        if isinstance(exc, (InvalidParameterError, TrajectoryError)) and param in reader.table:
+            name = param  # e.g. a negative mass is reported at object.mass, waypoints too close at trajectory.times
         raise reader.fail(name, str(exc)) from exc
 
 
@@ -323,7 +324,11 @@ def _friction(r: _Reader, default: Friction) -> Friction:
             raise r.fail(name, f"expected a friction coefficient >= 0, got {value!r}")
     if len(values) == 2 and values[1] > values[0]:
         raise r.fail("mu_kinetic", f"expected a kinetic coefficient <= mu_static = {values[0]:g}, got {values[1]!r}")
-    return Friction(*values)
+    try:
+        return Friction(*values)
+    except InvalidParameterError as exc:  # (Friction's own bounds, at the key that set the coefficient)
+        raise r.fail(exc.name if exc.name in names else names[0], f"expected {exc.expected}, got "
+                                                                   f"{short_repr(exc.value)}") from None
 
 
 def _effort(r: _Reader, default: np.ndarray | None) -> np.ndarray | None:
@@ -352,11 +357,14 @@ def _fingers(path: Path, tables: Any, polygon: ConvexPolygon, friction: Friction
             raise r.fail("name", f"finger names must be unique; '{name}' is repeated")
         names.add(name)
         urdf = Path(r.string("urdf"))
-        if not urdf.is_absolute():
-            urdf = (path.parent / urdf).resolve()
-        problem = file_problem(urdf, "URDF file")
+        relative = not urdf.is_absolute()
+        if relative:
+            urdf = path.parent / urdf
+        problem = file_problem(urdf, "URDF file")  # (before resolving: a symlink loop is no file, not a crash)
         if problem is not None:
             raise r.fail("urdf", f"{problem}: {urdf}")
+        if relative:
+            urdf = urdf.resolve()
         base = r.array("base", (3,))
         configuration = r.string("configuration", choices=("left", "right"))
         edge = r.integer("edge")

@@ -819,6 +819,57 @@ def test_bad_input():
         plant.step([0.0, 0.0, np.inf, 0.0])
 
 
+@pytest.mark.parametrize("stop_on", [None, object(), 5, "separation", ["separation", None], ["explosion"]])
+def test_stop_on_that_is_no_sequence_of_event_kinds_is_named(stop_on):
+    """Issue 25: ``stop_on=None`` or ``object()`` was a ``TypeError`` (not iterable)."""
+    with pytest.raises(InvalidParameterError, match="invalid stop_on = .*: expected a sequence of plant event kinds"):
+        _plant([PlantContact(1, "fixed"), PlantContact(3, "fixed")], stop_on=stop_on)
+
+
+def _held(**kw) -> tuple[Plant, np.ndarray]:
+    plant = _plant([PlantContact(1, "fixed"), PlantContact(3, "fixed")], **kw)
+    rst = ReducedModel(make_hand(), Grasp(polygon(), EDGES, ["fixed", "fixed"]), [0.0, 0.0]).state(
+        [0.0, 0.12, 0.0], np.zeros(3))
+    return plant, rst.q
+
+
+@pytest.mark.parametrize("which, value, name, bound", [
+    ("q", np.full(4, 1e308), "q", r"10000 \[rad\]"),  # issue 25: a LinAlgError at the step before
+    ("v", np.full(4, 1e308), "v", r"10000 \[rad/s\]"),
+    ("v", np.full(4, 2e4), "v", r"10000 \[rad/s\]"),
+    ("X", [1e5, 0.12, 0.0], "X", r"\(1000, 1000, 10000\) \[m, m, rad\]"),
+    ("X", [0.0, 0.12, 1e308], "X", r"\(1000, 1000, 10000\) \[m, m, rad\]"),
+    ("V", [0.0, 1e308, 0.0], "V", r"10000 \[m/s, m/s, rad/s\]"),
+])
+@pytest.mark.parametrize("compiled", [None, False])
+def test_reset_refuses_a_state_beyond_the_physical_bounds(compiled, which, value, name, bound):
+    plant, q = _held(compiled=compiled)
+    state = {"q": q, "v": np.zeros(4), "X": [0.0, 0.12, 0.0], "V": np.zeros(3), which: value}
+    with pytest.raises(InvalidParameterError, match=f"invalid {name} = .*: expected entries of magnitude at most "
+                                                    f"{bound}"):
+        plant.reset(state["q"], state["v"], state["X"], state["V"])
+
+
+@pytest.mark.parametrize("compiled", [None, False])
+@pytest.mark.parametrize("v, V", [(1e4, 0.0), (0.0, 1e4), (1e4, 1e4)])
+def test_a_run_that_diverges_ends_in_a_plant_state_error_at_the_last_good_state(compiled, v, V):
+    """A reset within the bounds but far from the contacts' constraints (joints at 10 000 rad/s) diverges: with no
+    event to stop it, the step whose equations fail or overflow raises a PlantStateError (a LinAlgError, a
+    ``math domain error``, an ``OverflowError`` or a NaN before), the plant left at the state it started from."""
+    from regrasp.core.exceptions import PlantStateError
+
+    plant, q = _held(compiled=compiled, stop_on=(), collision_check=False)
+    plant.reset(q, np.full(4, v), [0.0, 0.12, 0.0], np.full(3, V))
+    with pytest.raises(PlantStateError, match="the plant cannot step from its state at t = .* s: ") as info:
+        for _ in range(50):
+            before = plant.state.copy()
+            plant.step(np.zeros(4))
+    message = str(info.value)
+    assert "\n" not in message and len(message) < 400 and isinstance(info.value, np.linalg.LinAlgError), message
+    assert plant.state.t == before.t == info.value.t and np.array_equal(plant.state.q, before.q)
+    assert np.isfinite(plant.state.flat()).all()
+
+
 def test_reset_can_set_contact_modes_and_validates_them():
     from regrasp import Hand, Plant, PlantContact, load_scenario
     from regrasp.core.exceptions import InvalidParameterError

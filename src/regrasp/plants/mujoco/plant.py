@@ -51,9 +51,9 @@ from ...core.contact import DEFAULT_FRICTION, ContactMode, Friction, FrictionLik
 from ...core.events import Event, EventKind
 from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
-from ...core.validation import as_finite_array, as_finite_float, expect_sequence_of, expect_type
+from ...core.validation import as_finite_array, as_finite_float, expect_choices, expect_sequence_of, expect_type
 from ...model.hand import Hand
-from ..project.state import PlantContact, PlantState, PlantStep
+from ..project.state import PlantContact, PlantState, PlantStep, checked_state
 from ..saturation import Saturation
 from ..sphere_sensing import SphereTipSensing
 from .mjcf import MujocoSettings, build_mjcf, require_mujoco
@@ -107,9 +107,7 @@ class MujocoPlant(SphereTipSensing):
             raise InvalidParameterError("contacts", contacts, f"one contact per finger ({hand.m})")
         self.hand, self.polygon, self.settings = hand, polygon, settings
         self.configure_sensing(dt, settings.timestep, "MuJoCo's timestep", slip_speed, stick_speed, separation_gap)
-        if isinstance(stop_on, str) or not all(isinstance(k, str) and k in _STOP_KINDS for k in stop_on):
-            raise InvalidParameterError("stop_on", stop_on, f"a sequence of plant event kinds "
-                                        f"({', '.join(sorted(_STOP_KINDS))})")
+        stop_on = expect_choices("stop_on", stop_on, _STOP_KINDS, "plant event kinds")
         self.stop_on = frozenset(EventKind(k) for k in stop_on)
         built = build_mjcf(hand.fingers, polygon, as_frictions(friction, hand.m),
                            gravity_in_hand=hand.gravity_in_hand, object_mass=object_mass, object_inertia=object_inertia,
@@ -173,8 +171,7 @@ class MujocoPlant(SphereTipSensing):
             if len(contacts) != self.hand.m:
                 raise InvalidParameterError("contacts", contacts, f"one contact per finger ({self.hand.m})")
             self.contacts = self.copy_contacts(contacts)
-        values = (as_finite_array("q", q, (n,)), as_finite_array("v", v, (n,)), as_finite_array("X", X, (3,)),
-                  as_finite_array("V", V, (3,)))
+        values = checked_state(n, q, v, X, V)
         self._mj.mj_resetData(self.model, self.data)
         self._load(self.data, *values, as_finite_float("t", t))
         self._energy0 = float(self.data.energy[0] + self.data.energy[1])

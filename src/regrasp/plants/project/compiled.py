@@ -29,7 +29,7 @@ from ...kernels.plant import (
 from ...model.hand import Hand
 from .equations import PlantEquations
 from .events import Accelerations, PlantEvents
-from .state import PlantContact, PlantState, PlantStep, rigid_contact_report
+from .state import PlantContact, PlantState, PlantStep, check_finite_step, rigid_contact_report
 
 __all__ = ["PlantKernel"]
 
@@ -124,6 +124,7 @@ class PlantKernel:
         terms, needs_coal, posture = self.workspace
         err, attention, any_coal = plant_step_into(*self.arguments(state, contacts, np.array(tau)), out, terms,
                                                    needs_coal, posture)
+        check_finite_step(state, out[:size].tolist())
         new = PlantState.from_flat(state.t + self.dt, out, n)
         surface = out[size:size + 2 * m].reshape(m, 2)
         xi, xi_dot = out[size + 6 * m:size + 7 * m], out[size + 7 * m:]

@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike
 
 from ...core.contact import DEFAULT_FRICTION, ContactMode, FrictionLike, as_frictions
 from ...core.events import Event, EventKind
-from ...core.exceptions import InvalidParameterError
+from ...core.exceptions import InvalidParameterError, PlantStateError, RegraspError
 from ...core.pad import Pad
 from ...core.polygon import ConvexPolygon
 from ...core.validation import (
@@ -57,6 +57,7 @@ from ...core.validation import (
     as_inertia,
     as_mass,
     as_positive_float,
+    expect_choices,
     expect_sequence_of,
     expect_type,
 )
@@ -75,8 +76,11 @@ from .state import (
     PlantLog,
     PlantState,
     PlantStep,
+    check_finite_step,
+    checked_state,
     contact_xi,
     rigid_contact_report,
+    state_magnitudes,
     surface_force,
 )
 
@@ -152,9 +156,7 @@ class Plant:
             raise InvalidParameterError("dt", dt, f"a step of at most {MAX_DT} s (the explicit integrator and the "
                                         "Baumgarte terms need a fine step)")
         alpha = as_positive_float("baumgarte", baumgarte, allow_zero=True)
-        if isinstance(stop_on, str) or not all(isinstance(k, str) and k in PLANT_EVENT_KINDS for k in stop_on):
-            raise InvalidParameterError("stop_on", stop_on, f"a sequence of plant event kinds "
-                                        f"({', '.join(sorted(PLANT_EVENT_KINDS))})")
+        stop_on = expect_choices("stop_on", stop_on, PLANT_EVENT_KINDS, "plant event kinds")
         self.stop_on = frozenset(EventKind(k) for k in stop_on)
         self.contact_events = as_flag("contact_events", contact_events)
         #: The events since the last reset, and whether one stopped the plant.
@@ -223,6 +225,7 @@ class Plant:
               contacts: Sequence[PlantContact] | None = None) -> PlantState:
         """Set the state (q, v [rad, rad/s], X = (x, y, β), V = (vx, vy, ω)) and clear the event log.
 
+        Each entry is finite and within the physical bounds of :func:`~regrasp.plants.project.state.checked_state`.
         Contact modes persist across resets (events change them); pass ``contacts`` to set them anew.
         """
         n = self.hand.nq
@@ -230,9 +233,8 @@ class Plant:
             if len(contacts) != self.hand.m:
                 raise InvalidParameterError("contacts", contacts, f"one contact per finger ({self.hand.m})")
             self.contacts = self._copy_contacts(contacts)
-        self.state = PlantState(as_finite_float("t", t), as_finite_array("q", q, (n,)).copy(),
-                                as_finite_array("v", v, (n,)).copy(), as_finite_array("X", X, (3,)).copy(),
-                                as_finite_array("V", V, (3,)).copy())
+        q, v, X, V = checked_state(n, q, v, X, V)
+        self.state = PlantState(as_finite_float("t", t), q.copy(), v.copy(), X.copy(), V.copy())
         self.log.clear()
         self.saturation.clear()
         self.max_constraint_error = self.constraint_error(self.state)
@@ -307,7 +309,8 @@ class Plant:
 
     def step(self, tau: ArrayLike) -> PlantStep:
         """Advance one time step with constant joint torques ``tau`` [N m] (RK4), saturated at the joints' limits
-        (module docstring)."""
+        (module docstring). A state the equations cannot step from (singular, or overflowing: a run that diverged)
+        raises :class:`~regrasp.core.exceptions.PlantStateError`, the plant left at that state."""
         if self.state is None:
             raise InvalidParameterError("state", None, "a state: call reset() first")
         if self.stopped:
@@ -317,6 +320,18 @@ class Plant:
         saturation: list[Event] = []
         for i, detail, values in self.saturation.onsets(commanded, saturated):  # (at the step's start)
             self.log.add(self.state.t, i, EventKind.SATURATION, detail, saturation, **values)
+        start = self.state
+        try:
+            return self._advance(tau, saturation)
+        except RegraspError:
+            raise
+        except (np.linalg.LinAlgError, ArithmeticError, ValueError) as exc:  # (the solves, math's overflows)
+            self.adopt(start, 0.0)
+            raise PlantStateError(start.t, f"its equations failed ({type(exc).__name__}: {exc}) at "
+                                  f"{state_magnitudes(start)}") from exc
+
+    def _advance(self, tau: tuple[float, ...], saturation: list[Event]) -> PlantStep:
+        """:meth:`step`'s integration and event checks, with the saturation events ``saturation``."""
         if self.compiled:
             step = self.kernel.step(self.state, self.contacts, tau, self.accelerations)
             self.adopt(step.state, step.constraint_error)
@@ -343,6 +358,7 @@ class Plant:
             k3 = equations.evaluate([a + half * b for a, b in zip(y, k2)], tau, specs)[0]
             k4 = equations.evaluate([a + h * b for a, b in zip(y, k3)], tau, specs)[0]
             y = [a + h * ((b1 + 2 * b2 + 2 * b3 + b4) / 6.0) for a, b1, b2, b3, b4 in zip(y, k1, k2, k3, k4)]
+        check_finite_step(st, y)
         new = PlantState(st.t + h, np.array(y[:n]), np.array(y[n:2 * n]), np.array(y[2 * n:2 * n + 3]),
                          np.array(y[2 * n + 3:2 * n + 6]), *y[2 * n + 6:])
         self.state = new
@@ -406,3 +422,4 @@ class Plant:
                                                             + self.inertia * st.V[2] ** 2)
         pot = self.hand.potential_energy(st.q) - self.mass * g @ st.X[:2]
         return float(kin + pot)
+

@@ -5,6 +5,7 @@ constants in plain floats (:class:`EdgeGeometry`) with the contact kinematics on
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
@@ -13,12 +14,13 @@ import numpy as np
 
 from ...core.contact import ContactMode, as_modes
 from ...core.events import Event, EventKind, EventSource
-from ...core.exceptions import InvalidParameterError
+from ...core.exceptions import InvalidParameterError, PlantStateError
 from ...core.polygon import ConvexPolygon
-from ...core.validation import as_finite_float, as_integer
+from ...core.validation import MAX_ANGLE, MAX_POSITION, MAX_SPEED, as_bounded_array, as_finite_float, as_integer
 
 __all__ = ["MAX_DT", "PLANT_EVENT_KINDS", "EdgeGeometry", "PlantContact", "PlantLog", "PlantState", "PlantStep",
-           "contact_xi", "edge_geometry", "rigid_contact_report", "surface_force"]
+           "check_finite_step", "checked_state", "contact_xi", "edge_geometry", "rigid_contact_report",
+           "state_magnitudes", "surface_force"]
 
 #: The plant's largest step [s].
 MAX_DT = 0.01
@@ -86,6 +88,29 @@ class PlantState:
         """The state at time ``t`` [s] from a flat array ``y`` (:meth:`flat`'s layout) of ``n`` joints; q, v, X and V
         are views of ``y``."""
         return cls(t, y[:n], y[n:2 * n], y[2 * n:2 * n + 3], y[2 * n + 3:2 * n + 6], *y[2 * n + 6:2 * n + 9].tolist())
+
+
+def checked_state(n: int, q: object, v: object, X: object, V: object) -> tuple[np.ndarray, ...]:
+    """A plant reset's (q, v, X, V) as float arrays (``n`` joints), each entry finite and within the physical bounds
+    of :mod:`~regrasp.core.validation`: joint angles and β at most ``MAX_ANGLE`` [rad], the object's position at most
+    ``MAX_POSITION`` [m], joint and object speeds at most ``MAX_SPEED`` [rad/s, m/s] (beyond them a step's sines and
+    squares lose their meaning or overflow); an error names the argument."""
+    return (as_bounded_array("q", q, (n,), MAX_ANGLE, "rad"), as_bounded_array("v", v, (n,), MAX_SPEED, "rad/s"),
+            as_bounded_array("X", X, (3,), (MAX_POSITION, MAX_POSITION, MAX_ANGLE), "m, m, rad"),
+            as_bounded_array("V", V, (3,), MAX_SPEED, "m/s, m/s, rad/s"))
+
+
+def state_magnitudes(st: PlantState) -> str:
+    """The largest |q|, |v|, |X| and |V| of a state, for an error."""
+    return ", ".join(f"max |{name}| = {float(np.max(np.abs(value))):.3g}" for name, value in
+                     (("q", st.q), ("v", st.v), ("X", st.X), ("V", st.V)))
+
+
+def check_finite_step(start: PlantState, y: Sequence[float]) -> None:
+    """A :class:`~regrasp.core.exceptions.PlantStateError` unless the flat state ``y`` (:meth:`PlantState.flat`'s
+    layout) one step after ``start`` is finite (its sum is finite when every entry is, and far from overflow)."""
+    if not math.isfinite(sum(y)):
+        raise PlantStateError(start.t, f"the step from {state_magnitudes(start)} overflowed (a run that diverged)")
 
 
 @dataclass(frozen=True)
