@@ -105,6 +105,7 @@ def test_the_mjcf_text_loads_back():
 
 
 @pytest.mark.parametrize("kwargs", [dict(tip_radius=-1e-4), dict(timestep=1e-4, time_constant=1e-4),
+                                    dict(timestep=1e-4, friction_time_constant=1.5e-4),
                                     dict(solimp=(0.9, 0.8, 1e-3, 0.5, 2)), dict(integrator="verlet"),
                                     dict(erode="yes"), dict(contact_depth=math.nan)])
 def test_bad_mujoco_settings_are_typed_errors(kwargs):
@@ -113,7 +114,8 @@ def test_bad_mujoco_settings_are_typed_errors(kwargs):
 
 
 TABLE = fields_of(MujocoSettings(), {
-    "pos": ("tip_radius", "timestep", "time_constant", "damping_ratio", "impratio", "tolerance", "object_thickness"),
+    "pos": ("tip_radius", "timestep", "time_constant", "friction_time_constant", "damping_ratio", "impratio",
+            "tolerance", "object_thickness"),
     "nonneg": ("contact_depth",), "count0": ("noslip_iterations",), "count1": ("iterations",), "flag": ("erode",),
     "choice": ("integrator",), "other": ("solimp",)},
     choices={"integrator": ("euler", "implicit", "implicitfast", "rk4")})

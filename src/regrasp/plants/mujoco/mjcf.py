@@ -75,8 +75,13 @@ class MujocoSettings:
         tip_radius: r [m], the fingertips' sphere radius.
         timestep: MuJoCo's step [s]; the plant takes ``round(dt / timestep)`` of them per control step,
             with the torques held (zero-order hold).
-        time_constant: The contacts' ``solref`` time constant [s] (normal and friction rows): how fast
-            a penetration or a slip is undone. MuJoCo needs at least 2 ``timestep``.
+        time_constant: The contacts' ``solref`` time constant [s] (their normal rows): how fast a penetration
+            is undone, the pad's softness. MuJoCo needs at least 2 ``timestep``.
+        friction_time_constant: The friction rows' time constant [s] (``solreffriction``): how fast a slip
+            velocity is undone. Not a material property but MuJoCo's drift correction: its contact constraints
+            leave out the velocity-product term J̇q̇, so a contact stuck on a turning object slips at a steady
+            speed proportional to this (``docs/derivations.md``, "MuJoCo's held contacts drift"); default
+            ``time_constant``'s default, 0.5 ms, whatever the normal rows' softness.
         damping_ratio: ``solref``'s damping ratio [-] (1: critically damped).
         solimp: ``solimp`` (d_min, d_max, width [m], midpoint, power): the constraint's impedance grows
             from d_min to d_max over ``width`` of penetration.
@@ -103,6 +108,7 @@ class MujocoSettings:
     tip_radius: float = 2.5e-4
     timestep: float = 1e-4
     time_constant: float = 5e-4
+    friction_time_constant: float = 5e-4
     damping_ratio: float = 1.0
     solimp: tuple[float, float, float, float, float] = (0.99, 0.999, 1e-4, 0.5, 2.0)
     impratio: float = 100.0
@@ -115,14 +121,15 @@ class MujocoSettings:
     integrator: str = "implicitfast"
 
     def __post_init__(self):
-        check_fields(self, as_positive_float, ("tip_radius", "timestep", "time_constant", "damping_ratio", "impratio",
-                                               "tolerance", "object_thickness"))
+        check_fields(self, as_positive_float, ("tip_radius", "timestep", "time_constant", "friction_time_constant",
+                                               "damping_ratio", "impratio", "tolerance", "object_thickness"))
         check_fields(self, as_positive_float, ("contact_depth",), allow_zero=True)
         if not 1e-7 <= self.timestep <= 1e-3:
             raise InvalidParameterError("timestep", self.timestep, "a step from 1e-7 to 1e-3 s")
-        if not self.time_constant >= 2.0 * self.timestep:
-            raise InvalidParameterError("time_constant", self.time_constant,
-                                        f"at least 2 timesteps ({2.0 * self.timestep:.3g} s): MuJoCo's stable minimum")
+        for name in ("time_constant", "friction_time_constant"):
+            if not getattr(self, name) >= 2.0 * self.timestep:
+                raise InvalidParameterError(name, getattr(self, name), f"at least 2 timesteps "
+                                            f"({2.0 * self.timestep:.3g} s): MuJoCo's stable minimum")
         solimp = tuple(as_finite_float("solimp", v) for v in self.solimp) if isinstance(self.solimp, (tuple, list)) \
             else None
         if solimp is None or len(solimp) != 5 or not (0.0 < solimp[0] <= solimp[1] < 1.0 and solimp[2] > 0.0
@@ -381,7 +388,7 @@ def build_mjcf(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Seq
         mus.append(mu)
         spec.add_pair(name=f"f{i}/tip_object", geomname1=tip, geomname2="object", condim=3,
                       friction=[mu, mu, 0.0, 0.0, 0.0], solref=[settings.time_constant, settings.damping_ratio],
-                      solreffriction=[settings.time_constant, settings.damping_ratio],
+                      solreffriction=[settings.friction_time_constant, settings.damping_ratio],
                       solimp=list(settings.solimp), margin=0.0, gap=0.0)
     # the links' contacts with the hull get the same solver parameters (they end the run anyway)
     for geoms in links:
