@@ -118,6 +118,7 @@ TABLE = fields_of(MujocoSettings(), {
             "tolerance", "object_thickness"),
     "nonneg": ("contact_depth",), "count0": ("noslip_iterations",), "count1": ("iterations",), "flag": ("erode",),
     "choice": ("integrator",), "other": ("solimp",)},
+    optional=("friction_time_constant",), good={"friction_time_constant": 5e-4},
     choices={"integrator": ("euler", "implicit", "implicitfast", "rk4")})
 
 test_each_field_refuses_bad_values, test_each_field_refuses_generated_bad_values = field_tests(TABLE)
@@ -125,3 +126,15 @@ test_each_field_refuses_bad_values, test_each_field_refuses_generated_bad_values
 
 def test_solimp_is_stored_as_a_tuple_of_floats():
     assert MujocoSettings(solimp=[0.9, 0.95, 1e-3, 0.5, 2]).solimp == (0.9, 0.95, 1e-3, 0.5, 2.0)
+
+
+def test_the_friction_rows_time_constant_follows_the_normal_rows_unless_given():
+    """None: 0.4 of the normal rows' time constant, within [0.5 ms, the normal rows']; the MJCF carries it."""
+    assert MujocoSettings(time_constant=2.5e-4).friction_rows_time_constant == 2.5e-4
+    assert MujocoSettings(time_constant=1e-3).friction_rows_time_constant == 5e-4
+    assert MujocoSettings(time_constant=2e-3).friction_rows_time_constant == pytest.approx(8e-4)
+    assert MujocoSettings(time_constant=2e-3, friction_time_constant=3e-4).friction_rows_time_constant == 3e-4
+    model = mujoco.MjModel.from_xml_string(scenario_to_mjcf(SC3, MujocoSettings(time_constant=2e-3)))
+    tips = [k for k in range(model.npair) if "tip_object" in model.pair(k).name]
+    assert tips and all(model.pair_solref[k][0] == pytest.approx(2e-3) for k in tips)
+    assert all(model.pair_solreffriction[k][0] == pytest.approx(8e-4) for k in tips)

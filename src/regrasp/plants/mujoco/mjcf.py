@@ -65,6 +65,13 @@ __all__ = ["MjcfHand", "MujocoSettings", "build_mjcf", "eroded_vertices", "requi
 #: Contact bits: links (contype) against the object's hull (conaffinity); tips only through explicit pairs.
 _LINK_BIT = 2
 _INTEGRATORS = ("euler", "implicit", "implicitfast", "rk4")
+#: The friction rows' time constant as a fraction of the normal rows' (``MujocoSettings.friction_time_constant``
+#: None): at 0.3 a sliding contact on the default scenario chattered off its edge at solref 1.5 ms, at 0.4 and above
+#: none did from 1 to 2 ms (``docs/derivations.md``, "MuJoCo's contacts: drift and hops").
+FRICTION_TIME_RATIO = 0.4
+#: The friction rows' least default time constant [s] (the normal rows' default: the drift it leaves, 0.04 mm over
+#: a 1.5 s hold, is the least the plant keeps).
+FRICTION_TIME_FLOOR = 5e-4
 
 
 @dataclass(frozen=True)
@@ -80,8 +87,10 @@ class MujocoSettings:
         friction_time_constant: The friction rows' time constant [s] (``solreffriction``): how fast a slip
             velocity is undone. Not a material property but MuJoCo's drift correction: its contact constraints
             leave out the velocity-product term J̇q̇, so a contact stuck on a turning object slips at a steady
-            speed proportional to this (``docs/derivations.md``, "MuJoCo's held contacts drift"); default
-            ``time_constant``'s default, 0.5 ms, whatever the normal rows' softness.
+            speed proportional to this; and far below the normal rows' it makes a sliding contact chatter off its
+            edge (``docs/derivations.md``, "MuJoCo's contacts: drift and hops"). None (default): the normal rows'
+            ``time_constant`` times ``FRICTION_TIME_RATIO`` (0.4), but not below 0.5 ms nor above
+            ``time_constant`` (:attr:`friction_rows_time_constant`).
         damping_ratio: ``solref``'s damping ratio [-] (1: critically damped).
         solimp: ``solimp`` (d_min, d_max, width [m], midpoint, power): the constraint's impedance grows
             from d_min to d_max over ``width`` of penetration.
@@ -108,7 +117,7 @@ class MujocoSettings:
     tip_radius: float = 2.5e-4
     timestep: float = 1e-4
     time_constant: float = 5e-4
-    friction_time_constant: float = 5e-4
+    friction_time_constant: float | None = None
     damping_ratio: float = 1.0
     solimp: tuple[float, float, float, float, float] = (0.99, 0.999, 1e-4, 0.5, 2.0)
     impratio: float = 100.0
@@ -121,13 +130,14 @@ class MujocoSettings:
     integrator: str = "implicitfast"
 
     def __post_init__(self):
-        check_fields(self, as_positive_float, ("tip_radius", "timestep", "time_constant", "friction_time_constant",
-                                               "damping_ratio", "impratio", "tolerance", "object_thickness"))
+        check_fields(self, as_positive_float, ("tip_radius", "timestep", "time_constant", "damping_ratio", "impratio",
+                                               "tolerance", "object_thickness"))
+        check_fields(self, as_positive_float, ("friction_time_constant",), optional=True)
         check_fields(self, as_positive_float, ("contact_depth",), allow_zero=True)
         if not 1e-7 <= self.timestep <= 1e-3:
             raise InvalidParameterError("timestep", self.timestep, "a step from 1e-7 to 1e-3 s")
         for name in ("time_constant", "friction_time_constant"):
-            if not getattr(self, name) >= 2.0 * self.timestep:
+            if getattr(self, name) is not None and not getattr(self, name) >= 2.0 * self.timestep:
                 raise InvalidParameterError(name, getattr(self, name), f"at least 2 timesteps "
                                             f"({2.0 * self.timestep:.3g} s): MuJoCo's stable minimum")
         solimp = tuple(as_finite_float("solimp", v) for v in self.solimp) if isinstance(self.solimp, (tuple, list)) \
@@ -142,6 +152,14 @@ class MujocoSettings:
         check_fields(self, as_flag, ("erode",))
         if not isinstance(self.integrator, str) or self.integrator not in _INTEGRATORS:
             raise InvalidParameterError("integrator", self.integrator, f"one of {', '.join(_INTEGRATORS)}")
+
+    @property
+    def friction_rows_time_constant(self) -> float:
+        """The friction rows' ``solreffriction`` time constant [s]: ``friction_time_constant``, or when None
+        ``time_constant`` · ``FRICTION_TIME_RATIO`` kept within [``FRICTION_TIME_FLOOR``, ``time_constant``]."""
+        if self.friction_time_constant is not None:
+            return self.friction_time_constant
+        return min(self.time_constant, max(FRICTION_TIME_FLOOR, FRICTION_TIME_RATIO * self.time_constant))
 
 
 def eroded_vertices(polygon: ConvexPolygon, distance: float) -> np.ndarray:
@@ -388,7 +406,7 @@ def build_mjcf(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Seq
         mus.append(mu)
         spec.add_pair(name=f"f{i}/tip_object", geomname1=tip, geomname2="object", condim=3,
                       friction=[mu, mu, 0.0, 0.0, 0.0], solref=[settings.time_constant, settings.damping_ratio],
-                      solreffriction=[settings.friction_time_constant, settings.damping_ratio],
+                      solreffriction=[settings.friction_rows_time_constant, settings.damping_ratio],
                       solimp=list(settings.solimp), margin=0.0, gap=0.0)
     # the links' contacts with the hull get the same solver parameters (they end the run anyway)
     for geoms in links:
