@@ -17,7 +17,7 @@ from regrasp.core.exceptions import InvalidParameterError
 from regrasp.core.measurement import Measurement
 from regrasp.dynamics.grasp import Grasp
 from regrasp.dynamics.internal_force.settings import InternalForceSettings
-from regrasp.supervisor.executor import SlideExecutor
+from regrasp.supervisor.executor import FLOOR_FRACTIONS, SlideExecutor
 from regrasp.supervisor.settings import ExecutorSettings
 from regrasp.supervisor.types import ContactPhase, SlideOrder
 
@@ -293,3 +293,16 @@ def test_floors_no_squeeze_can_meet_give_way_to_f_min():
 def test_floor_settings_refuse_bad_values(bad):
     with pytest.raises(InvalidParameterError):
         ExecutorSettings(**bad)
+
+
+def test_floors_no_squeeze_can_meet_are_kept_in_part_where_the_forces_allow():
+    """Between the floors and f_min: a step whose forces cannot meet the floors keeps the largest of
+    ``FLOOR_FRACTIONS`` of them that they can (a slider dragging harder than the model's μ caps the squeeze)."""
+    assert FLOOR_FRACTIONS[0] == 1.0 and FLOOR_FRACTIONS[-1] == 0.0 and list(FLOOR_FRACTIONS) == sorted(
+        FLOOR_FRACTIONS, reverse=True)
+    ex = executor(slider_floor=0.21, holder_preload=0.7, internal_force=InternalForceSettings(f_min=0.2, f_max=16.0))
+    ex.start(SlideOrder(0, 1, 0.0, reference=lambda t: (XI[0], 0.0, 0.0)), meas(0.8), [])
+    half = 0.2 + FLOOR_FRACTIONS[1] * (0.7 - 0.2)  # (of the 0.7 N pre-load; f_min alone: 0.235 N)
+    control, law, _, aborted = command(ex, 0.8, meas(0.8), [])
+    holders = control.contact_forces_surface[1:, 0]
+    assert not aborted and half - 1e-6 <= holders.min() < 0.7

@@ -69,6 +69,11 @@ if TYPE_CHECKING:
 
 __all__ = ["SlideExecutor"]
 
+#: The fractions of the contacts' floors above ``f_min`` (:meth:`SlideExecutor.floors`) a step's law tries in turn
+#: when the forces cannot meet them all: a contact keeps what load the others' cones allow (a slider whose plant μ
+#: is above the model's drags the object harder, and the holders' cones then cap the squeeze), down to ``f_min``.
+FLOOR_FRACTIONS = (1.0, 0.5, 0.0)
+
 @dataclass
 class _Active:
     order: SlideOrder
@@ -360,9 +365,10 @@ class SlideExecutor:
         omega = np.array([s.control_omega] * 3 + [s.slide_omega] * (n - 3))
         return Gains(2.0 * omega, omega**2)
 
-    def _law(self, floors: bool = True) -> ComputedTorqueController:
-        """The control law of the current phases (cached while they and the held positions stay); ``floors``: with
-        the contacts' floors (:meth:`floors`), else with the internal force's ``f_min`` alone."""
+    def _law(self, floors: float = 1.0) -> ComputedTorqueController:
+        """The control law of the current phases (cached while they and the held positions stay); ``floors``: the
+        fraction of each contact's floor above the internal force's ``f_min`` (:meth:`floors`) it keeps (0: ``f_min``
+        alone)."""
         s = self.settings
         edges = []
         for i, a in sorted(self._active.items()):
@@ -376,7 +382,8 @@ class SlideExecutor:
         sliders = [i for i in range(self.hand.m) if self.phases[i] is ContactPhase.SLIDING]
         friction = tuple(Friction(max(f.static, k), k) if k != f.kinetic else f
                          for f, k in zip(self.friction, (self._kinetic(i) for i in range(self.hand.m))))
-        floors = self.floors() if floors else ()
+        f_min = s.internal_force.f_min
+        floors = tuple(f_min + floors * (f - f_min) if f > f_min else f for f in self.floors()) if floors > 0.0 else ()
         key = (tuple(self.phases), tuple(edges), self.xi.tobytes(), friction, floors)
         if key == self._key:
             return self._controller
@@ -430,7 +437,6 @@ class SlideExecutor:
         (a :class:`~regrasp.core.trajectory.TrajectorySample`)."""
         m = self.hand.m
         self._now = float(meas.t)
-        law = self._law()
         reference = np.full(m, np.nan)
         sliders = [i for i in range(m) if self.phases[i] is ContactPhase.SLIDING]
         refs = [self._slider_reference(i, float(meas.t), dt) for i in sliders]
@@ -444,14 +450,14 @@ class SlideExecutor:
         S_d_dot = np.concatenate([desired.velocity, [r[1] for r in refs]])
         S_d_ddot = np.concatenate([desired.acceleration, [r[2] for r in refs]])
         try:
-            try:
-                return self._tipped(law(S, S_dot, S_d, S_d_dot, S_d_ddot), meas), _name(law), reference, []
-            except InternalForceInfeasibleError:
-                if law.internal_force is None or law.internal_force.floors == ():
-                    raise
-                # the floors are a preference (a pre-load, a reflex); the internal force's f_min is the limit
-                law = self._law(floors=False)
-                return self._tipped(law(S, S_dot, S_d, S_d_dot, S_d_ddot), meas), _name(law), reference, []
+            for fraction in FLOOR_FRACTIONS:  # the floors are a preference (a pre-load, a reflex): as much of them as
+                # the forces allow, the internal force's f_min the limit
+                law = self._law(fraction)
+                try:
+                    return self._tipped(law(S, S_dot, S_d, S_d_dot, S_d_ddot), meas), _name(law), reference, []
+                except InternalForceInfeasibleError:
+                    if law.internal_force is None or law.internal_force.floors == ():
+                        raise
         except InternalForceInfeasibleError as exc:
             if not any(self.phases[i] in (ContactPhase.PRIMING, ContactPhase.SLIDING) for i in self._active):
                 raise
