@@ -91,12 +91,13 @@ def main() -> None:
         r = run_study(scenario, args.runs, seed=args.seed, perturbation=PERTURBATION, duration=duration,
                       periods=args.periods, workers=min(args.workers, args.runs), schedule=schedule, settings=settings)
         lo, hi = r.interval
-        cone = min(o.min_cone_margin for o in r.runs)
+        cones = [o.min_cone_margin for o in r.runs if o.min_cone_margin is not None]  # (None: no step measured one)
+        cone = f"{min(cones):13.3f} N" if cones else f"{'n/a':>15s}"
         failures = ", ".join(f"{k} {v}" for k, v in sorted(r.failures.items())) or "none"
         position = [o.max_object_error for o in r.runs if o.max_object_error is not None]
         angle = [o.max_orientation_error for o in r.runs if o.max_orientation_error is not None]
         errors = f"{1e3 * median(position):.2f} mm {1e3 * median(angle):5.1f} mrad" if position else "-"
-        print(f"{name:32s} {r.successes:4d}/{len(r.runs):<4d} [{lo:5.1%}, {hi:5.1%}]  {cone:13.3f} N  {errors:>18s}  "
+        print(f"{name:32s} {r.successes:4d}/{len(r.runs):<4d} [{lo:5.1%}, {hi:5.1%}]  {cone}  {errors:>18s}  "
               f"{failures}", flush=True)
 
 

@@ -165,7 +165,10 @@ URDF_TEXT = URDF.read_text()
     (URDF_TEXT.replace('<mass value="0.015"/>', '<mass value="nan"/>', 1), "mass 0 kg"),  # (urdfdom reads NaN as 0)
     (URDF_TEXT.replace('ixx="7.2e-07"', 'ixx="-1"', 1), "principal moments -1"),
     (URDF_TEXT.replace('<origin xyz="0.045 0 0"', '<origin xyz="1e300 0 0"', 1), "placed 1e+300 m from its joint"),
-], ids=["empty", "not XML", "negative mass", "NaN mass", "negative inertia", "a distal link 1e300 m long"])
+    (URDF_TEXT.replace('izz="2.625e-06"', 'izz="1e300"', 1), "of at most 1e+12 kg m^2"),
+    (URDF_TEXT.replace('izz="2.625e-06"', 'izz="1e9"', 1), "the joint-space mass matrix is singular or ill-"),
+], ids=["empty", "not XML", "negative mass", "NaN mass", "negative inertia", "a distal link 1e300 m long",
+        "a distal inertia of 1e300", "a distal inertia 1e14 times the proximal link's"])
 def test_a_bad_urdf_is_one_line_with_urdfdom_kept_off_stderr(tmp_path, capfd, text, says):
     from regrasp.core.exceptions import FingerModelError
 
@@ -187,3 +190,63 @@ def test_huge_links_and_infinite_positions_are_refused():
     sample = FingerEnvelope(FINGER, BOX, 1).at([0.0, 0.12, 0.0])
     with pytest.raises(InvalidParameterError, match="xi"):
         sample.margin(math.inf)
+
+
+def _recorder(rrd_path, **options):
+    from regrasp.rollout.recording.recorder import RolloutRecorder
+
+    return RolloutRecorder(plant(), rrd_path=rrd_path, **options)
+
+
+def _settings(kind: str, **fields):
+    if kind == "regrasp":
+        from regrasp.schedule.planner import RegraspSettings
+
+        return RegraspSettings(**fields)
+    if kind == "mujoco":
+        from regrasp.plants.mujoco.mjcf import MujocoSettings
+
+        return MujocoSettings(**fields)
+    if kind == "softness":
+        from regrasp.model.softness import ContactSoftness
+
+        return ContactSoftness(**fields)
+    from regrasp.plants.drake.model import DrakeSettings
+
+    return DrakeSettings(**fields)
+
+
+#: Issue 25's library reproducers: (case, the parameter its error must name).
+ISSUE_25 = {
+    "1 a recorder path of 5": (lambda: _recorder(5), "rrd_path"),
+    "1 a recorder path in /proc": (lambda: _recorder("/proc/x.rrd"), "rrd_path"),
+    "1 a recorder path with NUL": (lambda: _recorder("a\0b.rrd"), "rrd_path"),
+    "1 a recorder path of 300 characters": (lambda: _recorder("x" * 300 + ".rrd"), "rrd_path"),
+    "3 periods = 10**400": (lambda: build_rollout(load_scenario(ROOT / "examples" / "scenarios" /
+                                                                "paper_trajectory_2.toml"),
+                                                  RunSpec(periods=10**400), policy="none"), "periods"),
+    "3 envelope_substeps = 10**400": (lambda: _settings("regrasp", envelope_substeps=10**400), "envelope_substeps"),
+    "3 a decimation of 10**21": (lambda: _recorder(None, spawn=True, decimation=10**21), "decimation"),
+    "4 a run of 1e-5 s": (lambda: build_rollout(load_scenario(ROOT / "examples" / "scenarios" /
+                                                              "paper_trajectory_2.toml"),
+                                                RunSpec(duration=1e-5), policy="none"), "duration"),
+    "5 a MuJoCo tip radius of 1e300": (lambda: _settings("mujoco", tip_radius=1e300), "tip_radius"),
+    "5 a Drake tip radius of 1": (lambda: _settings("drake", tip_radius=1.0), "tip_radius"),
+    "5 a softness tip radius of 1 m": (lambda: _settings("softness", time_constant=1e-3, solimp_width=1e-4,
+                                                         tip_radius=1.0), "tip_radius"),
+}
+
+
+@pytest.mark.parametrize("case", list(ISSUE_25), ids=list(ISSUE_25))
+def test_issue_25_library_reproducers_are_typed_one_line_errors_naming_the_parameter(case):
+    from regrasp.core.exceptions import InvalidParameterError
+
+    make, name = ISSUE_25[case]
+    with pytest.raises(InvalidParameterError) as info:
+        make()
+    assert info.value.name == name and "\n" not in str(info.value), str(info.value)
+
+
+def test_numpy_integers_are_counts():
+    assert _settings("regrasp", envelope_substeps=np.int64(2)).envelope_substeps == 2
+    assert RunSpec(periods=np.int64(3)).periods == 3 and type(RunSpec(periods=np.int64(3)).periods) is int

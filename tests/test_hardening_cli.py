@@ -132,3 +132,125 @@ def test_version_and_ctrl_c():
     lines = err.strip().splitlines()
     assert proc.returncode == 130, err
     assert lines[-1] == "regrasp: interrupted" and not any("Traceback" in line for line in lines), lines
+
+
+# ---------------------------------------------------------------- issue 25: the new surfaces' reproducers
+T3 = str(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml")
+RUN = ["simulate", T3, "--policy", "none", "--duration", "0.05"]
+STUDY = ["study", T3, "--runs", "1", "--workers", "1", "--duration", "0.05"]
+
+
+def one_error_line(capfd, argv: list[str]) -> str:
+    """``main(argv)``: exit 2 and the one error line it prints (argparse's follows its usage lines), no traceback."""
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    out, err = capfd.readouterr()
+    lines = err.strip().splitlines()
+    assert code == 2 and lines and out == "", (argv, out, err)
+    assert "Traceback" not in err and re.match(r"regrasp( \w+)?: error: ", lines[-1]), lines
+    if lines[-1].startswith("regrasp: error:"):
+        assert len(lines) == 1, lines
+    return lines[-1]
+
+
+def unused_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.parametrize("argv, says", [
+    (RUN + ["--rrd", "/proc/x.rrd"], "invalid --rrd = '/proc/x.rrd': expected a writable file path"),
+    (RUN + ["--rrd", "a\0b.rrd"], "a NUL byte in the name"),
+    (RUN + ["--rrd", "x" * 300 + ".rrd"], "a name of 304 bytes"),
+    (RUN + ["--rrd", ""], "an empty path"),
+    (RUN + ["--plot", "/proc/figs"], "invalid --plot = '/proc/figs'"),
+    (RUN + ["--plot", ""], "invalid --plot = ''"),
+    (RUN + ["--connect", "localhost:9876"], "invalid --connect"),
+    (STUDY + ["--plot", "/proc/figs"], "invalid --plot = '/proc/figs'"),
+    (["study", T3, "--replay", "0", "--duration", "0.05", "--rrd", "/proc/x.rrd"], "invalid --rrd = '/proc/x.rrd'"),
+    (RUN + ["--decimate", "1000000000000000000000"], "argument --decimate: expected an integer in [1, 1000000]"),
+    (["simulate", T3, "--periods", "1" + "0" * 400], "argument --periods: expected an integer in [1, 1000000]"),
+    (STUDY + ["--seed", "1" + "0" * 60], "argument --seed: expected an integer in [0, "),
+    (STUDY + ["--workers", "100000"], "argument --workers: expected an integer in [1, 1024]"),
+    (STUDY + ["--delay", "11"], "argument --delay: expected an integer in [0, 10]"),
+    (["simulate", T3, "--policy", "none", "--duration", "1e-5"], "invalid duration = 1e-05: expected a run of at "
+                                                                  "least one control step (0.001 s)"),
+    (["study", T3, "--runs", "1", "--duration", "1e-300"], "invalid duration = 1e-300"),
+    (RUN + ["--plant", "mujoco", "--tip-radius", "1e300"], "argument --tip-radius: expected a radius in (0, 50] mm"),
+    (["study", T3, "--replay", "100000"], "argument --replay: expected an integer in [0, 99999]"),
+    (["study", T3, "--runs", "5", "--replay", "7"], "invalid --replay = 7: expected a run of this study's 5"),
+    (["study", T3, "--replay", "1", "--workers", "2"], "(not with --workers)"),
+    (["study", T3, "--replay", "1", "--ray"], "(not with --ray)"),
+    (["study", T3, "--replay", "1", "--plot", "figs"], "(not with --plot)"),
+    (STUDY + ["--fixed-softness"], "invalid --fixed-softness = True: expected --plant mujoco"),
+    (STUDY + ["--ray", "1.2.3"], "argument --ray: expected 'local', 'auto', a Ray cluster's HOST:PORT"),
+], ids=["1 rrd in /proc", "1 rrd with NUL", "1 rrd of 300 characters", "1 rrd empty", "1 plot in /proc",
+        "1 plot empty", "1 connect", "1 study plot in /proc", "1 replay rrd in /proc", "3 decimate 1e21",
+        "3 periods 1e400", "3 seed 1e60", "3 workers 1e5", "3 delay 11", "4 simulate 1e-5 s", "4 study 1e-300 s",
+        "5 tip radius 1e300", "5 replay 100000", "5 replay past runs", "5 replay workers", "5 replay ray",
+        "5 replay plot", "5 fixed softness off mujoco", "2 ray address"])
+def test_issue_25_command_lines_exit_2_with_one_line_before_any_work(capfd, tmp_path, monkeypatch, argv, says):
+    monkeypatch.chdir(tmp_path)
+    line = one_error_line(capfd, argv)
+    assert says in line, line
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_issue_25_a_study_on_an_unreachable_ray_cluster_ends_at_once(capfd):
+    start = time.monotonic()
+    port = unused_port()
+    line = one_error_line(capfd, STUDY + ["--ray", f"127.0.0.1:{port}"])
+    assert line == f"regrasp: error: no Ray cluster at '127.0.0.1:{port}': cannot connect to 127.0.0.1:{port} " \
+                   "(Connection refused)"
+    assert time.monotonic() - start < 5.0
+
+
+def strict_json(text: str):
+    """``text`` as JSON with no NaN or Infinity (``json.dumps(..., allow_nan=False)`` holds for it)."""
+    import json
+
+    def refuse(constant):
+        raise AssertionError(f"{constant} in a JSON document")
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_issue_25_summaries_of_runs_that_measured_nothing_say_so(capsys, monkeypatch):
+    """Runs that failed at their first step measured no margin: 'n/a', null in JSON, never inf or NaN."""
+    import dataclasses
+
+    from regrasp.cli.simulate import rollout_summary
+    from regrasp.model.perturbation import Perturbation
+    from regrasp.study import study as study_module
+    from regrasp.study.draws import draw_runs
+    from regrasp.study.study import RunOutcome, StudyResult
+
+    draws = draw_runs(2, 0, Perturbation())
+    outcomes = tuple(RunOutcome(d, False, "collision", 0.0, "finger1", None, None, None, None, 0, 0, 0.01)
+                     for d in draws)
+    result = StudyResult(T3, outcomes, Perturbation(), 0, 0.05, 1, "process", 0.1, 0.05)
+    monkeypatch.setattr(study_module, "run_study", lambda *args, **kwargs: result)
+    assert main(["study", T3, "--runs", "2", "--workers", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "smallest cone margin [N]: n/a" in out and "smallest envelope margin [mm]: n/a" in out
+    assert "inf" not in out and "nan" not in out, out
+    assert main(["study", T3, "--runs", "2", "--workers", "1", "--json"]) == 0
+    doc = strict_json(capsys.readouterr().out)
+    assert doc["outcomes"][0]["min_cone_margin"] is None
+
+    assert main(["simulate", T3, "--policy", "none", "--duration", "0.01", "--json"]) == 0
+    doc = strict_json(capsys.readouterr().out)
+    assert doc["steps"] == 10 and doc["success"] is True
+    from regrasp import RunSpec, build_rollout, load_scenario
+
+    sc = load_scenario(T3)
+    run = build_rollout(sc, RunSpec(duration=0.002), policy="none").run()
+    blank = dataclasses.replace(run, min_cone_margin=float("inf"), min_cone_margin_at=(float("nan"), ""),
+                                min_envelope_margin=float("inf"), min_envelope_margin_at=(float("nan"), ""))
+    text = rollout_summary(blank, sc, "project")
+    assert re.search(r"smallest envelope margin +n/a", text) and "inf" not in text and "nan" not in text, text
+    strict_json(__import__("json").dumps(blank.to_json_dict()))

@@ -2,7 +2,10 @@
 
 Each property: a typed error whose message names the parameter or key, or a valid value with no
 NaN or inf; for the CLI, exit 2 with one error line on stderr. ``derandomize`` makes the examples
-the same on every run.
+the same on every run. Every flag of ``simulate`` and ``study`` (issue 25): one to three flags with generated
+values either exit 2 with one error line before any work, or reach the work (replaced here by :class:`Reached`), and
+a value that must be refused (a count out of its bounds, an unwritable path, a run of no step, an address where no
+Ray cluster answers) never reaches it.
 """
 
 import math
@@ -203,3 +206,175 @@ def test_a_generated_urdf_is_a_one_line_finger_error_or_a_finite_finger(tmp_path
         checked_link_shapes(finger, default_tip_clearance(finger))
     except FingerModelError as exc:
         assert "\n" not in str(exc)
+
+
+# ---------------------------------------------------------------- every flag of simulate and study (issue 25)
+class Reached(Exception):
+    """The command got past its checks to its work (the plan, the rollout): its input was taken."""
+
+
+def reached(*args, **kwargs):
+    raise Reached
+
+
+class FlagRecorder:
+    """Stands in for a command's parser in its ``configure``: the flags it adds, each with its options."""
+
+    def __init__(self, configure):
+        self.flags: dict[str, dict] = {}
+        configure(self)
+
+    def add_argument(self, *names, **options):
+        self.flags.update({n: options for n in names if n.startswith("--")})
+
+    def add_mutually_exclusive_group(self, **options):
+        return self
+
+    def set_defaults(self, **defaults):
+        pass
+
+
+def count_bounds():
+    from regrasp.core.validation import MAX_COUNT, MAX_RUNS, MAX_SEED, MAX_WORKERS
+    from regrasp.model.noise import MAX_DELAY_STEPS
+
+    return {"simulate": {"--periods": (1, MAX_COUNT), "--decimate": (1, MAX_COUNT)},
+            "study": {"--periods": (1, MAX_COUNT), "--runs": (1, MAX_RUNS), "--seed": (0, MAX_SEED),
+                      "--workers": (1, MAX_WORKERS), "--replay": (0, MAX_RUNS - 1), "--delay": (0, MAX_DELAY_STEPS),
+                      "--slip-delay": (0, MAX_DELAY_STEPS)}}
+
+
+T3 = str(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml")
+BAD_PATHS = ["", "/proc/x", "a\0b", "x" * 300]
+# values no flag's work is slow for (no run count or replay index in the thousands, no host name to look up)
+flag_values = st.one_of(
+    st.sampled_from(["abc", "nan", "inf", "-inf", "-1", "0", "1", "2", "0.5", "1.5", "1e-5", "1e-300", "1e300",
+                     "-1e-300", "0.0002", "1" + "0" * 21, "9" * 5000, "0x10", "1_0", " 3 ", "\u0663", "11", "100001",
+                     "1025", "1000001", "mass=0.1,0.2", "delay=1,2", "bogus=1", "xi-noise=", "mujoco", "drake",
+                     "project", "none", "paper", "rerun+http://127.0.0.1:1/proxy", "figs", "out.rrd", *BAD_PATHS]),
+    st.sampled_from(["0", "1", "2", "0.1", "0.01", "0.001", "0.2", "0.25", "5", "10"]),  # (values most flags take)
+    st.integers(-3, 12).map(str), st.floats(allow_nan=True, allow_infinity=True).map(repr), st.text(max_size=6))
+ray_values = st.sampled_from(["", "local", "auto", "127.0.0.1:1", "127.0.0.1:0", "[::1]:1", "ray://127.0.0.1", "1.2.3",
+                              "x y:1", "h:99999", "-1"])
+path_values = st.sampled_from([*BAD_PATHS, "figs", "out.rrd", "sub/out.rrd", ".", "/proc", "/proc/self/x"])
+
+
+def values_for(command: str, flag: str):
+    """What a flag is given: a generated value, or one aimed at it (a path, a Ray address, a count at its bounds)."""
+    aimed = {"--rrd": path_values, "--plot": path_values, "--ray": ray_values,
+             "--connect": st.sampled_from(["rerun+http://127.0.0.1:1/proxy", "localhost:9876", "", "rerun://"])}
+    bounds = count_bounds()[command].get(flag)
+    if bounds is not None:  # (not the largest run counts: their draws take seconds)
+        lo, hi = bounds
+        aimed[flag] = st.sampled_from([str(lo - 1), str(lo), str(lo + 1), str(hi + 1), "1" + "0" * 400, "1.0", "1e3"])
+    if flag == "--ray":  # (only these: a generated host name would be looked up)
+        return ray_values
+    return st.one_of(aimed[flag], flag_values) if flag in aimed else flag_values
+
+
+def command_line(command: str, chosen: dict) -> list[str]:
+    flags = FlagRecorder(configure_of(command)).flags
+    argv = [command, T3]
+    for flag, value in chosen.items():
+        argv.append(flag)
+        if flags[flag].get("action") != "store_true":
+            argv.append(value)
+    return argv
+
+
+def configure_of(command: str):
+    from regrasp.cli import simulate, study
+
+    return {"simulate": simulate.configure, "study": study.configure}[command]
+
+
+def number(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        return math.nan
+
+
+def must_refuse(command: str, chosen: dict) -> str | None:
+    """Why the command line must be refused (a count out of its bounds, a path no file can be written to, a run of
+    no step, an address where no Ray cluster answers, no viewer's URL), or None."""
+    for flag, value in chosen.items():
+        if (flag == "--duration" and not 1e-3 <= number(value) <= 3600.0) \
+                or (flag == "--ray" and value not in ("local", "auto")) \
+                or (flag == "--connect" and value != "rerun+http://127.0.0.1:1/proxy"):
+            return f"{flag} {value[:40]!r}"
+        bounds = count_bounds()[command].get(flag)
+        if bounds is not None:
+            try:
+                ok = bounds[0] <= int(value) <= bounds[1]
+            except ValueError:
+                ok = False
+            if not ok:
+                return f"{flag} {value[:40]!r}"
+        if flag in ("--rrd", "--plot") and value in BAD_PATHS:
+            return f"{flag} {value[:40]!r}"
+    return None
+
+
+def test_the_count_table_names_every_count_flag():
+    for command, bounds in count_bounds().items():
+        flags = FlagRecorder(configure_of(command)).flags
+        counts = {f for f, o in flags.items()
+                  if getattr(o.get("type"), "__qualname__", "").startswith("count_argument")}
+        assert counts == set(bounds), command
+
+
+def generated_command_lines(command: str):
+    """One to three of the command's flags, each with a value (:func:`values_for`)."""
+    flags = sorted(FlagRecorder(configure_of(command)).flags)
+    return st.lists(st.sampled_from(flags), min_size=1, max_size=3, unique=True).flatmap(
+        lambda chosen: st.tuples(*(values_for(command, f) for f in chosen)).map(lambda vs: dict(zip(chosen, vs))))
+
+
+def check_command_line(capsys, command: str, chosen: dict) -> None:
+    argv = command_line(command, chosen)
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    except Reached:
+        code = None
+    out, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    if code is None:  # taken: then nothing said it was bad
+        assert must_refuse(command, chosen) is None, (argv, must_refuse(command, chosen))
+        assert "error" not in err, err
+        return
+    assert code == 2, (argv, code, out, err)
+    assert lines and re.match(r"regrasp( \w+)?: error: ", lines[-1]), (argv, lines)
+    assert "\n" not in lines[-1] and not any("Traceback" in line for line in lines), lines
+    if lines[-1].startswith("regrasp: error: "):  # (a typed error: its one line, nothing else)
+        assert len(lines) == 1, lines
+
+
+FLAG_SETTINGS = settings(derandomize=True, database=None, max_examples=200, deadline=None,
+                         suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+
+
+@pytest.fixture
+def before_any_work(tmp_path, monkeypatch):
+    """The commands' work replaced by :class:`Reached` (the checks are what is tested), in a fresh directory."""
+    import regrasp.rollout.build
+    import regrasp.schedule.planner
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    monkeypatch.setattr(regrasp.rollout.build, "build_rollout", reached)
+    monkeypatch.setattr(regrasp.schedule.planner, "plan_regrasps", reached)
+
+
+@FLAG_SETTINGS
+@given(chosen=generated_command_lines("simulate"))
+def test_every_simulate_flag_takes_a_value_or_exits_2_with_one_line(capsys, before_any_work, chosen):
+    check_command_line(capsys, "simulate", chosen)
+
+
+@FLAG_SETTINGS
+@given(chosen=generated_command_lines("study"))
+def test_every_study_flag_takes_a_value_or_exits_2_with_one_line(capsys, before_any_work, chosen):
+    check_command_line(capsys, "study", chosen)

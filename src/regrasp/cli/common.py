@@ -1,5 +1,6 @@
-"""What the command line's commands share: argument types (one parser maker for every numeric option), the
-progress bar, the figures' output directory, the default scenario and the plant options."""
+"""What the command line's commands share: argument types (one parser maker for every numeric option, one for every
+count, :func:`count_argument`), the progress bar, the output paths' checks, the default scenario and the plant
+options."""
 
 from __future__ import annotations
 
@@ -12,20 +13,20 @@ from pathlib import Path
 from typing import TYPE_CHECKING, TextIO, TypeVar
 
 from ..core.exceptions import InvalidParameterError
+from ..core.validation import MAX_TIP_RADIUS, as_count, as_output_directory, as_output_path
 
 if TYPE_CHECKING:
     from ..core.pad import Pad
     from ..plants.spec import PlantSpec
 
-__all__ = ["DEFAULT_SCENARIO", "ProgressBar", "add_plant_arguments", "nonnegative", "number_argument",
-           "output_directory", "pad_option", "plant_spec", "positive"]
+__all__ = ["DEFAULT_SCENARIO", "ProgressBar", "add_plant_arguments", "count_argument", "nonnegative", "number_argument",
+           "output_directory", "output_file", "pad_option", "plant_spec", "positive"]
 
 T = TypeVar("T", int, float)
 
 #: The default scenario (in the source tree's examples/).
 DEFAULT_SCENARIO = Path(__file__).resolve().parents[3] / "examples" / "scenarios" / \
     "paper_trajectory_2_three_fingers.toml"
-
 
 
 def number_argument(kind: type[T], expected: str, accept: Callable[[T], bool]) -> Callable[[str], T]:
@@ -49,6 +50,19 @@ def positive(kind: type[T]) -> Callable[[str], T]:
 
 #: A ``type=`` for a finite number >= 0.
 nonnegative = number_argument(float, "a finite number >= 0", lambda v: 0.0 <= v < float("inf"))
+
+
+def count_argument(least: int, most: int) -> Callable[[str], int]:
+    """A ``type=`` for a count: an integer in [``least``, ``most``] (the library's :func:`~regrasp.core.validation.
+    as_count`), else an ``ArgumentTypeError`` (one ``error:`` line naming the flag, exit 2): every integer flag."""
+    expected = f"an integer in [{least}, {most}]"
+
+    def parse(text: str) -> int:
+        try:
+            return as_count("count", int(text), least, most)
+        except (ValueError, InvalidParameterError):  # (int() refuses 'abc', '1.5' and more than 4300 digits)
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
+    return parse
 
 
 class ProgressBar:
@@ -77,19 +91,27 @@ class ProgressBar:
 
 
 def output_directory(option: str, path: str | os.PathLike[str]) -> Path:
-    """``path`` as a directory figures can be written into (made if missing), or an
-    :class:`~regrasp.core.exceptions.InvalidParameterError` naming ``option``."""
-    directory = Path(path)
+    """``path`` as a directory files can be written into (made if missing), or an
+    :class:`~regrasp.core.exceptions.InvalidParameterError` naming ``option``
+    (:func:`~regrasp.core.validation.as_output_directory`)."""
+    directory = as_output_directory(option, path)
     try:
-        if directory.exists() and not directory.is_dir():
-            raise InvalidParameterError(option, str(path), "a directory (it is a file)")
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InvalidParameterError(option, str(path), f"a directory that can be made ({exc.strerror or exc})") \
             from None
-    if not os.access(directory, os.W_OK | os.X_OK):
-        raise InvalidParameterError(option, str(path), "a writable directory")
     return directory
+
+
+def output_file(option: str, path: str | os.PathLike[str] | None) -> Path | None:
+    """``path`` as a file that can be written (:func:`~regrasp.core.validation.as_output_path`), checked before any
+    work, or None for None; else an :class:`~regrasp.core.exceptions.InvalidParameterError` naming ``option``."""
+    return None if path is None else as_output_path(option, path)
+
+
+#: ``--tip-radius``'s type: a radius in (0, MAX_TIP_RADIUS] [mm].
+_TIP_RADIUS = number_argument(float, f"a radius in (0, {MAX_TIP_RADIUS * 1e3:g}] mm",
+                              lambda v: 0.0 < v <= MAX_TIP_RADIUS * 1e3)
 
 
 def add_plant_arguments(p: argparse.ArgumentParser) -> None:
@@ -98,7 +120,7 @@ def add_plant_arguments(p: argparse.ArgumentParser) -> None:
                    help="project: the full-coordinate plant with point contacts (default); mujoco: MuJoCo with sphere "
                         "tips and soft contacts (pip install 'regrasp[mujoco]'); drake: Drake with sphere tips and "
                         "compliant point contacts (pip install 'regrasp[drake]')")
-    p.add_argument("--tip-radius", type=positive(float), metavar="MM",
+    p.add_argument("--tip-radius", type=_TIP_RADIUS, metavar="MM",
                    help="--plant mujoco or drake: the fingertips' sphere radius [mm] (default 0.25)")
     p.add_argument("--pad-stiffness", type=positive(float), metavar="N_PER_M",
                    help="--plant project: compliant fingertip pads of this stiffness [N/m] (Kelvin-Voigt; the "

@@ -134,7 +134,7 @@ def _cmd_plan(args) -> int:
     from ..model.scenario import load_scenario
 
     scenario = load_scenario(args.scenario)
-    if args.plot:  # before the work, not after it
+    if args.plot is not None:  # before the work, not after it
         output_directory("--plot", args.plot)
     progress = ProgressBar(f"planning {scenario.name}") if not args.json else None
     result = plan_scenario(scenario, samples=args.samples, geometry=args.geometry, progress=progress)
@@ -153,7 +153,7 @@ def _cmd_plan(args) -> int:
         except NoScheduleError as exc:
             error = exc
     figures = []
-    if args.plot:
+    if args.plot is not None:
         from ..envelope.plotting import write_plan_figures
         from ..schedule.plotting import plot_schedule
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -23,12 +24,15 @@ from ..core.capture import captured_fd
 from ..core.contact import DEFAULT_CONE_MARGIN
 from ..core.events import EventKind, FailureKind
 from ..core.exceptions import InvalidParameterError
+from ..core.validation import MAX_COUNT
 from .common import (
     DEFAULT_SCENARIO,
     ProgressBar,
     add_plant_arguments,
+    count_argument,
     nonnegative,
     output_directory,
+    output_file,
     plant_spec,
     positive,
 )
@@ -46,15 +50,15 @@ def configure(p: argparse.ArgumentParser) -> None:
     p.add_argument("scenario", nargs="?", default=None,
                    help=f"scenario file (TOML); default: {DEFAULT_SCENARIO.name} from examples/scenarios")
     span = p.add_mutually_exclusive_group()
-    span.add_argument("--periods", type=positive(int), metavar="N",
+    span.add_argument("--periods", type=count_argument(1, MAX_COUNT), metavar="N",
                       help="run N periods of a periodic trajectory (past the scenario's t_end)")
     span.add_argument("--duration", type=positive(float), metavar="T", help="simulated time [s]")
     p.add_argument("--policy", choices=("scheduled", "paper", "none"), default="scheduled",
                    help="scheduled: plan the slides ahead, follow and re-plan them (default); paper: the paper's "
                         "danger-zone heuristic; none: never slide")
     add_plant_arguments(p)
-    p.add_argument("--rrd", metavar="FILE", type=Path, help="write a rerun recording to FILE")
-    p.add_argument("--decimate", type=positive(int), default=10, metavar="K",
+    p.add_argument("--rrd", metavar="FILE", help="write a rerun recording to FILE")
+    p.add_argument("--decimate", type=count_argument(1, MAX_COUNT), default=10, metavar="K",
                    help="record every K-th step (events at every step); default 10, a 10 ms row at 1 kHz, about "
                         "0.17 MB per simulated second; 1 records every step (about 1.5 MB per second)")
     view = p.add_mutually_exclusive_group()
@@ -118,12 +122,12 @@ def rollout_summary(result: RolloutResult, scenario: Scenario, plant_line: str) 
                                                               f"object's width), orientation {rot * 1e3:.3f} mrad"),
         ("slides", ", ".join(f"{n} {c}" for n, c in result.regrasps.items())),
         ("re-plans", str(result.replans)),
-        ("smallest envelope margin", f"{result.min_envelope_margin * mm:.2f} mm ({result.min_envelope_margin_at[1]}, "
-                                     f"t = {result.min_envelope_margin_at[0]:.3f} s)"),
-        ("smallest cone margin (fixed)", f"{result.min_cone_margin:.3f} N ({result.min_cone_margin_at[1]}, "
-                                         f"t = {result.min_cone_margin_at[0]:.3f} s)"),
+        ("smallest envelope margin", _smallest(result.min_envelope_margin, result.min_envelope_margin_at, mm,
+                                               ".2f mm")),
+        ("smallest cone margin (fixed)", _smallest(result.min_cone_margin, result.min_cone_margin_at, 1.0, ".3f N")),
         ("plant events", ", ".join(f"{k} {v}" for k, v in sorted(result.plant_event_counts().items())) or "none"),
-        ("wall time", f"{result.wall_seconds:.2f} s ({result.realtime_factor:.2f}x real time)"),
+        ("wall time", f"{result.wall_seconds:.2f} s" + (f" ({result.realtime_factor:.2f}x real time)"
+                                                        if math.isfinite(result.realtime_factor) else "")),
     ]
     w = max(len(k) for k, _ in rows)
     lines += [f"  {k:<{w}}  {v}" for k, v in rows]
@@ -135,6 +139,15 @@ def rollout_summary(result: RolloutResult, scenario: Scenario, plant_line: str) 
         lines.append(f"  recording: {result.rrd} - open it with `rerun {result.rrd}` "
                      f"(or `rerun --web-viewer {result.rrd}` on a machine without a display)")
     return "\n".join(lines)
+
+
+def _smallest(value: float, at: tuple[float, str], scale: float, form: str) -> str:
+    """A smallest margin and where (``form``: its format and unit, ``".2f mm"``), or ``n/a`` when no step had one (no
+    contact held fixed, a run of no step): never an inf or a NaN."""
+    if not math.isfinite(value):
+        return "n/a (no step measured one)"
+    spec, unit = form.split(" ")
+    return f"{value * scale:{spec}} {unit} ({at[1]}, t = {at[0]:.3f} s)"
 
 
 def _health_lines(result) -> list[str]:
@@ -178,7 +191,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         raise InvalidParameterError("scenario", None, f"a scenario file (the default {DEFAULT_SCENARIO} is not "
                                     "here: regrasp is not installed from its source tree)")
     scenario = load_scenario(path)
-    if args.plot:
+    output_file("--rrd", args.rrd)  # (the outputs before any work: a run is never lost to its file)
+    if args.connect is not None:
+        from ..rollout.recording.options import as_viewer_url
+
+        as_viewer_url("--connect", args.connect)
+    if args.plot is not None:
         output_directory("--plot", args.plot)
     plant = replace(plant_spec(args), errors=ModelErrors(mass_scale=args.plant_mass_scale,
                                                          mu_scale=args.plant_mu_scale))
@@ -190,6 +208,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     settings = SupervisorSettings.robust(scenario.geometry, cone, tip_radius=plant.tip_radius)
     common = dict(settings=settings, regrasp_settings=RegraspSettings(**options), plant=plant)
     run = RunSpec(periods=args.periods, duration=args.duration)
+    run.resolve(scenario)  # (a run of no step, or past what the trajectory allows: refused before the plan)
     # OSQP's C library prints "Polishing not needed" on fd 1 even with verbose=False: keep stdout for the result
     with captured_fd(1):
         code, output = _simulate(args, scenario, run, common)
@@ -234,7 +253,7 @@ def _simulate(args, scenario, run, common) -> tuple[int, str]:
             if recorder is not None:
                 recorder.close()
     figures = []
-    if args.plot:
+    if args.plot is not None:
         from ..rollout.plots import plot_rollout
 
         figures.append(str(plot_rollout(result, Path(args.plot) / "regrasp_rollout.png")))

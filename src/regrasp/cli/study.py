@@ -21,7 +21,19 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..core.exceptions import InvalidParameterError
-from .common import DEFAULT_SCENARIO, ProgressBar, add_plant_arguments, number_argument, output_directory, plant_spec
+from ..core.validation import MAX_COUNT, MAX_RUNS, MAX_SEED, MAX_WORKERS
+from ..model.noise import MAX_DELAY_STEPS
+from ..study.ray_cluster import parse_ray_address
+from .common import (
+    DEFAULT_SCENARIO,
+    ProgressBar,
+    add_plant_arguments,
+    count_argument,
+    number_argument,
+    output_directory,
+    output_file,
+    plant_spec,
+)
 
 if TYPE_CHECKING:
     from ..plants.spec import PlantSpec
@@ -30,16 +42,24 @@ if TYPE_CHECKING:
 __all__ = ["configure"]
 
 
-def _count(least: int) -> Callable[[str], int]:
-    return number_argument(int, f"an integer >= {least}", lambda v: v >= least)
-
-
 def _at_most(limit: float, unit: str) -> Callable[[str], float]:
     return number_argument(float, f"a number in [0, {limit:g}] [{unit}]", lambda v: 0.0 <= v <= limit)
 
 
 _half_width = number_argument(float, "a relative half-width in [0, 1)", lambda v: 0.0 <= v < 1.0)
 _seconds = number_argument(float, "a finite duration > 0 [s]", lambda v: 0.0 < v < float("inf"))
+#: Default runs of a study.
+RUNS = 20
+
+
+def _ray_address(text: str) -> str:
+    """``--ray ADDRESS``'s type: an address :func:`~regrasp.study.ray_cluster.parse_ray_address` takes (it is reached
+    when the study starts, before the plan)."""
+    try:
+        return parse_ray_address("--ray", text).text
+    except InvalidParameterError as exc:
+        raise argparse.ArgumentTypeError(f"expected {exc.expected}, got {text!r}") from None
+
 
 #: Each perturbation's flag: (metavar, help, argument type); the bounds are the library's.
 _FLAGS = {
@@ -59,9 +79,10 @@ _FLAGS = {
     "force_noise": ("N", "contact force sensing noise [N]", _at_most(100.0, "N")),
     "slip_threshold": ("M/S", "the slip sensor reports sliding above this |xi_dot| [m/s] (default: a perfect "
                               "slip sensor)", _at_most(10.0, "m/s")),
-    "slip_delay": ("STEPS", "the slip sensor's delay [control steps]", _count(0)),
+    "slip_delay": ("STEPS", "the slip sensor's delay [control steps]", count_argument(0, MAX_DELAY_STEPS)),
     "torque_noise": ("NM", "joint torque noise, standard deviation [N m]", _at_most(10.0, "N m")),
-    "delay": ("STEPS", "actuation delay: each torque is applied STEPS control steps late", _count(0)),
+    "delay": ("STEPS", "actuation delay: each torque is applied STEPS control steps late",
+              count_argument(0, MAX_DELAY_STEPS)),
 }
 
 
@@ -85,20 +106,24 @@ def configure(p: argparse.ArgumentParser) -> None:
     """``regrasp study``'s arguments, on its parser."""
     p.add_argument("scenario", nargs="?", default=None,
                    help=f"scenario file (TOML); default: {DEFAULT_SCENARIO.name} from examples/scenarios")
-    p.add_argument("--runs", type=_count(1), default=20, metavar="N", help="number of runs (default 20)")
-    p.add_argument("--seed", type=_count(0), default=0, metavar="S", help="the study's seed (default 0)")
-    p.add_argument("--workers", type=_count(1), default=None, metavar="K",
+    p.add_argument("--runs", type=count_argument(1, MAX_RUNS), default=None, metavar="N",
+                   help=f"number of runs (default {RUNS})")
+    p.add_argument("--seed", type=count_argument(0, MAX_SEED), default=0, metavar="S",
+                   help="the study's seed (default 0)")
+    p.add_argument("--workers", type=count_argument(1, MAX_WORKERS), default=None, metavar="K",
                    help="worker processes (default: one per core); the results do not depend on it")
-    p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
-                   help="run on Ray: a local cluster of --workers CPUs, or the cluster at ADDRESS (ray.init's "
-                        "address); the results are the same as on processes")
+    p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS", type=_ray_address,
+                   help="run on Ray: a local cluster of --workers CPUs, or the cluster at ADDRESS ('auto', HOST:PORT "
+                        "or ray://HOST[:PORT], reached within seconds before the plan); the results are the same as "
+                        "on processes")
     add_plant_arguments(p)
     p.add_argument("--fixed-softness", action="store_true",
                    help="--plant mujoco: keep MuJoCo's default contact softness in every run (default: each run draws "
                         "its solref time constant 0.25-2 ms, solimp width 0.05-0.5 mm and tip radius 0.1-1 mm; "
                         "--tip-radius fixes the radius)")
     span = p.add_mutually_exclusive_group()
-    span.add_argument("--periods", type=_count(1), metavar="P", help="each run: P periods of the trajectory")
+    span.add_argument("--periods", type=count_argument(1, MAX_COUNT), metavar="P",
+                      help="each run: P periods of the trajectory")
     span.add_argument("--duration", type=_seconds, metavar="T", help="each run: T seconds")
     for name, (metavar, text, kind) in _FLAGS.items():
         p.add_argument("--" + name.replace("_", "-"), dest=name, type=kind, default=None, metavar=metavar, help=text)
@@ -107,10 +132,11 @@ def configure(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sweep", type=_sweep, metavar="NAME=V1,V2,...",
                    help="one study per size of one perturbation (a flag's name, e.g. xi-noise=0,1e-4,2e-4), the others "
                         "as given: the success rate against that size (--plot: study_sweep.png)")
-    p.add_argument("--replay", type=_count(0), metavar="I",
-                   help="run only run I of this study (the same seed and perturbations) and print its rollout; exit "
-                        "status 0 if it succeeds, 1 if it fails")
-    p.add_argument("--rrd", metavar="FILE", type=Path, help="with --replay: write the run to a rerun recording")
+    p.add_argument("--replay", type=count_argument(0, MAX_RUNS - 1), metavar="I",
+                   help="run only run I of this study (the same seed and perturbations; I < --runs if given) and print "
+                        "its rollout; exit status 0 if it succeeds, 1 if it fails (not with --workers, --ray, --plot "
+                        "or --sweep)")
+    p.add_argument("--rrd", metavar="FILE", help="with --replay: write the run to a rerun recording")
     p.set_defaults(func=_cmd_study)
 
 
@@ -129,16 +155,27 @@ def _summary(result: StudyResult) -> str:
         times = sorted(r.failure_time for r in runs if r.failure_kind == kind)
         lines.append(f"  failed, {kind}: {count} (at t = {', '.join(f'{t:.3f}' for t in times[:8])}"
                      f"{', ...' if len(times) > 8 else ''} s)")
-    cone = np.array([r.min_cone_margin for r in runs])
-    env = np.array([r.min_envelope_margin for r in runs]) * 1e3
     errors = np.array([r.max_object_error for r in runs if r.max_object_error is not None]) * 1e3
-    lines.append(f"  smallest cone margin [N]: min {cone.min():.3f}, median {np.median(cone):.3f}")
-    lines.append(f"  smallest envelope margin [mm]: min {env.min():.2f}, median {np.median(env):.2f}")
+    lines.append("  smallest cone margin [N]: " + _spread([r.min_cone_margin for r in runs], 1.0, ".3f"))
+    lines.append("  smallest envelope margin [mm]: " + _spread([r.min_envelope_margin for r in runs], 1e3, ".2f"))
     if errors.size:
         lines.append(f"  largest object error after 0.5 s [mm]: median {np.median(errors):.3f}, max {errors.max():.3f}")
     lines.append(f"  wall time: {result.wall_seconds:.1f} s ({result.plan_seconds:.1f} s planning) on "
                  f"{result.workers} {'Ray CPU' if result.backend == 'ray' else 'worker'}(s)")
     return "\n".join(lines)
+
+
+def _spread(values: list[float | None], scale: float, form: str) -> str:
+    """``min M, median D`` of the runs' values that were measured (None: a run with no step that measured one), with
+    how many were not; ``n/a`` when none was."""
+    import numpy as np
+
+    measured = np.array([v for v in values if v is not None], dtype=float) * scale
+    missing = len(values) - measured.size
+    if not measured.size:
+        return "n/a (no run measured one)"
+    return (f"min {measured.min():{form}}, median {np.median(measured):{form}}"
+            + (f" ({missing} run(s) measured none)" if missing else ""))
 
 
 def _softness(args: argparse.Namespace):
@@ -163,8 +200,8 @@ def _replay(args: argparse.Namespace, scenario, perturbation, plant: PlantSpec) 
     from .simulate import plant_text, rollout_summary
 
     draw = draw_runs(args.replay + 1, args.seed, perturbation, len(scenario.contacts), _softness(args))[args.replay]
+    _, duration = RunSpec(duration=args.duration, periods=args.periods).resolve(scenario)  # (before the plan)
     schedule = plan_regrasps(scenario, progress=None if args.json else ProgressBar("planning regrasps"))
-    _, duration = RunSpec(duration=args.duration, periods=args.periods).resolve(scenario)
     rollout = build_run(scenario, draw, schedule, duration, perturbation, plant=plant)
     recorder = None
     if args.rrd is not None:
@@ -201,7 +238,7 @@ def _sweep_study(args: argparse.Namespace, scenario, perturbation, plant: PlantS
     from ..study.study import sweep_study
 
     name, values = args.sweep
-    directory = output_directory("--plot", args.plot) if args.plot else None
+    directory = output_directory("--plot", args.plot) if args.plot is not None else None
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     results = sweep_study(scenario, args.runs, name, values, perturbation=perturbation, seed=args.seed,
                           duration=args.duration, periods=args.periods, workers=min(workers, args.runs),
@@ -235,6 +272,27 @@ def _perturbation(args: argparse.Namespace, scenario) -> object:
     return replace(scenario.study, **given)
 
 
+def _check_combination(args: argparse.Namespace) -> None:
+    """The flags that mean nothing together, refused before any work: ``--rrd`` without ``--replay``; with
+    ``--replay``, a study's own flags (``--sweep``, ``--workers``, ``--ray``, ``--plot``: a replay is one run, here)
+    and a run past ``--runs``; ``--fixed-softness`` off MuJoCo."""
+    if args.fixed_softness and args.plant != "mujoco":
+        raise InvalidParameterError("--fixed-softness", True, f"--plant mujoco (only MuJoCo's contacts have a softness "
+                                    f"to draw; the {args.plant} plant's is fixed)")
+    if args.replay is None:
+        if args.rrd is not None:
+            raise InvalidParameterError("--rrd", args.rrd, "--replay I (a study records no run; replay one)")
+        return
+    for flag, value in (("--sweep", args.sweep), ("--workers", args.workers), ("--ray", args.ray),
+                        ("--plot", args.plot)):
+        if value is not None:
+            raise InvalidParameterError("--replay", args.replay, f"a run of one study, alone in this process (not with "
+                                        f"{flag})")
+    if args.runs is not None and args.replay >= args.runs:
+        raise InvalidParameterError("--replay", args.replay, f"a run of this study's {args.runs} (0 to "
+                                    f"{args.runs - 1})")
+
+
 def _cmd_study(args: argparse.Namespace) -> int:
     from ..model.scenario import load_scenario
     from ..study.plots import plot_study
@@ -244,15 +302,15 @@ def _cmd_study(args: argparse.Namespace) -> int:
     scenario = load_scenario(path)  # a bad file is exit 2 before any work
     perturbation = _perturbation(args, scenario)
     plant = plant_spec(args)
-    if args.rrd is not None and args.replay is None:
-        raise InvalidParameterError("--rrd", str(args.rrd), "--replay I (a study records no run; replay one)")
+    _check_combination(args)
     if args.replay is not None:
-        if args.sweep is not None:
-            raise InvalidParameterError("--replay", args.replay, "a run of one study (not with --sweep)")
+        output_file("--rrd", args.rrd)
         return _replay(args, scenario, perturbation, plant)
+    if args.runs is None:
+        args.runs = RUNS
     if args.sweep is not None:
         return _sweep_study(args, scenario, perturbation, plant)
-    directory = output_directory("--plot", args.plot) if args.plot else None
+    directory = output_directory("--plot", args.plot) if args.plot is not None else None
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     result = run_study(scenario, args.runs, seed=args.seed, perturbation=perturbation, duration=args.duration,
                        periods=args.periods, workers=min(workers, args.runs), ray_address=args.ray, plant=plant,

@@ -11,6 +11,7 @@ The enums mix in ``str``: ``EventKind.SLIP == "slip"``, so a kind prints and ser
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from enum import Enum
 from types import MappingProxyType
@@ -80,8 +81,10 @@ class Event:
             object.__setattr__(self, "values", MappingProxyType(dict(self.values)))
 
     def to_json_dict(self) -> dict:
+        """The event as plain JSON types (a value that is NaN or infinite is null: JSON has neither)."""
         return {"time": self.time, "contact": self.contact, "kind": self.kind.value, "detail": self.detail,
-                "source": self.source.value, "values": {k: float(v) for k, v in self.values.items()}}
+                "source": self.source.value,
+                "values": {k: float(v) if math.isfinite(v) else None for k, v in self.values.items()}}
 
 
 class FailureKind(str, Enum):

@@ -214,3 +214,17 @@ class MissingDependencyError(RegraspError, ImportError):
     def __init__(self, package: str, extra: str, feature: str):
         self.package, self.extra, self.feature = package, extra, feature
         super().__init__(f"{feature} needs the '{package}' package: pip install 'regrasp[{extra}]'")
+
+
+class ClusterConnectionError(RegraspError, ConnectionError):
+    """A Ray cluster cannot be reached at its address (nothing listens there, or what does is no Ray cluster), said
+    within seconds instead of Ray's endless retries.
+
+    Attributes:
+        address: The address as given.
+        reason: What failed (the connection's error, a timeout...).
+    """
+
+    def __init__(self, address: str, reason: str):
+        self.address, self.reason = address, reason
+        super().__init__(f"no Ray cluster at {short_repr(address)}: {reason}")

@@ -8,6 +8,8 @@ accept them are refused, and so is an integer too large for a float (``10**400``
 from __future__ import annotations
 
 import math
+import os
+import tempfile
 from collections.abc import Callable, Iterable, Mapping
 from collections.abc import Set as AbstractSet
 from pathlib import Path
@@ -135,6 +137,15 @@ def as_duration(name: str, value: object) -> float:
     return _positive_at_most(name, value, MAX_DURATION, f"a duration of at most {MAX_DURATION:g} s")
 
 
+def step_count(name: str, duration: float, dt: float) -> int:
+    """The control steps a run of ``duration`` [s] takes at the step ``dt`` [s] (``round(duration / dt)``), or an
+    :class:`InvalidParameterError` naming ``name`` for a run shorter than one step (it would run none, and report
+    nothing): the one check every run makes of its length."""
+    if not duration >= dt * (1.0 - 1e-9):
+        raise InvalidParameterError(name, duration, f"a run of at least one control step ({dt:g} s)")
+    return int(round(duration / dt))
+
+
 def expect_type(name: str, value: _T, kind: type | tuple[type, ...], what: str) -> _T:
     """``value`` if it is an instance of ``kind``, else an :class:`InvalidParameterError` saying ``what``
     was expected (the check every public entry point makes of its structured arguments)."""
@@ -189,6 +200,111 @@ def file_problem(path: Path, what: str = "file") -> str | None:
     return None if found else f"{what} not found"
 
 
+#: The longest name of one path component [bytes] where the file system does not say (NAME_MAX on Linux and macOS),
+#: and the longest path [bytes] (Linux's PATH_MAX).
+NAME_MAX = 255
+PATH_MAX = 4096
+
+
+def _existing_ancestor(path: Path) -> Path:
+    """``path`` or its nearest ancestor that exists (an absolute path: the root at worst)."""
+    for candidate in (path, *path.parents):
+        try:
+            if candidate.exists():
+                return candidate
+        except (OSError, ValueError):  # (a component too long, a loop: look higher)
+            continue
+    return Path(path.anchor)
+
+
+def _name_max(directory: Path) -> int:
+    try:
+        return int(os.pathconf(directory, "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError, TypeError):  # (no pathconf on Windows, or no such limit)
+        return NAME_MAX
+
+
+def _unwritable(directory: Path) -> str | None:
+    """Why no file can be made in ``directory``, or None: a file is made there and removed (permissions alone do not
+    say: root may write anywhere but on a read-only file system or /proc)."""
+    if not directory.is_dir():
+        return f"{directory} is not a directory"
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".regrasp-write-check-", dir=directory)
+    except OSError as exc:
+        return f"no file can be made in {directory} ({exc.strerror or exc})"
+    os.close(fd)
+    try:
+        os.unlink(probe)
+    except OSError:  # pragma: no cover (made a moment ago)
+        pass
+    return None
+
+
+def output_path_problem(path: object, *, directory: bool = False) -> str | None:
+    """Why ``path`` cannot be written, or None: a file (its directory exists and takes a new file; it is not a
+    directory itself) or, with ``directory``, a directory to write files into (a directory, or a path that can be
+    made one: its nearest existing ancestor takes a new entry). Checked: a str or ``os.PathLike``, not empty, no NUL
+    byte, each name at most the file system's ``NAME_MAX`` bytes and the whole at most :data:`PATH_MAX`. The
+    output-side twin of :func:`file_problem`."""
+    try:
+        text = os.fspath(path) if isinstance(path, (str, os.PathLike)) else None
+    except TypeError:
+        text = None
+    if not isinstance(text, str):
+        return "not a path (a str or an os.PathLike)"
+    if not text:
+        return "an empty path"
+    if "\0" in text:
+        return "a NUL byte in the name"
+    try:
+        target = Path(os.path.abspath(text))
+        if len(os.fsencode(str(target))) > PATH_MAX:
+            return f"a path longer than {PATH_MAX} bytes"
+        existing = _existing_ancestor(target)
+        limit = _name_max(existing)
+        for part in target.parts:
+            if len(os.fsencode(part)) > limit:
+                return f"a name of {len(os.fsencode(part))} bytes (the file system takes at most {limit})"
+        if directory:
+            if existing == target and not target.is_dir():
+                return "it is a file"
+            return _unwritable(existing)
+        if target.is_dir():
+            return "it is a directory"
+        if existing != target and existing != target.parent:
+            return f"its directory {target.parent} does not exist"
+        if target.exists() and not os.access(target, os.W_OK):
+            return "an existing file that cannot be written"
+        return _unwritable(target.parent)
+    except (OSError, ValueError) as exc:
+        return f"not a usable path ({type(exc).__name__}: {getattr(exc, 'strerror', None) or exc})"
+
+
+def _path_text(value: object) -> object:
+    """A path as text for an error message (a Path's repr is longer), anything else as it is."""
+    return os.fspath(value) if isinstance(value, os.PathLike) else value
+
+
+def as_output_path(name: str, value: object) -> Path:
+    """``value`` as the path of a file to write (:func:`output_path_problem`), checked before any work, else an
+    :class:`InvalidParameterError` naming ``name`` and saying why."""
+    problem = output_path_problem(value)
+    if problem is not None:
+        raise InvalidParameterError(name, _path_text(value), f"a writable file path in an existing directory "
+                                    f"({problem})")
+    return Path(os.fspath(value))
+
+
+def as_output_directory(name: str, value: object) -> Path:
+    """``value`` as a directory to write files into, existing or to be made (:func:`output_path_problem`), else an
+    :class:`InvalidParameterError` naming ``name``."""
+    problem = output_path_problem(value, directory=True)
+    if problem is not None:
+        raise InvalidParameterError(name, _path_text(value), f"a directory that can be written ({problem})")
+    return Path(os.fspath(value))
+
+
 def as_integer(name: str, value: object, least: int = 0) -> int:
     """``value`` as an int >= ``least`` (an integer, Python's or numpy's; not a bool, a float or a string)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < least:
@@ -199,6 +315,15 @@ def as_integer(name: str, value: object, least: int = 0) -> int:
 #: The largest count (of periods, substeps, candidates, re-plans, steps between samples...) a setting takes: far
 #: above any useful value, and low enough that a product of two counts stays an exact float.
 MAX_COUNT = 10**6
+
+
+#: The most runs one study takes, and the most worker processes (or a local Ray cluster's CPUs) it runs them on (far
+#: more than any machine's cores).
+MAX_RUNS = 100_000
+MAX_WORKERS = 1024
+
+#: The largest seed a run or a study takes: 128 bits, as much as a ``numpy.random.SeedSequence``'s entropy holds.
+MAX_SEED = 2**128 - 1
 
 
 def as_count(name: str, value: object, least: int = 0, most: int = MAX_COUNT) -> int:
@@ -267,3 +392,17 @@ def as_sign(name: str, value: object) -> float:
             or value not in (-1, 1):
         raise InvalidParameterError(name, value, "+1 or -1")
     return float(value)
+
+
+#: The largest fingertip sphere radius [m] a plant takes: a 5 cm ball is far larger than any fingertip, and small
+#: enough that the erosion of an object by it stays meaningful.
+MAX_TIP_RADIUS = 0.05
+
+
+def as_tip_radius(name: str, value: object, *, allow_zero: bool = False) -> float:
+    """``value`` as a fingertip sphere's radius [m] in (0, :data:`MAX_TIP_RADIUS`] ([0, ...] with ``allow_zero``: a
+    point)."""
+    out = as_positive_float(name, value, allow_zero=allow_zero)
+    if out > MAX_TIP_RADIUS:
+        raise InvalidParameterError(name, value, f"a radius of at most {MAX_TIP_RADIUS:g} m")
+    return out

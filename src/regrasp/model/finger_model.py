@@ -14,10 +14,16 @@ import pinocchio as pin
 
 from ..core.capture import captured_fd
 from ..core.exceptions import FingerModelError
+from ..core.validation import MAX_INERTIA, MAX_MASS
 
 __all__ = ["parse_finger_urdf", "planar_angle", "validate_finger_model"]
 
 _PLANAR_TOL = 1e-9
+
+#: The largest condition number a finger's joint-space mass matrix may have, at any elbow angle: past it the matrix is
+#: singular to rounding (its links' inertias too far apart, a distal link of 1e300 kg m^2 on one of 1e-6) and no plant
+#: can step the finger (the shipped finger's is at most about 100).
+MAX_MASS_CONDITION = 1e10
 
 
 def planar_angle(placement: pin.SE3) -> float:
@@ -114,6 +120,21 @@ def validate_finger_model(model: pin.Model, source: str, tip_frame: str) -> None
         raise FingerModelError("the first link has zero length", source=source, joint=model.names[2])
     if np.linalg.norm(frame.placement.translation[:2]) <= _PLANAR_TOL:
         raise FingerModelError("the second link has zero length", source=source, joint=tip_frame)
+    _check_mass_matrix(model, source)
+
+
+def _check_mass_matrix(model: pin.Model, source: str) -> None:
+    """The joint-space mass matrix of the 2R ``model`` is positive definite with a condition number of at most
+    :data:`MAX_MASS_CONDITION` at every elbow angle (sampled; it does not depend on the first joint's)."""
+    data = model.createData()
+    for elbow in np.linspace(-np.pi, np.pi, 12, endpoint=False):
+        mass = pin.crba(model, data, np.array([0.0, elbow]))
+        eig = np.linalg.eigvalsh(0.5 * (mass + mass.T)) if np.isfinite(mass).all() else np.full(2, np.nan)
+        if not (eig[0] > 0.0 and eig[1] <= MAX_MASS_CONDITION * eig[0]):
+            raise FingerModelError(f"the joint-space mass matrix is singular or ill-conditioned at elbow angle "
+                                   f"{elbow:.3g} rad (eigenvalues {eig[0]:.3g}, {eig[1]:.3g} kg m^2; a condition "
+                                   f"number of at most {MAX_MASS_CONDITION:g} expected): the links' inertias are too "
+                                   "far apart", source=source)
 
 
 def parse_finger_urdf(build_model: Callable[[], pin.Model], build_geometry: Callable[[pin.Model], pin.GeometryModel],
@@ -145,10 +166,11 @@ def parse_finger_urdf(build_model: Callable[[], pin.Model], build_geometry: Call
         mass = float(inertia.mass)
         moments = np.linalg.eigvalsh(0.5 * (rotational + rotational.T)) if np.isfinite(rotational).all() \
             else np.full(3, np.nan)
-        if not (np.isfinite(mass) and mass > 0.0 and np.isfinite(moments).all() and moments.min() >= 0.0
-                and moments.max() > 0.0 and np.isfinite(inertia.lever).all()):
-            raise FingerModelError(f"link of joint {model.names[j]!r}: expected a finite mass > 0 and a non-zero, "
-                                   f"positive semi-definite inertia, got mass {mass:.6g} kg, principal moments "
+        if not (np.isfinite(mass) and 0.0 < mass <= MAX_MASS and np.isfinite(moments).all() and moments.min() >= 0.0
+                and 0.0 < moments.max() <= MAX_INERTIA and np.isfinite(inertia.lever).all()):
+            raise FingerModelError(f"link of joint {model.names[j]!r}: expected a mass in (0, {MAX_MASS:g}] kg and a "
+                                   f"non-zero, positive semi-definite inertia of at most {MAX_INERTIA:g} kg m^2, got "
+                                   f"mass {mass:.6g} kg, principal moments "
                                    f"{', '.join(f'{m:.3g}' for m in moments)} kg m^2", source=source,
                                    joint=model.names[j])
     return model, geom

@@ -15,15 +15,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.exceptions import InvalidParameterError
-from ..core.validation import as_positive_float
+from ..core.validation import as_positive_float, as_tip_radius
 
 __all__ = ["ContactSoftness", "SoftnessRanges"]
+
+
+def _check(name: str, value: object) -> float:
+    """A softness value: a tip radius (:func:`~regrasp.core.validation.as_tip_radius`), else a number > 0."""
+    return as_tip_radius(name, value) if name == "tip_radius" else as_positive_float(name, value)
 
 
 def _range(name: str, value: object) -> tuple[float, float]:
     if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
         raise InvalidParameterError(name, value, "a range (low, high)")
-    lo, hi = (as_positive_float(name, v) for v in value)
+    lo, hi = (_check(name, v) for v in value)
     if not lo <= hi:
         raise InvalidParameterError(name, value, "a range (low, high) with low <= high")
     return lo, hi
@@ -45,7 +50,7 @@ class ContactSoftness:
 
     def __post_init__(self) -> None:
         for name in ("time_constant", "solimp_width", "tip_radius"):
-            object.__setattr__(self, name, as_positive_float(name, getattr(self, name)))
+            object.__setattr__(self, name, _check(name, getattr(self, name)))
 
     def to_json_dict(self) -> dict:
         return {"time_constant": self.time_constant, "solimp_width": self.solimp_width,

@@ -17,7 +17,7 @@ import numpy as np
 from ..core.events import Event
 from ..core.exceptions import InvalidParameterError
 from ..core.trajectory import TrajectorySample
-from ..core.validation import as_duration, as_positive_float, expect_type
+from ..core.validation import as_duration, as_positive_float, expect_type, step_count
 from ..dynamics.control import ComputedTorqueController, ControlOutput
 from ..dynamics.laws import Proposition2Controller
 from ..dynamics.reduced import ReducedModel
@@ -171,7 +171,7 @@ def run_closed_loop(
         raise InvalidParameterError("controller", controller, "a control law (regrasp.dynamics.control)")
     if not callable(reference):
         raise InvalidParameterError("reference", reference, "a function t -> (S_d, S_d_dot, S_d_ddot)")
-    duration = as_duration("duration", duration)
+    steps = step_count("duration", as_duration("duration", duration), plant.dt)
     force_noise = as_positive_float("force_noise", force_noise, allow_zero=True)
     model = controller.model
     sliding = list(model.grasp.sliding)
@@ -184,6 +184,6 @@ def run_closed_loop(
     consumers = [records.append]
     if on_step is not None:  # after the plant's step, as the recorder's hook expects
         consumers.append(lambda record: on_step(record.t, record.command.control))
-    simulate(plant, driver, int(round(duration / plant.dt)), consumers=consumers, sensor=sense_projected,
+    simulate(plant, driver, steps, consumers=consumers, sensor=sense_projected,
              control_failures=False)
     return ClosedLoopLog.from_records(records, plant, 2 * model.grasp.m, model.n)

@@ -32,7 +32,7 @@ from ..core.events import PLANT_FAILURES, EventKind, EventSource, Failure, Failu
 from ..core.exceptions import InvalidParameterError
 from ..core.health import HealthCriteria, HealthMonitor
 from ..core.measurement import Measurement
-from ..core.validation import as_finite_array, expect_type
+from ..core.validation import as_finite_array, expect_type, step_count
 from ..envelope.planner import PlanResult, plan_scenario
 from ..model.hand import Hand
 from ..model.scenario import Scenario
@@ -129,7 +129,7 @@ class Rollout:
                 (:mod:`regrasp.rollout.stretch`; the same steps, faster); False: every step on the reference path.
         """
         plant = self.plant
-        total = int(round(self.duration / plant.dt))
+        total = step_count("duration", self.duration, plant.dt)  # (a run of no step is refused)
         rows = RolloutRows(total, plant.hand.m, plant.friction)
         consumers = [rows.add]
         if recorder is not None:

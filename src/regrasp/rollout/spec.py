@@ -11,7 +11,16 @@ import numpy as np
 from ..core.exceptions import InvalidParameterError
 from ..core.health import HealthCriteria
 from ..core.trajectory import RepeatedTrajectory
-from ..core.validation import MAX_DURATION, as_duration, as_finite_array, as_integer, as_positive_float, expect_type
+from ..core.validation import (
+    MAX_DURATION,
+    MAX_SEED,
+    as_count,
+    as_duration,
+    as_finite_array,
+    as_positive_float,
+    expect_type,
+    step_count,
+)
 from ..model.noise import ActuatorNoise, SensorNoise
 from ..model.scenario import Scenario
 from ..plants.disturbance import Disturbance
@@ -26,7 +35,8 @@ class RunSpec:
 
     Attributes:
         duration: Simulated time [s]; default: the trajectory's domain. A periodic trajectory repeats.
-        periods: Instead of ``duration``: this many periods of a periodic trajectory.
+        periods: Instead of ``duration``: this many periods of a periodic trajectory (at most 10**6, and
+            :data:`~regrasp.core.validation.MAX_DURATION`).
         dt: The control and plant step [s].
         seed: Seeds the noise (required when there is any): an int or a ``numpy.random.SeedSequence``.
         xi0: Where the supervisor believes the contacts start [m], one per finger (default: the schedule's start,
@@ -50,12 +60,12 @@ class RunSpec:
         if self.periods is not None:
             if self.duration is not None:
                 raise InvalidParameterError("periods", self.periods, "either periods or duration, not both")
-            as_integer("periods", self.periods, 1)
+            object.__setattr__(self, "periods", as_count("periods", self.periods, 1))
         if self.duration is not None:
             object.__setattr__(self, "duration", as_duration("duration", self.duration))
         object.__setattr__(self, "dt", as_positive_float("dt", self.dt))
         if self.seed is not None and not isinstance(self.seed, np.random.SeedSequence):
-            object.__setattr__(self, "seed", as_integer("seed", self.seed))
+            object.__setattr__(self, "seed", as_count("seed", self.seed, 0, MAX_SEED))
         if self.xi0 is not None:
             xi0 = as_finite_array("xi0", self.xi0)
             if xi0.ndim != 1:
@@ -66,7 +76,8 @@ class RunSpec:
         expect_type("health", self.health, HealthCriteria, "a HealthCriteria (regrasp.core.health)")
 
     def resolve(self, scenario: Scenario) -> tuple[Scenario, float]:
-        """The scenario with its trajectory repeated to cover the run, and the run's duration [s]."""
+        """The scenario with its trajectory repeated to cover the run, and the run's duration [s] (at least one step
+        ``dt``: :func:`~regrasp.core.validation.step_count`)."""
         traj = scenario.trajectory
         domain = traj.t_end - traj.t_start
         period = trajectory_period(traj)
@@ -80,6 +91,7 @@ class RunSpec:
                 raise InvalidParameterError("periods", self.periods, f"at most {MAX_DURATION:g} s of simulated time "
                                             f"({int(MAX_DURATION // period)} periods of {period:.6g} s)")
         duration = domain if duration is None else duration
+        step_count("periods" if self.periods is not None else "duration", duration, self.dt)  # (at least one step)
         if duration > domain + 1e-9:
             if period is None:
                 raise InvalidParameterError("duration", duration, f"at most the trajectory's domain, {domain:.6g} s "

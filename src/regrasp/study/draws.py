@@ -7,17 +7,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.exceptions import InvalidParameterError
-from ..core.validation import as_integer, expect_type
+from ..core.validation import MAX_RUNS, MAX_SEED, as_count, expect_type
 from ..model.perturbation import Perturbation
 from ..model.softness import ContactSoftness, SoftnessRanges
 from ..plants.spec import ModelErrors
 
-__all__ = ["MAX_RUNS", "RunDraw", "draw_runs"]
+__all__ = ["MAX_RUNS", "MAX_SEED", "RunDraw", "draw_runs"]
 
-
-#: The most runs one study takes.
-MAX_RUNS = 100_000
 
 
 #: The most fingers a study draws placement errors for.
@@ -64,18 +60,15 @@ def draw_runs(runs: int, seed: int, perturbation: Perturbation, contacts: int = 
     draw does not depend on how many runs there are or who runs them. ``contacts``: the fingers to draw a
     placement error for; ``softness``: the ranges to draw the contacts' softness from (None: none drawn; drawn
     after the rest, so that the model errors are the same with and without)."""
-    runs = as_integer("runs", runs, 1)
-    if runs > MAX_RUNS:
-        raise InvalidParameterError("runs", runs, f"at most {MAX_RUNS} runs")
+    runs = as_count("runs", runs, 1, MAX_RUNS)
+    seed = as_count("seed", seed, 0, MAX_SEED)
     expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
-    contacts = as_integer("contacts", contacts)
+    contacts = as_count("contacts", contacts, 0, MAX_CONTACTS)
     if softness is not None:
         expect_type("softness", softness, SoftnessRanges, "a SoftnessRanges (regrasp.model.softness)")
-    if contacts > MAX_CONTACTS:
-        raise InvalidParameterError("contacts", contacts, f"at most {MAX_CONTACTS} fingers")
     p = perturbation
     out = []
-    for i, child in enumerate(np.random.SeedSequence(as_integer("seed", seed)).spawn(runs)):
+    for i, child in enumerate(np.random.SeedSequence(seed).spawn(runs)):
         rng = np.random.default_rng(child)
         mass, mu, inertia, links = rng.uniform(-1.0, 1.0, 4).tolist()  # (the order of the first studies)
         kinetic = float(rng.uniform(-1.0, 1.0))

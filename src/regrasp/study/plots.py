@@ -121,8 +121,9 @@ def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
 
     fig, axes = plt.subplots(1, 2, figsize=(9.0, 3.5))
     for ax, values, label in ((axes[0], [r.min_cone_margin for r in runs], "smallest cone margin [N]"),
-                              (axes[1], [1e3 * r.min_envelope_margin for r in runs], "smallest envelope margin [mm]")):
-        values = np.array(values)
+                              (axes[1], [None if r.min_envelope_margin is None else 1e3 * r.min_envelope_margin
+                                         for r in runs], "smallest envelope margin [mm]")):
+        values = np.array([np.nan if v is None else v for v in values], dtype=float)  # (None: not measured)
         finite = np.isfinite(values)
         if finite.any():
             lo, hi = values[finite].min(), values[finite].max()
@@ -159,7 +160,8 @@ def plot_sweep(name: str, results: Sequence[StudyResult], path: str | Path) -> P
     top.set_ylabel("success rate [-]")
     rest = replace(results[0].perturbation, **{name: Perturbation.__dataclass_fields__[name].default})
     top.set_title(f"{len(results[0].runs)} runs a size; besides {name}: {rest.describe()}", fontsize=8)
-    bottom.plot(x, [float(np.median([o.min_cone_margin for o in r.runs])) for r in results], "s-")
+    medians = [[o.min_cone_margin for o in r.runs if o.min_cone_margin is not None] for r in results]
+    bottom.plot(x, [float(np.median(m)) if m else np.nan for m in medians], "s-")
     bottom.set_ylabel("median smallest cone margin [N]")
     bottom.set_xlabel(name)
     path = Path(path)

@@ -6,7 +6,8 @@ plant's errors, and seeds its sensor and actuator noise, from ``numpy.random.See
 the same however many workers run them, in whatever order, on processes or on Ray.
 
 Where runs go: this process (``workers=1``), a pool of ``workers`` spawned processes, or a Ray cluster
-(``ray_address``: ``"local"`` starts one on this machine, anything else is handed to ``ray.init(address=...)``).
+(``ray_address``: ``"local"`` starts one on this machine; a cluster's address is checked, and reached, first:
+:mod:`regrasp.study.ray_cluster`).
 A job carries the scenario itself (pickled: the fingers' models, not file paths), so Ray workers on other
 machines need no copy of the files.
 
@@ -23,17 +24,17 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
-from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.exceptions import InvalidParameterError, MissingDependencyError
-from ..core.validation import as_finite_float, as_integer, expect_type
+from ..core.exceptions import InvalidParameterError
+from ..core.validation import MAX_WORKERS, as_count, as_finite_float, as_integer, expect_type
 from ..model.perturbation import Perturbation
 from ..model.softness import ContactSoftness, SoftnessRanges
 from ..plants.spec import PlantSpec
 from .draws import RunDraw, draw_runs
+from .ray_cluster import check_ray_address, ray_runs, require_ray
 
 if TYPE_CHECKING:
     from ..envelope.planner import PlanResult
@@ -80,8 +81,9 @@ class RunOutcome:
         failure_kind: The :class:`~regrasp.core.events.FailureKind` value, or None.
         failure_time: When it failed [s], or None.
         failure_contact: The finger the failure names, or None.
-        min_cone_margin: Its smallest cone margin of a contact held fixed [N].
-        min_envelope_margin: Its smallest envelope margin [m].
+        min_cone_margin: Its smallest cone margin of a contact held fixed [N] (None: no step had one, as a run
+            failing at its first step).
+        min_envelope_margin: Its smallest envelope margin [m] (None: likewise).
         max_object_error: Its largest object position error after the transient [m] (None: the run ended
             before the transient did).
         max_orientation_error: Its largest orientation error after the transient [rad] (None: likewise).
@@ -95,8 +97,8 @@ class RunOutcome:
     failure_kind: str | None
     failure_time: float | None
     failure_contact: str | None
-    min_cone_margin: float
-    min_envelope_margin: float
+    min_cone_margin: float | None
+    min_envelope_margin: float | None
     max_object_error: float | None
     max_orientation_error: float | None
     slides: int
@@ -105,7 +107,8 @@ class RunOutcome:
 
 
 def _finite_or_none(x: float) -> float | None:
-    return None if math.isnan(x) else float(x)
+    """``x``, or None for a NaN or an infinity (no sample: a JSON document holds no NaN or inf)."""
+    return float(x) if math.isfinite(x) else None
 
 
 def build_run(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
@@ -148,7 +151,8 @@ def run_once(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None
     r = build_run(scenario, draw, schedule, duration, perturbation, settings, plant, plan).run(interruptible=False)
     f = r.failure
     return RunOutcome(draw, r.success, None if f is None else f.kind.value, None if f is None else f.time,
-                      None if f is None else f.contact, r.min_cone_margin, r.min_envelope_margin,
+                      None if f is None else f.contact, _finite_or_none(r.min_cone_margin),
+                      _finite_or_none(r.min_envelope_margin),
                       _finite_or_none(r.max_object_error_after_transient),
                       _finite_or_none(r.max_orientation_error_after_transient), sum(r.regrasps.values()), r.replans,
                       r.wall_seconds)
@@ -244,33 +248,6 @@ def _on_processes(workers: int, shared: tuple, draws: tuple[RunDraw, ...]) -> It
         yield from pool.map(_pool_run, draws)
 
 
-def _require_ray() -> ModuleType:
-    """The ``ray`` module, or a :class:`~regrasp.core.exceptions.MissingDependencyError` naming the extra."""
-    try:
-        import ray
-    except ImportError as exc:
-        raise MissingDependencyError("ray", "ray", "a study on Ray") from exc
-    return ray
-
-
-def _on_ray(address: str, workers: int | None, shared: tuple, draws: tuple[RunDraw, ...]) -> Iterator[RunOutcome]:
-    """The runs as Ray tasks, in run order (the results do not depend on where they ran)."""
-    ray = _require_ray()
-    started = not ray.is_initialized()
-    if started:
-        kwargs = {"num_cpus": workers} if address == "local" and workers is not None else {}
-        ray.init(address=None if address == "local" else address, include_dashboard=False, log_to_driver=False,
-                 logging_level="ERROR", **kwargs)
-    try:
-        task = ray.remote(num_cpus=1)(run_once)
-        refs = [ray.put(x) for x in shared]
-        futures = [task.remote(refs[0], draw, *refs[1:]) for draw in draws]
-        yield from (ray.get(f) for f in futures)
-    finally:
-        if started:
-            ray.shutdown()
-
-
 def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
               perturbation: Perturbation = Perturbation(), duration: float | None = None, periods: int | None = None,
               workers: int = 1, ray_address: str | None = None, schedule: RegraspSchedule | None = None,
@@ -286,8 +263,10 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
         perturbation: What is perturbed, and by how much.
         duration, periods: Each run's length, as in :func:`~regrasp.rollout.build.build_rollout` (default: the
             trajectory's domain).
-        workers: Processes (1: this one); with Ray, the CPUs of a local cluster.
-        ray_address: None (processes), ``"local"`` (a Ray cluster on this machine) or a cluster's address.
+        workers: Processes (1: this one, at most ``MAX_WORKERS``); with Ray, the CPUs of a local cluster.
+        ray_address: None (processes), ``"local"`` (a Ray cluster on this machine), ``"auto"`` or a cluster's
+            address (:mod:`regrasp.study.ray_cluster`: reached within seconds, before the plan, or a
+            :class:`~regrasp.core.exceptions.ClusterConnectionError`).
         schedule: The schedule every run starts with (default: planned here with the model, with the cone margin
             rollouts keep by default): a planning stack that studies one plan under several perturbations plans
             it once.
@@ -304,32 +283,32 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     from ..schedule.planner import plan_regrasps
 
     start = time.perf_counter()
-    workers = as_integer("workers", workers, 1)
+    workers = as_count("workers", workers, 1, MAX_WORKERS)
     plant = PlantSpec.of(plant)
     if plant.errors != PlantSpec().errors:
         raise InvalidParameterError("plant", plant, "a PlantSpec without model errors (each run draws its own)")
     expect_type("perturbation", perturbation, Perturbation, "a Perturbation")
-    if ray_address is not None:
-        if not isinstance(ray_address, str) or not ray_address:
-            raise InvalidParameterError("ray_address", ray_address, "'local' or a Ray cluster's address")
-        _require_ray()  # (before planning)
+    if ray_address is not None:  # (before planning: an address where no cluster answers is said within seconds)
+        ray_address = check_ray_address(ray_address).text
+        require_ray()
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     name = str(scenario.path) if scenario.path is not None else scenario.name
     if softness is not None:
         soften(plant, softness.draw(np.random.default_rng(0)))  # (a rigid plant refuses before any planning)
     draws = draw_runs(runs, seed, perturbation, len(scenario.contacts), softness)
+    run = RunSpec(duration=duration, periods=periods)
+    run.resolve(scenario)  # (a run of no step, or longer than the trajectory allows: refused before the plan)
     if schedule is None:
         schedule = plan_regrasps(scenario)
-    probe = build_rollout(scenario, RunSpec(duration=duration, periods=periods), schedule=schedule, settings=settings,
-                          plant=plant)
+    probe = build_rollout(scenario, run, schedule=schedule, settings=settings, plant=plant)
     _check_offsets(scenario, probe.schedule.at(scenario.trajectory.t_start).xi if probe.schedule else None,
                    perturbation.contact_position)
     plan_seconds = time.perf_counter() - start
     # the schedule and the envelope plan are computed once for every run (they depend on the model only)
     shared = (scenario, probe.schedule, probe.duration, perturbation, settings, plant, probe.supervisor.plan)
     source = _on_processes(workers, shared, draws) if ray_address is None else \
-        _on_ray(ray_address, workers, shared, draws)
+        ray_runs(ray_address, workers, run_once, shared, draws)
     outcomes: list[RunOutcome] = []
     for outcome in source:
         outcomes.append(outcome)

@@ -19,6 +19,7 @@ from ..core.validation import (
     as_finite_float,
     as_flag,
     as_positive_float,
+    as_tip_radius,
     check_fields,
     expect_type,
 )
@@ -144,8 +145,9 @@ class ExecutorSettings:
                 raise InvalidParameterError(name, getattr(self, name), "a frequency of at most 1e6 rad/s")
         check_fields(self, as_duration, ("prime_time", "max_slide_time", "control_period", "reflex_time"))
         check_fields(self, as_duration, ("friction_filter_time", "hold_filter_time"), optional=True)
-        check_fields(self, as_positive_float, ("integral", "settle_margin", "tip_radius", "slider_floor",
-                                               "holder_preload", "reflex_below", "reflex_floor"), allow_zero=True)
+        check_fields(self, as_positive_float, ("integral", "settle_margin", "slider_floor", "holder_preload",
+                                               "reflex_below", "reflex_floor"), allow_zero=True)
+        check_fields(self, as_tip_radius, ("tip_radius",), allow_zero=True)
         check_fields(self, as_positive_float, ("start_speed",), allow_zero=True, optional=True)
         check_fields(self, as_positive_float, ("hold_resolution",), optional=True)
         check_fields(self, as_count, ("max_reprimes", "actuation_delay"))

@@ -46,7 +46,14 @@ import numpy as np
 from ...core.contact import Friction
 from ...core.exceptions import FingerModelError, InvalidParameterError, MissingDependencyError
 from ...core.polygon import ConvexPolygon
-from ...core.validation import as_finite_float, as_positive_float, check_fields, expect_sequence_of, expect_type
+from ...core.validation import (
+    as_finite_float,
+    as_positive_float,
+    as_tip_radius,
+    check_fields,
+    expect_sequence_of,
+    expect_type,
+)
 from ...model.collision import checked_link_shapes, default_tip_clearance
 from ...model.finger import Finger
 from ..mujoco.mjcf import eroded_vertices
@@ -62,7 +69,8 @@ class DrakeSettings:
     r"""Drake's physics for the third plant (``docs/derivations.md``, "A third plant: Drake").
 
     Attributes:
-        tip_radius: r [m], the fingertips' sphere radius.
+        tip_radius: r [m], the fingertips' sphere radius (at most 5 cm,
+            :data:`~regrasp.core.validation.MAX_TIP_RADIUS`).
         time_step: Drake's discrete step [s]; the plant takes ``round(dt / time_step)`` of them per control step,
             with the torques held (zero-order hold).
         point_contact_stiffness: k [N/m] of every contact (tip–object and link–object).
@@ -101,7 +109,8 @@ class DrakeSettings:
     contact_depth: float = 4e-7
 
     def __post_init__(self):
-        check_fields(self, as_positive_float, ("tip_radius", "time_step", "point_contact_stiffness",
+        check_fields(self, as_tip_radius, ("tip_radius",))
+        check_fields(self, as_positive_float, ("time_step", "point_contact_stiffness",
                                                "stiction_tolerance", "object_thickness"))
         check_fields(self, as_positive_float, ("hunt_crossley_dissipation", "near_rigid_threshold", "contact_depth"),
                      allow_zero=True)
@@ -292,7 +301,7 @@ def build_drake(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Se
     mass = as_positive_float("object_mass", polygon.mass if object_mass is None else object_mass)
     inertia = as_positive_float("object_inertia", polygon.inertia if object_inertia is None else object_inertia)
     s = settings
-    tip_vertices = eroded_vertices(polygon, s.tip_radius - s.contact_depth)
+    tip_vertices = eroded_vertices(polygon, s.tip_radius - s.contact_depth, "tip_radius")
 
     builder = DiagramBuilder()
     config = MultibodyPlantConfig(time_step=s.time_step, contact_model="point", discrete_contact_approximation=

@@ -50,6 +50,7 @@ from ...core.validation import (
     as_finite_float,
     as_flag,
     as_positive_float,
+    as_tip_radius,
     check_fields,
     expect_sequence_of,
     expect_type,
@@ -79,7 +80,8 @@ class MujocoSettings:
     r"""MuJoCo's physics for the second plant (``docs/derivations.md``, "A second plant: MuJoCo").
 
     Attributes:
-        tip_radius: r [m], the fingertips' sphere radius.
+        tip_radius: r [m], the fingertips' sphere radius (at most 5 cm,
+            :data:`~regrasp.core.validation.MAX_TIP_RADIUS`).
         timestep: MuJoCo's step [s]; the plant takes ``round(dt / timestep)`` of them per control step,
             with the torques held (zero-order hold).
         time_constant: The contacts' ``solref`` time constant [s] (their normal rows): how fast a penetration
@@ -130,8 +132,9 @@ class MujocoSettings:
     integrator: str = "implicitfast"
 
     def __post_init__(self):
-        check_fields(self, as_positive_float, ("tip_radius", "timestep", "time_constant", "damping_ratio", "impratio",
-                                               "tolerance", "object_thickness"))
+        check_fields(self, as_tip_radius, ("tip_radius",))
+        check_fields(self, as_positive_float, ("timestep", "time_constant", "damping_ratio", "impratio", "tolerance",
+                                               "object_thickness"))
         check_fields(self, as_positive_float, ("friction_time_constant",), optional=True)
         check_fields(self, as_positive_float, ("contact_depth",), allow_zero=True)
         if not 1e-7 <= self.timestep <= 1e-3:
@@ -162,9 +165,9 @@ class MujocoSettings:
         return min(self.time_constant, max(FRICTION_TIME_FLOOR, FRICTION_TIME_RATIO * self.time_constant))
 
 
-def eroded_vertices(polygon: ConvexPolygon, distance: float) -> np.ndarray:
+def eroded_vertices(polygon: ConvexPolygon, distance: float, name: str = "distance") -> np.ndarray:
     r"""The polygon with every edge moved inwards by ``distance`` [m] (outwards if negative): (n, 2) vertices,
-    object frame.
+    object frame; an error names ``distance`` as ``name`` (a plant's ``"tip_radius"``).
 
     Vertex k is where the moved lines of edges k − 1 and k meet: :math:`n_j \cdot p = n_j \cdot v_j + d`
     for j = k − 1, k (n_j the inward normals).
@@ -173,9 +176,9 @@ def eroded_vertices(polygon: ConvexPolygon, distance: float) -> np.ndarray:
         InvalidParameterError: the distance is so large that an edge vanishes.
     """
     expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
-    r = as_finite_float("distance", distance)
+    r = as_finite_float(name, distance)
     if abs(r) > polygon.scale:
-        raise InvalidParameterError("distance", r, f"an offset of at most the object's size ({polygon.scale:.3g} m)")
+        raise InvalidParameterError(name, r, f"an offset of at most the object's size ({polygon.scale:.3g} m)")
     edges = polygon.edges
     n = len(edges)
     out = np.empty((n, 2))
@@ -187,10 +190,10 @@ def eroded_vertices(polygon: ConvexPolygon, distance: float) -> np.ndarray:
     for k in range(n):  # each moved edge keeps its direction (else the erosion swallowed it)
         d = out[(k + 1) % n] - out[k]
         if not d @ (edges[k].end - edges[k].start) > 0.0:
-            raise InvalidParameterError("tip_radius", r, f"a radius small enough that edge {k} of the object "
+            raise InvalidParameterError(name, r, f"a radius small enough that edge {k} of the object "
                                         "survives the erosion by it")
     if not np.isfinite(out).all():
-        raise InvalidParameterError("distance", r, "an offset the polygon's edges survive")
+        raise InvalidParameterError(name, r, "an offset the polygon's edges survive")
     return out
 
 
@@ -361,7 +364,7 @@ def build_mjcf(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Seq
     inertia = as_positive_float("object_inertia", polygon.inertia if object_inertia is None else object_inertia)
     scale = as_positive_float("link_mass_scale", link_mass_scale)
     r = settings.tip_radius
-    tip_vertices = eroded_vertices(polygon, (r if settings.erode else 0.0) - settings.contact_depth)
+    tip_vertices = eroded_vertices(polygon, (r if settings.erode else 0.0) - settings.contact_depth, "tip_radius")
 
     spec = mujoco.MjSpec()
     spec.modelname = "regrasp_hand"

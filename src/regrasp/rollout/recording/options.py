@@ -15,14 +15,24 @@ from numpy.typing import ArrayLike
 
 from ...core.contact import ContactMode
 from ...core.exceptions import InvalidParameterError
+from ...core.validation import as_count, as_output_path
 from ...plants.project.state import PlantState
 from ...plants.simulation import PlantLike
 
-__all__ = ["RecorderOptions", "checked_desired", "checked_options", "checked_plant_state", "checked_step",
-           "checked_time"]
+__all__ = ["RecorderOptions", "as_viewer_url", "checked_desired", "checked_options", "checked_plant_state",
+           "checked_step", "checked_time"]
 
 #: Where ``connect`` may point: a rerun gRPC URL such as ``rerun+http://127.0.0.1:9876/proxy``.
 _GRPC_URL = re.compile(r"^rerun(\+https?)?://[^/\s]+(/\S*)?$")
+
+
+def as_viewer_url(name: str, value: object) -> str:
+    """``value`` if it is a rerun viewer's gRPC URL (``rerun+http://127.0.0.1:9876/proxy``), else an
+    :class:`~regrasp.core.exceptions.InvalidParameterError` naming ``name`` (a command line checks it before any
+    work)."""
+    if not isinstance(value, str) or not _GRPC_URL.match(value):
+        raise InvalidParameterError(name, value, "a rerun gRPC URL such as 'rerun+http://127.0.0.1:9876/proxy'")
+    return value
 
 
 @dataclass(frozen=True)
@@ -37,7 +47,7 @@ class RecorderOptions:
         application_id: Rerun application id.
         recording_name: The name shown in the viewer.
         danger_fraction: Width of each danger zone, a fraction of its interval, in [0, 0.5).
-        decimation: Log every n-th step (n >= 1).
+        decimation: Log every n-th step (1 <= n <= 10**6).
         flush_every: Send the buffered rows every this many logged steps (>= 1).
         force_scale: Arrow length per newton [mm/N].
         cone_length: Length of the friction cones' rays [mm].
@@ -74,7 +84,9 @@ def checked_options(plant: PlantLike, *, envelope_edges: Sequence[int | Sequence
     checked and normalised. The envelope geometry is checked when the envelopes are made.
 
     Raises:
-        InvalidParameterError: no plant, no sink, a missing directory, ``spawn`` with ``connect``, a ``connect``
+        InvalidParameterError: no plant, no sink, an ``rrd_path`` that cannot be written
+            (:func:`~regrasp.core.validation.as_output_path`: a missing or read-only directory, a name too long or with
+            a NUL byte, a directory), ``spawn`` with ``connect``, a ``connect``
             that is no rerun gRPC URL, or a parameter out of its domain.
         UnknownEdgeError: an edge in ``envelope_edges`` that the object does not have.
     """
@@ -82,22 +94,16 @@ def checked_options(plant: PlantLike, *, envelope_edges: Sequence[int | Sequence
         raise InvalidParameterError("plant", plant,
                                     "a plant (regrasp.Plant or regrasp.plants.mujoco.plant.MujocoPlant)")
     if connect is not None:
-        if not isinstance(connect, str) or not _GRPC_URL.match(connect):
-            raise InvalidParameterError("connect", connect,
-                                        "a rerun gRPC URL such as 'rerun+http://127.0.0.1:9876/proxy'")
+        as_viewer_url("connect", connect)
         if spawn:
             raise InvalidParameterError("connect", connect, "either spawn=True or connect, not both")
     if rrd_path is None and not spawn and connect is None:
         raise InvalidParameterError("rrd_path", None, "a sink: an .rrd path, spawn=True or connect, or both")
-    path = None
-    if rrd_path is not None:
-        path = Path(rrd_path)
-        if path.is_dir() or not path.parent.is_dir():
-            raise InvalidParameterError("rrd_path", rrd_path, "a file path in an existing directory")
+    path = None if rrd_path is None else as_output_path("rrd_path", rrd_path)  # (before any stream or file is made)
     if not (isinstance(danger_fraction, (int, float)) and 0.0 <= danger_fraction < 0.5):
         raise InvalidParameterError("danger_fraction", danger_fraction, "a fraction in [0, 0.5)")
-    decimation = _positive_int("decimation", decimation)
-    flush_every = _positive_int("flush_every", flush_every)
+    decimation = as_count("decimation", decimation, 1)
+    flush_every = as_count("flush_every", flush_every, 1)
     for name, value in (("force_scale", force_scale), ("cone_length", cone_length)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise InvalidParameterError(name, value, "a length > 0 [mm per N, mm]")
@@ -119,12 +125,6 @@ def checked_options(plant: PlantLike, *, envelope_edges: Sequence[int | Sequence
         force_scale=float(force_scale), cone_length=float(cone_length), plant_forces=bool(plant_forces),
         envelope_tolerance=float(envelope_tolerance), envelope_geometry=envelope_geometry, envelope_edges=edges,
         sliding=[int(i) for i in sliding])
-
-
-def _positive_int(name: str, value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise InvalidParameterError(name, value, "an integer >= 1")
-    return int(value)
 
 
 def _parse_edges(envelope_edges: object, plant: PlantLike) -> list[tuple[int, ...]] | None:

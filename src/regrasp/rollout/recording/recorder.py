@@ -81,7 +81,7 @@ class RolloutRecorder:
         envelope_edges: Which feasible envelopes to draw: one entry per finger, each an edge
             index, a sequence of edge indices or None (none for that finger). Default: each
             finger's current contact edge (``plant.contacts[i].edge``, followed if it changes).
-        rrd_path: Write the recording to this ``.rrd`` file (its directory must exist).
+        rrd_path: Write the recording to this ``.rrd`` file (its directory must exist and take a new file).
         spawn: Start a rerun viewer and stream to it (with ``rrd_path``: both).
         connect: Stream to a running viewer (or ``rerun --serve-grpc`` server) at this gRPC URL,
             e.g. ``"rerun+http://127.0.0.1:9876/proxy"`` (with ``rrd_path``: both; not with ``spawn``).
@@ -89,7 +89,7 @@ class RolloutRecorder:
         recording_name: Name shown in the viewer (default: the file's stem, or "rollout").
         danger_fraction: Width of each danger zone as a fraction of its feasible interval, in
             [0, 0.5).
-        decimation: Log every n-th step only (n >= 1).
+        decimation: Log every n-th step only (1 <= n <= 10**6).
         sliding: Contacts whose ξ are the reduced coordinates S[3:] (the controller's
             ``grasp.sliding``), for naming the error series. Default: the contacts in mode
             ``ContactMode.SLIDING`` now.
