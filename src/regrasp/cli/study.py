@@ -156,25 +156,28 @@ def _summary(result: StudyResult) -> str:
         lines.append(f"  failed, {kind}: {count} (at t = {', '.join(f'{t:.3f}' for t in times[:8])}"
                      f"{', ...' if len(times) > 8 else ''} s)")
     errors = np.array([r.max_object_error for r in runs if r.max_object_error is not None]) * 1e3
+    turns = np.array([r.max_orientation_error for r in runs if r.max_orientation_error is not None]) * 1e3
     lines.append("  smallest cone margin [N]: " + _spread([r.min_cone_margin for r in runs], 1.0, ".3f"))
     lines.append("  smallest envelope margin [mm]: " + _spread([r.min_envelope_margin for r in runs], 1e3, ".2f"))
     if errors.size:
-        lines.append(f"  largest object error after 0.5 s [mm]: median {np.median(errors):.3f}, max {errors.max():.3f}")
+        turned = f"; orientation [mrad]: median {np.median(turns):.1f}, max {turns.max():.1f}" if turns.size else ""
+        lines.append(f"  largest object error after 0.5 s [mm]: median {np.median(errors):.3f}, max {errors.max():.3f}"
+                     + turned)
     lines.append(f"  wall time: {result.wall_seconds:.1f} s ({result.plan_seconds:.1f} s planning) on "
                  f"{result.workers} {'Ray CPU' if result.backend == 'ray' else 'worker'}(s)")
     return "\n".join(lines)
 
 
 def _spread(values: list[float | None], scale: float, form: str) -> str:
-    """``min M, median D`` of the runs' values that were measured (None: a run with no step that measured one), with
-    how many were not; ``n/a`` when none was."""
+    """``min M, 5 % Q, median D`` of the runs' values that were measured (None: a run with no step that measured one),
+    with how many were not; ``n/a`` when none was."""
     import numpy as np
 
     measured = np.array([v for v in values if v is not None], dtype=float) * scale
     missing = len(values) - measured.size
     if not measured.size:
         return "n/a (no run measured one)"
-    return (f"min {measured.min():{form}}, median {np.median(measured):{form}}"
+    return (f"min {measured.min():{form}}, 5 % {np.percentile(measured, 5):{form}}, median {np.median(measured):{form}}"
             + (f" ({missing} run(s) measured none)" if missing else ""))
 
 
