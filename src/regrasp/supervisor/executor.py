@@ -365,9 +365,9 @@ class SlideExecutor:
         omega = np.array([s.control_omega] * 3 + [s.slide_omega] * (n - 3))
         return Gains(2.0 * omega, omega**2)
 
-    def _law(self, floors: float = 1.0) -> ComputedTorqueController:
-        """The control law of the current phases (cached while they and the held positions stay); ``floors``: the
-        fraction of each contact's floor above the internal force's ``f_min`` (:meth:`floors`) it keeps (0: ``f_min``
+    def _law(self, fraction: float = 1.0) -> ComputedTorqueController:
+        """The control law of the current phases (cached while they and the held positions stay); ``fraction``: how
+        much of each contact's floor above the internal force's ``f_min`` (:meth:`floors`) it keeps (0: ``f_min``
         alone)."""
         s = self.settings
         edges = []
@@ -383,7 +383,8 @@ class SlideExecutor:
         friction = tuple(Friction(max(f.static, k), k) if k != f.kinetic else f
                          for f, k in zip(self.friction, (self._kinetic(i) for i in range(self.hand.m))))
         f_min = s.internal_force.f_min
-        floors = tuple(f_min + floors * (f - f_min) if f > f_min else f for f in self.floors()) if floors > 0.0 else ()
+        floors = tuple(f_min + fraction * (f - f_min) if f > f_min else f for f in self.floors()) if fraction > 0.0 \
+            else ()
         key = (tuple(self.phases), tuple(edges), self.xi.tobytes(), friction, floors)
         if key == self._key:
             return self._controller
@@ -456,7 +457,7 @@ class SlideExecutor:
                 try:
                     return self._tipped(law(S, S_dot, S_d, S_d_dot, S_d_ddot), meas), _name(law), reference, []
                 except InternalForceInfeasibleError:
-                    if law.internal_force is None or law.internal_force.floors == ():
+                    if fraction == FLOOR_FRACTIONS[-1] or law.internal_force is None or law.internal_force.floors == ():
                         raise
         except InternalForceInfeasibleError as exc:
             if not any(self.phases[i] in (ContactPhase.PRIMING, ContactPhase.SLIDING) for i in self._active):

@@ -67,11 +67,12 @@ __all__ = ["MjcfHand", "MujocoSettings", "build_mjcf", "eroded_vertices", "requi
 _LINK_BIT = 2
 _INTEGRATORS = ("euler", "implicit", "implicitfast", "rk4")
 #: The friction rows' time constant as a fraction of the normal rows' (``MujocoSettings.friction_time_constant``
-#: None): at 0.3 a sliding contact on the default scenario chattered off its edge at solref 1.5 ms, at 0.4 and above
-#: none did from 1 to 2 ms (``docs/derivations.md``, "MuJoCo's contacts: drift and hops").
+#: None): on the default scenario at solref 2 ms, 0.25 of it let a slider chatter off its edge and 0.4 did not, and
+#: longer ones let the held contacts drift further (``examples/13_mujoco_contact_artifacts.py --rollouts``;
+#: ``docs/derivations.md``, "MuJoCo's contacts: drift and hops").
 FRICTION_TIME_RATIO = 0.4
-#: The friction rows' least default time constant [s] (the normal rows' default: the drift it leaves, 0.04 mm over
-#: a 1.5 s hold, is the least the plant keeps).
+#: The friction rows' least default time constant [s]: the normal rows' default, so that the default plant's friction
+#: rows keep the 0.5 ms they had.
 FRICTION_TIME_FLOOR = 5e-4
 
 
