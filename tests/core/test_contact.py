@@ -103,7 +103,8 @@ def test_as_frictions_forms():
     assert as_frictions([0.5, f], 2) == (Friction(0.5), f)
     assert as_frictions(np.array([0.2, 0.7]), 2) == (Friction(0.2), Friction(0.7))
     assert as_frictions((f, Friction(0.1)), 2) == (f, Friction(0.1))
-    for bad in ("0.5", None, [0.5], [0.5, 0.5, 0.5], [0.5, -1.0], -0.5, [f, "x"]):
+    for bad in ("0.5", None, [0.5], [0.5, 0.5, 0.5], [0.5, -1.0], -0.5, [f, "x"],
+                [False, []], [0.5, [1, [2]]], {0.5: 1, 0.4: 2}, {0.5, 0.4}):  # (ragged: numpy's ndim raises on them)
         with pytest.raises(InvalidParameterError):
             as_frictions(bad, 2)
 

@@ -43,3 +43,11 @@ def test_a_pad_is_a_pad_on_the_project_plant(make):
     pytest.importorskip("mujoco")
     with pytest.raises(InvalidParameterError):
         make()
+
+
+@pytest.mark.parametrize("friction", [[False, []], [0.5, [1, [2]]], {1: 2}, {0.5}, np.array([[0.5]])])
+def test_a_plant_spec_refuses_a_friction_that_is_no_coefficient_per_finger(friction):
+    """Ragged lists (numpy's ndim raises on them), mappings and sets are typed errors (the generated-argument test
+    of tests/test_entry_points.py found [False, []])."""
+    with pytest.raises(InvalidParameterError):
+        PlantSpec(friction=friction)

@@ -17,7 +17,8 @@ sliding contact's force ratio.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 from enum import Enum
 from typing import TypeAlias
@@ -128,19 +129,30 @@ FrictionLike: TypeAlias = Friction | float | Sequence[Friction | float]
 DEFAULT_FRICTION = Friction(0.5, 0.5)
 
 
+def _is_scalar(value: object) -> bool:
+    """Whether ``value`` is no sequence or array of more than zero dimensions (a ragged list is not a scalar: numpy's
+    ``ndim`` raises on it)."""
+    if isinstance(value, (list, tuple, dict, set, frozenset)):
+        return False
+    try:
+        return np.ndim(value) == 0
+    except (ValueError, TypeError):
+        return False
+
+
 def as_frictions(friction: FrictionLike, m: int) -> tuple[Friction, ...]:
     """One :class:`Friction` per contact from a Friction or a number (for all ``m`` contacts), or a
     sequence of ``m`` of them (a number is μ_s = μ_k)."""
     if isinstance(friction, Friction):
         return (friction,) * m
-    if isinstance(friction, (str, bytes)) or friction is None:
+    if isinstance(friction, (str, bytes, Mapping, AbstractSet)) or friction is None:
         raise InvalidParameterError("friction", friction, "a Friction, a coefficient, or one per contact")
-    if not isinstance(friction, Sequence) and np.ndim(friction) == 0:
+    if not isinstance(friction, Sequence) and _is_scalar(friction):
         return (Friction(friction.item() if hasattr(friction, "item") else friction),) * m
     items = list(friction)
     if len(items) != m:
         raise InvalidParameterError("friction", friction, f"one friction per contact ({m})")
-    if any(not isinstance(f, Friction) and np.ndim(f) != 0 for f in items):
+    if any(not isinstance(f, Friction) and not _is_scalar(f) for f in items):
         raise InvalidParameterError("friction", friction, "one Friction or coefficient per contact (not arrays)")
     return tuple(f if isinstance(f, Friction) else Friction(f.item() if hasattr(f, "item") else f) for f in items)
 

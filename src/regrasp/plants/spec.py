@@ -146,7 +146,8 @@ class PlantSpec:
                                             "their own contact laws)")
         if self.friction is not None:  # (checked now, whatever the scenario: one value for all, or one per finger)
             f = self.friction
-            per_finger = not isinstance(f, (Friction, str, bytes)) and np.ndim(f) != 0
+            per_finger = (isinstance(f, Sequence) and not isinstance(f, (str, bytes))) or (isinstance(f, np.ndarray)
+                                                                                      and f.ndim > 0)
             as_frictions(f, len(f) if per_finger else 1)
 
     def settings_class(self) -> type:
