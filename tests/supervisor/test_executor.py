@@ -5,20 +5,22 @@ laws predict are checked against what the phases ask for.
 """
 
 import math
+from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from regrasp import Hand, load_scenario
-from regrasp.core.contact import ContactMode
+from regrasp.core.contact import ContactMode, Friction
 from regrasp.core.events import EventKind
 from regrasp.core.exceptions import InvalidParameterError
 from regrasp.core.measurement import Measurement
 from regrasp.dynamics.grasp import Grasp
+from regrasp.dynamics.internal_force.problem import InternalForceInfeasibleError
 from regrasp.dynamics.internal_force.settings import InternalForceSettings
-from regrasp.supervisor.executor import FLOOR_FRACTIONS, SlideExecutor
-from regrasp.supervisor.settings import ExecutorSettings
+from regrasp.supervisor.executor import FEEDBACK_FRACTIONS, FLOOR_FRACTIONS, SlideExecutor
+from regrasp.supervisor.settings import ExecutorSettings, SupervisorSettings
 from regrasp.supervisor.types import ContactPhase, SlideOrder
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
@@ -306,3 +308,70 @@ def test_floors_no_squeeze_can_meet_are_kept_in_part_where_the_forces_allow():
     control, law, _, aborted = command(ex, 0.8, meas(0.8), [])
     holders = control.contact_forces_surface[1:, 0]
     assert not aborted and half - 1e-6 <= holders.min() < 0.7
+
+
+def _robust_without_floors(**changes) -> dict:
+    """The robust executor's settings with no floors and no reflex: the internal force's f_min alone."""
+    settings = SupervisorSettings.robust().executor
+    values = {f.name: getattr(settings, f.name) for f in fields(settings)}
+    return values | dict(slider_floor=0.0, holder_preload=0.0, reflex_below=0.0) | changes
+
+
+def _sliding_at(ex, mu, steps=30, t=0.8):
+    """Two slides (finger 1 up, finger 2 down from XI) run ``steps`` control steps, the plant's friction ratio ``mu``
+    sensed at both; the last measurement's time."""
+    out = []
+    for i, d in ((0, 1), (1, -1)):
+        ex.start(SlideOrder(i, d, XI[i], reference=lambda t, i=i: (XI[i], 0.0, 0.0)), meas(t), out)
+    for k in range(1, steps + 1):
+        m = meas(t + 1e-3 * k, xi_dot=(0.005, -0.005, 0.0), sliding=(True, True, False), normal=(0.3, 0.3, 1.0),
+                 tangential=(mu * 0.3, -mu * 0.3, 0.0))
+        command(ex, m.t, m, out)
+        ex.advance(m, out)
+    return t + 1e-3 * steps
+
+
+def test_a_correction_no_forces_can_give_is_scaled_down_not_the_slide_aborted():
+    """Where the cones cannot give the feedback's correction (an object turned by sliders dragging harder than the
+    model's μ), the step keeps the planned motion and as much of the correction as ``FEEDBACK_FRACTIONS`` allow."""
+    assert FEEDBACK_FRACTIONS[0] == 1.0 and FEEDBACK_FRACTIONS[-1] == 0.0
+    ex = executor(friction=[Friction(0.5, 0.5)] * 3, **_robust_without_floors())
+    t = _sliding_at(ex, mu=0.7) + 1e-3
+    turned = 0.4  # [rad] of orientation error
+    m = meas(t, xi_dot=(0.005, -0.005, 0.0), sliding=(True, True, False), normal=(0.3, 0.3, 1.0),
+             tangential=(0.21, -0.21, 0.0))
+    m = Measurement(m.t, m.X + np.array([0.0, 0.0, turned]), m.V, m.xi, m.xi_dot, m.sliding, m.tangential_force,
+                    m.normal_force)
+    S = np.concatenate([m.X, m.xi[:2]])
+    S_dot = np.concatenate([m.V, m.xi_dot[:2]])
+    full = (np.concatenate([SC.trajectory.pose(t), XI[:2]]), np.concatenate([SC.trajectory.velocity(t), [0.0, 0.0]]),
+            np.concatenate([SC.trajectory.acceleration(t), [0.0, 0.0]]))
+    with pytest.raises(InternalForceInfeasibleError):  # the whole correction: no forces
+        ex.law()(S, S_dot, *full)
+    out = []
+    control, law, _, aborted = command(ex, t, m, out)
+    assert law == "Proposition 3" and not aborted and not any(e.kind is EventKind.SLIDE_ABORTED for e in out)
+    fraction = control.error[2] / -turned  # (the integral adds one step's error: 1 + 0.3 · 20 rad/s · 1 ms)
+    assert 0.0 < fraction < 1.0
+    (fn1, ft1), (fn2, ft2), (fn3, ft3) = control.contact_forces_surface
+    assert min(fn1, fn2, fn3) >= 0.2 - 1e-6 and abs(ft3) <= 0.5 * fn3  # f_min everywhere, the palm in its cone
+    assert ft1 == pytest.approx(0.7 * fn1, rel=1e-9) and ft2 == pytest.approx(-0.7 * fn2, rel=1e-9)
+
+
+def test_settling_contacts_whose_cone_edges_leave_no_forces_get_the_plain_fixed_law():
+    """Two aborted slides settling, one of them sensed moving against its slide: their kinetic edges leave no forces
+    (the run once ended there, a control failure); the law holds them with their static cones instead."""
+    ex = executor(friction=[Friction(0.5, 0.5)] * 3, **_robust_without_floors())
+    t = _sliding_at(ex, mu=0.7, steps=40) + 0.01
+    m = meas(t, xi_dot=(0.005, 0.005, 0.0), sliding=(True, True, False), normal=(0.3, 0.3, 1.0),
+             tangential=(0.21, -0.21, 0.0))
+    out = []
+    ex.abort(m, out, "for the test")
+    assert ex.phases[:2] == [ContactPhase.SETTLING] * 2
+    S_d = (SC.trajectory.pose(t), SC.trajectory.velocity(t), SC.trajectory.acceleration(t))
+    with pytest.raises(InternalForceInfeasibleError):  # on the settling edges, even without feedback
+        ex.law()(m.X, m.V, m.X, m.V, S_d[2])
+    control, law, _, _ = command(ex, t, m, out)
+    assert law == "fixed contacts"
+    fn, ft = control.contact_forces_surface.T
+    assert fn.min() >= 0.2 - 1e-6 and (np.abs(ft) <= 0.5 * fn + 1e-9).all()

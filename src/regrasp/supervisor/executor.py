@@ -60,6 +60,7 @@ from ..dynamics.reduced import ReducedModel
 from ..kernels.stretch_layout import SLIDER, StretchExecutor
 from ..model.hand import Hand
 from ..model.sphere_tip import sphere_tip_torque
+from .fallbacks import FEEDBACK_FRACTIONS, FLOOR_FRACTIONS, fallbacks
 from .settings import ExecutorSettings
 from .types import ContactPhase, SlideEnd, SlideOrder, SlideProfile
 
@@ -67,12 +68,7 @@ if TYPE_CHECKING:
     from ..core.measurement import Measurement
     from ..core.trajectory import TrajectorySample
 
-__all__ = ["SlideExecutor"]
-
-#: The fractions of the contacts' floors above ``f_min`` (:meth:`SlideExecutor.floors`) a step's law tries in turn
-#: when the forces cannot meet them all: a contact keeps what load the others' cones allow (a slider whose plant μ
-#: is above the model's drags the object harder, and the holders' cones then cap the squeeze), down to ``f_min``.
-FLOOR_FRACTIONS = (1.0, 0.5, 0.0)
+__all__ = ["FEEDBACK_FRACTIONS", "FLOOR_FRACTIONS", "SlideExecutor"]
 
 @dataclass
 class _Active:
@@ -365,10 +361,11 @@ class SlideExecutor:
         omega = np.array([s.control_omega] * 3 + [s.slide_omega] * (n - 3))
         return Gains(2.0 * omega, omega**2)
 
-    def _law(self, fraction: float = 1.0) -> ComputedTorqueController:
+    def _law(self, fraction: float = 1.0, settle_edges: bool = True) -> ComputedTorqueController:
         """The control law of the current phases (cached while they and the held positions stay); ``fraction``: how
         much of each contact's floor above the internal force's ``f_min`` (:meth:`floors`) it keeps (0: ``f_min``
-        alone)."""
+        alone); ``settle_edges``: whether a settling contact still sensed sliding gets its kinetic cone's edge (False:
+        the plain fixed-contact law, as once it is sensed stuck)."""
         s = self.settings
         edges = []
         for i, a in sorted(self._active.items()):
@@ -376,7 +373,8 @@ class SlideExecutor:
                 ramp = min(1.0, (self._now - a.phase_start) / s.prime_time)
                 overshoot = s.prime_overshoot + ramp * (s.prime_overshoot_max - s.prime_overshoot)
                 edges.append(ConeEdge(i, a.order.direction, self.friction[i].static + overshoot))
-            elif self.phases[i] is ContactPhase.SETTLING and a.still == 0:  # (stuck: the fixed law's own cone)
+            elif self.phases[i] is ContactPhase.SETTLING and a.still == 0 and settle_edges:  # (stuck: the fixed
+                # law's own cone)
                 kinetic = self._kinetic(i)
                 edges.append(ConeEdge(i, a.settle_sign, kinetic - min(a.settle_undershoot, 0.5 * kinetic)))
         sliders = [i for i in range(self.hand.m) if self.phases[i] is ContactPhase.SLIDING]
@@ -451,21 +449,31 @@ class SlideExecutor:
         S_d_dot = np.concatenate([desired.velocity, [r[1] for r in refs]])
         S_d_ddot = np.concatenate([desired.acceleration, [r[2] for r in refs]])
         try:
-            for fraction in FLOOR_FRACTIONS:  # the floors are a preference (a pre-load, a reflex): as much of them as
-                # the forces allow, the internal force's f_min the limit
-                law = self._law(fraction)
-                try:
-                    return self._tipped(law(S, S_dot, S_d, S_d_dot, S_d_ddot), meas), _name(law), reference, []
-                except InternalForceInfeasibleError:
-                    if fraction == FLOOR_FRACTIONS[-1] or law.internal_force is None or law.internal_force.floors == ():
-                        raise
+            law, output = self._feasible(S, S_dot, S_d, S_d_dot, S_d_ddot)
+            return self._tipped(output, meas), _name(law), reference, []
         except InternalForceInfeasibleError as exc:
             if not any(self.phases[i] in (ContactPhase.PRIMING, ContactPhase.SLIDING) for i in self._active):
                 raise
             ends = self.abort(meas, out, f"no internal force keeps the slide in its cones ({exc.status})")
-        law = self._law()
-        output = law(meas.X, meas.V, desired.pose, desired.velocity, desired.acceleration)
+        law, output = self._feasible(meas.X, meas.V, desired.pose, desired.velocity, desired.acceleration)
         return self._tipped(output, meas), _name(law), np.full(m, np.nan), ends
+
+    def _feasible(self, S: np.ndarray, S_dot: np.ndarray, S_d: np.ndarray, S_d_dot: np.ndarray,
+                  S_d_ddot: np.ndarray) -> tuple[ComputedTorqueController, ControlOutput]:
+        """The first law of :func:`~regrasp.supervisor.fallbacks.fallbacks` whose forces exist, and its output; the
+        last one's :class:`InternalForceInfeasibleError` where none's do."""
+        settling = any(self.phases[i] is ContactPhase.SETTLING and a.still == 0 for i, a in self._active.items())
+        pairs = fallbacks(self._law(1.0).internal_force, settling)
+        for fraction, gain, edges in pairs:
+            law = self._law(fraction, edges)
+            try:
+                output = law(S, S_dot, S_d, S_d_dot, S_d_ddot) if gain == 1.0 else \
+                    law(S, S_dot, S + gain * (S_d - S), S_dot + gain * (S_d_dot - S_dot), S_d_ddot)
+                return law, output
+            except InternalForceInfeasibleError:
+                if (fraction, gain, edges) == pairs[-1]:
+                    raise
+        raise AssertionError("unreachable")  # (pairs is never empty)
 
     def _tipped(self, output: ControlOutput, meas: Measurement) -> ControlOutput:
         """``output`` with the spherical tips' couple added to its torque (``tip_radius``)."""
