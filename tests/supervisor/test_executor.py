@@ -19,7 +19,8 @@ from regrasp.core.measurement import Measurement
 from regrasp.dynamics.grasp import Grasp
 from regrasp.dynamics.internal_force.problem import InternalForceInfeasibleError
 from regrasp.dynamics.internal_force.settings import InternalForceSettings
-from regrasp.supervisor.executor import FEEDBACK_FRACTIONS, FLOOR_FRACTIONS, SlideExecutor
+from regrasp.supervisor.executor import SlideExecutor
+from regrasp.supervisor.fallbacks import FEEDBACK_FRACTIONS, FLOOR_FRACTIONS
 from regrasp.supervisor.settings import ExecutorSettings, SupervisorSettings
 from regrasp.supervisor.types import ContactPhase, SlideOrder
 

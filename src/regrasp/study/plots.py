@@ -115,6 +115,9 @@ def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
     ax.set_title(f"{len(bad)} of {len(runs)} runs failed")
     if kinds:
         ax.legend(fontsize=8)
+    else:  # (an empty histogram's axis would run from -0.05 to 0.05 runs)
+        ax.set_ylim(0.0, 1.0)
+        ax.text(0.5, 0.5, "no run failed", transform=ax.transAxes, ha="center", va="center")
     paths.append(directory / "study_failure_times.png")
     fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
     plt.close(fig)

@@ -35,7 +35,9 @@ margin the internal force seeks), no cone edge.
 Contacts being primed or settled are fixed in the model with a cone edge each; the sliders are
 sliding in the model; all of them share one control law per step. When no internal force keeps
 the slides within their cones (the QP is infeasible), the slides are aborted: the contacts settle
-or are held with the fixed law. The executor decides nothing about *which* slides to run: that is
+or are held with the fixed law. Before that, a step gives up what it can (:mod:`regrasp.supervisor.fallbacks`): the
+contacts' floors above ``f_min``, then the feedback's correction (the planned motion stays), and, after an abort, a
+settling contact's kinetic cone edge. The executor decides nothing about *which* slides to run: that is
 the policy's (:mod:`regrasp.supervisor.policies.scheduled`).
 """
 
@@ -60,7 +62,7 @@ from ..dynamics.reduced import ReducedModel
 from ..kernels.stretch_layout import SLIDER, StretchExecutor
 from ..model.hand import Hand
 from ..model.sphere_tip import sphere_tip_torque
-from .fallbacks import FEEDBACK_FRACTIONS, FLOOR_FRACTIONS, fallbacks
+from .fallbacks import fallbacks
 from .settings import ExecutorSettings
 from .types import ContactPhase, SlideEnd, SlideOrder, SlideProfile
 
@@ -68,7 +70,7 @@ if TYPE_CHECKING:
     from ..core.measurement import Measurement
     from ..core.trajectory import TrajectorySample
 
-__all__ = ["FEEDBACK_FRACTIONS", "FLOOR_FRACTIONS", "SlideExecutor"]
+__all__ = ["SlideExecutor"]
 
 @dataclass
 class _Active:
@@ -463,17 +465,15 @@ class SlideExecutor:
         """The first law of :func:`~regrasp.supervisor.fallbacks.fallbacks` whose forces exist, and its output; the
         last one's :class:`InternalForceInfeasibleError` where none's do."""
         settling = any(self.phases[i] is ContactPhase.SETTLING and a.still == 0 for i, a in self._active.items())
-        pairs = fallbacks(self._law(1.0).internal_force, settling)
-        for fraction, gain, edges in pairs:
-            law = self._law(fraction, edges)
+        *first, last = fallbacks(self._law(1.0).internal_force, settling)
+        for fraction, gain, edges in first:
             try:
-                output = law(S, S_dot, S_d, S_d_dot, S_d_ddot) if gain == 1.0 else \
-                    law(S, S_dot, S + gain * (S_d - S), S_dot + gain * (S_d_dot - S_dot), S_d_ddot)
-                return law, output
+                law = self._law(fraction, edges)
+                return law, _with_feedback(law, gain, S, S_dot, S_d, S_d_dot, S_d_ddot)
             except InternalForceInfeasibleError:
-                if (fraction, gain, edges) == pairs[-1]:
-                    raise
-        raise AssertionError("unreachable")  # (pairs is never empty)
+                continue
+        law = self._law(last[0], last[2])
+        return law, _with_feedback(law, last[1], S, S_dot, S_d, S_d_dot, S_d_ddot)
 
     def _tipped(self, output: ControlOutput, meas: Measurement) -> ControlOutput:
         """``output`` with the spherical tips' couple added to its torque (``tip_radius``)."""
@@ -484,6 +484,14 @@ class SlideExecutor:
         normals = np.array([e.inward_normal for e in self.grasp.edges])
         return replace(output, tau=output.tau + sphere_tip_torque(normals @ np.array([[c, s], [-s, c]]),
                                                                    output.contact_forces, r))
+
+
+def _with_feedback(law: ComputedTorqueController, gain: float, S: np.ndarray, S_dot: np.ndarray, S_d: np.ndarray,
+                   S_d_dot: np.ndarray, S_d_ddot: np.ndarray) -> ControlOutput:
+    """``law``'s output with ``gain`` of the feedback's errors S_d - S, Ṡ_d - Ṡ (1: the targets as given)."""
+    if gain == 1.0:
+        return law(S, S_dot, S_d, S_d_dot, S_d_ddot)
+    return law(S, S_dot, S + gain * (S_d - S), S_dot + gain * (S_d_dot - S_dot), S_d_ddot)
 
 
 def _name(law: ComputedTorqueController) -> str:
