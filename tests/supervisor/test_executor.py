@@ -376,3 +376,37 @@ def test_settling_contacts_whose_cone_edges_leave_no_forces_get_the_plain_fixed_
     assert law == "fixed contacts"
     fn, ft = control.contact_forces_surface.T
     assert fn.min() >= 0.2 - 1e-6 and (np.abs(ft) <= 0.5 * fn + 1e-9).all()
+
+
+def test_a_priming_keeps_each_holders_load_of_the_step_before_and_releases_it_over_the_handover_time():
+    """The handover hold (``handover_time``): at the priming the least squeeze drops (with the hold off, a contact's
+    predicted load falls in one step); with it on, every contact keeps its load of the step before, released
+    linearly, and the laws' forces stay at or above it."""
+    settings = dict(slider_floor=0.3, holder_preload=0.3, internal_force=InternalForceSettings(f_min=0.2))
+    drops = {}
+    for time in (0.0, 0.03):
+        ex = executor(handover_time=time, **settings)
+        out = []
+        before, *_ = command(ex, 0.8, meas(0.8), out)
+        loads = before.contact_forces_surface[:, 0].copy()
+        ex.start(SlideOrder(2, -1, -0.01, reference=lambda t: (XI[2], 0.0, 0.0)), meas(0.801), out)  # (the palm's
+        # load falls 0.05 N in a step without the hold)
+        after, *_ = command(ex, 0.801, meas(0.801), out)
+        drops[time] = float(np.max(loads - after.contact_forces_surface[:, 0]))
+        if time:
+            assert ex.floors() == pytest.approx(tuple(np.maximum(np.minimum(loads, 2.0), (0.3, 0.3, 0.3))))
+            assert (after.contact_forces_surface[:, 0] >= loads - 1e-6).all()
+            later, *_ = command(ex, 0.816, meas(0.816), out)  # (half-way: half the loads, or the usual floors)
+            half = np.maximum(0.5 * np.minimum(loads, 2.0), 0.3)
+            assert ex.floors() == pytest.approx(tuple(half))
+            assert (later.contact_forces_surface[:, 0] >= half - 1e-6).all()
+            assert ex.stretch_view() is None  # (a hold runs on the reference path)
+    assert drops[0.0] > 0.04 and drops[0.03] <= 1e-6
+
+
+def test_the_handover_load_is_checked_against_f_max_only_when_the_hold_is_on():
+    limited = InternalForceSettings(f_max=1.5)
+    assert ExecutorSettings(internal_force=limited).handover_load_max == 2.0  # (no hold: nothing to check)
+    with pytest.raises(InvalidParameterError, match="handover_load_max"):
+        ExecutorSettings(internal_force=limited, handover_time=0.03)
+    ExecutorSettings(internal_force=limited, handover_time=0.03, handover_load_max=1.0)

@@ -49,6 +49,7 @@ import numpy as np
 
 from ..core.contact import coefficients, cone_margin
 from ..dynamics.laws import FixedContactController, Proposition3Controller
+from ..kernels.control import control_layout
 from ..kernels.decimation import logged_steps
 from ..kernels.monitor import envelope_arguments
 from ..kernels.stretch import STRETCH_COAL, STRETCH_DONE, stretch_into
@@ -288,7 +289,8 @@ class CompiledStretches:
         rows.control_seconds[k0:k0 + done] = rows.plant_seconds[k0:k0 + done] = 0.5 * seconds / done
         rows.n = k0 + done
         self._ranges.append((k0, done))
-        ex.take_stretch(sliders, times[done - 1])
+        surface = control_out[control_layout(held.size, 3 + len(sliders))["surface"]]
+        ex.take_stretch(sliders, times[done - 1], surface[0::2])  # (the last step's predicted normal forces)
         if not fixed:
             law.directions = directions.tolist()
         record = run_state[0]

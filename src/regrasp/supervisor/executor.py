@@ -62,7 +62,8 @@ from ..dynamics.reduced import ReducedModel
 from ..kernels.stretch_layout import SLIDER, StretchExecutor
 from ..model.hand import Hand
 from ..model.sphere_tip import sphere_tip_torque
-from .fallbacks import fallbacks
+from .fallbacks import fallbacks, with_feedback
+from .handover import HandoverHold
 from .settings import ExecutorSettings
 from .types import ContactPhase, SlideEnd, SlideOrder, SlideProfile
 
@@ -118,6 +119,7 @@ class SlideExecutor:
         self._integral_X = np.zeros(3)          # ∫(X_d - X) dt
         self._integral_xi: dict[int, float] = {}  # ∫(ξ_d - ξ) dt per slider
         self._reflex_until = np.full(hand.m, -math.inf)  # each contact's reflex lasts until then [s]
+        self._hold = HandoverHold(hand.m, settings.handover_time, settings.handover_load_max)
 
     # ------------------------------------------------------------------ state
     @property
@@ -173,18 +175,18 @@ class SlideExecutor:
 
     def floors(self) -> tuple[float, ...]:
         """Each contact's least normal force in the laws now [N] (0: the internal force's ``f_min``): a slider's
-        ``slider_floor``, a holder's ``holder_preload`` while another contact is primed or slides, and
-        ``reflex_floor`` while a reflex lasts."""
+        ``slider_floor``, a holder's ``holder_preload`` while another contact is primed or slides, ``reflex_floor``
+        while a reflex lasts, and the handover hold's (:mod:`regrasp.supervisor.handover`)."""
         s = self.settings
         moving = any(p in (ContactPhase.PRIMING, ContactPhase.SLIDING) for p in self.phases)
         out = []
-        for i, phase in enumerate(self.phases):
+        for i, (phase, hold) in enumerate(zip(self.phases, self._hold.floors(self._now).tolist())):
             floor = s.holder_preload if moving else 0.0
             if phase is not ContactPhase.FIXED:
                 floor = s.slider_floor
             if self._now < self._reflex_until[i]:
                 floor = max(floor, s.reflex_floor)
-            out.append(floor)
+            out.append(max(floor, hold))
         return tuple(out)
 
     def _sensed(self) -> np.ndarray:
@@ -321,10 +323,11 @@ class SlideExecutor:
         """What a compiled stretch (:mod:`regrasp.rollout.stretch`) reads and updates of the executor: (held (m,) bool,
         the law's held positions ξ [m], the filtered sensed positions [m] and ∫(X_d - X) dt, both the executor's own
         arrays, the sliders as :data:`~regrasp.kernels.stretch_layout.SLIDER` records); None where only the reference
-        path serves: a contact being primed or settling, a reflex lasting, a slide without a planned profile
-        (:class:`~regrasp.supervisor.types.SlideProfile`) or spherical tips."""
+        path serves: a contact being primed or settling, a reflex or a handover hold lasting or starting, a slide
+        without a planned profile (:class:`~regrasp.supervisor.types.SlideProfile`) or spherical tips."""
         s = self.settings
-        if s.tip_radius != 0.0 or bool((self._reflex_until > self._now).any()):
+        if s.tip_radius != 0.0 or bool((self._reflex_until > self._now).any()) or self._hold.changed(self.phases) \
+                or self._hold.active(self._now):
             return None
         sliders = []
         for i, phase in enumerate(self.phases):
@@ -347,9 +350,10 @@ class SlideExecutor:
         held = np.array([p is ContactPhase.FIXED for p in self.phases])
         return StretchExecutor(held, self.xi, self._xi_sensed, self._integral_X, records)
 
-    def take_stretch(self, sliders: np.ndarray, t: float) -> None:
+    def take_stretch(self, sliders: np.ndarray, t: float, loads_n: np.ndarray) -> None:
         """After a stretch whose last step started at ``t`` [s]: the sliders' slip flags, friction estimates and
-        integrals from its records (:meth:`stretch_view`)."""
+        integrals from its records (:meth:`stretch_view`), and its last step's predicted normal forces [N]."""
+        self._hold.note(loads_n)
         for record in sliders:
             a = self._active[int(record["contact"])]
             a.slipped, a.mu_hat = bool(record["slipped"]), float(record["mu_hat"])
@@ -438,6 +442,7 @@ class SlideExecutor:
         (a :class:`~regrasp.core.trajectory.TrajectorySample`)."""
         m = self.hand.m
         self._now = float(meas.t)
+        self._hold.see(self.phases, self._now)
         reference = np.full(m, np.nan)
         sliders = [i for i in range(m) if self.phases[i] is ContactPhase.SLIDING]
         refs = [self._slider_reference(i, float(meas.t), dt) for i in sliders]
@@ -450,15 +455,17 @@ class SlideExecutor:
             S_d = self._integrate(S_d, S, sliders, dt)
         S_d_dot = np.concatenate([desired.velocity, [r[1] for r in refs]])
         S_d_ddot = np.concatenate([desired.acceleration, [r[2] for r in refs]])
+        ends = []
         try:
             law, output = self._feasible(S, S_dot, S_d, S_d_dot, S_d_ddot)
-            return self._tipped(output, meas), _name(law), reference, []
         except InternalForceInfeasibleError as exc:
             if not any(self.phases[i] in (ContactPhase.PRIMING, ContactPhase.SLIDING) for i in self._active):
                 raise
             ends = self.abort(meas, out, f"no internal force keeps the slide in its cones ({exc.status})")
-        law, output = self._feasible(meas.X, meas.V, desired.pose, desired.velocity, desired.acceleration)
-        return self._tipped(output, meas), _name(law), np.full(m, np.nan), ends
+            law, output = self._feasible(meas.X, meas.V, desired.pose, desired.velocity, desired.acceleration)
+            reference = np.full(m, np.nan)
+        self._hold.note(output.contact_forces_surface[:, 0])
+        return self._tipped(output, meas), _name(law), reference, ends
 
     def _feasible(self, S: np.ndarray, S_dot: np.ndarray, S_d: np.ndarray, S_d_dot: np.ndarray,
                   S_d_ddot: np.ndarray) -> tuple[ComputedTorqueController, ControlOutput]:
@@ -469,11 +476,11 @@ class SlideExecutor:
         for fraction, gain, edges in first:
             try:
                 law = self._law(fraction, edges)
-                return law, _with_feedback(law, gain, S, S_dot, S_d, S_d_dot, S_d_ddot)
+                return law, with_feedback(law, gain, S, S_dot, S_d, S_d_dot, S_d_ddot)
             except InternalForceInfeasibleError:
                 continue
         law = self._law(last[0], last[2])
-        return law, _with_feedback(law, last[1], S, S_dot, S_d, S_d_dot, S_d_ddot)
+        return law, with_feedback(law, last[1], S, S_dot, S_d, S_d_dot, S_d_ddot)
 
     def _tipped(self, output: ControlOutput, meas: Measurement) -> ControlOutput:
         """``output`` with the spherical tips' couple added to its torque (``tip_radius``)."""
@@ -484,14 +491,6 @@ class SlideExecutor:
         normals = np.array([e.inward_normal for e in self.grasp.edges])
         return replace(output, tau=output.tau + sphere_tip_torque(normals @ np.array([[c, s], [-s, c]]),
                                                                    output.contact_forces, r))
-
-
-def _with_feedback(law: ComputedTorqueController, gain: float, S: np.ndarray, S_dot: np.ndarray, S_d: np.ndarray,
-                   S_d_dot: np.ndarray, S_d_ddot: np.ndarray) -> ControlOutput:
-    """``law``'s output with ``gain`` of the feedback's errors S_d - S, Ṡ_d - Ṡ (1: the targets as given)."""
-    if gain == 1.0:
-        return law(S, S_dot, S_d, S_d_dot, S_d_ddot)
-    return law(S, S_dot, S + gain * (S_d - S), S_dot + gain * (S_d_dot - S_dot), S_d_ddot)
 
 
 def _name(law: ComputedTorqueController) -> str:

@@ -8,9 +8,16 @@ Measured on the default scenario's 200-run study (``docs/derivations.md``, "Cont
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from ..dynamics.internal_force.settings import InternalForceSettings
 
-__all__ = ["FEEDBACK_FRACTIONS", "FLOOR_FRACTIONS", "fallbacks"]
+if TYPE_CHECKING:
+    import numpy as np
+
+    from ..dynamics.control import ComputedTorqueController, ControlOutput
+
+__all__ = ["FEEDBACK_FRACTIONS", "FLOOR_FRACTIONS", "fallbacks", "with_feedback"]
 
 #: The fractions of the contacts' floors above ``f_min`` (:meth:`~regrasp.supervisor.executor.SlideExecutor.floors`)
 #: a step's law tries in turn when the forces cannot meet them all: a contact keeps what load the others' cones allow
@@ -34,3 +41,11 @@ def fallbacks(internal_force: InternalForceSettings | None, settling: bool) -> l
     if settling:
         out += [(floors[-1], g, False) for g in FEEDBACK_FRACTIONS]
     return out
+
+
+def with_feedback(law: ComputedTorqueController, gain: float, S: np.ndarray, S_dot: np.ndarray, S_d: np.ndarray,
+                  S_d_dot: np.ndarray, S_d_ddot: np.ndarray) -> ControlOutput:
+    """``law``'s output with ``gain`` of the feedback's errors S_d - S, Ṡ_d - Ṡ (1: the targets as given)."""
+    if gain == 1.0:
+        return law(S, S_dot, S_d, S_d_dot, S_d_ddot)
+    return law(S, S_dot, S + gain * (S_d - S), S_dot + gain * (S_d_dot - S_dot), S_d_ddot)

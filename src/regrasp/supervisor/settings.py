@@ -103,6 +103,9 @@ class ExecutorSettings:
         reflex_below: A contact whose sensed normal force falls below this [N] (0: never) ...
         reflex_floor: ... pushes with at least this [N] in the laws ...
         reflex_time: ... for this long [s] (the reflex: more internal force at once, before the contact is lost).
+        handover_time: At a phase change every contact's predicted load of the step before is a floor released
+            linearly over this time [s] (0: none; :mod:`regrasp.supervisor.handover`) ...
+        handover_load_max: ... up to this load [N].
     """
 
     omega_n: float = 20.0
@@ -135,6 +138,8 @@ class ExecutorSettings:
     reflex_below: float = 0.0
     reflex_floor: float = 0.0
     reflex_time: float = 0.01
+    handover_time: float = 0.0
+    handover_load_max: float = 2.0
 
     def __post_init__(self):
         check_fields(self, as_positive_float, ("omega_n", "zeta", "prime_overshoot", "prime_overshoot_max",
@@ -146,7 +151,8 @@ class ExecutorSettings:
         check_fields(self, as_duration, ("prime_time", "max_slide_time", "control_period", "reflex_time"))
         check_fields(self, as_duration, ("friction_filter_time", "hold_filter_time"), optional=True)
         check_fields(self, as_positive_float, ("integral", "settle_margin", "slider_floor", "holder_preload",
-                                               "reflex_below", "reflex_floor"), allow_zero=True)
+                                               "reflex_below", "reflex_floor", "handover_time"), allow_zero=True)
+        check_fields(self, as_positive_float, ("handover_load_max",))
         check_fields(self, as_tip_radius, ("tip_radius",), allow_zero=True)
         check_fields(self, as_positive_float, ("start_speed",), allow_zero=True, optional=True)
         check_fields(self, as_positive_float, ("hold_resolution",), optional=True)
@@ -158,7 +164,8 @@ class ExecutorSettings:
                                         f"at least prime_overshoot = {self.prime_overshoot}")
         if self.integral >= 2.0:
             raise InvalidParameterError("integral", self.integral, "a gain fraction in [0, 2) (stability)")
-        for name in ("slider_floor", "holder_preload", "reflex_below", "reflex_floor"):
+        for name in ("slider_floor", "holder_preload", "reflex_below", "reflex_floor") + \
+                (("handover_load_max",) if self.handover_time > 0.0 else ()):
             if getattr(self, name) >= self.internal_force.f_max:
                 raise InvalidParameterError(name, getattr(self, name), f"a normal force below the internal "
                                             f"force's f_max ({self.internal_force.f_max:g} N)")
@@ -323,7 +330,8 @@ class SupervisorSettings:
         sphere ``tip_radius`` [m] and the ``hold_resolution`` [m] its ξ sensor's noise calls for; and what the
         schedule was planned with, its ``slider_floor`` and ``holder_preload`` [N]
         (:class:`~regrasp.schedule.problem.RegraspSettings`): the executor keeps the plan's loads, with a reflex
-        (a contact sensed below 0.1 N pushes with at least 0.4 N for 10 ms). Change anything
+        (a contact sensed below 0.1 N pushes with at least 0.4 N for 10 ms) and a handover hold (at a phase change
+        each contact's load is released over 30 ms, at most 2 N of it). Change anything
         else with :func:`dataclasses.replace` on the branch (e.g. ``replace(s, executor=replace(s.executor,
         prime_overshoot=0.01))``)."""
         executor = ExecutorSettings(
@@ -332,7 +340,8 @@ class SupervisorSettings:
             internal_force=InternalForceSettings(f_min=0.2, friction_margin=0.1, target_cone_margin=cone_margin,
                                                  fallback_friction_margin=0.05),
             actuation_delay=actuation_delay, tip_radius=tip_radius, hold_resolution=hold_resolution,
-            slider_floor=slider_floor, holder_preload=holder_preload, reflex_below=0.1, reflex_floor=0.4)
+            slider_floor=slider_floor, holder_preload=holder_preload, reflex_below=0.1, reflex_floor=0.4,
+            handover_time=0.03)
         return cls(executor=executor, monitor=MonitorSettings(geometry=geometry, every=10))
 
     def with_executor(self, **changes: object) -> SupervisorSettings:
