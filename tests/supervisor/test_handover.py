@@ -29,6 +29,7 @@ def test_no_hold_without_a_previous_step_or_a_time():
     off = HandoverHold(3, time=0.0, load_max=2.0)
     off.see(FIXED, 0.0)
     off.note(np.ones(3))
+    assert not off.changed(PRIMING)  # (no hold: nothing for a compiled stretch to stop for)
     off.see(PRIMING, 0.001)
     assert not off.active(0.001) and not off.floors(0.001).any()
 

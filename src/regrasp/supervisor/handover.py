@@ -53,8 +53,9 @@ class HandoverHold:
         # path handed over may leave no prediction: no load to hold)
 
     def changed(self, phases: tuple) -> bool:
-        """Whether ``phases`` differ from those of the last step seen (:meth:`see`)."""
-        return self._phases is not None and tuple(phases) != self._phases
+        """Whether ``phases`` differ from those of the last step seen (:meth:`see`) and start a hold (never with no
+        hold time: the compiled stretches then need not stop at a change)."""
+        return self.time > 0.0 and self._phases is not None and tuple(phases) != self._phases
 
     def active(self, t: float) -> bool:
         """Whether a hold lasts at ``t`` [s]."""
@@ -63,7 +64,7 @@ class HandoverHold:
     def see(self, phases: tuple, t: float) -> None:
         """A step at ``t`` [s] with the contacts in ``phases``: a change from the last step's phases starts a hold."""
         phases = tuple(phases)
-        if self.time > 0.0 and self.changed(phases):
+        if self.changed(phases):
             self._held = np.clip(self._loads, 0.0, self.load_max)
             self._since = t
         self._phases = phases
