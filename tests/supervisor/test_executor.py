@@ -20,7 +20,7 @@ from regrasp.dynamics.grasp import Grasp
 from regrasp.dynamics.internal_force.problem import InternalForceInfeasibleError
 from regrasp.dynamics.internal_force.settings import InternalForceSettings
 from regrasp.supervisor.executor import SlideExecutor
-from regrasp.supervisor.fallbacks import FEEDBACK_FRACTIONS, FLOOR_FRACTIONS
+from regrasp.supervisor.fallbacks import FEEDBACK_FRACTIONS, FLOOR_BISECTIONS, FLOOR_FRACTIONS
 from regrasp.supervisor.settings import ExecutorSettings, SupervisorSettings
 from regrasp.supervisor.types import ContactPhase, SlideOrder
 
@@ -299,16 +299,26 @@ def test_floor_settings_refuse_bad_values(bad):
 
 
 def test_floors_no_squeeze_can_meet_are_kept_in_part_where_the_forces_allow():
-    """Between the floors and f_min: a step whose forces cannot meet the floors keeps the largest of
-    ``FLOOR_FRACTIONS`` of them that they can (a slider dragging harder than the model's μ caps the squeeze)."""
-    assert FLOOR_FRACTIONS[0] == 1.0 and FLOOR_FRACTIONS[-1] == 0.0 and list(FLOOR_FRACTIONS) == sorted(
-        FLOOR_FRACTIONS, reverse=True)
+    """Between the floors and f_min: a step whose forces cannot meet the floors keeps the largest fraction of them
+    that they can, to 1/2^``FLOOR_BISECTIONS`` (a slider dragging harder than the model's μ caps the squeeze)."""
+    assert FLOOR_FRACTIONS == (1.0, 0.0)
     ex = executor(slider_floor=0.21, holder_preload=0.7, internal_force=InternalForceSettings(f_min=0.2, f_max=16.0))
     ex.start(SlideOrder(0, 1, 0.0, reference=lambda t: (XI[0], 0.0, 0.0)), meas(0.8), [])
-    half = 0.2 + FLOOR_FRACTIONS[1] * (0.7 - 0.2)  # (of the 0.7 N pre-load; f_min alone: 0.235 N)
     control, law, _, aborted = command(ex, 0.8, meas(0.8), [])
     holders = control.contact_forces_surface[1:, 0]
-    assert not aborted and half - 1e-6 <= holders.min() < 0.7
+    assert not aborted and holders.min() < 0.7
+    # the largest fraction (f_min alone: 0.235 N): a pre-load one bisection step above what was kept is not met
+    # either, and one a step below is met whole
+    kept = (holders.min() - 0.2) / (0.7 - 0.2)
+    assert kept > 0.5
+    step = 0.5**FLOOR_BISECTIONS
+    for shift, met in ((step, False), (-step, True)):
+        preload = 0.2 + (kept + shift) * (0.7 - 0.2)  # (and the same fraction of the slider's floor)
+        other = executor(slider_floor=0.2 + (kept + shift) * (0.21 - 0.2), holder_preload=preload,
+                         internal_force=InternalForceSettings(f_min=0.2, f_max=16.0))
+        other.start(SlideOrder(0, 1, 0.0, reference=lambda t: (XI[0], 0.0, 0.0)), meas(0.8), [])
+        loads = command(other, 0.8, meas(0.8), [])[0].contact_forces_surface[1:, 0]
+        assert bool(loads.min() >= preload - 1e-6) == met
 
 
 def _robust_without_floors(**changes) -> dict:

@@ -62,7 +62,7 @@ from ..dynamics.reduced import ReducedModel
 from ..kernels.stretch_layout import SLIDER, StretchExecutor
 from ..model.hand import Hand
 from ..model.sphere_tip import sphere_tip_torque
-from .fallbacks import fallbacks, with_feedback
+from .fallbacks import fallbacks, first_feasible, with_feedback
 from .handover import HandoverHold
 from .settings import ExecutorSettings
 from .types import ContactPhase, SlideEnd, SlideOrder, SlideProfile
@@ -472,15 +472,12 @@ class SlideExecutor:
         """The first law of :func:`~regrasp.supervisor.fallbacks.fallbacks` whose forces exist, and its output; the
         last one's :class:`InternalForceInfeasibleError` where none's do."""
         settling = any(self.phases[i] is ContactPhase.SETTLING and a.still == 0 for i, a in self._active.items())
-        *first, last = fallbacks(self._law(1.0).internal_force, settling)
-        for fraction, gain, edges in first:
-            try:
-                law = self._law(fraction, edges)
-                return law, with_feedback(law, gain, S, S_dot, S_d, S_d_dot, S_d_ddot)
-            except InternalForceInfeasibleError:
-                continue
-        law = self._law(last[0], last[2])
-        return law, with_feedback(law, last[1], S, S_dot, S_d, S_d_dot, S_d_ddot)
+
+        def solve(fraction: float, gain: float, edges: bool) -> tuple[ComputedTorqueController, ControlOutput]:
+            law = self._law(fraction, edges)
+            return law, with_feedback(law, gain, S, S_dot, S_d, S_d_dot, S_d_ddot)
+
+        return first_feasible(fallbacks(self._law(1.0).internal_force, settling), solve, InternalForceInfeasibleError)
 
     def _tipped(self, output: ControlOutput, meas: Measurement) -> ControlOutput:
         """``output`` with the spherical tips' couple added to its torque (``tip_radius``)."""
