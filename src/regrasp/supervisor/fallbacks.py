@@ -57,8 +57,8 @@ def fallbacks(internal_force: InternalForceSettings | None, settling: bool) -> l
     return out
 
 
-def largest_fraction(solve: Callable[[float], T], feasible: float, infeasible: float, found: T,
-                     steps: int = FLOOR_BISECTIONS, errors: tuple[type[Exception], ...] = ()) -> T:
+def largest_fraction(solve: Callable[[float], T], feasible: float, infeasible: float, found: T, *,
+                     errors: tuple[type[Exception], ...], steps: int = FLOOR_BISECTIONS) -> T:
     """The result of ``solve`` at the largest fraction in [``feasible``, ``infeasible``) found by ``steps`` halvings,
     where ``solve(feasible)`` gave ``found`` and ``solve(infeasible)`` raised one of ``errors`` (a fraction whose
     ``solve`` raises one of them leaves no forces; the fractions that do are an interval, the floors being lower
