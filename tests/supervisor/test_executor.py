@@ -321,6 +321,22 @@ def test_floors_no_squeeze_can_meet_are_kept_in_part_where_the_forces_allow():
         assert bool(loads.min() >= preload - 1e-6) == met
 
 
+def test_floors_are_never_kept_by_taking_the_holders_fallback_friction_margin():
+    """A holder pre-load of 1 N no force meets within the friction margin 0.1 but one meets within the fallback 0:
+    the step keeps the whole margin at every held contact and gives up floors instead (kept above f_min where the
+    margin allows); with the fallback margin the palm would sit on its cone's edge (ratio 0.499 of μ_s 0.5)."""
+    margin = 0.1
+    ex = executor(slider_floor=0.21, holder_preload=1.0, internal_force=InternalForceSettings(
+        f_min=0.2, f_max=16.0, friction_margin=margin, fallback_friction_margin=0.0))
+    ex.start(SlideOrder(0, 1, 0.0, reference=lambda t: (XI[0], 0.0, 0.0)), meas(0.8), [])
+    control, _, _, aborted = command(ex, 0.8, meas(0.8), [])
+    forces = control.contact_forces_surface[1:]
+    ratios = np.abs(forces[:, 1]) / forces[:, 0]
+    assert not aborted and forces[:, 0].max() < 1.0  # the pre-load is not met whole
+    assert np.all(ratios <= np.array([f.static for f in SC.friction[1:]]) - margin + 1e-6)
+    assert forces[:, 0].min() > 0.2 + 0.1  # some of the floors kept, not f_min alone
+
+
 def _robust_without_floors(**changes) -> dict:
     """The robust executor's settings with no floors and no reflex: the internal force's f_min alone."""
     settings = SupervisorSettings.robust().executor

@@ -36,9 +36,9 @@ Contacts being primed or settled are fixed in the model with a cone edge each; t
 sliding in the model; all of them share one control law per step. When no internal force keeps
 the slides within their cones (the QP is infeasible), the slides are aborted: the contacts settle
 or are held with the fixed law. Before that, a step gives up what it can (:mod:`regrasp.supervisor.fallbacks`): the
-contacts' floors above ``f_min``, then the feedback's correction (the planned motion stays), and, after an abort, a
-settling contact's kinetic cone edge. The executor decides nothing about *which* slides to run: that is
-the policy's (:mod:`regrasp.supervisor.policies.scheduled`).
+contacts' floors above ``f_min``, then the held contacts' friction margin down to its fallback, then the feedback's
+correction (the planned motion stays), then a settling contact's kinetic cone edge. The executor decides nothing
+about *which* slides to run: that is the policy's (:mod:`regrasp.supervisor.policies.scheduled`).
 """
 
 from __future__ import annotations
@@ -316,7 +316,7 @@ class SlideExecutor:
 
     # ------------------------------------------------------------------ stretches (regrasp.rollout.stretch)
     def law(self) -> ComputedTorqueController:
-        """The control law the next step runs (the current phases' law; cached while it stays the same)."""
+        """The law the next step tries first (the current phases', whole floors and friction margin; cached)."""
         return self._law()
 
     def stretch_view(self) -> StretchExecutor | None:
@@ -367,11 +367,11 @@ class SlideExecutor:
         omega = np.array([s.control_omega] * 3 + [s.slide_omega] * (n - 3))
         return Gains(2.0 * omega, omega**2)
 
-    def _law(self, fraction: float = 1.0, settle_edges: bool = True) -> ComputedTorqueController:
+    def _law(self, fraction: float = 1.0, settle_edges: bool = True, relaxed: bool = False) -> ComputedTorqueController:
         """The control law of the current phases (cached while they and the held positions stay); ``fraction``: how
         much of each contact's floor above the internal force's ``f_min`` (:meth:`floors`) it keeps (0: ``f_min``
         alone); ``settle_edges``: whether a settling contact still sensed sliding gets its kinetic cone's edge (False:
-        the plain fixed-contact law, as once it is sensed stuck)."""
+        the fixed-contact law, as once sensed stuck); ``relaxed``: whether it may take ``fallback_friction_margin``."""
         s = self.settings
         edges = []
         for i, a in sorted(self._active.items()):
@@ -389,12 +389,15 @@ class SlideExecutor:
         f_min = s.internal_force.f_min
         floors = tuple(f_min + fraction * (f - f_min) if f > f_min else f for f in self.floors()) if fraction > 0.0 \
             else ()
-        key = (tuple(self.phases), tuple(edges), self.xi.tobytes(), friction, floors)
+        relaxed = relaxed and s.internal_force.fallback_friction_margin is not None  # (else: the same law)
+        key = (tuple(self.phases), tuple(edges), self.xi.tobytes(), friction, floors, relaxed)
         if key == self._key:
             return self._controller
         internal_force = s.internal_force
         if floors and any(f > internal_force.f_min for f in floors):
             internal_force = replace(internal_force, floors=floors)
+        if not relaxed and internal_force.fallback_friction_margin is not None:
+            internal_force = replace(internal_force, fallback_friction_margin=None)
         modes = [ContactMode.SLIDING if i in sliders else ContactMode.FIXED for i in range(self.hand.m)]
         model = ReducedModel(self.hand, self.grasp.with_modes(modes), self.xi, object_mass=self.object_mass,
                              object_inertia=self.object_inertia)
@@ -473,11 +476,14 @@ class SlideExecutor:
         last one's :class:`InternalForceInfeasibleError` where none's do."""
         settling = any(self.phases[i] is ContactPhase.SETTLING and a.still == 0 for i, a in self._active.items())
 
-        def solve(fraction: float, gain: float, edges: bool) -> tuple[ComputedTorqueController, ControlOutput]:
-            law = self._law(fraction, edges)
+        def solve(fraction: float, gain: float, edges: bool,
+                  relaxed: bool) -> tuple[ComputedTorqueController, ControlOutput]:
+            law = self._law(fraction, edges, relaxed)
             return law, with_feedback(law, gain, S, S_dot, S_d, S_d_dot, S_d_ddot)
 
-        return first_feasible(fallbacks(self._law(1.0).internal_force, settling), solve, InternalForceInfeasibleError)
+        order = fallbacks(self._law().internal_force.floors != (), self.settings.internal_force.fallback_friction_margin
+                          is not None, settling)
+        return first_feasible(order, solve, InternalForceInfeasibleError)
 
     def _tipped(self, output: ControlOutput, meas: Measurement) -> ControlOutput:
         """``output`` with the spherical tips' couple added to its torque (``tip_radius``)."""

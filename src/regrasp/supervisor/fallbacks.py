@@ -1,12 +1,18 @@
 r"""What a step's law gives up, in turn, when no internal force gives it all
-(:class:`~regrasp.supervisor.executor.SlideExecutor`): the contacts' floors above ``f_min``, then the feedback's
-correction, then a settling contact's kinetic cone edge.
+(:class:`~regrasp.supervisor.executor.SlideExecutor`): the contacts' floors above ``f_min``, then the friction
+margin's part above ``fallback_friction_margin``, then the feedback's correction, then a settling contact's kinetic
+cone edge.
 
 The floors are given up only as far as they must be: where the whole floors leave no forces and ``f_min`` does, the
 largest fraction of them that leaves forces is found by bisection (:func:`largest_fraction`, :data:`FLOOR_BISECTIONS`
 halvings). Where the internal force has one free direction (two sliders and a holder, or a slider and a contact being
 primed), the least squeeze under a floor sits on that floor: taking the floors down to ``f_min`` at once drops every
 load to its least in one step, and a compliant contact that carried 1.4 N then leaves its edge.
+
+The held contacts' friction margin is kept before the floors: a floor keeps a load through a handover, the margin
+covers the plant's μ being below the model's, and a holder that slips fails the run. While any fraction of the floors
+leaves forces within the whole margin, no step takes the smaller ``fallback_friction_margin`` to keep more of them
+(a held palm at 0.44 of its load with the plant's μ 0.42 slipped that way at a break-away).
 
 The planned motion and ``f_min`` are the limits: where even they leave no forces, the executor aborts the slides.
 Measured on the default scenario's 200-run study (``docs/derivations.md``, "Contact health and keeping the loads").
@@ -15,17 +21,16 @@ Measured on the default scenario's 200-run study (``docs/derivations.md``, "Cont
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, NamedTuple, TypeVar
 
 from ..core.exceptions import InvalidParameterError
-from ..dynamics.internal_force.settings import InternalForceSettings
 
 if TYPE_CHECKING:
     import numpy as np
 
     from ..dynamics.control import ComputedTorqueController, ControlOutput
 
-__all__ = ["FEEDBACK_FRACTIONS", "FLOOR_BISECTIONS", "FLOOR_FRACTIONS", "fallbacks", "first_feasible",
+__all__ = ["FEEDBACK_FRACTIONS", "FLOOR_BISECTIONS", "FLOOR_FRACTIONS", "Fallback", "fallbacks", "first_feasible",
            "largest_fraction", "with_feedback"]
 
 T = TypeVar("T")
@@ -46,14 +51,35 @@ FLOOR_BISECTIONS = 4
 FEEDBACK_FRACTIONS = (1.0, 0.5, 0.0)
 
 
-def fallbacks(internal_force: InternalForceSettings | None, settling: bool) -> list[tuple[float, float, bool]]:
-    """The (floor fraction, feedback fraction, settling edges) a step's law tries in turn (:data:`FLOOR_FRACTIONS`,
-    :data:`FEEDBACK_FRACTIONS`): the floors first, with the whole feedback; then, on ``f_min`` alone, less feedback;
-    then (``settling``: a contact settles on its kinetic cone's edge) the same without the settling edges."""
-    floors = FLOOR_FRACTIONS if internal_force is not None and internal_force.floors != () else FLOOR_FRACTIONS[:1]
-    out = [(f, FEEDBACK_FRACTIONS[0], True) for f in floors] + [(floors[-1], g, True) for g in FEEDBACK_FRACTIONS[1:]]
+class Fallback(NamedTuple):
+    """One law a step tries (:func:`fallbacks`).
+
+    Attributes:
+        floors: The fraction of the contacts' floors above ``f_min`` kept [-] (0: ``f_min`` alone).
+        feedback: The fraction of the feedback's errors kept [-] (1: the targets as given).
+        edges: Whether a settling contact still sensed sliding keeps its kinetic cone's edge.
+        relaxed: Whether the internal force may take ``fallback_friction_margin`` where no force keeps the whole
+            ``friction_margin`` (False: it may not; the same where the settings have no fallback margin).
+    """
+
+    floors: float
+    feedback: float
+    edges: bool
+    relaxed: bool
+
+
+def fallbacks(floored: bool, relaxable: bool, settling: bool) -> list[Fallback]:
+    """The laws a step tries in turn (:data:`FLOOR_FRACTIONS`, :data:`FEEDBACK_FRACTIONS`): the floors first
+    (``floored``: some contact has a floor above ``f_min``), with the whole feedback and the whole friction margin;
+    then the same with the fallback friction margin (``relaxable``: the settings have one); then, on ``f_min`` alone,
+    less feedback; then (``settling``: a contact settles on its kinetic cone's edge) the same without the settling
+    edges."""
+    floors = FLOOR_FRACTIONS if floored else FLOOR_FRACTIONS[:1]
+    out = [Fallback(f, FEEDBACK_FRACTIONS[0], True, False) for f in floors] if relaxable else []
+    out += [Fallback(f, FEEDBACK_FRACTIONS[0], True, True) for f in floors]
+    out += [Fallback(floors[-1], g, True, True) for g in FEEDBACK_FRACTIONS[1:]]
     if settling:
-        out += [(floors[-1], g, False) for g in FEEDBACK_FRACTIONS]
+        out += [Fallback(floors[-1], g, False, True) for g in FEEDBACK_FRACTIONS]
     return out
 
 
@@ -75,25 +101,26 @@ def largest_fraction(solve: Callable[[float], T], feasible: float, infeasible: f
     return found
 
 
-def first_feasible(order: list[tuple[float, float, bool]], solve: Callable[[float, float, bool], T],
+def first_feasible(order: list[Fallback], solve: Callable[[float, float, bool, bool], T],
                    error: type[Exception]) -> T:
-    """``solve``'s result at the first (floor fraction, feedback fraction, settling edges) of ``order``
-    (:func:`fallbacks`) at which it does not raise ``error``; where that one gave up floors the entry before kept
-    (same feedback and edges), at the largest fraction between the two (:func:`largest_fraction`). The last entry's
-    ``error`` where every entry raises it."""
-    failed = None
-    for k, (fraction, gain, edges) in enumerate(order):
+    """``solve``'s result at the first :class:`Fallback` of ``order`` (:func:`fallbacks`) at which it does not raise
+    ``error``; where an entry before it with the rest the same kept more of the floors, at the largest fraction between
+    the two (:func:`largest_fraction`). The last entry's ``error`` where every entry raises it."""
+    failed: dict[tuple, float] = {}  # (feedback, edges, relaxed): the least fraction of the floors that raised
+    for k, entry in enumerate(order):
         try:
-            found = solve(fraction, gain, edges)
+            found = solve(*entry)
         except error:
             if k == len(order) - 1:
                 raise
-            failed = (fraction, gain, edges)
+            rest = entry[1:]
+            failed[rest] = min(failed.get(rest, entry.floors), entry.floors)
             continue
-        if failed is not None and failed[1:] == (gain, edges) and failed[0] > fraction:
-            found = largest_fraction(lambda f: solve(f, gain, edges), fraction, failed[0], found, errors=(error,))
+        rest = entry[1:]
+        if failed.get(rest, entry.floors) > entry.floors:
+            found = largest_fraction(lambda f: solve(f, *rest), entry.floors, failed[rest], found, errors=(error,))
         return found
-    raise InvalidParameterError("order", order, "a non-empty list of (floor fraction, feedback fraction, edges)")
+    raise InvalidParameterError("order", order, "a non-empty list of Fallback (floors, feedback, edges, relaxed)")
 
 
 def with_feedback(law: ComputedTorqueController, gain: float, S: np.ndarray, S_dot: np.ndarray, S_d: np.ndarray,
