@@ -129,6 +129,26 @@ def test_the_first_friction_estimate_is_the_ratio_the_contact_broke_away_at():
     assert law == "Proposition 3" and ft == pytest.approx(0.58 * fn, rel=1e-9)
 
 
+@pytest.mark.parametrize("broke_away_at", [0.50, 0.61])
+def test_the_first_friction_estimate_is_no_less_than_the_largest_ratio_the_primed_contact_held(broke_away_at):
+    """A compliant contact's friction builds up over its first slipping step: primed, it held 0.56 of its load
+    (the plant's μ_s, 12 % above the model's 0.5), then broke away reading 0.50. The sliding law starts on the
+    edge of 0.56, what the contact held, not 0.50 (the slider would stick again within a step); a break-away
+    read above what it held (0.61) is kept."""
+    ex = executor(friction_filter_time=0.01, breakaway_estimate=True)
+    out = []
+    ex.start(SlideOrder(0, 1, 0.0, reference=lambda t: (-0.014, 0.0, 0.0)), meas(0.0), out)
+    for k, ratio in enumerate((0.52, 0.56, 0.54), start=1):  # held, primed (not sliding)
+        ex.advance(meas(k * 1e-3, normal=(1.0, 1.0, 1.0), tangential=(ratio, 0.0, 0.0)), out)
+        assert ex.phases[0] is ContactPhase.PRIMING
+    ex.advance(meas(0.001, sliding=(False, False, False), normal=(0.01, 1.0, 1.0), tangential=(0.009, 0, 0)), out)
+    m = meas(0.004, sliding=(True, False, False), normal=(1.0, 1.0, 1.0), tangential=(broke_away_at, 0.0, 0.0))
+    ex.advance(m, out)
+    control, law, _, _ = command(ex, 0.004, m, out)
+    fn, ft = control.contact_forces_surface[0]
+    assert law == "Proposition 3" and ft == pytest.approx(max(0.56, broke_away_at) * fn, rel=1e-9)
+
+
 def test_with_a_start_speed_the_priming_lasts_until_the_contact_moves_the_right_way():
     ex = executor(start_speed=1e-3)
     out = []

@@ -4,6 +4,7 @@ the supervisor, its executor and its policies read. It never carries the plant i
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,3 +35,10 @@ class Measurement:
     sliding: np.ndarray
     tangential_force: np.ndarray
     normal_force: np.ndarray | None = None
+
+    def force_ratio(self, i: int, min_force: float = 0.0) -> float:
+        """Contact i's sensed friction ratio |f_t| / f_n [-]; NaN where the normal force is not sensed or is not
+        above ``min_force`` [N]."""
+        if self.normal_force is None or not float(self.normal_force[i]) > min_force:
+            return math.nan
+        return abs(float(self.tangential_force[i])) / float(self.normal_force[i])

@@ -81,6 +81,7 @@ class _Active:
     aborted: bool = False
     reprimes: int = 0
     mu_hat: float = math.nan  # the slider's kinetic friction ratio, estimated while it slides
+    held_ratio: float = math.nan  # the largest |f_t| / f_n sensed while primed and not yet slipping
     settle_sign: float = 0.0
     settle_undershoot: float = 0.0  # u of the settling phase (module docstring)
     still: int = 0  # steps in a row the settling contact was sensed stuck
@@ -181,9 +182,7 @@ class SlideExecutor:
         moving = any(p in (ContactPhase.PRIMING, ContactPhase.SLIDING) for p in self.phases)
         out = []
         for i, (phase, hold) in enumerate(zip(self.phases, self._hold.floors(self._now).tolist())):
-            floor = s.holder_preload if moving else 0.0
-            if phase is not ContactPhase.FIXED:
-                floor = s.slider_floor
+            floor = s.slider_floor if phase is not ContactPhase.FIXED else s.holder_preload if moving else 0.0
             if self._now < self._reflex_until[i]:
                 floor = max(floor, s.reflex_floor)
             out.append(max(floor, hold))
@@ -205,14 +204,17 @@ class SlideExecutor:
             t, xi, xi_dot, sliding = float(meas.t), float(meas.xi[i]), float(meas.xi_dot[i]), bool(meas.sliding[i])
             target = a.order.target
             started = sliding and (s.start_speed is None or xi_dot * a.order.direction > s.start_speed)
+            if phase is ContactPhase.PRIMING and not sliding:  # the largest ratio it held: ≤ the plant's μ_s
+                a.held_ratio = float(np.fmax(a.held_ratio, meas.force_ratio(i, s.friction_min_force)))
             if phase is ContactPhase.PRIMING and (started or t - a.phase_start >= s.prime_time - 1e-12):
                 self.phases[i] = ContactPhase.SLIDING
                 a.phase_start, a.slipped, a.filter = t, sliding, [xi, xi_dot]
                 if s.breakaway_estimate:
-                    # the first estimate: the force ratio at which it broke away, μ_s >= μ_k of the plant (the
-                    # sliding law then starts with no less friction than the plant's: a slider whose law
-                    # expects less friction than it gets reverses within a step and sticks again)
+                    # the first estimate: the force ratio it broke away at, or the largest it held primed (a soft
+                    # contact's friction builds up as it slips): ≈ μ_s >= μ_k of the plant, no less friction than the
+                    # plant's (a slider whose law expects less reverses within a step and sticks again)
                     self._estimate_friction(a, i, meas)
+                    a.mu_hat = float(np.fmax(a.mu_hat, a.held_ratio))
                 self.xi = self._sensed()
                 self._event(out, t, i, EventKind.SLIDE, f"sliding law, target {target * 1e3:.2f} mm"
                             + ("" if sliding else " (not yet slipping)"), xi=xi, target=target)
@@ -254,16 +256,11 @@ class SlideExecutor:
     def _estimate_friction(self, a: _Active, i: int, meas) -> None:
         """Update the slider's kinetic friction ratio from the sensed forces (``friction_filter_time``)."""
         s = self.settings
-        if s.friction_filter_time is None or meas.normal_force is None or not meas.sliding[i]:
+        ratio = meas.force_ratio(i, s.friction_min_force)
+        if s.friction_filter_time is None or not meas.sliding[i] or math.isnan(ratio):
             return
-        fn, ft = float(meas.normal_force[i]), float(meas.tangential_force[i])
-        if not fn > s.friction_min_force:
-            return
-        ratio = abs(ft) / fn
-        if math.isnan(a.mu_hat):
-            a.mu_hat = ratio
-        else:
-            a.mu_hat += min(1.0, s.control_period / s.friction_filter_time) * (ratio - a.mu_hat)
+        a.mu_hat = ratio if math.isnan(a.mu_hat) else \
+            a.mu_hat + min(1.0, s.control_period / s.friction_filter_time) * (ratio - a.mu_hat)
 
     def _kinetic(self, i: int) -> float:
         """The kinetic friction ratio the laws use for contact i: the estimate while it slides, rounded to

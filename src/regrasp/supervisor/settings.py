@@ -59,8 +59,9 @@ class ExecutorSettings:
             than its law predicts stops and sticks, one that carries less overshoots.
         friction_min_force: The estimate uses only steps with f_n above this [N].
         breakaway_estimate: Start the estimate at the step the contact is sensed breaking away, from the
-            force ratio it broke away at (≈ the plant's μ_s ≥ μ_k), so that the sliding law's first steps
-            expect no less friction than the plant's (False: from its first step sensed sliding).
+            force ratio it broke away at or the largest it held while primed, if more (≈ the plant's μ_s ≥ μ_k;
+            a compliant contact's friction builds up over its first slipping step), so that the sliding law's
+            first steps expect no less friction than the plant's (False: from its first step sensed sliding).
         friction_resolution: The laws get the estimate rounded to this [-] (a new law per change).
         control_period: The control period the filter assumes [s].
         max_reprimes: A planned slide (an order with a reference) that sticks before its planned end is
