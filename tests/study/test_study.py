@@ -130,6 +130,45 @@ def test_a_study_gives_the_same_runs_on_one_process_and_on_two(in_process, capsy
     assert json.loads((tmp_path / "study.json").read_text())["outcomes"] == doc["outcomes"]
 
 
+def interrupt_after(runs):
+    """A progress callback that presses Ctrl-C (raises KeyboardInterrupt) once ``runs`` runs have finished."""
+    def progress(done, total):
+        if done >= runs:
+            raise KeyboardInterrupt
+    return progress
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_ctrl_c_ends_a_study_with_the_runs_it_finished(in_process, workers):
+    result = run_study(SCENARIO, 4, seed=5, perturbation=TARGET, duration=0.15, workers=workers,
+                       progress=interrupt_after(2), interruptible=True)
+    assert result.interrupted and result.requested_runs == 4 and len(result.runs) == 2
+    indices = [r.draw.index for r in result.runs]
+    assert indices == sorted(indices)  # in run order, whichever finished first
+    for mine in result.runs:  # the runs it kept are the study's own, whole
+        reference = in_process.runs[mine.draw.index]
+        assert (mine.success, mine.min_cone_margin, mine.min_envelope_margin) == \
+            (reference.success, reference.min_cone_margin, reference.min_envelope_margin)
+    doc = result.to_json_dict()
+    assert doc["interrupted"] and doc["runs"] == 2 and doc["requested_runs"] == 4 and len(doc["outcomes"]) == 2
+    assert not in_process.interrupted and in_process.to_json_dict()["interrupted"] is False
+    with pytest.raises(KeyboardInterrupt):  # (not interruptible: Ctrl-C propagates, the workers stopped)
+        run_study(SCENARIO, 4, seed=5, perturbation=TARGET, duration=0.15, workers=workers,
+                  progress=interrupt_after(1))
+
+
+def test_a_study_interrupted_before_any_run_finished_says_so(tmp_path):
+    from regrasp.study.plots import plot_study
+
+    result = run_study(SCENARIO, 3, seed=5, duration=0.05, workers=1, progress=interrupt_after(0), interruptible=True)
+    assert result.runs == () and result.interrupted and result.requested_runs == 3
+    assert math.isnan(result.success_rate) and result.interval == (0.0, 1.0)
+    doc = result.to_json_dict()
+    assert doc["success_rate"] is None and doc["runs"] == 0 and json.loads(json.dumps(doc)) == doc
+    paths = plot_study(result, tmp_path)
+    assert len(paths) == 3 and all(p.stat().st_size > 1000 for p in paths)
+
+
 def test_a_study_on_a_local_ray_gives_the_same_runs(in_process, capsys):
     pytest.importorskip("ray")
     assert main(["study", str(SCENARIO), "--runs", "4", "--seed", "5", *FLAGS, "--duration", "0.15", "--workers", "2",

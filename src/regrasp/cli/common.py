@@ -19,8 +19,12 @@ if TYPE_CHECKING:
     from ..core.pad import Pad
     from ..plants.spec import PlantSpec
 
-__all__ = ["DEFAULT_SCENARIO", "ProgressBar", "add_plant_arguments", "count_argument", "nonnegative", "number_argument",
-           "output_directory", "output_file", "pad_option", "plant_spec", "positive"]
+__all__ = ["DEFAULT_SCENARIO", "STARTED", "ProgressBar", "add_plant_arguments", "count_argument", "nonnegative",
+           "number_argument", "output_directory", "output_file", "pad_option", "plant_spec", "positive"]
+
+#: When the command line started (``time.monotonic()``, at the CLI's import, before any heavy import): a summary's
+#: "in all" wall time counts imports, planning and compiling too.
+STARTED = time.monotonic()
 
 T = TypeVar("T", int, float)
 
@@ -67,26 +71,31 @@ def count_argument(least: int, most: int) -> Callable[[str], int]:
 
 class ProgressBar:
     """A one-line progress bar on stderr (done/total, elapsed and remaining time), drawn only when stderr is a
-    terminal."""
+    terminal; with ``lines``, elsewhere (a pipe, a log file) a plain line at each tenth of the work instead."""
 
-    def __init__(self, label: str, stream: TextIO = sys.stderr):
+    def __init__(self, label: str, stream: TextIO = sys.stderr, *, lines: bool = False):
         self.label, self.stream = label, stream
         self.enabled = stream.isatty()
+        self.lines = lines and not self.enabled
         self._last = -1
         self._start = time.monotonic()
 
     def __call__(self, done: int, total: int) -> None:
-        if not self.enabled:
+        if not (self.enabled or self.lines):
             return
         pct = int(100 * done / total)
-        if pct != self._last:
-            self._last = pct
-            bar = "#" * (pct // 4) + "." * (25 - pct // 4)
+        step = pct // 10 if self.lines else pct
+        if step != self._last:
+            self._last = step
             elapsed = time.monotonic() - self._start
             left = f", {elapsed * (total - done) / done:.0f} s left" if 0 < done < total else ""
-            self.stream.write(f"\r{self.label} [{bar}] {pct:3d}% ({done}/{total}, {elapsed:.0f} s{left})  ")
-            if done == total:
-                self.stream.write("\n")
+            if self.lines:
+                self.stream.write(f"{self.label}: {done}/{total} ({pct}%), {elapsed:.0f} s{left}\n")
+            else:
+                bar = "#" * (pct // 4) + "." * (25 - pct // 4)
+                self.stream.write(f"\r{self.label} [{bar}] {pct:3d}% ({done}/{total}, {elapsed:.0f} s{left})  ")
+                if done == total:
+                    self.stream.write("\n")
             self.stream.flush()
 
 

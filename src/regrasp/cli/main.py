@@ -39,7 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "around the model's, with sensing noise, torque noise and delays. Prints the success rate with a "
                     "Wilson 95 % interval, the failures by kind and time and the margins. The perturbations default "
                     "to the scenario's [study] table; a flag overrides its key. Exit status 0: the study ran, 2: bad "
-                    "input."))
+                    "input, 130: Ctrl-C (the runs that finished are summarised and written first)."))
     return parser
 
 

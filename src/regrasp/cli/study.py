@@ -5,7 +5,8 @@
 [--sweep NAME=V1,V2,... | --replay I [--rrd FILE]]``
 
 The perturbations default to the scenario's ``[study]`` table; a flag overrides its key.
-Exit status: 0 the study ran (whatever its success rate), 2 bad input; with ``--replay``, 0 or 1 as the run
+Exit status: 0 the study ran (whatever its success rate), 2 bad input, 130 Ctrl-C (after the runs that finished
+are summarised and, with ``--plot``, written: study.json and the figures); with ``--replay``, 0 or 1 as the run
 succeeded or failed.
 """
 
@@ -145,12 +146,18 @@ def _summary(result: StudyResult) -> str:
 
     lo, hi = result.interval
     runs = result.runs
-    lines = [f"regrasp study: {Path(result.scenario).name} on the {result.plant} plant, {len(runs)} runs of "
+    counted = f"{len(runs)} of {result.requested_runs} runs" if result.interrupted else f"{len(runs)} runs"
+    lines = [f"regrasp study: {Path(result.scenario).name} on the {result.plant} plant, {counted} of "
              f"{result.duration:.4g} s, seed "
              f"{result.seed}: {result.perturbation.describe()}"
-             + ("" if result.softness is None else f"; {result.softness.describe()}"),
-             f"  success: {result.successes}/{len(runs)} = {result.success_rate:.1%} (Wilson 95 %: "
-             f"[{lo:.1%}, {hi:.1%}])"]
+             + ("" if result.softness is None else f"; {result.softness.describe()}")]
+    if result.interrupted:
+        lines.append(f"  interrupted (Ctrl-C): {len(runs)} of {result.requested_runs} runs had finished; the runs "
+                     "under way were dropped, and the numbers below are over the finished ones")
+    if not runs:
+        return "\n".join(lines)
+    lines.append(f"  success: {result.successes}/{len(runs)} = {result.success_rate:.1%} (Wilson 95 %: "
+                 f"[{lo:.1%}, {hi:.1%}])")
     for kind, count in sorted(result.failures.items()):
         times = sorted(r.failure_time for r in runs if r.failure_kind == kind)
         lines.append(f"  failed, {kind}: {count} (at t = {', '.join(f'{t:.3f}' for t in times[:8])}"
@@ -245,8 +252,10 @@ def _sweep_study(args: argparse.Namespace, scenario, perturbation, plant: PlantS
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     results = sweep_study(scenario, args.runs, name, values, perturbation=perturbation, seed=args.seed,
                           duration=args.duration, periods=args.periods, workers=min(workers, args.runs),
-                          ray_address=args.ray, plant=plant, softness=_softness(args),
-                          progress=None if args.json else ProgressBar(f"{len(values)} x {args.runs} runs"))
+                          ray_address=args.ray, plant=plant, softness=_softness(args), interruptible=True,
+                          progress=None if args.json else
+                          ProgressBar(f"regrasp study: {len(values)} x {args.runs} runs", lines=True))
+    interrupted = len(results) < len(values) or results[-1].interrupted
     doc = {"sweep": name, "values": list(values), "studies": [r.to_json_dict() for r in results]}
     if directory is not None:
         (directory / "study_sweep.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")  # results first
@@ -255,18 +264,21 @@ def _sweep_study(args: argparse.Namespace, scenario, perturbation, plant: PlantS
     if args.json:
         json.dump(doc, sys.stdout)
         sys.stdout.write("\n")
-        return 0
+        return 130 if interrupted else 0
     print(f"regrasp study --sweep {name}: {len(values)} studies of {args.runs} runs, seed {args.seed}; besides "
           f"{name}: "
           f"{replace(perturbation, **{name: type(perturbation).__dataclass_fields__[name].default}).describe()}")
     for value, r in zip(values, results):
         lo, hi = r.interval
         failures = ", ".join(f"{k} {v}" for k, v in sorted(r.failures.items())) or "none"
+        cut = f" (interrupted: {len(r.runs)} of {r.requested_runs} runs finished)" if r.interrupted else ""
         print(f"  {name} = {value:<10g} success {r.successes}/{len(r.runs)} (Wilson 95 %: [{lo:.1%}, {hi:.1%}]); "
-              f"failures: {failures}")
+              f"failures: {failures}{cut}")
+    if interrupted:
+        print(f"  interrupted (Ctrl-C) after {len(results)} of {len(values)} sizes")
     for f in doc.get("figures", []):
         print(f"  figure: {f}")
-    return 0
+    return 130 if interrupted else 0
 
 
 def _perturbation(args: argparse.Namespace, scenario) -> object:
@@ -317,7 +329,8 @@ def _cmd_study(args: argparse.Namespace) -> int:
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     result = run_study(scenario, args.runs, seed=args.seed, perturbation=perturbation, duration=args.duration,
                        periods=args.periods, workers=min(workers, args.runs), ray_address=args.ray, plant=plant,
-                       softness=_softness(args), progress=None if args.json else ProgressBar(f"{args.runs} runs"))
+                       softness=_softness(args), interruptible=True,
+                       progress=None if args.json else ProgressBar(f"regrasp study: {args.runs} runs", lines=True))
     doc = result.to_json_dict()
     figures = []
     if directory is not None:
@@ -332,4 +345,4 @@ def _cmd_study(args: argparse.Namespace) -> int:
     else:
         print(_summary(result) + "".join(f"\n  figure: {f}" for f in figures)
               + (f"\n  results: {directory / 'study.json'}" if directory is not None else ""))
-    return 0
+    return 130 if result.interrupted else 0

@@ -19,10 +19,20 @@ from .intervals import Intervals
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["MM", "membership", "pyplot", "save_figure", "stacked_axes"]
+__all__ = ["FAILURE_COLOURS", "FAILURE_COLOUR", "MM", "SUCCESS_COLOUR", "membership", "pyplot", "save_figure",
+           "stacked_axes"]
 
 #: Millimetres per metre: the figures' lengths are in mm.
 MM = 1000.0
+
+#: A success, in every figure; no failure kind is green.
+SUCCESS_COLOUR = "tab:green"
+#: A failure of any kind (a figure that does not tell them apart).
+FAILURE_COLOUR = "tab:red"
+#: Each failure kind's colour (a :class:`~regrasp.core.events.FailureKind` value), the same in every figure.
+FAILURE_COLOURS = {"separation": "tab:purple", "unplanned_slip": "tab:orange", "collision": "tab:brown",
+                   "left_envelope": "tab:pink", "left_edge": "tab:olive", "singular": "tab:gray",
+                   "control": "tab:cyan", "no_schedule": "tab:blue", "interrupted": "black"}
 
 
 def pyplot() -> ModuleType:

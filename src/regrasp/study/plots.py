@@ -13,7 +13,7 @@ import numpy as np
 if TYPE_CHECKING:
     from .study import StudyResult
 
-__all__ = ["drawn_factors", "plot_study", "plot_sweep"]
+__all__ = ["drawn_factors", "plot_study", "plot_sweep", "study_title"]
 
 #: The drawn model errors a figure can show: (the perturbation's field, the axis label, the run's value).
 _DRAWN = (
@@ -49,8 +49,23 @@ def drawn_factors(result: StudyResult) -> dict[str, tuple[str, np.ndarray]]:
     return out
 
 
-def _binned(ax, x: np.ndarray, ok: np.ndarray, bins: int) -> None:
-    """The success rate in ``bins`` equal bins of x, with each bin's Wilson 95 % interval, and every run as a tick."""
+def study_title(result: StudyResult) -> str:
+    """What a study's figure is of: the scenario, the plant, the runs (and whether Ctrl-C cut the study short)."""
+    done = len(result.runs)
+    runs = f"{done} of {result.requested_runs} runs" if result.interrupted else f"{done} runs"
+    return (f"{Path(result.scenario).stem} on the {result.plant} plant, seed {result.seed}: {runs} of "
+            f"{result.duration:.3g} s" + (" (interrupted)" if result.interrupted else ""))
+
+
+def _sentence(ax, text: str) -> None:
+    """An axis that has nothing to draw says so, in words, instead of showing empty ranges."""
+    ax.set_axis_off()
+    ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", wrap=True)
+
+
+def _bins(x: np.ndarray, ok: np.ndarray, bins: int) -> tuple[list[float], list[float], list[float], list[float]]:
+    """The success rate in ``bins`` equal bins of x (the empty ones left out): (bin centres, rates, each rate's
+    Wilson 95 % interval's lower and upper ends)."""
     from .study import wilson_interval
 
     edges = np.linspace(x.min(), x.max(), bins + 1) if x.max() > x.min() else np.array([x.min() - 0.5, x.min() + 0.5])
@@ -65,59 +80,92 @@ def _binned(ax, x: np.ndarray, ok: np.ndarray, bins: int) -> None:
         lo, hi = wilson_interval(k, n)
         centres.append(0.5 * (edges[b] + edges[b + 1]))
         rates.append(k / n)
-        lows.append(k / n - lo)
-        highs.append(hi - k / n)
-    ax.errorbar(centres, rates, yerr=[lows, highs], fmt="o-", capsize=3, label="success rate (Wilson 95 %)")
-    ax.plot(x[ok], np.full(ok.sum(), 1.04), "|", color="C2", ms=8, label="a success")
-    ax.plot(x[~ok], np.full((~ok).sum(), -0.04), "|", color="C3", ms=8, label="a failure")
-    ax.set_ylim(-0.1, 1.1)
+        lows.append(lo)
+        highs.append(hi)
+    return centres, rates, lows, highs
+
+
+def _binned(ax, x: np.ndarray, ok: np.ndarray, binned: tuple, bottom: float) -> None:
+    """``binned`` (:func:`_bins`) with its intervals, and every run as a tick, on a rate axis from ``bottom`` to 1."""
+    from ..core.figures import FAILURE_COLOUR, SUCCESS_COLOUR
+
+    centres, rates, lows, highs = binned
+    ax.errorbar(centres, rates, yerr=[np.subtract(rates, lows), np.subtract(highs, rates)], fmt="o-", capsize=3,
+                color="black", label="success rate (Wilson 95 %)")
+    pad = 0.04 * (1.0 - bottom)
+    ax.plot(x[ok], np.full(ok.sum(), 1.0 + pad), "|", color=SUCCESS_COLOUR, ms=8, label="a success")
+    ax.plot(x[~ok], np.full((~ok).sum(), bottom - pad), "|", color=FAILURE_COLOUR, ms=8, label="a failure")
+    ax.set_ylim(bottom - 2.0 * pad, 1.0 + 2.0 * pad)
+
+
+def _rate_floor(lows: Sequence[float]) -> float:
+    """Where a success-rate axis starts: a tenth below the lowest interval end, rounded down to tenths, and not below
+    0 (so that the range that matters is not squashed into a corner of [0, 1])."""
+    return max(0.0, float(np.floor(10.0 * min(lows))) / 10.0 - 0.1)
 
 
 def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
-    """Write the study's figures into ``directory``; their paths.
+    """Write the study's figures into ``directory`` (made if missing); their paths.
 
     * ``study_success.png``: the success rate against each drawn model error (binned, Wilson intervals);
     * ``study_failure_times.png``: when the failed runs failed, stacked by failure kind;
     * ``study_margins.png``: each run's smallest cone and envelope margins, successes and failures apart.
+
+    Each names the scenario and the plant (:func:`study_title`); the failure kinds have their colours
+    (:data:`~regrasp.core.figures.FAILURE_COLOURS`); a figure with nothing to draw says so in a sentence.
     """
     from matplotlib.ticker import MaxNLocator
 
-    from ..core.figures import pyplot
+    from ..core.figures import FAILURE_COLOUR, FAILURE_COLOURS, SUCCESS_COLOUR, pyplot
 
     plt = pyplot()
 
     directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
     runs = result.runs
-    ok = np.array([r.success for r in runs])
+    ok = np.array([r.success for r in runs], dtype=bool)
     paths = []
     factors = drawn_factors(result)
+    title = study_title(result)
+    if not runs:
+        for name in ("study_success.png", "study_failure_times.png", "study_margins.png"):
+            fig, ax = plt.subplots(figsize=(6.0, 2.0))
+            _sentence(ax, f"{title}:\nno run finished")
+            paths.append(directory / name)
+            fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
+            plt.close(fig)
+        return paths
     if factors:
-        fig, axes = plt.subplots(1, len(factors), figsize=(4.2 * len(factors), 3.8), squeeze=False)
+        fig, axes = plt.subplots(1, len(factors), figsize=(4.2 * len(factors), 3.8), squeeze=False,
+                                 layout="constrained")
+        binned = {name: _bins(x, ok, bins=min(6, max(1, len(runs) // 10))) for name, (_, x) in factors.items()}
+        bottom = _rate_floor([lo for b in binned.values() for lo in b[2]])  # (one scale for every panel)
         for ax, (name, (label, x)) in zip(axes[0], factors.items()):
-            _binned(ax, x, ok, bins=min(6, max(1, len(runs) // 10)))
+            _binned(ax, x, ok, binned[name], bottom)
             ax.set_xlabel(label)
             ax.set_title(name)
         axes[0][0].set_ylabel("success rate [-]")
         axes[0][0].legend(fontsize=7, loc="lower left")
-        fig.suptitle(f"{result.successes}/{len(runs)} succeeded; {result.perturbation.describe()}", fontsize=9)
+        fig.suptitle(f"{title}: {result.successes}/{len(runs)} succeeded\n{result.perturbation.describe()}",
+                     fontsize=9)
         paths.append(directory / "study_success.png")
         fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
         plt.close(fig)
 
     bad = [r for r in runs if not r.success]
     kinds = sorted({r.failure_kind for r in bad})
-    fig, ax = plt.subplots(figsize=(6.0, 3.5))
-    ax.hist([[r.failure_time for r in bad if r.failure_kind == k] for k in kinds] or [[]], bins=20,
-            range=(0.0, result.duration), stacked=True, label=kinds or None)
-    ax.set_xlabel("failure time [s]")
-    ax.set_ylabel("runs")
-    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
-    ax.set_title(f"{len(bad)} of {len(runs)} runs failed")
+    fig, ax = plt.subplots(figsize=(6.0, 3.5) if kinds else (6.0, 2.0))
     if kinds:
+        ax.hist([[r.failure_time for r in bad if r.failure_kind == k] for k in kinds], bins=20,
+                range=(0.0, result.duration), stacked=True, label=kinds,
+                color=[FAILURE_COLOURS.get(k, FAILURE_COLOUR) for k in kinds])
+        ax.set_xlabel("failure time [s]")
+        ax.set_ylabel("runs")
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.set_title(f"{title}\n{len(bad)} of {len(runs)} runs failed", fontsize=9)
         ax.legend(fontsize=8)
-    else:  # (an empty histogram's axis would run from -0.05 to 0.05 runs)
-        ax.set_ylim(0.0, 1.0)
-        ax.text(0.5, 0.5, "no run failed", transform=ax.transAxes, ha="center", va="center")
+    else:  # (an empty histogram's axes would run from -0.05 to 0.05 runs)
+        _sentence(ax, f"{title}:\nno run failed")
     paths.append(directory / "study_failure_times.png")
     fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
     plt.close(fig)
@@ -132,11 +180,14 @@ def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
             lo, hi = values[finite].min(), values[finite].max()
             span = (lo, hi) if hi > lo else (lo - 0.5, hi + 0.5)
             ax.hist([values[finite & ok], values[finite & ~ok]], bins=20, range=span, stacked=True,
-                    color=["C2", "C3"], label=["success", "failure"])
-        ax.set_xlabel(label)
-        ax.set_ylabel("runs")
-        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
-    axes[0].legend(fontsize=8)
+                    color=[SUCCESS_COLOUR, FAILURE_COLOUR], label=["success", "failure"])
+            ax.set_xlabel(label)
+            ax.set_ylabel("runs")
+            ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+            ax.legend(fontsize=8)
+        else:
+            _sentence(ax, f"{label}:\nno run measured one")
+    fig.suptitle(title, fontsize=9)
     paths.append(directory / "study_margins.png")
     fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
     plt.close(fig)
@@ -148,26 +199,32 @@ def plot_sweep(name: str, results: Sequence[StudyResult], path: str | Path) -> P
     against the size of the perturbation ``name`` the studies differ in."""
     from ..core.figures import pyplot
     from ..model.perturbation import Perturbation
-    from .study import wilson_interval
 
     plt = pyplot()
+    path = Path(path)
+    results = [r for r in results if r.runs]  # (a study Ctrl-C stopped before any run finished has no rate)
+    if not results:
+        fig, ax = plt.subplots(figsize=(6.0, 2.0))
+        _sentence(ax, f"--sweep {name}: no run finished")
+        fig.savefig(path, dpi=110, bbox_inches="tight")
+        plt.close(fig)
+        return path
     x = [getattr(r.perturbation, name) for r in results]
     x = [0.0 if v is None else float(v) for v in x]
     rates = [r.success_rate for r in results]
-    bars = [wilson_interval(r.successes, len(r.runs)) for r in results]
+    bars = [r.interval for r in results]
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.0, 5.5), sharex=True)
     top.errorbar(x, rates, yerr=[[p - lo for p, (lo, _) in zip(rates, bars)], [hi - p for p, (_, hi) in zip(rates,
                                                                                                            bars)]],
                  fmt="o-", capsize=3)
-    top.set_ylim(-0.05, 1.05)
+    top.set_ylim(_rate_floor([lo for lo, _ in bars]) - 0.02, 1.02)
     top.set_ylabel("success rate [-]")
     rest = replace(results[0].perturbation, **{name: Perturbation.__dataclass_fields__[name].default})
-    top.set_title(f"{len(results[0].runs)} runs a size; besides {name}: {rest.describe()}", fontsize=8)
+    top.set_title(f"{study_title(results[0])} a size\nbesides {name}: {rest.describe()}", fontsize=8)
     medians = [[o.min_cone_margin for o in r.runs if o.min_cone_margin is not None] for r in results]
     bottom.plot(x, [float(np.median(m)) if m else np.nan for m in medians], "s-")
     bottom.set_ylabel("median smallest cone margin [N]")
     bottom.set_xlabel(name)
-    path = Path(path)
     fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path

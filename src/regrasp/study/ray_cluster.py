@@ -135,8 +135,8 @@ def require_ray() -> ModuleType:
 def ray_runs(address: str, workers: int | None, function: Callable, shared: tuple, items: Sequence) -> Iterator:
     """``function(shared[0], item, *shared[1:])`` for each item, as Ray tasks of one CPU on the cluster at
     ``address`` (checked with :func:`check_ray_address` already; ``"local"``: one started here with ``workers``
-    CPUs, shut down after), in the items' order. Ray's own refusal to connect is a
-    :class:`~regrasp.core.exceptions.ClusterConnectionError`."""
+    CPUs, shut down after), as they finish. Closing the generator early cancels the tasks still pending or running.
+    Ray's own refusal to connect is a :class:`~regrasp.core.exceptions.ClusterConnectionError`."""
     ray = require_ray()
     started = not ray.is_initialized()
     if started:
@@ -145,11 +145,16 @@ def ray_runs(address: str, workers: int | None, function: Callable, shared: tupl
             ray.init(address=address, include_dashboard=False, log_to_driver=False, logging_level="ERROR", **kwargs)
         except (ConnectionError, TimeoutError, ValueError) as exc:  # (Ray's: no cluster found, a bad address...)
             raise ClusterConnectionError(address, f"Ray could not connect ({' '.join(str(exc).split())})") from exc
+    pending: list = []
     try:
         task = ray.remote(num_cpus=1)(function)
         refs = [ray.put(x) for x in shared]
-        futures = [task.remote(refs[0], item, *refs[1:]) for item in items]
-        yield from (ray.get(f) for f in futures)
+        pending = [task.remote(refs[0], item, *refs[1:]) for item in items]
+        while pending:
+            (done,), pending = ray.wait(pending, num_returns=1)
+            yield ray.get(done)
     finally:
+        for ref in pending:  # (an early close: Ctrl-C, or the consumer stopped)
+            ray.cancel(ref, force=True)
         if started:
             ray.shutdown()

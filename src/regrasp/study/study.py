@@ -11,23 +11,26 @@ Where runs go: this process (``workers=1``), a pool of ``workers`` spawned proce
 A job carries the scenario itself (pickled: the fingers' models, not file paths), so Ray workers on other
 machines need no copy of the files.
 
-The success rate comes with a Wilson score interval (:func:`wilson_interval`).
+The success rate comes with a Wilson score interval (:func:`wilson_interval`). With ``interruptible``, Ctrl-C ends
+a study at once and keeps what it finished: the runs that ran to their end (the ones under way are dropped, so no
+run is judged by a Ctrl-C), in run order (:attr:`StudyResult.interrupted`).
 """
 
 from __future__ import annotations
 
 import math
 import multiprocessing
+import signal
 import time
 from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.events import FailureKind
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import MAX_WORKERS, as_count, as_finite_float, as_integer, expect_type
 from ..model.perturbation import Perturbation
@@ -146,9 +149,12 @@ def soften(plant: PlantSpec, softness: ContactSoftness | None) -> PlantSpec:
 
 def run_once(scenario: Scenario, draw: RunDraw, schedule: RegraspSchedule | None, duration: float,
              perturbation: Perturbation, settings: SupervisorSettings | None = None,
-             plant: PlantSpec = PlantSpec(), plan: PlanResult | None = None) -> RunOutcome:
-    """:func:`build_run`'s rollout, run: what it did."""
-    r = build_run(scenario, draw, schedule, duration, perturbation, settings, plant, plan).run(interruptible=False)
+             plant: PlantSpec = PlantSpec(), plan: PlanResult | None = None, *,
+             interruptible: bool = False) -> RunOutcome:
+    """:func:`build_run`'s rollout, run: what it did (``interruptible``: Ctrl-C ends it with an ``interrupted``
+    failure, as :meth:`~regrasp.rollout.build.Rollout.run` does, rather than raising)."""
+    r = build_run(scenario, draw, schedule, duration, perturbation, settings, plant, plan).run(
+        interruptible=interruptible)
     f = r.failure
     return RunOutcome(draw, r.success, None if f is None else f.kind.value, None if f is None else f.time,
                       None if f is None else f.contact, _finite_or_none(r.min_cone_margin),
@@ -164,7 +170,7 @@ class StudyResult:
 
     Attributes:
         scenario: The scenario file (or name).
-        runs: The outcomes, in run order.
+        runs: The outcomes of the runs that ran to their end, in run order (by ``draw.index``).
         perturbation: What was perturbed, and by how much.
         seed: The study's seed.
         duration: Each run's simulated time [s].
@@ -174,6 +180,7 @@ class StudyResult:
         wall_seconds: The study's wall time [s] (the plan included).
         plan_seconds: The plan's wall time [s].
         softness: The ranges each run's contact softness was drawn from, or None.
+        requested_runs: The runs the study was asked for (None: ``len(runs)``); more than ran when Ctrl-C ended it.
     """
 
     scenario: str
@@ -187,6 +194,12 @@ class StudyResult:
     plan_seconds: float
     plant: str = "project"
     softness: SoftnessRanges | None = None
+    requested_runs: int | None = None
+
+    @property
+    def interrupted(self) -> bool:
+        """Whether Ctrl-C ended the study before all its runs ran."""
+        return self.requested_runs is not None and len(self.runs) < self.requested_runs
 
     @property
     def successes(self) -> int:
@@ -194,12 +207,13 @@ class StudyResult:
 
     @property
     def success_rate(self) -> float:
-        return self.successes / len(self.runs)
+        """Successes over the runs that ran (NaN when none did)."""
+        return self.successes / len(self.runs) if self.runs else math.nan
 
     @property
     def interval(self) -> tuple[float, float]:
-        """The success rate's Wilson 95 % interval."""
-        return wilson_interval(self.successes, len(self.runs))
+        """The success rate's Wilson 95 % interval ([0, 1] when no run ran: nothing is known)."""
+        return wilson_interval(self.successes, len(self.runs)) if self.runs else (0.0, 1.0)
 
     @property
     def failures(self) -> dict[str, int]:
@@ -212,7 +226,9 @@ class StudyResult:
         return {"scenario": self.scenario, "seed": self.seed, "duration": self.duration, "workers": self.workers,
                 "backend": self.backend, "plant": self.plant, "perturbation": asdict(self.perturbation),
                 "softness": None if self.softness is None else asdict(self.softness),
-                "runs": len(self.runs), "successes": self.successes, "success_rate": self.success_rate,
+                "runs": len(self.runs), "requested_runs": self.requested_runs or len(self.runs),
+                "interrupted": self.interrupted, "successes": self.successes,
+                "success_rate": _finite_or_none(self.success_rate),
                 "wilson_95": [lo, hi],
                 "failures": self.failures, "wall_seconds": self.wall_seconds, "plan_seconds": self.plan_seconds,
                 "outcomes": [{**{f.name: getattr(r, f.name) for f in fields(r)}, "draw": r.draw.to_json_dict()}
@@ -224,7 +240,8 @@ _JOB: dict = {}
 
 def _init_worker(*shared: object) -> None:
     """A pool worker's shared inputs (``run_once``'s arguments but the draw), handed over once per worker, not
-    once per run."""
+    once per run. A worker ignores Ctrl-C (the terminal sends it to the whole process group): the study decides."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     _JOB["shared"] = shared
     from ..kernels import warm_up
 
@@ -237,15 +254,19 @@ def _pool_run(draw: RunDraw) -> RunOutcome:
 
 
 def _on_processes(workers: int, shared: tuple, draws: tuple[RunDraw, ...]) -> Iterator[RunOutcome]:
+    """The runs' outcomes as they finish: in this process (a run ended by Ctrl-C raises KeyboardInterrupt, it is
+    not an outcome) or on a pool of ``workers`` processes (closing the generator terminates the pool)."""
     if workers == 1:
         for draw in draws:
-            yield run_once(*shared[:1], draw, *shared[1:])
+            outcome = run_once(*shared[:1], draw, *shared[1:], interruptible=True)
+            if outcome.failure_kind == FailureKind.INTERRUPTED.value:
+                raise KeyboardInterrupt
+            yield outcome
         return
     # "spawn", not Linux's default "fork": the parent has run OpenMP code (planning), and forking such a
     # process aborts the child ("fork() called from a process already using GNU OpenMP")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                             initializer=_init_worker, initargs=shared) as pool:
-        yield from pool.map(_pool_run, draws)
+    with multiprocessing.get_context("spawn").Pool(workers, initializer=_init_worker, initargs=shared) as pool:
+        yield from pool.imap_unordered(_pool_run, draws)  # (the pool's exit terminates the workers)
 
 
 def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
@@ -253,7 +274,7 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
               workers: int = 1, ray_address: str | None = None, schedule: RegraspSchedule | None = None,
               settings: SupervisorSettings | None = None, plant: PlantSpec | str = "project",
               softness: SoftnessRanges | None = None,
-              progress: Callable[[int, int], None] | None = None) -> StudyResult:
+              progress: Callable[[int, int], None] | None = None, interruptible: bool = False) -> StudyResult:
     """Plan the schedule once, then run ``runs`` seeded rollouts (module docstring).
 
     Args:
@@ -275,7 +296,10 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
             :class:`~regrasp.plants.spec.PlantSpec` without model errors: each run draws its own, or a kind's name).
         softness: The ranges each run draws its contacts' softness from
             (:class:`~regrasp.model.softness.SoftnessRanges`; a compliant plant only), or None (the plant's own).
-        progress: Called as ``progress(done, runs)`` after each run.
+        progress: Called as ``progress(done, runs)`` once the runs start (done = 0), then after each run.
+        interruptible: Ctrl-C (KeyboardInterrupt) ends the study at once with the runs it finished
+            (:attr:`StudyResult.interrupted`) instead of propagating; the runs under way are dropped and the
+            workers stopped. Before the first run (while planning) it propagates.
     """
     from ..model.scenario import Scenario, load_scenario
     from ..rollout.build import build_rollout
@@ -310,13 +334,21 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     source = _on_processes(workers, shared, draws) if ray_address is None else \
         ray_runs(ray_address, workers, run_once, shared, draws)
     outcomes: list[RunOutcome] = []
-    for outcome in source:
-        outcomes.append(outcome)
+    try:
         if progress is not None:
-            progress(len(outcomes), len(draws))
-    return StudyResult(name, tuple(outcomes), perturbation, int(seed), probe.duration, workers,
-                       "process" if ray_address is None else "ray", time.perf_counter() - start, plan_seconds,
-                       plant.kind, softness)
+            progress(0, len(draws))  # (planned: the runs start)
+        for outcome in source:
+            outcomes.append(outcome)
+            if progress is not None:
+                progress(len(outcomes), len(draws))
+    except KeyboardInterrupt:
+        if not interruptible:
+            raise
+    finally:
+        source.close()  # (stops the workers, or cancels the Ray tasks, that are still running)
+    return StudyResult(name, tuple(sorted(outcomes, key=lambda o: o.draw.index)), perturbation, int(seed),
+                       probe.duration, workers, "process" if ray_address is None else "ray",
+                       time.perf_counter() - start, plan_seconds, plant.kind, softness, len(draws))
 
 
 def _check_offsets(scenario: Scenario, xi0, half_width: float) -> None:
@@ -337,7 +369,8 @@ def sweep_study(scenario: str | Path | Scenario, runs: int, name: str, values: S
     """One study per value of one perturbation (``name``, a :class:`~regrasp.model.perturbation.Perturbation` field),
     the others as ``perturbation`` gives them: success against that perturbation's size. The schedule is planned
     once; every study has the same seed, so the k-th runs of two studies differ only in that perturbation.
-    ``options``: :func:`run_study`'s. ``progress(done, total)`` counts runs over all the studies."""
+    ``options``: :func:`run_study`'s. ``progress(done, total)`` counts runs over all the studies. With
+    ``interruptible``, Ctrl-C ends the sweep with the studies so far, the last one interrupted."""
     from ..model.scenario import Scenario, load_scenario
 
     if not isinstance(name, str) or name not in {f.name for f in fields(Perturbation)}:
@@ -357,5 +390,12 @@ def sweep_study(scenario: str | Path | Scenario, runs: int, name: str, values: S
     for k, p in enumerate(perturbations):
         step = None if progress is None else (lambda done, total, k=k: progress(k * total + done,
                                                                                len(perturbations) * total))
-        out.append(run_study(scenario, runs, perturbation=p, progress=step, **options))
+        try:
+            out.append(run_study(scenario, runs, perturbation=p, progress=step, **options))
+        except KeyboardInterrupt:  # (between two studies' runs)
+            if not options.get("interruptible"):
+                raise
+            break
+        if out[-1].interrupted:
+            break
     return tuple(out)
