@@ -1,6 +1,7 @@
 """The ``regrasp`` command line: verdicts, JSON, figures, exit codes and errors."""
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -182,3 +183,38 @@ def test_ctrl_c_ends_a_simulation_with_a_partial_result_and_a_complete_recording
     assert proc.returncode == 1, err
     assert "interrupted" in out and "FAILURE" in out and "Traceback" not in err
     verify_rrd(tmp_path / "run.rrd")
+
+
+def test_ctrl_c_ends_a_study_keeping_the_runs_it_finished(tmp_path):
+    """Ctrl-C once a tenth of the runs finished (the progress line on stderr says so, through a pipe too): exit
+    130, the finished runs summarised and written (study.json, the figures), the workers stopped, no traceback."""
+    import signal
+
+    proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli.main", "study", "--runs", "100", "--workers", "2",
+                             "--duration", "0.5", "--seed", "3", "--plot", "out"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    seen = []
+    for line in proc.stderr:  # (event-driven: no clock to race)
+        seen.append(line)
+        if "(10%)" in line:
+            break
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=300)
+    err = "".join(seen) + err
+    assert proc.returncode == 130, (out, err)
+    assert "regrasp study: 100 runs: 0/100 (0%)" in err and "Traceback" not in err
+    doc = json.loads((tmp_path / "out" / "study.json").read_text())
+    assert doc["interrupted"] and doc["requested_runs"] == 100 and 10 <= doc["runs"] < 100
+    assert doc["runs"] == len(doc["outcomes"]) and len(doc["figures"]) == 3
+    assert f"interrupted (Ctrl-C): {doc['runs']} of 100 runs had finished" in out
+    assert f"success: {doc['successes']}/{doc['runs']}" in out
+
+
+def test_a_partial_schedule_is_called_partial_and_the_wall_time_counts_everything(capsys):
+    """Trajectory 1 has no schedule past t = 0.060 s: the summary says so, not "not periodic" as if it were whole;
+    and its wall time counts the run and, in all, the imports, the plan and the compiling."""
+    assert main(["simulate", T1]) == 1
+    out = capsys.readouterr().out
+    assert "schedule: PARTIAL, until t = 0.060 s" in out and "not periodic" not in out
+    run, total = re.search(r"wall time +([0-9.]+) s for the run .*; ([0-9.]+) s in all, with the imports", out).groups()
+    assert float(total) >= float(run)

@@ -16,6 +16,7 @@ import argparse
 import json
 import math
 import sys
+import time
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -27,6 +28,7 @@ from ..core.exceptions import InvalidParameterError
 from ..core.validation import MAX_COUNT
 from .common import (
     DEFAULT_SCENARIO,
+    STARTED,
     ProgressBar,
     add_plant_arguments,
     count_argument,
@@ -96,8 +98,9 @@ def plant_text(name: str, plant: PlantLike) -> str:
     return "project (point contacts, rigid)"
 
 
-def rollout_summary(result: RolloutResult, scenario: Scenario, plant_line: str) -> str:
-    """A rollout's result as ``regrasp simulate`` prints it (``plant_line``: :func:`plant_text`'s)."""
+def rollout_summary(result: RolloutResult, scenario: Scenario, plant_line: str, started: float | None = None) -> str:
+    """A rollout's result as ``regrasp simulate`` prints it (``plant_line``: :func:`plant_text`'s; ``started``: when
+    the command started, ``time.monotonic()``, for the wall time in all, with imports, planning and compiling)."""
     mm = 1e3
     lines = [f"regrasp simulate: {scenario.name}" + (f" ({scenario.path})" if scenario.path else ""),
              f"  plant: {plant_line}",
@@ -105,11 +108,15 @@ def rollout_summary(result: RolloutResult, scenario: Scenario, plant_line: str) 
              f"({result.steps} steps)"]
     sch = result.schedule
     if sch is not None:
-        lines.append(f"  schedule: {'periodic' if sch.periodic else 'not periodic'}, {len(sch.slides)} slides"
+        end = scenario.trajectory.t_start + result.duration
+        kind = ("periodic" if sch.periodic else "not periodic") if sch.periodic or sch.t_end >= end - 1e-9 else \
+            f"PARTIAL, until t = {sch.t_end:.3f} s (no schedule goes further)"
+        lines.append(f"  schedule: {kind}, {len(sch.slides)} slides"
                      + (" per period" if sch.periodic else "") + (f" (no fewer possible than {sch.slides_lower_bound})"
                                                                   if sch.slides_lower_bound is not None else "")
-                     + f"; planned margins {sch.min_envelope_margin * mm:.2f} mm, {sch.min_cone_margin:.3f} N; "
-                       f"planned in {sch.planning_seconds:.2f} s")
+                     + f"; planned smallest margins {sch.min_envelope_margin * mm:.2f} mm (envelope), "
+                       f"{sch.min_cone_margin:.3f} N (cone)"
+                     + (f"; planned in {sch.planning_seconds:.2f} s" if sch.planning_seconds > 0 else ""))
     if result.success:
         lines.append("  result: SUCCESS")
     else:
@@ -126,8 +133,10 @@ def rollout_summary(result: RolloutResult, scenario: Scenario, plant_line: str) 
                                                ".2f mm")),
         ("smallest cone margin (fixed)", _smallest(result.min_cone_margin, result.min_cone_margin_at, 1.0, ".3f N")),
         ("plant events", ", ".join(f"{k} {v}" for k, v in sorted(result.plant_event_counts().items())) or "none"),
-        ("wall time", f"{result.wall_seconds:.2f} s" + (f" ({result.realtime_factor:.2f}x real time)"
-                                                        if math.isfinite(result.realtime_factor) else "")),
+        ("wall time", f"{result.wall_seconds:.2f} s for the run" + (f" ({result.realtime_factor:.2f}x real time)"
+                                                                    if math.isfinite(result.realtime_factor) else "")
+         + ("" if started is None else f"; {time.monotonic() - started:.1f} s in all, with the imports, planning "
+                                       "and compiling kernels")),
     ]
     w = max(len(k) for k, _ in rows)
     lines += [f"  {k:<{w}}  {v}" for k, v in rows]
@@ -263,7 +272,7 @@ def _simulate(args, scenario, run, common) -> tuple[int, str]:
         doc["plant"] = args.plant
         doc["figures"] = figures
         return code, json.dumps(doc)
-    lines = ([rollout_summary(result, scenario, plant_text(args.plant, rollout.plant))]
+    lines = ([rollout_summary(result, scenario, plant_text(args.plant, rollout.plant), STARTED)]
              + [f"  figure: {f}" for f in figures])
     if result.failure is not None and result.failure.kind is FailureKind.INTERRUPTED:
         lines.append("  (interrupted: the result and the recording cover the run so far)")

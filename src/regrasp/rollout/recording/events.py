@@ -18,10 +18,11 @@ WARN_KINDS = frozenset({EventKind.SLIP, EventKind.SEPARATION, EventKind.COLLISIO
 
 
 def event_line(ev: Event) -> rr.TextLog:
-    """``t = … s  <source> <finger>: <kind> (<detail>)``, WARN for the kinds in :data:`WARN_KINDS`, else INFO."""
+    """``t = … s  <source> <finger>: <kind> (<detail>)`` (an event of no one finger, such as a re-plan:
+    ``<source>: <kind> (<detail>)``), WARN for the kinds in :data:`WARN_KINDS`, else INFO."""
     level = "WARN" if ev.kind in WARN_KINDS else "INFO"
-    return rr.TextLog(f"t = {ev.time:.4f} s  {ev.source.value} {ev.contact or '-'}: {ev.kind.value} ({ev.detail})",
-                      level=level)
+    who = f"{ev.source.value} {ev.contact}" if ev.contact else ev.source.value
+    return rr.TextLog(f"t = {ev.time:.4f} s  {who}: {ev.kind.value} ({ev.detail})", level=level)
 
 
 def failure_line(failure: Failure) -> rr.TextLog:
