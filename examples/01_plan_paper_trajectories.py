@@ -8,9 +8,6 @@ verdict, why it fails where it does, and the contact each finger should start fr
 import argparse
 from pathlib import Path
 
-from regrasp import load_scenario, plan_scenario
-from regrasp.envelope.plotting import write_plan_figures
-
 HERE = Path(__file__).resolve().parent
 
 
@@ -18,6 +15,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--plot", metavar="DIR", help="also write the figures of each plan into DIR/<scenario>/")
     args = parser.parse_args()
+    # (imported after parsing: --help answers at once)
+    from regrasp import load_scenario, plan_scenario
+    from regrasp.envelope.plotting import write_plan_figures
+
     for name in ("paper_trajectory_1", "paper_trajectory_2"):
         scenario = load_scenario(HERE / "scenarios" / f"{name}.toml")
         for geometry in ("ideal", "urdf"):

@@ -13,15 +13,16 @@ drift.
 import argparse
 from pathlib import Path
 
-import numpy as np
-
-from regrasp import Friction, Hand, Plant, PlantContact, load_scenario
-
 HERE = Path(__file__).resolve().parent
 
 
 def main() -> None:
     argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
+    # (imported after parsing: --help answers at once)
+    import numpy as np
+
+    from regrasp import Friction, Hand, Plant, PlantContact, load_scenario
+
     sc = load_scenario(HERE / "scenarios" / "paper_trajectory_2.toml")
     hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
     pose = np.array([0.0, 0.12, 0.0])  # object centre and orientation in the hand frame

@@ -19,35 +19,46 @@ Prints the slide range, the largest tracking errors, the smallest friction-cone 
 holding finger, the plant's event log (empty) and the control step's median time.
 """
 
+from __future__ import annotations
+
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
-
-from regrasp import FingerEnvelope, Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
-from regrasp.dynamics.control import Gains
-from regrasp.dynamics.internal_force.settings import InternalForceSettings
-from regrasp.dynamics.laws import Proposition3Controller
-from regrasp.dynamics.sliding import sliding_feasibility
-from regrasp.plants.closed_loop import run_closed_loop
+if TYPE_CHECKING:
+    from regrasp import Friction
 
 HERE = Path(__file__).resolve().parent
-FRICTION = [Friction(0.05), Friction(0.8)]  # sliding tip, holding tip (mu_s = mu_k each)
+MU = (0.05, 0.8)            # sliding tip, holding tip (mu_s = mu_k each; tip_friction())
 XI_HOLD = 0.019             # finger 2's contact: 19 mm below the centre of the right edge
-X0 = np.array([0.0, 0.12, 0.0])
+X0 = (0.0, 0.12, 0.0)       # the object's pose (x, y, β) on the first leg
 T_LEG = 1.5                 # [s] per slide leg
 ELLIPSE = (0.004, 0.002, 2.0)  # a [m], b [m], ω [rad/s] of the object's small ellipse
+
+
+def tip_friction() -> list[Friction]:
+    """The sliding tip's and the holding tip's friction, ``Friction(mu)`` for each of MU."""
+    from regrasp import Friction
+
+    return [Friction(mu) for mu in MU]
 
 
 def slide_range(sc, grasp):
     """The planner's feasible interval at X0 minus 10 % at each end, intersected with the contacts
     where sliding is possible both ways (sliding_feasibility, 0.5 mm grid, pushes of 0.3 to 6 N)."""
-    envelope = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1, geometry="urdf").at(X0)
+    import numpy as np
+
+    from regrasp import FingerEnvelope
+    from regrasp.dynamics.internal_force.settings import InternalForceSettings
+    from regrasp.dynamics.sliding import sliding_feasibility
+
+    x0, friction = np.array(X0), tip_friction()
+    envelope = FingerEnvelope(sc.contacts[0].finger, sc.polygon, 1, geometry="urdf").at(x0)
     lo, hi = max(envelope.feasible, key=lambda iv: iv[1] - iv[0])
     lo, hi = lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo)
     settings = InternalForceSettings(f_min=0.3, friction_margin=0.05, f_max=6.0)
     both = [x for x in np.arange(lo, hi + 1e-12, 5e-4)
-            if all(sliding_feasibility(grasp, X0, [x, XI_HOLD], np.zeros(3), 0, s, FRICTION,
+            if all(sliding_feasibility(grasp, x0, [x, XI_HOLD], np.zeros(3), 0, s, friction,
                                        object_mass=sc.polygon.mass,
                                        object_inertia=sc.polygon.inertia, gravity_in_hand=sc.gravity_in_hand,
                                        settings=settings).possible for s in (1, -1))]
@@ -55,13 +66,15 @@ def slide_range(sc, grasp):
 
 
 def make_reference(lo, hi):
+    import numpy as np
+
     c, amp, w = 0.5 * (lo + hi), 0.5 * (hi - lo), np.pi / T_LEG
     a, b, om = ELLIPSE
 
     def reference(t):
         # ξ: lo -> hi on the first leg, hi -> lo on the second (cosine, smooth at the turn)
         xi, xi_d, xi_dd = c - amp * np.cos(w * t), amp * w * np.sin(w * t), amp * w * w * np.cos(w * t)
-        pos, vel, acc = X0.copy(), np.zeros(3), np.zeros(3)
+        pos, vel, acc = np.array(X0), np.zeros(3), np.zeros(3)
         if t > T_LEG:  # the object joins a small ellipse, blended in over 0.5 s (quintic)
             tau = t - T_LEG
             u = min(tau / 0.5, 1.0)
@@ -82,6 +95,15 @@ def make_reference(lo, hi):
 
 def main() -> None:
     argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
+    # (imported after parsing: --help answers at once)
+    import numpy as np
+
+    from regrasp import Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+    from regrasp.dynamics.control import Gains
+    from regrasp.dynamics.laws import Proposition3Controller
+    from regrasp.plants.closed_loop import run_closed_loop
+
+    friction = tip_friction()
     sc = load_scenario(HERE / "scenarios" / "paper_trajectory_2.toml")
     hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
     grasp = Grasp(sc.polygon, [1, 3], ["sliding", "fixed"])
@@ -95,9 +117,9 @@ def main() -> None:
     S0, S0_dot, _ = reference(0.0)
     st = model.state(S0, S0_dot)
     plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", lo, 1.0), PlantContact(3, "fixed", XI_HOLD)],
-                  friction=FRICTION)
+                  friction=friction)
     plant.reset(st.q, st.q_dot, S0[:3], S0_dot[:3])
-    controller = Proposition3Controller(model, Gains.critically_damped(40.0, 4), friction=FRICTION)
+    controller = Proposition3Controller(model, Gains.critically_damped(40.0, 4), friction=friction)
     log = run_closed_loop(plant, controller, reference, 2 * T_LEG)
 
     err = log.errors

@@ -9,33 +9,25 @@ scheduled policy on the independent full-coordinate plant (optionally one that d
 and reads the result: success, tracking, slides, margins, and the supervisor's decisions.
 """
 
+from __future__ import annotations
+
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
-
-from regrasp import (
-    ConvexPolygon,
-    EllipseTrajectory,
-    EventKind,
-    Finger,
-    Friction,
-    Geometry,
-    ModelErrors,
-    PlantSpec,
-    RegraspSettings,
-    RunSpec,
-    Scenario,
-    build_rollout,
-    plan_regrasps,
-)
-from regrasp.model import FingerContact
+if TYPE_CHECKING:
+    from regrasp import Scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def three_finger_scenario() -> Scenario:
     """Paper trajectory 2 with a palm finger (as examples/scenarios/paper_trajectory_2_three_fingers.toml)."""
+    import numpy as np
+
+    from regrasp import ConvexPolygon, EllipseTrajectory, Finger, Friction, Geometry, Scenario
+    from regrasp.model import FingerContact
+
     finger = ROOT / "urdf" / "planar_2r_finger.urdf"
     palm = ROOT / "urdf" / "planar_2r_palm_finger.urdf"
     up = np.pi / 2
@@ -61,6 +53,8 @@ def main() -> None:
     parser.add_argument("--plant-mu-scale", type=float, default=1.0, help="the plant's friction / the model's")
     parser.add_argument("--rrd", type=Path, help="also write a rerun recording (open it with `rerun FILE`)")
     args = parser.parse_args()
+    # (imported after parsing: --help answers at once)
+    from regrasp import EventKind, ModelErrors, PlantSpec, RegraspSettings, RunSpec, build_rollout, plan_regrasps
 
     scenario = three_finger_scenario()
     schedule = plan_regrasps(scenario, RegraspSettings(cone_margin=0.2))

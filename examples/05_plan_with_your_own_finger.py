@@ -9,16 +9,17 @@ few times and whether one fixed grasp survives the whole motion.
 import argparse
 from pathlib import Path
 
-import numpy as np
-
-from regrasp import ConvexPolygon, Finger, WaypointTrajectory, plan
-from regrasp.model import FingerContact
-
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def main() -> None:
     argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()
+    # (imported after parsing: --help answers at once)
+    import numpy as np
+
+    from regrasp import ConvexPolygon, Finger, WaypointTrajectory, plan
+    from regrasp.model import FingerContact
+
     urdf = ROOT / "urdf" / "planar_2r_finger_long_distal.urdf"
     left = Finger.from_urdf(urdf, base_in_hand=(-0.045, 0.0, np.pi / 2), configuration="left", name="left")
     right = left.with_placement(base_in_hand=(0.045, 0.0, np.pi / 2), configuration="right", name="right")

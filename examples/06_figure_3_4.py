@@ -12,12 +12,6 @@ directions and writes figure_3_4.png.
 import argparse
 from pathlib import Path
 
-import numpy as np
-
-from regrasp import Friction, Grasp, load_scenario
-from regrasp.dynamics.plotting import plot_slide_feasibility
-from regrasp.dynamics.sliding import sliding_feasibility
-
 HERE = Path(__file__).resolve().parent
 
 
@@ -25,6 +19,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default=".", help="directory for figure_3_4.png (default: here)")
     args = parser.parse_args()
+    # (imported after parsing: --help answers at once)
+    import numpy as np
+
+    from regrasp import Friction, Grasp, load_scenario
+    from regrasp.dynamics.plotting import plot_slide_feasibility
+    from regrasp.dynamics.sliding import sliding_feasibility
+
     sc = load_scenario(HERE / "scenarios" / "paper_trajectory_2.toml")
     pose, xi, friction = np.array([0.0, 0.12, 0.0]), np.array([-0.0075, -0.0075]), Friction(0.3)
     grasp = Grasp(sc.polygon, [1, 3], ["fixed", "fixed"])

@@ -20,12 +20,6 @@ import importlib.util
 import time
 from pathlib import Path
 
-from regrasp import Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
-from regrasp.dynamics.control import Gains
-from regrasp.dynamics.laws import Proposition3Controller
-from regrasp.plants.closed_loop import run_closed_loop
-from regrasp.rollout.recording.recorder import RolloutRecorder
-
 HERE = Path(__file__).resolve().parent
 
 
@@ -44,8 +38,15 @@ def main() -> None:
     parser.add_argument("--decimation", type=int, default=1, help="log every n-th control step (default 1)")
     parser.add_argument("--spawn", action="store_true", help="also stream to a rerun viewer it starts")
     args = parser.parse_args()
+    # (imported after parsing: --help answers at once)
+    from regrasp import Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
+    from regrasp.dynamics.control import Gains
+    from regrasp.dynamics.laws import Proposition3Controller
+    from regrasp.plants.closed_loop import run_closed_loop
+    from regrasp.rollout.recording.recorder import RolloutRecorder
 
     ex = load_example_03()
+    friction = ex.tip_friction()
     sc = load_scenario(HERE / "scenarios" / "paper_trajectory_2.toml")
     hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
     grasp = Grasp(sc.polygon, [1, 3], ["sliding", "fixed"])
@@ -55,11 +56,11 @@ def main() -> None:
     S0, S0_dot, _ = reference(0.0)
     st = model.state(S0, S0_dot)
     plant = Plant(hand, sc.polygon, [PlantContact(1, "sliding", lo, 1.0), PlantContact(3, "fixed", ex.XI_HOLD)],
-                  friction=ex.FRICTION)
+                  friction=friction)
     plant.reset(st.q, st.q_dot, S0[:3], S0_dot[:3])
-    controller = Proposition3Controller(model, Gains.critically_damped(40.0, 4), friction=ex.FRICTION)
+    controller = Proposition3Controller(model, Gains.critically_damped(40.0, 4), friction=friction)
     print(f"example 03's slide: finger 1 from xi = {lo * 1e3:.1f} mm towards {hi * 1e3:.1f} mm "
-          f"({ex.FRICTION[0]} sliding, {ex.FRICTION[1]} holding), {args.duration:g} s at dt = {plant.dt * 1e3:g} ms")
+          f"({friction[0]} sliding, {friction[1]} holding), {args.duration:g} s at dt = {plant.dt * 1e3:g} ms")
 
     start = time.perf_counter()
     interrupted = False

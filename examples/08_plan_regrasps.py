@@ -13,9 +13,6 @@ exists; with the paper's two fingers none does, and the planner says why.
 import argparse
 from pathlib import Path
 
-from regrasp import NoScheduleError, RegraspSettings, load_scenario, plan_regrasps, plan_scenario
-from regrasp.schedule.plotting import plot_schedule
-
 HERE = Path(__file__).resolve().parent
 
 
@@ -29,6 +26,10 @@ def main() -> None:
                         help="required cone margins [N] (default: 0.1 0.3)")
     parser.add_argument("--plot", metavar="DIR", help="write each schedule's figure (paper Fig. 4.3) into DIR")
     args = parser.parse_args()
+    # (imported after parsing: --help answers at once)
+    from regrasp import NoScheduleError, RegraspSettings, load_scenario, plan_regrasps, plan_scenario
+    from regrasp.schedule.plotting import plot_schedule
+
     scenario = load_scenario(args.scenario)
     print(f"{scenario.name}: {len(scenario.contacts)} fingers, {', '.join(str(f) for f in scenario.friction)}")
     print(f"{'envelope margin':>16} {'cone margin':>12} {'slides':>7} {'fewest':>7} {'reached: envelope':>18} "

@@ -19,9 +19,6 @@ the README's figures use 3).
 import argparse
 from pathlib import Path
 
-from regrasp import NoScheduleError, RunSpec, build_rollout, load_scenario
-from regrasp.rollout.plots import plot_frames, plot_rollout
-
 SCENARIOS = Path(__file__).resolve().parent / "scenarios"
 
 
@@ -35,6 +32,8 @@ def row(name, result) -> str:
 def figures(result, rollout, directory: Path | None, stem: str, frames: bool) -> None:
     if directory is None:
         return
+    from regrasp.rollout.plots import plot_frames, plot_rollout
+
     paths = [plot_rollout(result, directory / f"{stem}.png")]
     if frames:
         paths.append(plot_frames(result, rollout.supervisor.hand, rollout.plant.polygon,
@@ -48,6 +47,9 @@ def main() -> None:
     parser.add_argument("--periods", type=int, default=1, help="periods of trajectory 2 to run (default 1)")
     parser.add_argument("--plot", type=Path, help="write the figures into this directory")
     args = parser.parse_args()
+    # (imported after parsing: --help answers at once)
+    from regrasp import NoScheduleError, RunSpec, build_rollout, load_scenario
+
     header = f"  {'rollout':34s} {'reached':>8s} {'slides':>6s} {'envelope':>11s} {'cone':>9s}  failure"
 
     print(f"Figure 4.3: trajectory 2, three fingers, gravity down, {args.periods} period(s)")

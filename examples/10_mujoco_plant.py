@@ -15,35 +15,14 @@ sensed positions (a sphere rolls): docs/derivations.md, "A second plant: MuJoCo"
 import argparse
 from pathlib import Path
 
-import numpy as np
-
-from regrasp import (
-    Grasp,
-    Hand,
-    MujocoSettings,
-    Plant,
-    PlantContact,
-    PlantSpec,
-    ReducedModel,
-    RegraspSupervisor,
-    RunSpec,
-    SupervisorSettings,
-    WaypointTrajectory,
-    build_rollout,
-    load_scenario,
-)
-from regrasp.core.events import EventKind
-from regrasp.plants.mujoco import MujocoPlant
-from regrasp.rollout.build import Rollout
-from regrasp.supervisor import SlideOrder
-from regrasp.supervisor.policies import OrderedSlidesPolicy
-
 SCENARIOS = Path(__file__).resolve().parent / "scenarios"
 XI0, MU, SPEED, START, END = -0.0075, 0.3, 0.005, 0.02, 0.32  # Figure 3.4: finger 1 7.5 mm below the centre
 
 
 def hold(sc, plant, radius):
     """The two-finger hold on ``plant``: (orientation error [mrad], position error [mm], events)."""
+    from regrasp import MujocoSettings, PlantSpec, RunSpec, build_rollout
+
     spec = PlantSpec() if plant == "project" else PlantSpec("mujoco", MujocoSettings(tip_radius=radius))
     r = build_rollout(sc, RunSpec(duration=1.0), policy="none", plant=spec).run()
     return (r.max_orientation_error_after_transient * 1e3, r.max_object_error_after_transient * 1e3,
@@ -53,6 +32,25 @@ def hold(sc, plant, radius):
 def figure_3_4(sc, plant, radius):
     """Figure 3.4's slide on ``plant``: (primings, largest |ξ - ξ_d| after 50 ms [mm], ξ at the end [mm],
     largest orientation error [mrad])."""
+    import numpy as np
+
+    from regrasp import (
+        Grasp,
+        Hand,
+        MujocoSettings,
+        Plant,
+        PlantContact,
+        ReducedModel,
+        RegraspSupervisor,
+        SupervisorSettings,
+        WaypointTrajectory,
+    )
+    from regrasp.core.events import EventKind
+    from regrasp.plants.mujoco import MujocoPlant
+    from regrasp.rollout.build import Rollout
+    from regrasp.supervisor import SlideOrder
+    from regrasp.supervisor.policies import OrderedSlidesPolicy
+
     hand = Hand([c.finger for c in sc.contacts], gravity_in_hand=sc.gravity_in_hand)
     contacts = [PlantContact(1, "fixed", XI0), PlantContact(3, "fixed", XI0)]
     pose = np.array([0.0, 0.12, 0.0])
@@ -78,6 +76,8 @@ def figure_3_4(sc, plant, radius):
 
 
 def scheduled(sc, plant, radius, seconds):
+    from regrasp import MujocoSettings, PlantSpec, RunSpec, build_rollout
+
     spec = PlantSpec() if plant == "project" else PlantSpec("mujoco", MujocoSettings(tip_radius=radius))
     r = build_rollout(sc, RunSpec(duration=seconds), plant=spec).run()
     outcome = "success" if r.success else f"{r.failure.kind.value} at {r.failure.time:.3f} s"
@@ -101,6 +101,9 @@ def main() -> None:
     parser.add_argument("--rollout", type=positive, default=None, metavar="SECONDS",
                         help="also run the scheduled three-finger rollout this long on both plants")
     args = parser.parse_args()
+    # (imported after parsing: --help answers at once)
+    from regrasp import load_scenario
+
     radius = args.tip_radius * 1e-3
     two = load_scenario(SCENARIOS / "paper_trajectory_2.toml")
     print(f"MuJoCo: sphere tips of {args.tip_radius:g} mm, soft contacts, 0.1 ms steps under a 1 kHz zero-order hold")

@@ -26,27 +26,26 @@ runs of the largest object position and orientation errors after the first 0.5 s
 ``--runs 50 --periods 2`` (about 80 minutes on 2 cores).
 """
 
+from __future__ import annotations
+
 import argparse
 import os
 from pathlib import Path
 from statistics import median
+from typing import TYPE_CHECKING
 
-from regrasp import load_scenario
-from regrasp.core.contact import DEFAULT_CONE_MARGIN
-from regrasp.dynamics.internal_force.settings import InternalForceSettings
-from regrasp.schedule.planner import RegraspSettings, plan_regrasps
-from regrasp.study.study import Perturbation, run_study
-from regrasp.supervisor.settings import SupervisorSettings
+if TYPE_CHECKING:
+    from regrasp.supervisor.settings import SupervisorSettings
 
 SCENARIO = Path(__file__).resolve().parent / "scenarios" / "paper_trajectory_2_three_fingers.toml"
-
-#: The issue's perturbations.
-PERTURBATION = Perturbation(mass=0.2, inertia=0.2, mu=0.2, contact_position=2e-4, xi_noise=2e-4,
-                            position_noise=1e-4, angle_noise=1e-3, delay=1)
 
 
 def variants(geometry: str, delay: int, hold_resolution: float) -> list[tuple[str, SupervisorSettings]]:
     """The supervisors of the docstring, each the one before plus one change."""
+    from regrasp.core.contact import DEFAULT_CONE_MARGIN
+    from regrasp.dynamics.internal_force.settings import InternalForceSettings
+    from regrasp.supervisor.settings import SupervisorSettings
+
     today = SupervisorSettings.robust(geometry, DEFAULT_CONE_MARGIN, actuation_delay=delay,
                                       hold_resolution=hold_resolution)
     now = today.executor
@@ -80,15 +79,24 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="worker processes (default: cores)")
     parser.add_argument("--seed", type=int, default=1, help="the study's seed (default 1)")
     args = parser.parse_args()
+    # (imported after parsing: --help answers at once)
+    from regrasp import load_scenario
+    from regrasp.core.contact import DEFAULT_CONE_MARGIN
+    from regrasp.schedule.planner import RegraspSettings, plan_regrasps
+    from regrasp.study.study import Perturbation, run_study
+
+    # the issue's perturbations
+    perturbation = Perturbation(mass=0.2, inertia=0.2, mu=0.2, contact_position=2e-4, xi_noise=2e-4,
+                                position_noise=1e-4, angle_noise=1e-3, delay=1)
     duration = None if args.periods else (args.duration or 0.3)
     scenario = load_scenario(SCENARIO)
     schedule = plan_regrasps(scenario, RegraspSettings(cone_margin=DEFAULT_CONE_MARGIN))
     print(f"{args.runs} runs of {'%d periods' % args.periods if args.periods else '%g s' % duration} each, seed "
-          f"{args.seed}: {PERTURBATION.describe()}")
+          f"{args.seed}: {perturbation.describe()}")
     print(f"{'supervisor':32s} {'success':>9s} {'Wilson 95 %':>15s}  {'min cone margin':>15s}  "
           f"{'median errors':>18s}  failures")
-    for name, settings in variants(scenario.geometry.value, PERTURBATION.delay, 0.5 * PERTURBATION.xi_noise):
-        r = run_study(scenario, args.runs, seed=args.seed, perturbation=PERTURBATION, duration=duration,
+    for name, settings in variants(scenario.geometry.value, perturbation.delay, 0.5 * perturbation.xi_noise):
+        r = run_study(scenario, args.runs, seed=args.seed, perturbation=perturbation, duration=duration,
                       periods=args.periods, workers=min(args.workers, args.runs), schedule=schedule, settings=settings)
         lo, hi = r.interval
         cones = [o.min_cone_margin for o in r.runs if o.min_cone_margin is not None]  # (None: no step measured one)

@@ -22,24 +22,26 @@ the first 0.5 s. The default (0.3 s at r = 0.25 mm) only shows the machinery; th
 took ``--periods 2 --radii 0.25 1`` (about 3 minutes on 2 cores).
 """
 
+from __future__ import annotations
+
 import argparse
 from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING
 
-from regrasp import load_scenario
-from regrasp.core.contact import DEFAULT_CONE_MARGIN
-from regrasp.plants.mujoco.mjcf import MujocoSettings
-from regrasp.plants.spec import PlantSpec
-from regrasp.rollout.build import build_rollout
-from regrasp.rollout.spec import RunSpec
-from regrasp.schedule.planner import RegraspSettings, plan_regrasps
-from regrasp.schedule.problem import trajectory_period
-from regrasp.supervisor.settings import SupervisorSettings
+if TYPE_CHECKING:
+    from regrasp.schedule.planner import RegraspSettings
+    from regrasp.supervisor.settings import SupervisorSettings
 
 SCENARIO = "paper_trajectory_2_three_fingers.toml"
 
 
 def variants(geometry: str, tip_radius: float) -> list[tuple[str, RegraspSettings, SupervisorSettings]]:
     """The supervisors of the docstring, each the one before plus one change, with the planner's settings."""
+    from regrasp.core.contact import DEFAULT_CONE_MARGIN
+    from regrasp.schedule.planner import RegraspSettings
+    from regrasp.supervisor.settings import SupervisorSettings
+
     plan = RegraspSettings()
     primed = replace(plan, prime_overshoot=0.05)
     today = SupervisorSettings.robust(geometry, DEFAULT_CONE_MARGIN, tip_radius=tip_radius,
@@ -51,8 +53,6 @@ def variants(geometry: str, tip_radius: float) -> list[tuple[str, RegraspSetting
     sup1 = sup0.with_executor(slider_floor=now.slider_floor)
     plan2 = replace(plan1, holder_preload=plan.holder_preload)
     sup2 = sup1.with_executor(holder_preload=now.holder_preload)
-    sup3 = sup2.with_executor(reflex_below=now.reflex_below, reflex_floor=now.reflex_floor,
-                              reflex_time=now.reflex_time)
     return [("0 issue 23's", plan0, sup0), ("1 + slider floor 0.3 N", plan1, sup1),
             ("2 + holders pre-loaded 0.3 N", plan2, sup2), ("3 + reflex (today)", plan, today),
             ("4 + priming overshoot planned", primed, today)]
@@ -67,7 +67,14 @@ def main() -> None:
                    help="the fingertips' sphere radii [mm] (default 0.25)")
     p.add_argument("--plant", choices=("mujoco", "project"), default="mujoco", help="the plant (default mujoco)")
     args = p.parse_args()
-    from pathlib import Path
+    # (imported after parsing: --help answers at once)
+    from regrasp import load_scenario
+    from regrasp.plants.mujoco.mjcf import MujocoSettings
+    from regrasp.plants.spec import PlantSpec
+    from regrasp.rollout.build import build_rollout
+    from regrasp.rollout.spec import RunSpec
+    from regrasp.schedule.planner import plan_regrasps
+    from regrasp.schedule.problem import trajectory_period
 
     sc = load_scenario(Path(__file__).resolve().parent / "scenarios" / SCENARIO)
     periodic = args.periods is not None
