@@ -157,6 +157,32 @@ def test_ctrl_c_ends_a_study_with_the_runs_it_finished(in_process, workers):
                   progress=interrupt_after(1))
 
 
+def test_a_resumed_study_keeps_its_finished_runs_and_runs_the_others(in_process, tmp_path, capsys):
+    from regrasp.study.resume import finished_runs, read_study
+
+    part = run_study(SCENARIO, 4, seed=5, perturbation=TARGET, duration=0.15, workers=1,
+                     progress=interrupt_after(1), interruptible=True)
+    (tmp_path / "study.json").write_text(json.dumps(part.to_json_dict()))
+    doc = read_study(tmp_path)
+    same = dict(scenario=str(SCENARIO), contacts=3, plant="project", duration=part.duration, seed=5, runs=4,
+                perturbation=TARGET, softness=None)
+    finished = finished_runs(doc, **same)
+    assert finished == part.runs  # (read back whole: the draw regenerated, every field as written)
+    whole = run_study(SCENARIO, 4, seed=5, perturbation=TARGET, duration=0.15, workers=1, finished=finished)
+    assert not whole.interrupted and [r.draw.index for r in whole.runs] == [0, 1, 2, 3]
+    for mine, reference in zip(whole.runs, in_process.runs):  # the same runs as a study never interrupted
+        assert (mine.success, mine.min_cone_margin, mine.max_object_error) == \
+            (reference.success, reference.min_cone_margin, reference.max_object_error)
+    for key, value in (("seed", 6), ("perturbation", Perturbation(mass=0.1)), ("plant", "mujoco"), ("runs", 0),
+                       ("contacts", 2)):
+        with pytest.raises(InvalidParameterError, match="resume"):
+            finished_runs(doc, **{**same, key: value})
+    with pytest.raises(InvalidParameterError, match="finished"):  # (a run of another study)
+        run_study(SCENARIO, 4, seed=6, perturbation=TARGET, duration=0.15, workers=1, finished=finished)
+    assert main(["study", str(SCENARIO), "--resume", str(tmp_path / "nowhere")]) == 2
+    assert "--resume" in capsys.readouterr().err
+
+
 def test_a_study_interrupted_before_any_run_finished_says_so(tmp_path):
     from regrasp.study.plots import plot_study
 

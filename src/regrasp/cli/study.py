@@ -1,7 +1,7 @@
 """``regrasp study``: many seeded rollouts under model errors and noise; the success rate and why runs failed.
 
 ``regrasp study [SCENARIO] --runs N [--seed S] [--workers K] [--ray [ADDRESS]] [--plant project|mujoco|drake]
-[--periods P | --duration T] [--mass H] [--mu H] ... [--delay STEPS] [--json] [--plot DIR]
+[--periods P | --duration T] [--mass H] [--mu H] ... [--delay STEPS] [--json] [--plot DIR | --resume DIR]
 [--sweep NAME=V1,V2,... | --replay I [--rrd FILE]]``
 
 The perturbations default to the scenario's ``[study]`` table; a flag overrides its key.
@@ -138,6 +138,10 @@ def configure(p: argparse.ArgumentParser) -> None:
                         "its rollout; exit status 0 if it succeeds, 1 if it fails (not with --workers, --ray, --plot "
                         "or --sweep)")
     p.add_argument("--rrd", metavar="FILE", help="with --replay: write the run to a rerun recording")
+    p.add_argument("--resume", metavar="DIR",
+                   help="go on with the study whose study.json is in DIR (one Ctrl-C stopped, or one of fewer --runs): "
+                        "the same command and flags, its finished runs kept and the others run, written back into DIR "
+                        "(--runs defaults to the runs it was asked for)")
     p.set_defaults(func=_cmd_study)
 
 
@@ -294,6 +298,11 @@ def _check_combination(args: argparse.Namespace) -> None:
     if args.fixed_softness and args.plant != "mujoco":
         raise InvalidParameterError("--fixed-softness", True, f"--plant mujoco (only MuJoCo's contacts have a softness "
                                     f"to draw; the {args.plant} plant's is fixed)")
+    if args.resume is not None and (args.sweep is not None or args.replay is not None):
+        raise InvalidParameterError("--resume", args.resume, "a study to go on with (not with --sweep or --replay)")
+    if args.resume is not None and args.plot is not None and Path(args.plot).resolve() != Path(args.resume).resolve():
+        raise InvalidParameterError("--plot", args.plot, f"the directory --resume writes back into ({args.resume}), "
+                                    "or no --plot")
     if args.replay is None:
         if args.rrd is not None:
             raise InvalidParameterError("--rrd", args.rrd, "--replay I (a study records no run; replay one)")
@@ -309,8 +318,11 @@ def _check_combination(args: argparse.Namespace) -> None:
 
 
 def _cmd_study(args: argparse.Namespace) -> int:
+    from ..core.validation import as_count
     from ..model.scenario import load_scenario
+    from ..rollout.spec import RunSpec
     from ..study.plots import plot_study
+    from ..study.resume import finished_runs, read_study
     from ..study.study import run_study
 
     path = Path(args.scenario) if args.scenario is not None else DEFAULT_SCENARIO
@@ -321,16 +333,31 @@ def _cmd_study(args: argparse.Namespace) -> int:
     if args.replay is not None:
         output_file("--rrd", args.rrd)
         return _replay(args, scenario, perturbation, plant)
+    doc = None if args.resume is None else read_study(args.resume, "--resume")
     if args.runs is None:
-        args.runs = RUNS
+        args.runs = RUNS if doc is None else as_count("--runs", doc.get("requested_runs", doc.get("runs")), 1,
+                                                      MAX_RUNS)
     if args.sweep is not None:
         return _sweep_study(args, scenario, perturbation, plant)
+    finished = ()
+    if doc is not None:
+        _, duration = RunSpec(periods=args.periods, duration=args.duration).resolve(scenario)
+        finished = finished_runs(doc, scenario=str(path), contacts=len(scenario.contacts), plant=plant.kind,
+                                 duration=duration, seed=args.seed, runs=args.runs, perturbation=perturbation,
+                                 softness=_softness(args), option="--resume")
+        args.plot = args.resume
     directory = output_directory("--plot", args.plot) if args.plot is not None else None
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     result = run_study(scenario, args.runs, seed=args.seed, perturbation=perturbation, duration=args.duration,
                        periods=args.periods, workers=min(workers, args.runs), ray_address=args.ray, plant=plant,
-                       softness=_softness(args), interruptible=True,
+                       softness=_softness(args), interruptible=True, finished=finished,
                        progress=None if args.json else ProgressBar(f"regrasp study: {args.runs} runs", lines=True))
+    resumed = ""
+    if doc is not None:  # (the wall time of every session the study took)
+        result = replace(result, wall_seconds=result.wall_seconds + float(doc.get("wall_seconds") or 0.0),
+                         plan_seconds=result.plan_seconds + float(doc.get("plan_seconds") or 0.0))
+        resumed = (f"\n  resumed: {len(finished)} runs read from {Path(args.resume) / 'study.json'}, "
+                   f"{len(result.runs) - len(finished)} run now (wall times: every session's)")
     doc = result.to_json_dict()
     figures = []
     if directory is not None:
@@ -343,6 +370,6 @@ def _cmd_study(args: argparse.Namespace) -> int:
         json.dump(doc, sys.stdout)
         sys.stdout.write("\n")
     else:
-        print(_summary(result) + "".join(f"\n  figure: {f}" for f in figures)
+        print(_summary(result) + resumed + "".join(f"\n  figure: {f}" for f in figures)
               + (f"\n  results: {directory / 'study.json'}" if directory is not None else ""))
     return 130 if result.interrupted else 0

@@ -274,7 +274,8 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
               workers: int = 1, ray_address: str | None = None, schedule: RegraspSchedule | None = None,
               settings: SupervisorSettings | None = None, plant: PlantSpec | str = "project",
               softness: SoftnessRanges | None = None,
-              progress: Callable[[int, int], None] | None = None, interruptible: bool = False) -> StudyResult:
+              progress: Callable[[int, int], None] | None = None, interruptible: bool = False,
+              finished: Sequence[RunOutcome] = ()) -> StudyResult:
     """Plan the schedule once, then run ``runs`` seeded rollouts (module docstring).
 
     Args:
@@ -300,6 +301,9 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
         interruptible: Ctrl-C (KeyboardInterrupt) ends the study at once with the runs it finished
             (:attr:`StudyResult.interrupted`) instead of propagating; the runs under way are dropped and the
             workers stopped. Before the first run (while planning) it propagates.
+        finished: Runs of this very study that ran already (a resumed study: :func:`~regrasp.study.resume.
+            finished_runs` reads them from a ``study.json``): they are kept, not run again, each checked to be the
+            draw of its index.
     """
     from ..model.scenario import Scenario, load_scenario
     from ..rollout.build import build_rollout
@@ -321,6 +325,7 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     if softness is not None:
         soften(plant, softness.draw(np.random.default_rng(0)))  # (a rigid plant refuses before any planning)
     draws = draw_runs(runs, seed, perturbation, len(scenario.contacts), softness)
+    outcomes = _checked_finished(finished, draws)
     run = RunSpec(duration=duration, periods=periods)
     run.resolve(scenario)  # (a run of no step, or longer than the trajectory allows: refused before the plan)
     if schedule is None:
@@ -331,12 +336,13 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     plan_seconds = time.perf_counter() - start
     # the schedule and the envelope plan are computed once for every run (they depend on the model only)
     shared = (scenario, probe.schedule, probe.duration, perturbation, settings, plant, probe.supervisor.plan)
-    source = _on_processes(workers, shared, draws) if ray_address is None else \
-        ray_runs(ray_address, workers, run_once, shared, draws)
-    outcomes: list[RunOutcome] = []
+    ran = {o.draw.index for o in outcomes}
+    todo = tuple(d for d in draws if d.index not in ran)
+    source = (o for o in ()) if not todo else _on_processes(workers, shared, todo) if ray_address is None else \
+        ray_runs(ray_address, workers, run_once, shared, todo)
     try:
         if progress is not None:
-            progress(0, len(draws))  # (planned: the runs start)
+            progress(len(outcomes), len(draws))  # (planned: the runs start)
         for outcome in source:
             outcomes.append(outcome)
             if progress is not None:
@@ -349,6 +355,20 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     return StudyResult(name, tuple(sorted(outcomes, key=lambda o: o.draw.index)), perturbation, int(seed),
                        probe.duration, workers, "process" if ray_address is None else "ray",
                        time.perf_counter() - start, plan_seconds, plant.kind, softness, len(draws))
+
+
+def _checked_finished(finished: Sequence[RunOutcome], draws: tuple[RunDraw, ...]) -> list[RunOutcome]:
+    """``finished`` as a list, each outcome checked to be the run of its index in this study (same draw), once."""
+    out, seen = [], set()
+    for o in finished:
+        expect_type("finished", o, RunOutcome, "RunOutcomes of this study")
+        i = o.draw.index
+        if not (0 <= i < len(draws)) or i in seen or o.draw != draws[i]:
+            raise InvalidParameterError("finished", o.draw, f"runs of this study, once each (run {i} is not the "
+                                        f"draw of index {i} of these {len(draws)} runs, or is there twice)")
+        seen.add(i)
+        out.append(o)
+    return out
 
 
 def _check_offsets(scenario: Scenario, xi0, half_width: float) -> None:
