@@ -136,15 +136,20 @@ def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
             plt.close(fig)
         return paths
     if factors:
-        fig, axes = plt.subplots(1, len(factors), figsize=(4.2 * len(factors), 3.8), squeeze=False,
+        cols = min(4, len(factors))
+        rows = -(-len(factors) // cols)
+        fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.4 * rows + 0.4), squeeze=False,
                                  layout="constrained")
         binned = {name: _bins(x, ok, bins=min(6, max(1, len(runs) // 10))) for name, (_, x) in factors.items()}
         bottom = _rate_floor([lo for b in binned.values() for lo in b[2]])  # (one scale for every panel)
-        for ax, (name, (label, x)) in zip(axes[0], factors.items()):
+        for ax, (name, (label, x)) in zip(axes.flat, factors.items()):
             _binned(ax, x, ok, binned[name], bottom)
             ax.set_xlabel(label)
             ax.set_title(name)
-        axes[0][0].set_ylabel("success rate [-]")
+        for ax in list(axes.flat)[len(factors):]:
+            ax.set_axis_off()
+        for row in axes:
+            row[0].set_ylabel("success rate [-]")
         axes[0][0].legend(fontsize=7, loc="lower left")
         fig.suptitle(f"{title}: {result.successes}/{len(runs)} succeeded\n{result.perturbation.describe()}",
                      fontsize=9)

@@ -327,7 +327,11 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     draws = draw_runs(runs, seed, perturbation, len(scenario.contacts), softness)
     outcomes = _checked_finished(finished, draws)
     run = RunSpec(duration=duration, periods=periods)
-    run.resolve(scenario)  # (a run of no step, or longer than the trajectory allows: refused before the plan)
+    _, length = run.resolve(scenario)  # (a run of no step, or longer than the trajectory allows: refused first)
+    backend = "process" if ray_address is None else "ray"
+    if len(outcomes) == len(draws):  # (all finished already: nothing to plan or run)
+        return StudyResult(name, tuple(sorted(outcomes, key=lambda o: o.draw.index)), perturbation, int(seed), length,
+                           workers, backend, time.perf_counter() - start, 0.0, plant.kind, softness, len(draws))
     if schedule is None:
         schedule = plan_regrasps(scenario)
     probe = build_rollout(scenario, run, schedule=schedule, settings=settings, plant=plant)
@@ -353,8 +357,8 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     finally:
         source.close()  # (stops the workers, or cancels the Ray tasks, that are still running)
     return StudyResult(name, tuple(sorted(outcomes, key=lambda o: o.draw.index)), perturbation, int(seed),
-                       probe.duration, workers, "process" if ray_address is None else "ray",
-                       time.perf_counter() - start, plan_seconds, plant.kind, softness, len(draws))
+                       probe.duration, workers, backend, time.perf_counter() - start, plan_seconds, plant.kind,
+                       softness, len(draws))
 
 
 def _checked_finished(finished: Sequence[RunOutcome], draws: tuple[RunDraw, ...]) -> list[RunOutcome]:
