@@ -5,12 +5,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+from hang_guard import HANG_SECONDS
+
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
 def test_planner_benchmark_quick_smoke():
     proc = subprocess.run([sys.executable, str(BENCH / "bench_planner.py"), "--quick", "--json"],
-                          capture_output=True, text=True, timeout=300, check=False)
+                          capture_output=True, text=True, timeout=HANG_SECONDS, check=False)
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
     for mode in ("ideal", "urdf", "brute_force"):
@@ -21,7 +23,7 @@ def test_planner_benchmark_quick_smoke():
 
 def test_dynamics_benchmark_quick_smoke():
     proc = subprocess.run([sys.executable, str(BENCH / "bench_dynamics.py"), "--quick", "--json"],
-                          capture_output=True, text=True, timeout=300, check=False)
+                          capture_output=True, text=True, timeout=HANG_SECONDS, check=False)
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
     for key in ("plant_step", "plant_accelerations", "reduced_state", "reduced_forward_dynamics",
@@ -33,7 +35,7 @@ def test_benchmark_table_quick_smoke():
     """benchmarks/run.py --quick --json: every measured item has a positive median, and the
     Pinocchio/OSQP floors are measured in the same run (no timing assertions)."""
     proc = subprocess.run([sys.executable, str(BENCH / "run.py"), "--quick", "--json"],
-                          capture_output=True, text=True, timeout=300, check=False)
+                          capture_output=True, text=True, timeout=HANG_SECONDS, check=False)
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
     for key in ("control_fixed_qp", "control_fixed_no_qp", "control_sliding_m3_qp", "control_sliding_m3_no_qp",

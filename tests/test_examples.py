@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 import regrasp
+from hang_guard import HANG_SECONDS
 
 #: The examples run in a temporary directory against the regrasp these tests import (a relative PYTHONPATH, such
 #: as ``PYTHONPATH=src`` in a worktree, would no longer point there).
@@ -32,7 +33,7 @@ def test_there_are_examples():
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=IDS)
 def test_example_runs(path, tmp_path):
-    proc = subprocess.run([sys.executable, str(path)], capture_output=True, text=True, timeout=300,
+    proc = subprocess.run([sys.executable, str(path)], capture_output=True, text=True, timeout=HANG_SECONDS,
                           cwd=tmp_path, env=ENV, check=False)
     assert proc.returncode == 0, proc.stderr
     assert len(proc.stdout.splitlines()) >= 3
@@ -40,7 +41,7 @@ def test_example_runs(path, tmp_path):
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=IDS)
 def test_example_help(path, tmp_path):
-    proc = subprocess.run([sys.executable, str(path), "--help"], capture_output=True, text=True, timeout=60,
+    proc = subprocess.run([sys.executable, str(path), "--help"], capture_output=True, text=True, timeout=HANG_SECONDS,
                           cwd=tmp_path, env=ENV, check=False)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.startswith("usage:")

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hang_guard import HANG_SECONDS
 from regrasp import (
     ConvexPolygon,
     EllipseTrajectory,
@@ -138,7 +139,8 @@ def test_every_public_name_loads_and_the_command_line_starts_without_the_heavy_l
         assert getattr(regrasp, name) is not None, name
     code = ("import sys, regrasp.cli.main; regrasp.cli.main.build_parser(); "
             "print(sorted(m for m in ('pinocchio', 'coal', 'scipy', 'rerun', 'numba') if m in sys.modules))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=True).stdout
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=HANG_SECONDS,
+                         check=True).stdout
     assert out.strip() == "[]"
 
 

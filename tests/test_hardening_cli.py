@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hang_guard import HANG_SECONDS
 from regrasp.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -117,7 +118,7 @@ def test_plot_into_a_place_root_cannot_write_either(tmp_path, capfd):
 
 def test_version_and_ctrl_c():
     version = subprocess.run([sys.executable, "-m", "regrasp.cli.main", "--version"], capture_output=True, text=True,
-                             timeout=60)
+                             timeout=HANG_SECONDS)
     assert version.returncode == 0 and re.fullmatch(r"regrasp \d+\.\d+\.\d+\S*\n", version.stdout)
     proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli.main", "plan",
                              str(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"),
@@ -128,7 +129,7 @@ def test_version_and_ctrl_c():
     time.sleep(5.0)
     assert proc.poll() is None, proc.communicate()
     proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
+    _, err = proc.communicate(timeout=HANG_SECONDS)
     lines = err.strip().splitlines()
     assert proc.returncode == 130, err
     assert lines[-1] == "regrasp: interrupted" and not any("Traceback" in line for line in lines), lines

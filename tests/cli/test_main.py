@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hang_guard import HANG_SECONDS
 from regrasp.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -109,13 +110,13 @@ def test_plan_regrasp_bad_margin_exits_2(capsys):
 
 
 # ---------------------------------------------------------------- regrasp simulate
-def simulate(*args, cwd, timeout=600):
+def simulate(*args, cwd, timeout=HANG_SECONDS):
     return subprocess.run([sys.executable, "-m", "regrasp.cli.main", "simulate", *args], capture_output=True, text=True,
                           cwd=cwd, timeout=timeout, check=False)
 
 
 def verify_rrd(path):
-    proc = subprocess.run(["rerun", "rrd", "verify", str(path)], capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(["rerun", "rrd", "verify", str(path)], capture_output=True, text=True, timeout=HANG_SECONDS)
     assert proc.returncode == 0, proc.stderr
 
 
@@ -179,7 +180,7 @@ def test_ctrl_c_ends_a_simulation_with_a_partial_result_and_a_complete_recording
         time.sleep(0.1)
     time.sleep(3.0)
     proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=120)
+    out, err = proc.communicate(timeout=HANG_SECONDS)
     assert proc.returncode == 1, err
     assert "interrupted" in out and "FAILURE" in out and "Traceback" not in err
     verify_rrd(tmp_path / "run.rrd")
@@ -199,7 +200,7 @@ def test_ctrl_c_ends_a_study_keeping_the_runs_it_finished(tmp_path):
         if "(10%)" in line:
             break
     proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=300)
+    out, err = proc.communicate(timeout=HANG_SECONDS)
     err = "".join(seen) + err
     assert proc.returncode == 130, (out, err)
     assert "regrasp study: 100 runs: 0/100 (0%)" in err and "Traceback" not in err

@@ -15,6 +15,7 @@ import pytest
 import rerun as rr
 from rerun.chunk import RrdReader
 
+from hang_guard import HANG_SECONDS
 from recordings import read
 from regrasp import Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, RunSpec, load_scenario
 from regrasp.core.events import Event, EventSource, Failure, FailureKind
@@ -70,8 +71,8 @@ def rerun_cli() -> list[str]:
 
 
 def verify(path: Path) -> str:
-    proc = subprocess.run([*rerun_cli(), "rrd", "verify", str(path)], capture_output=True, text=True, timeout=60,
-                          check=False)
+    proc = subprocess.run([*rerun_cli(), "rrd", "verify", str(path)], capture_output=True, text=True,
+                          timeout=HANG_SECONDS, check=False)
     out = proc.stdout + proc.stderr
     assert proc.returncode == 0, out
     assert "verified without error" in out, out
