@@ -35,3 +35,31 @@ def test_pad_options_need_a_stiffness_and_the_project_plant(argv):
 def test_bad_pad_values_are_refused_by_the_parser(argv):
     with pytest.raises(SystemExit):
         parse(*argv)
+
+
+def test_loading_cached_kernels_says_nothing_and_compiling_them_says_so(monkeypatch):
+    import io
+    import time
+
+    import regrasp.cli.common as common
+    import regrasp.kernels as kernels
+    from regrasp.kernels import WARM_UP_STEPS
+
+    quiet = io.StringIO()
+    common.compile_kernels(stream=quiet)  # (the session's kernels are loaded: at once, nothing said)
+    assert quiet.getvalue() == ""
+
+    def slow_warm_up(progress=None):  # a cold machine: still compiling when the notice is due
+        deadline = time.monotonic() + 60.0
+        while "compiling" not in loud.getvalue() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        for k in range(1, WARM_UP_STEPS + 1):
+            progress(k, WARM_UP_STEPS)
+
+    loud = io.StringIO()
+    monkeypatch.setattr(kernels, "warm_up", slow_warm_up)
+    monkeypatch.setattr(common, "COMPILE_NOTICE_AFTER", 0.01)
+    seconds = common.compile_kernels(stream=loud)
+    lines = loud.getvalue().splitlines()
+    assert lines[0].startswith("regrasp: compiling the numba kernels: once per machine")
+    assert lines[-1] == f"regrasp: kernels compiled in {seconds:.0f} s"

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -19,8 +20,8 @@ if TYPE_CHECKING:
     from ..core.pad import Pad
     from ..plants.spec import PlantSpec
 
-__all__ = ["DEFAULT_SCENARIO", "STARTED", "ProgressBar", "add_plant_arguments", "count_argument", "nonnegative",
-           "number_argument", "output_directory", "output_file", "pad_option", "plant_spec", "positive"]
+__all__ = ["DEFAULT_SCENARIO", "STARTED", "ProgressBar", "add_plant_arguments", "compile_kernels", "count_argument",
+           "nonnegative", "number_argument", "output_directory", "output_file", "pad_option", "plant_spec", "positive"]
 
 #: When the command line started (``time.monotonic()``, at the CLI's import, before any heavy import): a summary's
 #: "in all" wall time counts imports, planning and compiling too.
@@ -97,6 +98,41 @@ class ProgressBar:
                 if done == total:
                     self.stream.write("\n")
             self.stream.flush()
+
+
+#: Loading the kernels takes about a second from numba's disk cache; longer, they are being compiled [s].
+COMPILE_NOTICE_AFTER = 2.0
+
+
+def compile_kernels(quiet: bool = False, stream: TextIO = sys.stderr) -> float:
+    """Load every numba kernel (:func:`~regrasp.kernels.warm_up`) before the work starts, saying so on ``stream``
+    when it takes longer than a cache load: on a machine's first run (or after an upgrade) numba compiles them, once,
+    for a minute or two. The seconds it took."""
+    from ..kernels import warm_up
+
+    start = time.monotonic()
+    said = threading.Event()
+    bar = ProgressBar("regrasp: compiling kernels", stream)
+
+    def notice() -> None:
+        said.set()
+        stream.write("regrasp: compiling the numba kernels: once per machine and version, about 1-2 min on 2 cores; "
+                     "the next runs load them from the cache in about a second\n")
+        stream.flush()
+
+    timer = threading.Timer(COMPILE_NOTICE_AFTER, notice)
+    timer.daemon = True
+    if not quiet:
+        timer.start()
+    try:
+        warm_up(progress=lambda done, total: bar(done, total) if said.is_set() else None)
+    finally:
+        timer.cancel()
+    seconds = time.monotonic() - start
+    if said.is_set():
+        stream.write(f"regrasp: kernels compiled in {seconds:.0f} s\n")
+        stream.flush()
+    return seconds
 
 
 def output_directory(option: str, path: str | os.PathLike[str]) -> Path:

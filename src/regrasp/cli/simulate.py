@@ -31,6 +31,7 @@ from .common import (
     STARTED,
     ProgressBar,
     add_plant_arguments,
+    compile_kernels,
     count_argument,
     nonnegative,
     output_directory,
@@ -218,6 +219,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     common = dict(settings=settings, regrasp_settings=RegraspSettings(**options), plant=plant)
     run = RunSpec(periods=args.periods, duration=args.duration)
     run.resolve(scenario)  # (a run of no step, or past what the trajectory allows: refused before the plan)
+    compile_kernels(quiet=args.json)  # (a machine's first run compiles them: said, not a silent minute)
     # OSQP's C library prints "Polishing not needed" on fd 1 even with verbose=False: keep stdout for the result
     with captured_fd(1):
         code, output = _simulate(args, scenario, run, common)

@@ -29,6 +29,7 @@ from .common import (
     DEFAULT_SCENARIO,
     ProgressBar,
     add_plant_arguments,
+    compile_kernels,
     count_argument,
     number_argument,
     output_directory,
@@ -330,6 +331,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     perturbation = _perturbation(args, scenario)
     plant = plant_spec(args)
     _check_combination(args)
+    compile_kernels(quiet=args.json)  # (a machine's first run compiles them: said, not a silent minute)
     if args.replay is not None:
         output_file("--rrd", args.rrd)
         return _replay(args, scenario, perturbation, plant)

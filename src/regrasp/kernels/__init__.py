@@ -55,6 +55,7 @@ never positional tuples. Compiled code is cached on disk
 """
 
 import hashlib
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -93,7 +94,7 @@ from .stretch_layout import (
 
 __all__ = ["CONTACT_EDGE", "ENVELOPE_PARAMETERS", "FINGER_IK", "FINGER_PARAMETERS", "FINGER_TERMS", "FIXED",
            "FOOTPRINT", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDER", "SLIDING", "STRETCH_SETTINGS",
-           "STRETCH_STATE", "control_layout",
+           "STRETCH_STATE", "WARM_UP_STEPS", "control_layout",
            "control_step_into", "envelope_sample_into", "feasible_capacity", "finger_parameters", "finger_terms",
            "finger_terms_at", "footprint_distances", "internal_force_into", "output_size", "plant_evaluate",
            "plant_step_into", "reduced_terms", "sliding_step_into", "stretch_into", "tip_is_free", "warm_up",
@@ -125,11 +126,21 @@ _drop_stale_caches()  # (before any kernel runs: numba reads a cache at a kernel
 _WARM = []
 
 
-def warm_up() -> None:
+#: The kernel groups :func:`warm_up` loads, in order (what its ``progress`` counts).
+WARM_UP_STEPS = 8
+
+
+def warm_up(progress: Callable[[int, int], None] | None = None) -> None:
     """Load every kernel once in this process, on a one-finger dummy with the argument types the library
-    passes (later calls return at once)."""
+    passes (later calls return at once). On a machine's first run (no disk cache yet) this is where numba
+    compiles them: ``progress(done, WARM_UP_STEPS)`` is called after each group."""
     if _WARM:
         return
+    step = iter(range(1, WARM_UP_STEPS + 1))
+
+    def done() -> None:
+        if progress is not None:
+            progress(next(step), WARM_UP_STEPS)
     fingers = np.zeros(1, dtype=FINGER_PARAMETERS)
     for name in ("m1", "m2", "i1", "i2", "d2x", "tx"):
         fingers[name] = 1.0
@@ -140,21 +151,25 @@ def warm_up() -> None:
     contacts["mode"] = SEPARATED
     zeros = np.zeros(2)
     finger_terms(fingers, zeros, zeros, zeros, True)
+    done()
     plant_evaluate(fingers, plant, contacts, np.zeros(13), zeros)
     plant_step_into(fingers, plant, contacts, np.zeros(13), zeros, np.full((1, 9), np.nan), np.zeros((1, 2)),
                     np.empty(output_size(1)), np.empty(1, dtype=FINGER_TERMS), np.empty(1, np.bool_), np.empty((1, 7)))
+    done()
     iks = np.zeros(1, dtype=FINGER_IK)
     iks["l1"], iks["l2"], iks["outer"], iks["sigma"] = 1.0, 1.0, 2.0, 1.0
     edges = np.zeros(1, dtype=CONTACT_EDGE)
     edges["tx"], edges["ny"] = 1.0, 1.0
     reduced_terms(fingers, iks, edges, zeros, True, np.zeros(1), np.full(1, -1, dtype=np.int64),
                   np.array([1.0, 0.0, 0.0]), np.zeros(3))
+    done()
     # the internal force on a one-contact problem with a one-dimensional null space (a 2 x 1 A)
     rows = np.zeros((1, 2))
     rows[0, 0] = 1.0
     internal_force_into(np.array([[1.0], [0.0]]), zeros, np.array([[1.0, 0.0, 0.0, 1.0]]), rows, np.zeros(1), 1,
                         np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0, np.zeros((1, 4)), zeros, np.full(2, np.inf),
                         np.empty(2), np.empty(2))
+    done()
     # a control step with the argument types a controller passes (its answer here: take the reference path)
     s = np.zeros((5, 3))
     s[0, 1] = 1.0
@@ -162,12 +177,16 @@ def warm_up() -> None:
                       s[3], s[4], np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0), 1e8, np.ones(1), True,
                       rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0,
                       np.empty(control_layout(1, 3)["f_hat"].stop))
+    done()
     sliding_step_into(fingers, iks, edges, zeros, True, np.zeros(1), np.full(1, -1, dtype=np.int64), s[0], s[1], s[2],
                       s[3], s[4], np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0, np.int64), np.zeros(0),
                       np.zeros(0), True, 1e-3, 1e8, np.ones(1), True, rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0,
                       np.zeros(1), 1.0, 0.0, np.empty(control_layout(1, 3)["f_hat"].stop))
+    done()
     _warm_envelope()
+    done()
     _warm_stretch(fingers, plant, iks, edges, rows)
+    done()
     _WARM.append(True)
 
 
