@@ -5,7 +5,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from hang_guard import HANG_SECONDS
+
+pytestmark = pytest.mark.slow  # (rollouts, subprocesses: `pytest -m "not slow"` leaves them out)
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
 

@@ -13,6 +13,8 @@ import pytest
 import regrasp
 from hang_guard import HANG_SECONDS
 
+pytestmark = pytest.mark.slow  # (rollouts, subprocesses: `pytest -m "not slow"` leaves them out)
+
 #: The examples run in a temporary directory against the regrasp these tests import (a relative PYTHONPATH, such
 #: as ``PYTHONPATH=src`` in a worktree, would no longer point there).
 ENV = {**os.environ, "MPLBACKEND": "Agg",

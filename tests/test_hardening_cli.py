@@ -116,6 +116,7 @@ def test_plot_into_a_place_root_cannot_write_either(tmp_path, capfd):
     assert code == 2 and len(err) == 1 and "invalid --plot = '/proc/regrasp-figures'" in err[0], err
 
 
+@pytest.mark.slow
 def test_version_and_ctrl_c():
     version = subprocess.run([sys.executable, "-m", "regrasp.cli.main", "--version"], capture_output=True, text=True,
                              timeout=HANG_SECONDS)

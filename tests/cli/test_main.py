@@ -12,6 +12,8 @@ import pytest
 from hang_guard import HANG_SECONDS
 from regrasp.cli.main import main
 
+pytestmark = pytest.mark.slow  # (rollouts, subprocesses: `pytest -m "not slow"` leaves them out)
+
 ROOT = Path(__file__).resolve().parents[2]
 T1 = str(ROOT / "examples" / "scenarios" / "paper_trajectory_1.toml")
 T2 = str(ROOT / "examples" / "scenarios" / "paper_trajectory_2.toml")

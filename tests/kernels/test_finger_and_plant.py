@@ -196,6 +196,7 @@ def test_compiled_plant_meets_every_event_kind_the_reference_does():
     assert {"separation", "slip"} <= seen, seen
 
 
+@pytest.mark.slow
 def test_a_scheduled_rollout_is_the_same_on_both_paths():
     """The three-finger scheduled rollout (collision checks, slides, sticks) for 1.5 s on each path (slips at 0.82 s,
     sticks at 1.37 s)."""

@@ -12,6 +12,8 @@ from regrasp.core.exceptions import InvalidParameterError, ScenarioError
 from regrasp.core.health import HealthCriteria
 from regrasp.rollout.build import build_rollout
 
+pytestmark = pytest.mark.slow  # (rollouts, subprocesses: `pytest -m "not slow"` leaves them out)
+
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 
 

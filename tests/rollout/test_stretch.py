@@ -8,6 +8,8 @@ import pytest
 
 from regrasp import RunSpec, build_rollout, load_scenario
 
+pytestmark = pytest.mark.slow  # (rollouts, subprocesses: `pytest -m "not slow"` leaves them out)
+
 THREE = "examples/scenarios/paper_trajectory_2_three_fingers.toml"
 ROWS = ("times", "xi", "bounds", "planned_xi", "object_error", "poses", "joint_positions", "forces_surface")
 

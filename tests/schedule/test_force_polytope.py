@@ -62,6 +62,7 @@ def _compare(seed: int, samples: int = 60) -> list[bool]:
     return verdicts
 
 
+@pytest.mark.slow
 def test_vertex_feasibility_equals_the_linear_program():
     verdicts = [v for seed in range(40) for v in _compare(seed)]
     # both answers occur often: the comparison is not vacuous

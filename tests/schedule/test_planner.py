@@ -28,6 +28,8 @@ from regrasp.schedule.force_polytope import ForceLimits
 from regrasp.schedule.planner import RegraspSettings, plan_regrasps
 from regrasp.schedule.schedule import NoScheduleError, ScheduleLimit
 
+pytestmark = pytest.mark.slow  # (rollouts, subprocesses: `pytest -m "not slow"` leaves them out)
+
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 
 

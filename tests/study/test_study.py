@@ -14,6 +14,8 @@ from regrasp.cli.main import main
 from regrasp.core.exceptions import InvalidParameterError, ScenarioError
 from regrasp.study.study import Perturbation, draw_runs, run_study, wilson_interval
 
+pytestmark = pytest.mark.slow  # (rollouts, subprocesses: `pytest -m "not slow"` leaves them out)
+
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIO = ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
 

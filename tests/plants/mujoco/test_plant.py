@@ -203,6 +203,7 @@ def test_without_the_spheres_couple_figure_3_4s_slide_stalls_on_mujoco():
     assert kinds.count(EventKind.STUCK) >= 2 and error > 1e-4
 
 
+@pytest.mark.slow
 def test_the_scheduled_three_finger_rollout_makes_its_first_double_slide_on_mujoco():
     """Both side fingers slide up together, 27 mm in [0.815, 1.366] s (a schedule of the first 1.6 s: the
     periodic one's first two slides, planned in a third of the time), every contact loaded throughout (the health

@@ -249,6 +249,7 @@ def test_bad_input_raises_typed_errors(tmp_path):
     verify(path)
 
 
+@pytest.mark.slow
 def test_a_buffered_rollout_recording_holds_each_steps_values_at_its_time(tmp_path):
     """Blocks of steps sent with ``send_columns`` read back as the rollout's own numbers, step by
     step, and the same whether the steps go out one at a time or in blocks of any size."""
