@@ -13,7 +13,8 @@ HERE = Path(__file__).resolve().parent
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--plot", metavar="DIR", help="also write the figures of each plan into DIR/<scenario>/")
+    parser.add_argument("--plot", metavar="DIR",
+                        help="also write the figures of each plan into DIR/<scenario>_<geometry>/ (ideal and urdf)")
     args = parser.parse_args()
     # (imported after parsing: --help answers at once)
     from regrasp import load_scenario, plan_scenario

@@ -41,9 +41,8 @@ def three_finger_scenario() -> Scenario:
     ]
     block = ConvexPolygon.rectangle(0.10, 0.04, mass=0.08)
     trajectory = EllipseTrajectory(cx=0.0, cy=0.12, a=0.09, b=0.05, omega=2.0)  # one period: pi s
-    return Scenario(path=None, name="three fingers, in code", description="", polygon=block, trajectory=trajectory,
-                    contacts=tuple(fingers), gravity_in_hand=np.array([0.0, -9.81]), samples=801,
-                    geometry=Geometry.URDF)
+    return Scenario(name="three fingers, in code", polygon=block, trajectory=trajectory, contacts=fingers,
+                    gravity_in_hand=np.array([0.0, -9.81]), samples=801, geometry=Geometry.URDF)
 
 
 def main() -> None:

@@ -175,3 +175,9 @@ def force_lp(polygon, edges, pose, acc, xi, ratios, mu_s, limits, gravity, *, ma
     if maximise_margin:
         return -res.fun if res.status == 0 else None
     return res.status == 0
+
+
+#: A start of the three-finger scenario (``paper_trajectory_2_three_fingers``) with finger 1 0.2 mm from its feasible
+#: set's upper bound (-5 mm at t = 0), in its danger zone, so the paper's policy slides it at once (the §2 planner
+#: suggests starts outside the danger zones): finger1, finger2, palm [m].
+DANGER_START_THREE = (-0.0052, 0.00975, 0.00031)

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from hang_guard import HANG_SECONDS
+from regrasp import load_scenario, plan_scenario
 from regrasp.cli.main import main
 
 pytestmark = pytest.mark.slow  # (rollouts, subprocesses: `pytest -m "not slow"` leaves them out)
@@ -151,7 +152,12 @@ def test_simulate_says_at_once_that_two_fingers_have_no_schedule_and_why(tmp_pat
 def test_simulate_without_regrasps_fails_with_when_and_why(tmp_path):
     proc = simulate("--policy", "none", "--duration", "1.5", "--plot", "figs", cwd=tmp_path)
     assert proc.returncode == 1, proc.stderr
-    assert "FAILURE at t = 1.29" in proc.stdout and "collision of finger1" in proc.stdout
+    found = re.search(r"FAILURE at t = ([0-9.]+) s \(collision\): collision of finger1", proc.stdout)
+    assert found, proc.stdout
+    # where the plan said the start contact leaves its feasible set (one planner sample spacing either side)
+    plan = plan_scenario(load_scenario(ROOT / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"))
+    spacing = float(plan.times[1] - plan.times[0])
+    assert abs(float(found.group(1)) - plan.fingers[0].initial_xi_feasible_until) <= spacing
     assert (tmp_path / "figs" / "regrasp_rollout.png").stat().st_size > 10_000
 
 

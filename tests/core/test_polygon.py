@@ -310,6 +310,18 @@ def test_direct_construction_validates():
         ConvexPolygon(vertices=regular_polygon(4, 1.0), mass=1.0, inertia=0.0)
     with pytest.raises(PolygonError, match="collinear"):
         ConvexPolygon(vertices=[[0, 0], [1, 0], [2, 0]], mass=1.0, inertia=1.0)
+    with pytest.raises(InvalidParameterError, match="a mass"):
+        ConvexPolygon(regular_polygon(4, 1.0))
+    with pytest.raises(InvalidParameterError, match="mass"):
+        ConvexPolygon(regular_polygon(4, 1.0), mass=-1.0)
+    with pytest.raises(PolygonError, match="centroid"):  # mass alone: a uniform density about the origin
+        ConvexPolygon(regular_polygon(4, 1.0) + 1.0, mass=1.0)
+
+
+def test_direct_construction_with_mass_alone_is_uniform_density():
+    square = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    assert ConvexPolygon(square, mass=2.0).inertia == pytest.approx(2.0 / 6.0, rel=1e-14)  # m (w² + h²) / 12
+    assert ConvexPolygon(square, mass=2.0, inertia=0.5).inertia == 0.5
 
 
 @pytest.mark.parametrize("kwargs", [{"density": 1.0}, {"mass": 2.0}])

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from regrasp import EllipseTrajectory, Finger, load_scenario, plan, plan_scenario
-from regrasp.core.intervals import contains
+from regrasp.core.exceptions import InvalidParameterError
+from regrasp.core.intervals import DANGER_FRACTION, contains
 from regrasp.model import FingerContact
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -56,23 +57,37 @@ def test_trajectory_2_is_feasible_alternating_conditions_III_and_IV(trajectory_2
     np.testing.assert_allclose(d1, -d2, atol=1e-15)
 
 
-def test_initial_grasp_is_the_contact_that_stays_feasible_longest(trajectory_2):
-    result = plan_scenario(trajectory_2, samples=201)
+@pytest.mark.parametrize("fraction", [DANGER_FRACTION, 0.25])
+def test_initial_grasp_stays_outside_the_danger_zones_longest(trajectory_2, fraction):
+    """Brute force over 2001 contacts: none stays outside the danger zones longer than the suggested one, which
+    starts outside them; its reported times are where it leaves them and its feasible set."""
+    result = plan_scenario(trajectory_2, samples=201, danger_fraction=fraction)
     for f in result.fingers:
         grid = np.linspace(*f.samples[0].edge_range, 2001)
 
-        def survival(xi):  # index of the last sample up to which xi is feasible at every sample
+        def survival(xi, safe):  # index of the last sample up to which xi is in every (safe) set
             last = -1
             for k, s in enumerate(f.samples):
-                if not contains(s.feasible, xi):
+                keep = [(lo + fraction * (hi - lo), hi - fraction * (hi - lo)) for lo, hi in s.feasible] if safe \
+                    else s.feasible
+                if not contains(keep, xi):
                     break
                 last = k
             return last
 
-        best = max(survival(x) for x in grid)
-        k_initial = survival(f.initial_xi)
-        assert k_initial >= best  # no sampled contact outlasts the suggested one
-        assert result.times[k_initial] == pytest.approx(f.initial_xi_feasible_until)
+        best = max(survival(x, True) for x in grid)
+        k_safe = survival(f.initial_xi, True)
+        assert k_safe >= best > 0  # no sampled contact keeps out of the danger zones longer
+        assert result.times[k_safe] == pytest.approx(f.initial_xi_safe_until)
+        assert result.times[survival(f.initial_xi, False)] == pytest.approx(f.initial_xi_feasible_until)
+        lo, hi = next(iv for iv in f.samples[0].feasible if iv[0] <= f.initial_xi <= iv[1])
+        assert min(f.initial_xi - lo, hi - f.initial_xi) > fraction * (hi - lo)
+
+
+def test_danger_fraction_is_validated(trajectory_2):
+    for bad in (0.0, 0.5, -0.1, True, "0.1"):
+        with pytest.raises(InvalidParameterError):
+            plan_scenario(trajectory_2, samples=11, danger_fraction=bad)
 
 
 def test_a_gentle_trajectory_needs_no_regrasp(trajectory_2):

@@ -5,10 +5,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from regrasp import Friction, ScenarioError, load_scenario
+from regrasp import Friction, Scenario, ScenarioError, load_scenario
+from regrasp.core.exceptions import InvalidParameterError
 from regrasp.model.geometry import Geometry
 
 ROOT = Path(__file__).resolve().parents[2]
+SCENARIOS = ROOT / "examples" / "scenarios"
 URDF = ROOT / "urdf" / "planar_2r_finger.urdf"
 
 VALID = f"""
@@ -263,3 +265,21 @@ def test_bad_pad_keys_name_the_key(tmp_path, body, key):
     with pytest.raises(ScenarioError) as err:
         load_scenario(write(tmp_path, VALID + f"\n[pad]\n{body}\n"))
     assert err.value.key == key
+
+
+def test_a_scenario_built_in_code_needs_only_its_four_nouns():
+    sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
+    built = Scenario(name="in code", polygon=sc.polygon, trajectory=sc.trajectory, contacts=list(sc.contacts))
+    assert built.path is None and built.description == "" and built.contacts == sc.contacts
+    assert built.geometry is Geometry.IDEAL and built.samples == 401
+    np.testing.assert_array_equal(built.gravity_in_hand, [0.0, -9.81])
+
+
+@pytest.mark.parametrize("bad", [dict(name=""), dict(polygon="box"), dict(trajectory=None), dict(contacts=[]),
+                                 dict(contacts=["finger"]), dict(gravity_in_hand=[0.0, np.nan]), dict(samples=1),
+                                 dict(geometry="mesh"), dict(path=3), dict(description=None)])
+def test_a_scenario_built_in_code_is_validated(bad):
+    sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
+    fields = dict(name="in code", polygon=sc.polygon, trajectory=sc.trajectory, contacts=sc.contacts) | bad
+    with pytest.raises(InvalidParameterError):
+        Scenario(**fields)

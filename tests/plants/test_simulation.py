@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from drivers import driver
+from factories import DANGER_START_THREE
 from regrasp import RunSpec, load_scenario
 from regrasp.core.events import EventKind, EventSource, Failure, FailureKind
 from regrasp.core.exceptions import RegraspError
@@ -119,7 +120,7 @@ def test_a_second_sigint_raises_at_once_and_a_nested_deferral_shares_the_outer_r
 
 def test_plant_events_are_in_the_record_with_their_source():
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
-    rollout = build_rollout(sc, RunSpec(duration=0.01), policy="paper")  # finger 1 starts next to its bound: it slides
+    rollout = build_rollout(sc, RunSpec(duration=0.01, xi0=DANGER_START_THREE), policy="paper")  # finger 1 slides
     result = rollout.run()
     slips = [e for e in result.events if e.kind is EventKind.SLIP]
     assert slips and all(e.source is EventSource.PLANT for e in slips)

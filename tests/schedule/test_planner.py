@@ -200,7 +200,7 @@ def test_start_positions_outside_the_envelope_are_named():
         plan_regrasps(scenario, xi0=[0.019, 0.012, 0.0])  # finger1's set at t = 0 is [-20, -5] mm
     err = info.value
     assert err.limit is ScheduleLimit.ENVELOPE and err.contacts == ("finger1",) and err.latest_time == 0.0
-    assert "24.00 mm outside" in str(err)
+    assert "24.01 mm outside its feasible set at t = 3.122 s (where the periodic schedule is back" in str(err)
     with pytest.raises(InvalidParameterError):
         plan_regrasps(scenario, xi0=[0.019, 0.012])
     with pytest.raises(InvalidParameterError):

@@ -20,7 +20,7 @@ from factories import force_lp
 from field_checks import field_tests, fields_of
 from regrasp import Friction, load_scenario
 from regrasp.core.exceptions import InvalidParameterError
-from regrasp.schedule.problem import RegraspSettings, build_problem, trajectory_period
+from regrasp.schedule.problem import RegraspSettings, build_problem, trajectory_period, window_margin
 
 SCENARIO = Path(__file__).resolve().parents[2] / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
 
@@ -211,3 +211,17 @@ def test_counts_are_bounded_and_numpy_integers_are_counts(name):
         RegraspSettings(**{name: 10**400})
     value = getattr(RegraspSettings(**{name: np.int64(2)}), name)
     assert value == 2 and type(value) is int
+
+
+def test_window_margin_is_what_the_envelope_tables_admit():
+    """The margin a refusal reports (window_margin) decides each cell exactly as the lattice's envelope tables do."""
+    scenario = load_scenario("examples/scenarios/paper_trajectory_2_three_fingers.toml")
+    problem = build_problem(scenario, RegraspSettings(xi_resolution=2e-3))
+    need = problem.settings.envelope_margin + problem.envelope_buffer
+    n = len(problem.times) - 1
+    for k in (0, 1, n // 2, n):
+        for i, grid in enumerate(problem.grids):
+            found = [window_margin(problem, k, i, float(x)) for x in grid]
+            assert all(problem.sub_times[0] - 1e-12 <= t <= problem.sub_times[-1] + 1e-12 for _, t in found)
+            np.testing.assert_array_equal(problem.lattice.env_ok[k, i, :len(grid)],
+                                          [m >= need for m, _ in found])

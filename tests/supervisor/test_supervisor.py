@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from factories import DANGER_START_THREE
 from regrasp import Friction, Hand, RunSpec, load_scenario
 from regrasp.core.exceptions import InvalidParameterError
 from regrasp.core.measurement import Measurement
@@ -278,7 +279,7 @@ def test_a_slide_that_ends_sliding_settles_just_inside_the_cone_and_sticks():
     within a few periods, without slipping any other contact."""
     from regrasp import build_rollout
 
-    rollout = build_rollout(load_scenario(THREE), RunSpec(duration=0.3), policy="paper")
+    rollout = build_rollout(load_scenario(THREE), RunSpec(duration=0.3, xi0=DANGER_START_THREE), policy="paper")
     result = rollout.run()
     assert result.success, result.failure
     kinds = [(e.contact, e.kind) for e in result.events]

@@ -83,7 +83,10 @@ def _summary(plan, scenario, figures) -> str:
         if f.initial_xi is None:
             lines.append("    initial contact: none (infeasible at the first sample)")
         else:
-            lines.append(f"    initial contact: xi = {f.initial_xi * mm:.2f} mm, feasible until "
+            safe = ("inside a danger zone at the start (the feasible set has no width there)"
+                    if f.initial_xi_safe_until is None else
+                    f"outside the danger zones until t = {f.initial_xi_safe_until:.3f} s")
+            lines.append(f"    initial contact: xi = {f.initial_xi * mm:.2f} mm, {safe}, feasible until "
                          f"t = {f.initial_xi_feasible_until:.3f} s")
             if f.fixed_grasp:
                 ivs = ", ".join(f"[{lo * mm:.2f}, {hi * mm:.2f}]" for lo, hi in f.fixed_grasp)

@@ -12,13 +12,21 @@ from collections.abc import Iterable
 Intervals = tuple[tuple[float, float], ...]
 
 __all__ = [
+    "DANGER_FRACTION",
     "Intervals",
     "contains",
+    "danger_zones",
     "intersect",
     "merge",
     "total_length",
     "widest",
+    "without_danger_zones",
 ]
+
+#: A contact is in its *danger zone* when it is within this fraction of its feasible interval's width of either
+#: bound (paper §4's regrasp trigger). The one definition: the paper policy, the plan's suggested start, the
+#: rollout figures and the rerun recording all take it from here (or from a setting that defaults to it).
+DANGER_FRACTION = 0.1
 
 
 def merge(pieces: Iterable[tuple[float, float]], *, gap: float = 0.0) -> Intervals:
@@ -70,3 +78,15 @@ def widest(a: Intervals) -> tuple[float, float] | None:
     if not a:
         return None
     return max(a, key=lambda iv: iv[1] - iv[0])
+
+
+def danger_zones(lo: float, hi: float, fraction: float = DANGER_FRACTION) -> tuple[tuple[float, float], ...]:
+    """The two danger zones of the feasible interval [lo, hi] [m]: ``fraction`` of its width at each end."""
+    keep = fraction * (hi - lo)
+    return ((lo, lo + keep), (hi - keep, hi))
+
+
+def without_danger_zones(a: Intervals, fraction: float = DANGER_FRACTION) -> Intervals:
+    """``a`` less each interval's danger zones (:func:`danger_zones`)."""
+    return tuple((lo + fraction * (hi - lo), hi - fraction * (hi - lo)) for lo, hi in a
+                 if hi - lo > 0.0 and fraction < 0.5)

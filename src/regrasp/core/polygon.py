@@ -246,7 +246,8 @@ class ConvexPolygon:
 
     Prefer :meth:`from_vertices` or :meth:`rectangle`; direct construction validates the
     vertices too (and normalises CW input to CCW, keeping vertex 0 first) and requires
-    ``mass`` and ``inertia`` > 0.
+    ``mass`` > 0 and either ``inertia`` > 0 or, without it, a uniform density (as
+    :meth:`from_vertices` with ``mass`` alone: the centroid must then be the origin).
 
     Attributes:
         vertices: (n, 2) vertices [m], CCW, object frame (origin = centre of mass).
@@ -257,10 +258,16 @@ class ConvexPolygon:
     """
 
     vertices: np.ndarray
-    mass: float
-    inertia: float
+    mass: float | None = None
+    inertia: float | None = None
 
     def __post_init__(self) -> None:
+        if self.mass is None:
+            raise InvalidParameterError("mass", None, "a mass [kg] (and optionally an inertia [kg m^2]; "
+                                        "ConvexPolygon.from_vertices also takes a density)")
+        if self.inertia is None:
+            uniform = ConvexPolygon.from_vertices(self.vertices, mass=self.mass)
+            object.__setattr__(self, "inertia", uniform.inertia)
         object.__setattr__(self, "vertices", _readonly(_validated_ccw_vertices(self.vertices)))
         object.__setattr__(self, "mass", as_mass("mass", self.mass))
         object.__setattr__(self, "inertia", as_inertia("inertia", self.inertia))

@@ -8,14 +8,20 @@ the reachable set and the feasible set. The planner adds:
 * the infeasible time intervals per finger: maximal runs of consecutive infeasible
   samples with the same reason (``start``/``end`` are the first and last infeasible
   sample times, so the true interval extends at most one sample spacing further);
-* the initial grasp the envelope suggests. **Rule:** the contact that stays feasible
-  longest. Let :math:`F_k` be the feasible set at sample :math:`k`; the prefix
-  intersections :math:`P_k = F_0 \cap \dots \cap F_k` shrink with :math:`k`; take the last
-  non-empty one, :math:`P_K`, and choose the midpoint of its widest interval (the most
-  central such contact). Every contact of :math:`P_K` is feasible from the first sample up
-  to ``initial_xi_feasible_until`` = :math:`t_K`, and none lasts longer. When
-  :math:`K` is the last sample, one fixed grasp survives the whole trajectory
-  (``fixed_grasp`` is then :math:`P_K`, otherwise empty) and no regrasp is needed.
+* the initial grasp the envelope suggests. **Rule:** the contact that stays outside every danger zone
+  longest. Let :math:`F_k` be the feasible set at sample :math:`k` and :math:`D_k` the same less each
+  interval's danger zones (``danger_fraction`` of its width at each end,
+  :data:`~regrasp.core.intervals.DANGER_FRACTION`: where the paper's policy would already slide). The prefix
+  intersections :math:`P_k = F_0 \cap \dots \cap F_k` shrink with :math:`k`; when the last one is non-empty,
+  one fixed grasp survives the whole trajectory (``fixed_grasp`` is then :math:`P_K`, otherwise empty) and no
+  regrasp is needed. The candidates :math:`C` are that fixed grasp if there is one, else the whole edge; take
+  the last non-empty :math:`S_K = C \cap D_0 \cap \dots \cap D_K` and choose the midpoint of its widest
+  interval (the most central such contact): it is outside the danger zones up to ``initial_xi_safe_until`` =
+  :math:`t_K` and, among the candidates, none stays out longer. Only when :math:`C \cap D_0` is empty (the
+  feasible set has no width at the start) the start lies in a danger zone: then the midpoint of the widest
+  interval of the last non-empty :math:`P_k` (the contact that stays feasible longest), and
+  ``initial_xi_safe_until`` is None. ``initial_xi_feasible_until`` is the last sample up to which the chosen
+  contact stays feasible.
 """
 
 from __future__ import annotations
@@ -27,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.exceptions import InvalidParameterError
-from ..core.intervals import Intervals, intersect, widest
+from ..core.intervals import DANGER_FRACTION, Intervals, contains, intersect, widest, without_danger_zones
 from ..core.polygon import ConvexPolygon
 from ..core.trajectory import Trajectory
 from ..core.validation import MAX_SAMPLES, as_finite_array, as_sample_count, expect_sequence_of, expect_type
@@ -90,6 +96,8 @@ class FingerPlan:
         infeasible_intervals: Where the feasible set is empty, and why.
         initial_xi: Suggested initial contact ξ [m], or None if the first sample is infeasible.
         initial_xi_feasible_until: Last sample time [s] up to which ``initial_xi`` stays feasible.
+        initial_xi_safe_until: Last sample time [s] up to which ``initial_xi`` stays outside the danger zones
+            (None: it starts inside one, as only a feasible set with no width at the start forces).
         fixed_grasp: ξ-intervals feasible at every sample (empty when a regrasp is needed).
         tip_clearance: Tip clearance [m] used by the ``urdf`` geometry, else None.
     """
@@ -107,6 +115,7 @@ class FingerPlan:
     initial_xi_feasible_until: float | None
     fixed_grasp: Intervals
     tip_clearance: float | None
+    initial_xi_safe_until: float | None = None
 
     @property
     def feasible(self) -> bool:
@@ -194,6 +203,7 @@ class PlanResult:
                     ],
                     "initial_xi": f.initial_xi,
                     "initial_xi_feasible_until": f.initial_xi_feasible_until,
+                    "initial_xi_safe_until": f.initial_xi_safe_until,
                     "fixed_grasp": ivs(f.fixed_grasp),
                 }
                 for f in self.fingers
@@ -213,20 +223,43 @@ def _infeasible_intervals(samples: Sequence[EnvelopeSample]) -> tuple[Infeasible
     return tuple(runs)
 
 
-def _initial_grasp(samples: Sequence[EnvelopeSample]) -> tuple[float | None, float | None, Intervals]:
-    """The prefix-intersection rule of the module docstring: (xi, feasible_until, fixed_grasp)."""
-    prefix = samples[0].feasible
+def _last_prefix(sets: Sequence[Intervals]) -> tuple[Intervals, int]:
+    """The last non-empty prefix intersection of ``sets`` and its index (-1, () when the first set is empty)."""
+    prefix, last = sets[0], 0
     if not prefix:
-        return None, None, ()
-    last = 0
-    for k in range(1, len(samples)):
-        nxt = intersect(prefix, samples[k].feasible)
+        return (), -1
+    for k in range(1, len(sets)):
+        nxt = intersect(prefix, sets[k])
         if not nxt:
             break
         prefix, last = nxt, k
-    lo, hi = widest(prefix)
+    return prefix, last
+
+
+def _stays_until(sets: Sequence[Intervals], samples: Sequence[EnvelopeSample], xi: float) -> float | None:
+    """The last sample time [s] up to which ``xi`` [m] lies in every one of ``sets`` (None: not in the first)."""
+    until = None
+    for s, sample in zip(sets, samples):
+        if not contains(s, xi):
+            break
+        until = sample.time
+    return until
+
+
+def _initial_grasp(samples: Sequence[EnvelopeSample],
+                   fraction: float) -> tuple[float | None, float | None, float | None, Intervals]:
+    """The rule of the module docstring: (xi, feasible_until, safe_until, fixed_grasp)."""
+    feasible = [s.feasible for s in samples]
+    prefix, last = _last_prefix(feasible)
+    if last < 0:
+        return None, None, None, ()
     fixed = prefix if last == len(samples) - 1 else ()
-    return 0.5 * (lo + hi), samples[last].time, fixed
+    safe = [without_danger_zones(f, fraction) for f in feasible]
+    safe[0] = intersect(fixed, safe[0]) if fixed else safe[0]
+    candidates, _ = _last_prefix(safe)
+    lo, hi = widest(candidates or prefix)
+    xi = 0.5 * (lo + hi)
+    return xi, _stays_until(feasible, samples, xi), _stays_until(safe, samples, xi), fixed
 
 
 def plan(
@@ -239,6 +272,7 @@ def plan(
     geometry: Geometry | str = Geometry.IDEAL,
     progress: Progress | None = None,
     scenario: str | None = None,
+    danger_fraction: float = DANGER_FRACTION,
 ) -> PlanResult:
     """Run the grasp planner.
 
@@ -252,12 +286,17 @@ def plan(
         geometry: ``"ideal"`` or ``"urdf"``.
         progress: Called as ``progress(done, total)`` after each finger-sample.
         scenario: Name recorded in the result.
+        danger_fraction: The danger zones' share of a feasible interval's width at each end [-], in (0, 0.5): the
+            suggested initial contact keeps out of them longest (module docstring).
     """
     contacts = expect_sequence_of("contacts", contacts, FingerContact, "FingerContact")
     expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
     expect_type("trajectory", trajectory, Trajectory, "a Trajectory")
     if not contacts:
         raise InvalidParameterError("contacts", contacts, "at least one finger")
+    if isinstance(danger_fraction, bool) or not isinstance(danger_fraction, (int, float)) \
+            or not 0.0 < danger_fraction < 0.5:
+        raise InvalidParameterError("danger_fraction", danger_fraction, "a fraction in (0, 0.5)")
     if times is None:
         times = trajectory.times(as_sample_count("samples", samples))
     else:
@@ -281,7 +320,7 @@ def plan(
             if progress is not None:
                 progress(done, total)
         per_sample = tuple(per_sample)
-        xi0, until, fixed = _initial_grasp(per_sample)
+        xi0, until, safe_until, fixed = _initial_grasp(per_sample, float(danger_fraction))
         finger = contact.finger
         plans.append(
             FingerPlan(
@@ -296,6 +335,7 @@ def plan(
                 infeasible_intervals=_infeasible_intervals(per_sample),
                 initial_xi=xi0,
                 initial_xi_feasible_until=until,
+                initial_xi_safe_until=safe_until,
                 fixed_grasp=fixed,
                 tip_clearance=env.tip_clearance,
             )
@@ -319,8 +359,10 @@ def plan_scenario(
     samples: int | None = None,
     geometry: Geometry | str | None = None,
     progress: Progress | None = None,
+    danger_fraction: float = DANGER_FRACTION,
 ) -> PlanResult:
-    """Run the planner on a loaded scenario (``samples``/``geometry`` override its settings)."""
+    """Run the planner on a loaded scenario (``samples``/``geometry`` override its settings; ``danger_fraction`` as in
+    :func:`plan`)."""
     expect_type("scenario", scenario, Scenario, "a Scenario (regrasp.load_scenario)")
     if samples is not None:
         samples = as_sample_count("samples", samples)
@@ -332,4 +374,5 @@ def plan_scenario(
         geometry=scenario.geometry if geometry is None else scenario.check_geometry(geometry),
         progress=progress,
         scenario=scenario.name,
+        danger_fraction=danger_fraction,
     )

@@ -6,15 +6,11 @@ Unknown keys are errors (they are usually typos). Every error is a
 
 .. code-block:: toml
 
-    name = "paper_trajectory_2"          # optional, default: the file's stem
-    description = "..."                  # optional
-
-    [object]                             # a convex polygon in the object frame (origin = centre of mass)
-    vertices = [[0.05, 0.02], [-0.05, 0.02], [-0.05, -0.02], [0.05, -0.02]]
-    # or: width = 0.10  and  height = 0.04  (a rectangle, vertices CCW from the top-right corner)
+    name = "paper_trajectory_2"
+    [object]                             # a convex polygon; origin = centre of mass
+    width = 0.10
+    height = 0.04
     mass = 0.1                           # [kg]; with inertia [kg m^2], or density [kg/m^2] alone
-    inertia = 9.67e-5
-
     [trajectory]                         # object pose (x, y, beta) in the hand frame
     type = "ellipse"                     # x = cx + a sin(w t), y = cy + b cos(w t), beta = beta0 + beta_a sin(w t)
     cx = 0.0
@@ -22,46 +18,15 @@ Unknown keys are errors (they are usually typos). Every error is a
     a = 0.09
     b = 0.05
     omega = 2.0
-    beta0 = 0.0                          # optional, default 0
-    beta_a = 0.0                         # optional, default 0
-    t_start = 0.0                        # optional, default 0
-    t_end = 3.141592653589793            # optional, default one period
-    # or: type = "waypoints", times = [...], poses = [[x, y, beta], ...],
-    #     boundary = "natural" | "clamped" | "periodic", unwrap_angle = false
-
-    [hand]                               # optional
-    gravity = [0.0, -9.81]               # [m/s^2] in the hand frame
-    mu = 0.5                             # optional: Coulomb friction of every fingertip [-] (mu_s = mu_k),
-    # or: mu_static = 0.8 and mu_kinetic = 0.4 together (0 <= mu_kinetic <= mu_static); default mu = 0.5
-    effort = 0.5                         # optional: every joint's torque limit [N m] (> 0), or [joint 1, joint 2];
-                                         # default: each URDF's <limit effort> (0 or none there: no limit)
-
     [[fingers]]                          # one table per finger
     name = "finger1"
     urdf = "../../urdf/planar_2r_finger.urdf"   # relative to the scenario file
     base = [-0.05, 0.0, 1.5707963267948966]     # base pose (x, y, theta) in the hand frame
-    configuration = "left"               # "left" (-pi < theta2 < 0) or "right"
+    configuration = "left"
     edge = 1                             # edge k runs from vertex k to vertex k+1 (0-based, CCW order)
-    tip_clearance = 0.015                # optional, [m], 'urdf' geometry only
-    mu = 0.8                             # optional: this fingertip's friction, overriding [hand]'s;
-    # or: mu_static and mu_kinetic together, as in [hand]
-    effort = [0.3, 0.2]                  # optional: this finger's joint torque limits [N m], overriding [hand]'s
 
-    [pad]                                # optional: a compliant pad on every fingertip (the project plant's
-    stiffness = 1e5                      # soft normal contacts, regrasp.core.pad): k [N/m]; damping [N s/m]
-    damping = 63.2                       # (default 0); preload [N], a tip on its edge's line carries it
-    preload = 0.5                        # (default 0.5); substeps: RK4 steps per control step (default: from k)
-
-    [planner]                            # optional
-    samples = 401                        # time samples over the trajectory's domain
-    geometry = "ideal"                   # "ideal" or "urdf"
-
-    [study]                              # optional: the perturbations of `regrasp study` (regrasp.model.perturbation)
-    mass = 0.2                           # relative half-widths: mass, inertia, mu, mu_kinetic, link_mass
-    contact_position = 0.0002            # [m] half-width of each fingertip's placement error
-    position_noise = 0.0001              # [m]; also angle_noise [rad], velocity_noise, angular_velocity_noise,
-    delay = 1                            # xi_noise, xi_dot_noise, force_noise, slip_threshold, slip_delay,
-                                         # torque_noise [N m]; delay and slip_delay in control steps
+Every key, its unit, default and bounds (``[hand]``, ``[pad]``, ``[planner]``, ``[study]`` and the waypoint
+trajectory) is in the scenario reference, ``docs/scenario.md``.
 """
 
 from __future__ import annotations
@@ -88,9 +53,17 @@ from ..core.exceptions import (
 from ..core.pad import Pad
 from ..core.polygon import ConvexPolygon
 from ..core.trajectory import EllipseTrajectory, Trajectory, WaypointTrajectory
-from ..core.validation import MAX_SAMPLES, as_finite_array, as_positive_float, file_problem
+from ..core.validation import (
+    MAX_SAMPLES,
+    as_finite_array,
+    as_positive_float,
+    as_sample_count,
+    expect_sequence_of,
+    expect_type,
+    file_problem,
+)
 from .finger import Finger, as_effort_limit
-from .geometry import Geometry
+from .geometry import Geometry, as_geometry
 from .perturbation import Perturbation
 
 __all__ = ["FingerContact", "Scenario", "load_scenario"]
@@ -129,20 +102,54 @@ class FingerContact:
 
 @dataclass(frozen=True)
 class Scenario:
-    """Everything a scenario file describes, built and validated."""
+    """Everything a scenario file describes, built and validated (:func:`load_scenario` reads one; in code, give
+    at least ``name``, ``polygon``, ``trajectory`` and ``contacts`` by keyword).
 
-    path: Path | None
+    Attributes:
+        name: The scenario's name.
+        polygon: The object.
+        trajectory: The object's pose (x [m], y [m], β [rad]) in the hand frame over time.
+        contacts: The fingers, each with its edge (a sequence of :class:`FingerContact`; kept as a tuple).
+        description: Free text.
+        path: The file it was read from (None: built in code).
+        gravity_in_hand: Gravity (2,) [m/s²] in the hand frame.
+        samples: The §2 planner's number of time samples.
+        geometry: The planner's link geometry (``ideal`` or ``urdf``).
+        study: The robustness study's perturbations (the ``[study]`` table).
+        pad: The fingertips' compliant pad (the ``[pad]`` table), or None: rigid contacts on the project's plant.
+    """
+
     name: str
-    description: str
     polygon: ConvexPolygon
     trajectory: Trajectory
     contacts: tuple[FingerContact, ...]
+    description: str = ""
+    path: Path | None = None
     gravity_in_hand: np.ndarray = field(default_factory=lambda: np.array([0.0, -9.81]))
     samples: int = 401
     geometry: Geometry = Geometry.IDEAL
     study: Perturbation = Perturbation()
-    #: The fingertips' compliant pad (the ``[pad]`` table), or None: rigid contacts on the project's plant.
     pad: Pad | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise InvalidParameterError("name", self.name, "a non-empty string")
+        if not isinstance(self.description, str):
+            raise InvalidParameterError("description", self.description, "a string")
+        if self.path is not None and not isinstance(self.path, Path):
+            object.__setattr__(self, "path", Path(expect_type("path", self.path, str, "a path or None")))
+        expect_type("polygon", self.polygon, ConvexPolygon, "a ConvexPolygon")
+        expect_type("trajectory", self.trajectory, Trajectory, "a Trajectory")
+        contacts = expect_sequence_of("contacts", self.contacts, FingerContact, "FingerContact")
+        if not contacts:
+            raise InvalidParameterError("contacts", self.contacts, "at least one FingerContact")
+        object.__setattr__(self, "contacts", contacts)
+        object.__setattr__(self, "gravity_in_hand", as_finite_array("gravity_in_hand", self.gravity_in_hand, (2,)))
+        object.__setattr__(self, "samples", as_sample_count("samples", self.samples))
+        object.__setattr__(self, "geometry", as_geometry("geometry", self.geometry))
+        expect_type("study", self.study, Perturbation, "a Perturbation")
+        if self.pad is not None:
+            expect_type("pad", self.pad, Pad, "a Pad or None")
 
     def check_geometry(self, geometry: Geometry | str) -> Geometry:
         """``geometry`` as a :class:`~regrasp.model.geometry.Geometry` every finger of this scenario can be planned

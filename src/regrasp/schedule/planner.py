@@ -54,7 +54,7 @@ from ..model.scenario import Scenario
 from .diagnosis import diagnose
 from .force_polytope import force_system, force_vertices, torque_excess
 from .lattice import cells_of, flat_index, move_runs, path, run
-from .problem import Problem, RegraspSettings, build_problem, slide_ratios
+from .problem import Problem, RegraspSettings, build_problem, slide_ratios, window_margin
 from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide, first_minimum, slides_at
 from .torque import TorqueModel
 
@@ -239,18 +239,30 @@ def _periodic_from(problem: Problem, start, bans: dict):
     return (value, *path(lat, periodic, N, 0, flat_index(start, periodic.boxes[N])))
 
 
+def _when(problem: Problem, t: float) -> str:
+    """" at t = ..." for a refusal's time ``t`` [s] other than the start, saying so where a periodic schedule is back at
+    its start."""
+    if abs(t - problem.times[0]) < 1e-9:
+        return ""
+    back = " (where the periodic schedule is back at its start)" if t > problem.times[1] + 1e-9 else ""
+    return f" at t = {t:.3f} s{back}"
+
+
 def _bad_start(problem: Problem) -> NoScheduleError:
     """Why the given start positions are not admissible at the first layer."""
     t0 = float(problem.times[0])
     start = [float(problem.grids[i][c]) for i, c in enumerate(problem.start_cells)]
-    low = [(i, x, problem.sub_samples[i][0].margin(x)) for i, x in enumerate(start)
+    low = [(i, x, *window_margin(problem, 0, i, x)) for i, x in enumerate(start)
            if not problem.lattice.env_ok[0, i, problem.start_cells[i]]]
-    if low:
-        where = [f"{problem.names[i]} at xi = {x * 1e3:.2f} mm is " + (f"{-m * 1e3:.2f} mm outside its feasible set"
-                 if m < 0 else f"only {m * 1e3:.2f} mm inside its feasible set") for i, x, m in low]
-        return NoScheduleError(t0, ScheduleLimit.ENVELOPE, tuple(problem.names[i] for i, _, _ in low),
-                               f"at t = {t0:.3f} s {'; '.join(where)} (the envelope margin is "
-                               f"{problem.settings.envelope_margin * 1e3:.2f} mm)", partial=None)
+    if low:  # (the margin the lattice's envelope tables take: the least over the first layer's window)
+        where = [f"{problem.names[i]} at xi = {x * 1e3:.2f} mm is " + (
+                 f"{-m * 1e3:.2f} mm outside its feasible set" if m < 0 else f"only {m * 1e3:.2f} mm inside its "
+                 "feasible set") + _when(problem, tm) for i, x, m, tm in low]
+        need = problem.settings.envelope_margin + problem.envelope_buffer
+        return NoScheduleError(t0, ScheduleLimit.ENVELOPE, tuple(problem.names[i] for i, *_ in low),
+                               f"starting at t = {t0:.3f} s, {'; '.join(where)} (a contact must keep "
+                               f"{need * 1e3:.2f} mm: the envelope margin {problem.settings.envelope_margin * 1e3:.2f}"
+                               f" mm and {problem.envelope_buffer * 1e3:.2f} mm for a slide's ramp)", partial=None)
     return NoScheduleError(t0, ScheduleLimit.FORCES, problem.names,
                            f"no force system holds the object at rest at the start positions "
                            f"({', '.join(f'{x * 1e3:.1f}' for x in start)} mm) with the required margins", partial=None)

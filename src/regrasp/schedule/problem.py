@@ -288,6 +288,24 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
                    torque_excess, free_tables)
 
 
+def _window(k: int, q: int, n_steps: int) -> slice:
+    """Layer k's sub-samples, its window [t_{k-1}, t_{k+1}] (``q`` sub-samples a step)."""
+    return slice(max(0, (k - 1) * q), min(n_steps * q, (k + 1) * q) + 1)
+
+
+def window_margin(problem: Problem, k: int, i: int, xi: float) -> tuple[float, float]:
+    """Contact i's least envelope margin [m] at ``xi`` [m] over layer k's window, as the lattice's envelope tables
+    take it (periodic: the first and the last layer are one time), and the time [s] of that least margin."""
+    n_steps, q = len(problem.times) - 1, problem.settings.envelope_substeps
+    layers = [k] if not problem.periodic or k not in (0, n_steps) else [0, n_steps]
+    found = []
+    for layer in layers:
+        window = _window(layer, q, n_steps)
+        found += [(problem.sub_samples[i][j].margin(xi), float(problem.sub_times[j]))
+                  for j in range(window.start, window.stop)]
+    return min(found)
+
+
 def _envelope_tables(sub_samples, grids, q, n_steps, settings, buffer, periodic: bool):
     """(admissible, proximity) per layer, contact and cell over each layer's window [t_{k-1}, t_{k+1}]
     (wrapped around the period's ends when ``periodic``: the first and the last layer are one time)."""
@@ -297,8 +315,7 @@ def _envelope_tables(sub_samples, grids, q, n_steps, settings, buffer, periodic:
     em, comfort = settings.envelope_margin, settings.comfort_margin
     for i, grid in enumerate(grids):
         margins = np.array([_cell_margins(s, grid) for s in sub_samples[i]])  # (sub-samples, cells)
-        windows = [margins[max(0, (k - 1) * q):min(n_steps * q, (k + 1) * q) + 1].min(axis=0)
-                   for k in range(n_steps + 1)]
+        windows = [margins[_window(k, q, n_steps)].min(axis=0) for k in range(n_steps + 1)]
         if periodic:
             windows[0] = windows[n_steps] = np.minimum(windows[0], windows[n_steps])
         for k, window in enumerate(windows):

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field, replace
 
 from ..core.contact import DEFAULT_CONE_MARGIN
 from ..core.exceptions import InvalidParameterError
+from ..core.intervals import DANGER_FRACTION
 from ..core.validation import (
     as_count,
     as_duration,
@@ -227,7 +228,7 @@ class PaperSettings:
         enabling_recheck_time: Search for an enabling slide at most this often per contact [s].
     """
 
-    danger_fraction: float = 0.1
+    danger_fraction: float = DANGER_FRACTION
     reaction_time: float = 0.4
     target_horizon: float = 0.6
     recheck_time: float = 0.01

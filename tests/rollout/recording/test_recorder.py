@@ -15,6 +15,7 @@ import pytest
 import rerun as rr
 from rerun.chunk import RrdReader
 
+from factories import DANGER_START_THREE
 from hang_guard import HANG_SECONDS
 from recordings import read
 from regrasp import Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, RunSpec, load_scenario
@@ -337,7 +338,8 @@ def record_rollout(path: Path, *, policy="paper", duration=0.3, **kwargs):
     """A rollout of the three-finger scenario recorded to ``path``; returns it, its result and its records."""
     from regrasp.rollout.build import build_rollout
 
-    rollout = build_rollout(THREE, RunSpec(duration=duration), policy=policy)
+    start = DANGER_START_THREE if policy == "paper" else None  # (finger 1 slides at once)
+    rollout = build_rollout(THREE, RunSpec(duration=duration, xi0=start), policy=policy)
     records = []
     with RolloutRecorder(rollout.plant, rrd_path=path, **kwargs) as rec:
         log_record = rec.log_record
