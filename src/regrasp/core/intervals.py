@@ -81,7 +81,7 @@ def widest(a: Intervals) -> tuple[float, float] | None:
 
 
 def danger_zones(lo: float, hi: float, fraction: float = DANGER_FRACTION) -> tuple[tuple[float, float], ...]:
-    """The two danger zones of the feasible interval [lo, hi] [m]: ``fraction`` of its width at each end."""
+    """The two danger zones of the feasible interval ``[lo, hi]`` [m]: ``fraction`` of its width at each end."""
     keep = fraction * (hi - lo)
     return ((lo, lo + keep), (hi - keep, hi))
 

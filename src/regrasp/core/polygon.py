@@ -452,7 +452,7 @@ class ConvexPolygon:
         return bool(inside) if pts.ndim == 1 else inside
 
     def to_coal(self, half_thickness: float) -> coal.ConvexBase:
-        """The polygon extruded to z in [-h, h] [m] as a coal convex shape (object frame).
+        """The polygon extruded to z in ``[-h, h]`` [m] as a coal convex shape (object frame).
 
         Built with ``coal.Convex.convexHull`` (qhull option ``"Qt"``); coal returns it as
         a ``coal.ConvexBase``.

@@ -46,7 +46,7 @@ class TrajectorySample:
 
 
 class Trajectory(ABC):
-    """Base class: a planar object pose X(t) over a closed time domain [t_start, t_end] [s].
+    """Base class: a planar object pose X(t) over a closed time domain ``[t_start, t_end]`` [s].
 
     Subclasses implement :meth:`_evaluate` on a validated 1-D array of times.
     """
@@ -168,12 +168,15 @@ class EllipseTrajectory(Trajectory):
     explicit ``t_end``.
 
     Args:
-        cx, cy: Centre [m] (hand frame).
-        a, b: Semi-axes [m] along x and y (any finite sign).
+        cx: Centre's x [m] (hand frame).
+        cy: Centre's y [m] (hand frame).
+        a: Semi-axis [m] along x (any finite sign).
+        b: Semi-axis [m] along y (any finite sign).
         omega: Angular frequency ω [rad/s].
         beta0: Mean orientation β0 [rad].
         beta_a: Orientation amplitude βa [rad].
-        t_start, t_end: Time domain [s].
+        t_start: Start of the time domain [s].
+        t_end: End of the time domain [s].
     """
 
     def __init__(

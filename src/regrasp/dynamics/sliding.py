@@ -106,7 +106,8 @@ def sliding_feasibility(
         direction: +1 to slide along the edge's ξ direction, -1 against it.
         friction: The contacts' :class:`~regrasp.core.contact.Friction` (one for all, a coefficient [-], or
             one per contact): the slider on its kinetic edge, the fixed contacts in their static cones.
-        object_mass, object_inertia: [kg], [kg m²].
+        object_mass: [kg].
+        object_inertia: [kg m²].
         gravity_in_hand: [m/s²].
         settings: Minimum normal force and cone margin (default: the bare physics, 0 and 0).
         solver: A persistent :class:`~regrasp.dynamics.internal_force.solver.InternalForceSolver` with these

@@ -147,11 +147,13 @@ def internal_force_into(A: np.ndarray, f_m: np.ndarray, frames: np.ndarray, coef
         target: The target cone margin [N]; > 0 adds the variable s (``margin_column`` its σ_r, ``weight``
             W and ``aim`` δ [N] the objective's, :data:`regrasp.dynamics.internal_force.rows.MARGIN_WEIGHT` and
             ``MARGIN_AIM``).
-        jac, wrench, effort: The joint torque limits (:mod:`regrasp.dynamics.internal_force.torque`): per finger
-            its tip Jacobian J_i row-major (m, 4) [m/rad], w = M q̈ + N (2m) [N m] and the limits e (2m) [N m] (inf:
-            none), so that :math:`\tau = w + J^T f` and :math:`|\tau_j| \le e_j`. They are rows of the QP only where
-            the answer without them exceeds a limit (its optimum is then not the constrained one); otherwise that
-            answer is the constrained problem's optimum already, bit for bit the same as without limits.
+        jac: For the joint torque limits (:mod:`regrasp.dynamics.internal_force.torque`), per finger its tip
+            Jacobian J_i row-major (m, 4) [m/rad].
+        wrench: w = M q̈ + N (2m) [N m].
+        effort: The limits e (2m) [N m] (inf: none), so that :math:`\tau = w + J^T f` and
+            :math:`|\tau_j| \le e_j`. They are rows of the QP only where the answer without them exceeds a limit
+            (its optimum is then not the constrained one); otherwise that answer is the constrained problem's
+            optimum already, bit for bit the same as without limits.
 
     Returns:
         (status, k, cone margin [N]): ``FORCE_*``; k the null space's dimension; the least static-cone

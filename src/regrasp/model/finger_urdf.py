@@ -65,10 +65,12 @@ def planar_2r_urdf(
     """URDF text of a planar 2R finger with links along x and revolute z joints.
 
     Args:
-        l1, l2: Link lengths [m] (joint 1 to joint 2, joint 2 to the tip).
-        radius1, radius2: Cylinder radii [m] of the links (visual and collision).
-        mass1, mass2: Link masses [kg]; default: aluminium tubes of 30 % fill,
-            ``0.3 * 2700 * pi r^2 l``.
+        l1: Link length [m], joint 1 to joint 2.
+        l2: Link length [m], joint 2 to the tip.
+        radius1: Cylinder radius [m] of link 1 (visual and collision).
+        radius2: Cylinder radius [m] of link 2 (visual and collision).
+        mass1: Link 1's mass [kg]; default: an aluminium tube of 30 % fill, ``0.3 * 2700 * pi r^2 l``.
+        mass2: Link 2's mass [kg]; the same default.
         damping: Viscous joint damping [N·m·s/rad].
         name: Robot name.
     """

@@ -251,7 +251,8 @@ def xi_intervals(lam: np.ndarray, offset: np.ndarray, axis: int, others: np.ndar
     r"""The feasible :math:`\xi_j` interval (j = ``axis``) for each row of ``others``.
 
     Args:
-        lam, offset: One time's vertices (:meth:`ForceVertices.at`): (V, m) and (V,).
+        lam: One time's vertices λ (:meth:`ForceVertices.at`), (V, m).
+        offset: Their offsets q, (V,).
         axis: The contact j whose interval is wanted.
         others: Positions ξ [m] of the other contacts (in contact order, j left out), (n, m - 1).
 

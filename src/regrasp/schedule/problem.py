@@ -50,7 +50,7 @@ class RegraspSettings:
         envelope_margin: Every contact stays this far inside its feasible set [m] (≥ half the
             ``xi_resolution``, so that a one-cell move stays inside too).
         cone_margin: Every fixed contact keeps μ_s f_n - |f_t| ≥ this [N].
-        f_min, f_max: Every contact's normal force within [f_min, f_max] [N].
+        f_min, f_max: Every contact's normal force within ``[f_min, f_max]`` [N].
         prime_overshoot: Plan each break-away with the slider's friction ratio at μ_s + this [-] (the executor's
             priming overshoot, ``ExecutorSettings.prime_overshoot``), so that the holders keep their margins through
             it. Off by default: on the default scenario 0.05 tightens the schedule (3.0 mm of envelope margin instead

@@ -283,8 +283,9 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
         runs: How many runs (at most ``MAX_RUNS``).
         seed: The study's seed.
         perturbation: What is perturbed, and by how much.
-        duration, periods: Each run's length, as in :func:`~regrasp.rollout.build.build_rollout` (default: the
+        duration: Each run's length [s], as in :func:`~regrasp.rollout.build.build_rollout` (default: the
             trajectory's domain).
+        periods: Each run's length in periods, instead (as in :func:`~regrasp.rollout.build.build_rollout`).
         workers: Processes (1: this one, at most ``MAX_WORKERS``); with Ray, the CPUs of a local cluster.
         ray_address: None (processes), ``"local"`` (a Ray cluster on this machine), ``"auto"`` or a cluster's
             address (:mod:`regrasp.study.ray_cluster`: reached within seconds, before the plan, or a

@@ -96,7 +96,8 @@ class SlideExecutor:
         grasp: The contacts (edges; the modes are the executor's).
         xi: Initial contact positions [m], all fixed.
         friction: What the controllers assume: one :class:`~regrasp.core.contact.Friction` per contact.
-        object_mass, object_inertia: What the controllers assume [kg], [kg m²].
+        object_mass: The mass the controllers assume [kg].
+        object_inertia: The inertia the controllers assume [kg m²].
         settings: :class:`ExecutorSettings`.
     """
 

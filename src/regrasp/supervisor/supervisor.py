@@ -60,7 +60,8 @@ class RegraspSupervisor:
         xi: Initial contact positions ξ [m], one per finger (all contacts start fixed).
         friction: The friction the controllers and the predicate assume: a
             :class:`~regrasp.core.contact.Friction` or a coefficient [-] for all contacts, or one per contact.
-        object_mass, object_inertia: What the controllers assume [kg], [kg m²]; default: the polygon's.
+        object_mass: The mass the controllers assume [kg]; default: the polygon's.
+        object_inertia: The inertia the controllers assume [kg m²]; default: the polygon's.
         tip_clearance: Per-finger tip clearance [m] for the ``urdf`` geometry (None: default).
         plan: The planner's result for ``trajectory`` (:func:`~regrasp.envelope.planner.plan`), or None: the
             paper's policy looks ahead on it.

@@ -121,7 +121,9 @@ def torque_shortfall(null: np.ndarray, motion_forces: np.ndarray, C: np.ndarray,
     Args:
         null: N_c (2m, k), f = f_m + N_c y.
         motion_forces: f_m (2m,) [N].
-        C, lower, n_ineq: The other rows in the hand frame, C f >= lower (the first ``n_ineq``), = lower (the rest).
+        C: The other rows in the hand frame: C f >= lower (the first ``n_ineq``), = lower (the rest).
+        lower: Their bounds.
+        n_ineq: How many of them are inequalities.
         torques: The torque limits.
     """
     m2, k = null.shape

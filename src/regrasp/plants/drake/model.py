@@ -272,7 +272,8 @@ def build_drake(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Se
         polygon: The object.
         frictions: Each contact's friction (``CoulombFriction(μ_s, μ_k)``; Drake's discrete solver uses μ_k).
         gravity_in_hand: Gravity [m/s²] in the hand frame.
-        object_mass, object_inertia: The object's [kg], [kg m²] (default: the polygon's).
+        object_mass: The object's mass [kg] (default: the polygon's).
+        object_inertia: The object's inertia [kg m²] (default: the polygon's).
         tip_clearance: Per finger, the distal link's tip clearance [m] (None: the default).
         settings: :class:`DrakeSettings`.
 

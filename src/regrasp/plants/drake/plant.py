@@ -68,7 +68,8 @@ class DrakePlant(SphereTipSensing):
         contacts: One :class:`~regrasp.plants.project.state.PlantContact` per finger: its edge and initial mode.
         friction: Anything :class:`~regrasp.plants.project.plant.Plant` takes; Drake gets ``CoulombFriction(μ_s,
             μ_k)`` and uses μ_k; the plant reports ``Friction(μ_k)``.
-        object_mass, object_inertia: Override the polygon's [kg], [kg m²].
+        object_mass: Overrides the polygon's mass [kg].
+        object_inertia: Overrides the polygon's inertia [kg m²].
         dt: Control step [s] (a multiple of ``settings.time_step``).
         settings: :class:`~regrasp.plants.drake.model.DrakeSettings` (tip radius, contact parameters, Drake's step).
         tip_clearance: Per finger, the distal link's tip clearance [m] for the collision shapes (None: default).

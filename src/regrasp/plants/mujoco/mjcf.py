@@ -340,7 +340,8 @@ def build_mjcf(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Seq
         polygon: The object.
         frictions: Each contact's friction (MuJoCo gets μ_k).
         gravity_in_hand: Gravity [m/s²] in the hand frame.
-        object_mass, object_inertia: The object's [kg], [kg m²] (default: the polygon's).
+        object_mass: The object's mass [kg] (default: the polygon's).
+        object_inertia: The object's inertia [kg m²] (default: the polygon's).
         tip_clearance: Per finger, the distal link's tip clearance [m] (None: the default).
         link_mass_scale: The links' masses and inertias are this times the URDFs' [-].
         settings: :class:`MujocoSettings`.

@@ -75,7 +75,8 @@ class MujocoPlant(SphereTipSensing):
         contacts: One :class:`~regrasp.plants.project.state.PlantContact` per finger: its edge and initial mode.
         friction: Anything :class:`~regrasp.plants.project.plant.Plant` takes; MuJoCo gets μ_k
             (:class:`~regrasp.plants.mujoco.mjcf.MujocoSettings`) and the plant reports ``Friction(μ_k)``.
-        object_mass, object_inertia: Override the polygon's [kg], [kg m²].
+        object_mass: Overrides the polygon's mass [kg].
+        object_inertia: Overrides the polygon's inertia [kg m²].
         dt: Control step [s] (a multiple of ``settings.timestep``).
         settings: :class:`~regrasp.plants.mujoco.mjcf.MujocoSettings` (tip radius, contact parameters, MuJoCo's step).
         tip_clearance: Per finger, the distal link's tip clearance [m] for the collision shapes (None: default).

@@ -101,7 +101,8 @@ class Plant:
             (μ_s = μ_k) [-] for all contacts, or one per contact (default
             :data:`~regrasp.core.contact.DEFAULT_FRICTION`). A fixed contact slips when
             :math:`|f_t| > \mu_s f_n`; a sliding one carries :math:`\mu_k f_n`.
-        object_mass, object_inertia: Override the polygon's [kg], [kg m^2].
+        object_mass: Overrides the polygon's mass [kg].
+        object_inertia: Overrides the polygon's inertia [kg m^2].
         dt: Time step [s].
         baumgarte: α [1/s] of the constraint stabilisation.
         collision_check: Check link–object collisions with coal after every step.

@@ -111,7 +111,7 @@ class SupervisedStep(NamedTuple):
         surface: The plant's contact forces at the step's start (f_n, f_t) (m, 2) [N].
         predicted: The law's predicted contact forces, hand frame (m, 2) [N].
         predicted_surface: The same as (f_n, f_t) (m, 2) [N].
-        feasible: Per contact the supervisor's envelope's feasible intervals [(lo, hi), ...] [m].
+        feasible: Per contact the supervisor's envelope's feasible intervals ``[(lo, hi), ...]`` [m].
         phases: Per contact the supervisor's phase.
         xi: Each contact's ξ after the step [m].
         error: The law's tracking error (its first three entries, x, y [m] and β [rad], are plotted).
