@@ -134,6 +134,8 @@ SECTION_4 = ("fig_4_2_trajectory_1.png", "fig_4_2_trajectory_1_frames.png", "fig
 
 #: Every documented output, by the ID its pages use.
 BLOCKS: dict[str, Block] = {
+    # the defaults the concepts name, from the code
+    "defaults": Block("python docs/defaults.py"),
     # the planner (§2): seconds
     "plan-trajectory-1": Block(f"regrasp plan {T1}", status=(1,)),
     "plan-trajectory-2": Block(f"regrasp plan {T2}"),
