@@ -88,6 +88,19 @@ def lines(*patterns: str) -> Callable[[str, str], str]:
     return keep
 
 
+def after(pattern: str) -> Callable[[str, str], str]:
+    """A console block of the output's first line (the command's heading) and its lines from the first that matches
+    ``pattern`` (a regex) on."""
+    compiled = re.compile(pattern)
+
+    def keep(command: str, text: str) -> str:
+        out = without_timing(text).splitlines()
+        start = next((i for i, line in enumerate(out) if i and compiled.search(line)), len(out))
+        return console(command, "\n".join(out[:1] + out[start:]) + "\n")
+
+    return keep
+
+
 def stripped(*patterns: str) -> Callable[[str, str], str]:
     """A console block of the output less what ``patterns`` (regexes, per line) match: a timing column."""
     compiled = [re.compile(p, re.M) for p in patterns]
@@ -144,12 +157,12 @@ BLOCKS: dict[str, Block] = {
     "figures-trajectory-2": Block(f"regrasp plan {T2} --plot {{out}}", None,
                                   figures=_under("trajectory_2", PLANNER_FIGURES)),
     # the regrasp schedule (§4, planned): seconds each, the table a few minutes
-    "schedule-three-fingers": Block(f"regrasp plan {T3} --regrasp", lines(r"regrasp schedule|^    \w+: |smallest")),
+    "schedule-three-fingers": Block(f"regrasp plan {T3} --regrasp", after(r"regrasp schedule")),
     "schedule-three-fingers-figure": Block(f"regrasp plan {T3} --regrasp --plot {{out}}", None,
                                            figures={"regrasp.png": "docs/images/trajectory_2/regrasp.png"}),
-    "schedule-two-fingers": Block(f"regrasp plan {T2} --regrasp", lines(r"regrasp schedule|slide rule|latest time"),
+    "schedule-two-fingers": Block(f"regrasp plan {T2} --regrasp", after(r"regrasp schedule"),
                                   status=(1,)),
-    "schedule-gravity-up": Block(f"regrasp plan {UP} --regrasp", lines(r"regrasp schedule|^    \w+: |smallest")),
+    "schedule-gravity-up": Block(f"regrasp plan {UP} --regrasp", after(r"regrasp schedule")),
     "schedule-margins": Block("python examples/08_plan_regrasps.py --envelope-margins 1 2 3 4 5 "
                               "--cone-margins 0.1 0.2 0.3 0.5",
                               stripped(r"\s+planning$", r"(?<= N)\s+[\d.]+ s$"), slow=True),
@@ -160,12 +173,11 @@ BLOCKS: dict[str, Block] = {
     # rollouts (§4 on the plant)
     "simulate-trajectory-1": Block(f"regrasp simulate {T1}", status=(1,)),
     "simulate-default": Block("regrasp simulate --periods 3"),
-    "simulate-default-wall-time": Block("regrasp simulate --periods 3", lines(r"wall time"), slow=True,
-                                        measured=True),
     "section-4": Block("python examples/09_paper_section_4.py --periods 3 --plot {out}", slow=True,
                        figures=_under("section_4", SECTION_4)),
     # plants and contact health: minutes
     "plants-mujoco": Block("python examples/10_mujoco_plant.py", slow=True),
+    "health-project": Block("regrasp simulate --periods 2"),
     "health-mujoco": Block("regrasp simulate --periods 2 --plant mujoco", slow=True),
     "health-mujoco-1mm": Block("regrasp simulate --periods 2 --plant mujoco --tip-radius 1", slow=True),
     "health-drake": Block("regrasp simulate --periods 2 --plant drake", slow=True),
@@ -246,6 +258,7 @@ def main(args: list[str] | None = None) -> int:
                         help="compare with the pages, write nothing; exit 1 if any differ")
     parser.add_argument("--fast", action="store_true", help="leave the slow blocks out")
     parser.add_argument("--slow", action="store_true", help="with --check: the slow blocks too")
+    parser.add_argument("--no-figures", action="store_true", help="regenerate the blocks only, not the figures")
     parser.add_argument("--root", type=Path, default=ROOT, help="where the pages are (default: this checkout)")
     a = parser.parse_args(args)
     unknown = [i for i in a.ids if i not in BLOCKS]
@@ -255,7 +268,7 @@ def main(args: list[str] | None = None) -> int:
                     and not (a.check and (b.measured or b.keep is None))]
     failures = problems(a.root) if a.check else []
     cache: dict[str, str] = {}
-    outputs = {i: run(i, BLOCKS[i], not a.check, cache) for i in ids}
+    outputs = {i: run(i, BLOCKS[i], not (a.check or a.no_figures), cache) for i in ids}
     pages_blocks = found_blocks(a.root)
     for i, text in outputs.items():
         if BLOCKS[i].keep is not None and not any(m["id"] == i for ms in pages_blocks.values() for m in ms):
