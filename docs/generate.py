@@ -170,6 +170,10 @@ BLOCKS: dict[str, Block] = {
     "slide-along-edge": Block("python examples/03_slide_along_edge.py"),
     "figure-3-4": Block("python examples/06_figure_3_4.py --out {out}",
                         figures={"figure_3_4.png": "docs/images/figure_3_4.png"}),
+    # the tutorials: seconds
+    "own-finger": Block("python examples/05_plan_with_your_own_finger.py"),
+    "planning-stack": Block("python examples/04_regrasp_rollout.py", stripped(r"^\s+\d+ steps in .*\n")),
+    "study-small": Block(f"regrasp study {T3} --runs 8 --periods 1 --seed 1 --workers 2"),
     # rollouts (§4 on the plant)
     "simulate-trajectory-1": Block(f"regrasp simulate {T1}", status=(1,)),
     "simulate-default": Block("regrasp simulate --periods 3"),
@@ -225,8 +229,8 @@ def run(block_id: str, block: Block, write_figures: bool, cache: dict[str, str])
             for produced, dest in block.figures.items():
                 (ROOT / dest).parent.mkdir(parents=True, exist_ok=True)
                 shutil.copyfile(Path(out) / produced, ROOT / dest)
-    cache[block.command] = done.stdout
-    return block.keep(shown, done.stdout) if block.keep is not None else ""
+    cache[block.command] = done.stdout.replace(out, "DIR")
+    return block.keep(shown, cache[block.command]) if block.keep is not None else ""
 
 
 def found_blocks(root: Path) -> dict[Path, list[re.Match[str]]]:
