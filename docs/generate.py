@@ -21,7 +21,7 @@ ones. Every command runs this checkout's code (``src/`` first on ``PYTHONPATH``)
 ``--check`` also reads the prose of every page that has a generated block: a number with a unit outside generated
 blocks, code and ``<!-- prose numbers: REASON -->`` ... ``<!-- end prose numbers -->`` regions is an error, so a
 result cannot be documented by hand. Such a region names why its numbers are not generated (a parameter, a
-historical measurement).
+historical measurement). A Wilson interval's confidence level ("Wilson 95 %") is a name, not a result.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ BLOCK = re.compile(r"<!-- generated: (?P<id>[\w.-]+) -->\n(?P<body>.*?)<!-- end 
 EXEMPT = re.compile(r"<!-- prose numbers: [^>]*-->.*?<!-- end prose numbers -->", re.S)
 CODE = re.compile(r"```.*?```|`[^`\n]*`", re.S)
 UNITS = r"mm|µm|um|ms|µs|us|s|min|N|N m|mrad|rad|kg|MB|%|×|x real time|Hz|kHz"
-NUMBER_WITH_UNIT = re.compile(rf"(?<![\w.])[−-]?\d+(?:[.,]\d+)?\s?(?:{UNITS})(?![\w])")
+NUMBER_WITH_UNIT = re.compile(rf"(?<!Wilson )(?<![\w.])[−-]?\d+(?:[.,]\d+)?\s?(?:{UNITS})(?![\w])")
 
 #: Machine-dependent fragments of the commands' outputs, left out of checked blocks.
 TIMING = (
