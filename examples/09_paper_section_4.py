@@ -13,7 +13,7 @@ independent full-coordinate plant and prints what happened:
 
 With ``--plot DIR`` it writes the figures (per finger its band, planned and actual contact against
 time; the hand and the object at a few times). ``--periods`` runs N periods of trajectory 2 (default 1;
-the README's figures use 3).
+the documentation's figures use 3).
 """
 
 import argparse
