@@ -220,7 +220,7 @@ def run(block_id: str, block: Block, write_figures: bool, cache: dict[str, str])
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT / "src"), os.environ.get("PYTHONPATH")])),
                MPLBACKEND="Agg")
     with tempfile.TemporaryDirectory() as out:
-        print(f"[{block_id}] {block.command}", file=sys.stderr, flush=True)
+        print(f"[{block_id}] {shown}", file=sys.stderr, flush=True)
         done = subprocess.run(argv(block.command, out), cwd=ROOT, env=env, capture_output=True, text=True)
         if done.returncode not in block.status:
             raise SystemExit(f"[{block_id}] exit status {done.returncode} (expected {block.status}):\n"
