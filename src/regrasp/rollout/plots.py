@@ -88,10 +88,11 @@ def band_samples(times: np.ndarray, bounds: np.ndarray) -> tuple[np.ndarray, np.
         period = float(values[np.argmax(counts)])
     else:
         period = np.inf
+    half_step = 0.5 * float(np.min(np.diff(t))) if n > 1 else 0.0
     keep_t, keep_b, sampled = [t[0]], [b[0]], [True]
     for k in changes:
         held = t[k] - period
-        if held > keep_t[-1]:
+        if held > keep_t[-1] + half_step:
             keep_t.append(held)
             keep_b.append(b[k - 1])
             sampled.append(False)
