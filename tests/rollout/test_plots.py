@@ -9,10 +9,11 @@ from matplotlib.collections import PolyCollection
 
 from regrasp import load_scenario
 from regrasp.core.events import Failure, FailureKind
+from regrasp.core.figures import gravity_words
 from regrasp.core.intervals import DANGER_FRACTION, danger_zones
 from regrasp.model.hand import Hand
 from regrasp.rollout import plots
-from regrasp.rollout.plots import band_samples, gravity_words, plot_frames, plot_rollout, rollout_title
+from regrasp.rollout.plots import band_samples, plot_frames, plot_rollout, rollout_title
 from regrasp.rollout.result import RolloutResult
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"

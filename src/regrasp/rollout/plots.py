@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.figures import FAILURE_COLOURS, pyplot, save_figure
+from ..core.figures import FAILURE_COLOURS, gravity_words, pyplot, save_figure
 from ..core.intervals import DANGER_FRACTION, danger_zones
 
 if TYPE_CHECKING:
@@ -27,25 +27,12 @@ if TYPE_CHECKING:
     from ..model.scenario import Scenario
     from .result import RolloutResult
 
-__all__ = ["band_samples", "gravity_words", "plot_frames", "plot_rollout", "rollout_title"]
+__all__ = ["band_samples", "plot_frames", "plot_rollout", "rollout_title"]
 
 _MM = 1000.0
 _PHASE_COLOURS = {"fixed": "#2ca02c", "priming": "#9467bd", "sliding": "#ff7f0e", "settling": "#8c564b"}
 _BAND, _DANGER, _SLIDE = "#cfe8cf", "#f4b6b6", "#ffd8a8"
 _MAX_DOTS = 60
-
-
-def gravity_words(gravity) -> str:
-    """Gravity (2,) [m/s²] in the hand frame in words: ``gravity down`` / ``up`` / ``left`` / ``right`` when it
-    points along an axis, ``no gravity``, else its components."""
-    gx, gy = (float(v) for v in gravity)
-    size = float(np.hypot(gx, gy))
-    if size == 0.0:
-        return "no gravity"
-    for word, (ux, uy) in (("down", (0, -1)), ("up", (0, 1)), ("left", (-1, 0)), ("right", (1, 0))):
-        if abs(gx - size * ux) + abs(gy - size * uy) < 1e-9 * size:
-            return f"gravity {word}"
-    return f"gravity ({gx:g}, {gy:g}) m/s²"
 
 
 def rollout_title(result: RolloutResult, scenario: Scenario | None = None, plant: str | None = None) -> str:
