@@ -17,6 +17,7 @@ import rerun as rr
 from numpy.typing import ArrayLike
 
 from ...core.contact import ContactMode
+from ...core.intervals import danger_zones
 from ...core.planar import wrap_angle
 from ...supervisor.types import ContactPhase
 from .hand import HandDrawing
@@ -25,8 +26,8 @@ if TYPE_CHECKING:
     from ...plants.project.state import PlantContact
     from ...plants.simulation import StepRecord
 
-__all__ = ["MODE_CODES", "PHASE_CODES", "Layout", "Segment", "Series", "StepRow", "SupervisedStep", "poses",
-           "segments", "series", "series_columns", "supervised_row"]
+__all__ = ["BAND_LINES", "MODE_CODES", "PHASE_CODES", "ZONE_LINES", "Layout", "Segment", "Series", "StepRow",
+           "SupervisedStep", "band_fill", "poses", "segments", "series", "series_columns", "supervised_row"]
 
 #: Contact mode → the value plotted under ``plots/mode`` (a ContactMode equals its string, so either looks up).
 MODE_CODES = {ContactMode.FIXED: 0, ContactMode.SLIDING: 1, ContactMode.SEPARATED: 2}
@@ -64,7 +65,7 @@ class Series(NamedTuple):
     """One logged step's plotted values, in the plots' units (module docstring of
     :mod:`regrasp.rollout.recording`: mm, degrees, N, codes; NaN where absent), per plot entity."""
 
-    error: list[float]  #: ``plots/error``
+    error: list[float]  #: ``plots/error/position`` (x, y, each ξ [mm]) and ``plots/error/angle`` (β [deg])
     xi: list[list[float]]  #: ``plots/xi/<finger>``, per finger its seven series
     force: list[float]  #: ``plots/force``
     cone_margin: list[float]  #: ``plots/cone_margin``
@@ -198,8 +199,8 @@ def series(layout: Layout, X: ArrayLike, xi: Sequence[float], modes: Sequence[Co
         row = [nan] * 7
         if modes[i] is not ContactMode.SEPARATED:
             lo, hi = bands[i]
-            w = f * (hi - lo)
-            row = [xi[i], law_xi[i], lo, hi, lo + w, hi - w, planned_xi[i]]
+            (_, lo_zone), (hi_zone, _) = danger_zones(lo, hi, f)
+            row = [xi[i], law_xi[i], lo, hi, lo_zone, hi_zone, planned_xi[i]]
         xi_rows.append([v * 1000.0 for v in row])
         phase_rows.append([phases[i]])
     return Series(error=err[:3] + [v * 1000.0 for v in err[3:]], xi=xi_rows, force=forces, cone_margin=margins,
@@ -227,11 +228,33 @@ def supervised_row(layout: Layout, contacts: Sequence[PlantContact], step: Super
                    segments(enumerate(edges), lambda i, _edge: feasible[i]), values)
 
 
+#: How many lines fill a ξ panel's band (``plots/xi/<finger>/band``): between the danger zones, and in each zone.
+BAND_LINES, ZONE_LINES = 10, 2
+
+
+def band_fill(xi: np.ndarray) -> np.ndarray:
+    """The lines filling a block of ξ rows' band (n, 7) [mm] (series 2-5: lo, hi and where the danger zones start):
+    :data:`BAND_LINES` evenly inside the safe part, then :data:`ZONE_LINES` inside each danger zone, (n, B + 2 Z);
+    NaN where the row's band is."""
+    lo, hi, lo_zone, hi_zone = xi[:, 2:3], xi[:, 3:4], xi[:, 4:5], xi[:, 5:6]
+    safe = (np.arange(BAND_LINES) + 0.5) / BAND_LINES
+    zone = (np.arange(ZONE_LINES) + 0.5) / ZONE_LINES
+    return np.hstack([lo_zone + safe * (hi_zone - lo_zone), lo + zone * (lo_zone - lo),
+                      hi_zone + zone * (hi - hi_zone)])
+
+
 def series_columns(rows: Sequence[StepRow], keys: Sequence[str]) -> Iterator[tuple[str, rr.ComponentColumnList]]:
-    """``(entity path, columns)`` of the plots for a block of rows (one row per step), in a fixed order."""
-    yield "plots/error", _scalars([r.series.error for r in rows])
+    """``(entity path, columns)`` of the plots for a block of rows (one row per step), in a fixed order: the tracking
+    error in two entities of one unit each (``plots/error/position`` x, y and each reduced ξ [mm];
+    ``plots/error/angle`` β [deg]), each finger's ξ panel and the lines filling its band (:func:`band_fill`), the
+    forces, cone margins, modes and phases."""
+    error = np.array([r.series.error for r in rows], dtype=float)
+    yield "plots/error/position", _scalars(np.delete(error, 2, axis=1))
+    yield "plots/error/angle", _scalars(error[:, 2:3])
     for i, key in enumerate(keys):
-        yield f"plots/xi/{key}", _scalars([r.series.xi[i] for r in rows])
+        xi = np.array([r.series.xi[i] for r in rows], dtype=float)
+        yield f"plots/xi/{key}", _scalars(xi)
+        yield f"plots/xi/{key}/band", _scalars(band_fill(xi))
     yield "plots/force", _scalars([r.series.force for r in rows])
     yield "plots/cone_margin", _scalars([r.series.cone_margin for r in rows])
     yield "plots/mode", _scalars([r.series.mode for r in rows])
@@ -239,5 +262,5 @@ def series_columns(rows: Sequence[StepRow], keys: Sequence[str]) -> Iterator[tup
         yield f"plots/phase/{key}", _scalars([r.series.phase[i] for r in rows])
 
 
-def _scalars(values: list[list[float]]) -> rr.ComponentColumnList:
+def _scalars(values) -> rr.ComponentColumnList:
     return rr.Scalars.columns(scalars=np.array(values, dtype=float))

@@ -19,6 +19,7 @@ from rerun.encodings import Vec2DBatch
 
 from ...core.contact import ContactMode, Friction
 from ...core.events import EventKind, Failure, FailureKind
+from ...core.intervals import danger_zones
 from ...core.polygon import Edge
 from .hand import HandDrawing, circle
 from .rows import StepRow
@@ -27,7 +28,7 @@ from .style import DANGER, MM, MODE_RGBA, colours, rgba
 if TYPE_CHECKING:
     from ...plants.simulation import PlantLike
 
-__all__ = ["Scene", "arrows_columns", "failure_marker", "strips_array", "strips_columns"]
+__all__ = ["Scene", "arrows_columns", "failure_label", "failure_marker", "strips_array", "strips_columns"]
 
 _SIGN = np.sign(MM)  # a vector [m] -> scene [mm]: MM with the force scale instead of 1000
 
@@ -185,8 +186,9 @@ class Scene:
             nrm = np.stack([c[step] * self.normals[edge, 0] - s[step] * self.normals[edge, 1],
                             s[step] * self.normals[edge, 0] + c[step] * self.normals[edge, 1]], axis=-1)
             offset = -(0.003 + 0.003 * slot)[:, None] * nrm
-            wdt = self.danger_fraction * (hi - lo)
-            u = np.stack([lo, lo + wdt, hi - wdt, hi], axis=1)  # (S, 4)
+            (_, lo_zone), (hi_zone, _) = danger_zones(lo, hi, self.danger_fraction)
+            wdt = lo_zone - lo
+            u = np.stack([lo, lo_zone, hi_zone, hi], axis=1)  # (S, 4)
             in_object = self.xi_origins[edge][:, None] + u[..., None] * self.xi_directions[edge][:, None]
             ends = in_object @ RTs + (origin[step.astype(np.intp)] + offset)[:, None]  # (S, 4, 2)
             safe = ends[:, 1:3] * MM
@@ -213,7 +215,8 @@ def _pad_last(points: np.ndarray, n: int) -> np.ndarray:
 
 def failure_marker(failure: Failure, plant: PlantLike, hand: HandDrawing,
                    object_closed: np.ndarray) -> rr.LineStrips2D | None:
-    """The red outline marking ``failure`` at ``plant``'s state (``scene/failure``), labelled with its reason: a
+    """The red outline marking ``failure`` at ``plant``'s state (``scene/failure``), labelled with its kind, contact and
+    time (:func:`failure_label`; its reason is the ``events`` log's ERROR line): a
     collision's link outline (the colliding link of the plant's last ``collision`` event of that finger, both
     links if unknown), a circle around the tip of the contact any other contact failure names, the object's
     outline (``object_closed`` (nv + 1, 2) [m], object frame) for a failure of no one contact; None for an
@@ -243,4 +246,11 @@ def failure_marker(failure: Failure, plant: PlantLike, hand: HandDrawing,
         else:
             strips = [chains[i, 2] + np.vstack([circle(0.004), circle(0.004)[:1]])]
     return rr.LineStrips2D([s * MM for s in strips], radii=1.2, colors=colours([rgba(DANGER)]),
-                           labels=[f"{kind.value}: {failure.reason}"], show_labels=True, draw_order=40.0)
+                           labels=[failure_label(failure)], show_labels=True, draw_order=40.0)
+
+
+def failure_label(failure: Failure) -> str:
+    """The failure marker's label, short enough to stay inside the scene: ``<kind> (<contact>) at t = … s`` (the
+    reason is the ``events`` log's ERROR line)."""
+    who = f" ({failure.contact})" if failure.contact else ""
+    return f"{FailureKind(failure.kind).value}{who} at t = {failure.time:.3f} s"
