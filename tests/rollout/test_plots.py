@@ -116,7 +116,7 @@ def test_titles_name_scenario_plant_gravity_and_policy(figures):
                  "0.090 s"):
         assert word in title
     plot_rollout(result(), "unused.png", scenario=up, plant="mujoco")
-    assert "mujoco plant, gravity up" in figures[0]._suptitle.get_text()
+    assert "mujoco plant, gravity up" in figures[0].get_suptitle()
     assert gravity_words([0.0, -9.81]) == "gravity down" and gravity_words([0.0, 0.0]) == "no gravity"
     assert gravity_words([1.0, -1.0]).startswith("gravity (1, -1)")
 
@@ -131,5 +131,5 @@ def test_frames_legend_lists_only_the_phases_drawn_and_names_the_fingers(figures
     assert labels == ["contact fixed", "contact sliding"]  # (no priming, no settling: they never occur)
     texts = [t.get_text() for t in fig.axes[0].texts]
     assert "finger1" in texts and "finger2" in texts and "g" in texts  # fingers named, gravity drawn
-    assert "gravity down" in fig._suptitle.get_text()
+    assert "gravity down" in fig.get_suptitle()
     assert "left_envelope" in fig.axes[2].get_title()

@@ -46,8 +46,7 @@ def blueprint(plant: PlantLike, hand: HandDrawing) -> rrb.Blueprint:
         row_shares=[3, 1],
     )
     middle = rrb.Vertical(
-        *[_plot(f"plots/xi/{f.key}", f"{f.name} ξ [mm]: band green, danger zones red, ξ_d schedule wide, ξ_d law dark")
-          for f in hand.fingers],
+        *[_plot(f"plots/xi/{f.key}", f"{f.name} ξ [mm], ξ_d, band, danger zones") for f in hand.fingers],
         _plot("plots/phase", "phase: 0 fixed, 1 priming, 2 sliding, 3 settling",
               axis_y=rrb.ScalarAxis(range=(-0.2, 3.2))),
     )
