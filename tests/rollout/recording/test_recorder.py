@@ -475,6 +475,40 @@ def blueprint_origins(path: Path) -> set[str]:
     return origins
 
 
+def blueprint_views(path: Path) -> tuple[dict[str, tuple[str, str]], list[bool]]:
+    """Each view's entity (its id): (class, name), and every PlotLegend's visibility, from the stored blueprint."""
+    reader = RrdReader(path)
+    views: dict[str, dict] = {}
+    legends = []
+    for chunk in reader.stream(store=reader.blueprints()[0]).to_chunks():
+        batch = chunk.to_record_batch()
+        for column in ("ViewBlueprint:class_identifier", "ViewBlueprint:display_name"):
+            if column in batch.schema.names:
+                views.setdefault(chunk.entity_path, {})[column] = batch.column(column).to_pylist()[0][0]
+        if "PlotLegend:visible" in batch.schema.names:
+            legends += [v[0] for v in batch.column("PlotLegend:visible").to_pylist()]
+    named = {k: (v["ViewBlueprint:class_identifier"], v["ViewBlueprint:display_name"]) for k, v in views.items()}
+    return named, legends
+
+
+def test_the_plots_have_one_unit_each_no_legend_and_a_file_one_chunk_per_entity(tmp_path):
+    path = tmp_path / "layout.rrd"
+    rollout, result, _, _ = record_rollout(path, duration=0.1, decimation=10)
+    views, legends = blueprint_views(path)
+    plots = [name for kind, name in views.values() if kind == "TimeSeries"]
+    assert len(plots) == len(rollout.names) + 6 and len(legends) == len(plots) and not any(legends)
+    for name in plots:  # one unit per view (codes: none)
+        assert sum(unit in name for unit in ("[mm]", "[deg]", "[N]")) <= 1, name
+    assert "tracking error x, y, ξ [mm]" in plots and "tracking error β [deg]" in plots
+    # fewer, larger chunks: a file alone gets each entity's rows in one chunk (static styling apart)
+    reader = RrdReader(path)
+    per_entity: dict[str, int] = {}
+    for chunk in reader.stream().to_chunks():
+        if not chunk.is_static and chunk.entity_path.startswith(("/plots", "/scene")):
+            per_entity[chunk.entity_path] = per_entity.get(chunk.entity_path, 0) + 1
+    assert len(per_entity) >= 20 and set(per_entity.values()) == {1}, per_entity
+
+
 def test_a_decimated_supervised_rollout_has_one_row_per_k_steps_and_every_event(tmp_path):
     path = tmp_path / "decimated.rrd"
     rollout, result, records, rec = record_rollout(path, duration=0.1, decimation=10)
