@@ -117,8 +117,8 @@ def _log_series_styles(stream: rr.RecordingStream, hand: HandDrawing, options: R
             widths=[2.0, 1.0, 1.0, 1.0, 0.5, 0.5, 3.0]), static=True)
         log(f"plots/xi/{f.key}/band", rr.SeriesLines(  # (the band's fill: rows.band_fill)
             names=[f"feasible band {f.name}"] * BAND_LINES + [f"danger zone {f.name}"] * (2 * ZONE_LINES),
-            colors=colours([rgba(BAND, 40)] * BAND_LINES + [rgba(DANGER_FILL, 70)] * (2 * ZONE_LINES)),
-            widths=[12.0] * BAND_LINES + [7.0] * (2 * ZONE_LINES)), static=True)
+            colors=colours([rgba(BAND, 70)] * BAND_LINES + [rgba(DANGER_FILL, 110)] * (2 * ZONE_LINES)),
+            widths=[8.0] * BAND_LINES + [4.0] * (2 * ZONE_LINES)), static=True)
         log(f"plots/phase/{f.key}", rr.SeriesLines(names=[f.name], colors=colours([rgba(c)])), static=True)
     force_names = ([f"f_n {n}" for n in names] + [f"f_t {n}" for n in names]
                    + [f"f_n {n} (predicted)" for n in names] + [f"f_t {n} (predicted)" for n in names])
