@@ -9,7 +9,7 @@ from matplotlib.collections import PolyCollection
 
 from regrasp import load_scenario
 from regrasp.core.events import Failure, FailureKind
-from regrasp.core.figures import gravity_words
+from regrasp.core.figures import FAILURE_COLOURS, gravity_words
 from regrasp.core.intervals import DANGER_FRACTION, danger_zones
 from regrasp.model.hand import Hand
 from regrasp.rollout import plots
@@ -133,3 +133,6 @@ def test_frames_legend_lists_only_the_phases_drawn_and_names_the_fingers(figures
     assert "finger1" in texts and "finger2" in texts and "g" in texts  # fingers named, gravity drawn
     assert "gravity down" in fig.get_suptitle()
     assert "left_envelope" in fig.axes[2].get_title()
+    rings = [line for line in fig.axes[2].lines if line.get_markersize() == 14]  # the failing contact, ringed
+    assert len(rings) == 1 and rings[0].get_markeredgecolor() == FAILURE_COLOURS["left_envelope"]
+    assert not any(line.get_markersize() == 14 for line in fig.axes[1].lines)

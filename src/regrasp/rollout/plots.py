@@ -174,8 +174,13 @@ def plot_frames(result: RolloutResult, hand: Hand, polygon: ConvexPolygon, path:
                         fontsize=7, color="#1f4e79")
         everything.append(verts)
         failed = result.failure is not None and k == n - 1
+        if failed and result.failure.contact in result.names:  # the failing contact ringed in its kind's colour
+            i = result.names.index(result.failure.contact)
+            tip = hand.fingers[i].joint_positions_in_hand(result.joint_positions[k, 2 * i:2 * i + 2])[-1] * _MM
+            ax.plot(*tip, "o", mfc="none", mec=FAILURE_COLOURS.get(result.failure.kind.value, "#d62728"), ms=14,
+                    mew=2)
         ax.set_title(f"t = {result.times[k]:.3f} s" + (f" - {result.failure.kind.value}" if failed else ""),
-                     fontsize=9, color="#d62728" if failed else "black")
+                     fontsize=9, color=FAILURE_COLOURS.get(result.failure.kind.value, "#d62728") if failed else "black")
         ax.set_aspect("equal")
         ax.grid(alpha=0.3)
     for ax in list(axes.flat)[len(picks):]:
