@@ -155,4 +155,5 @@ class PlantMeasure:
         values = series(layout, X, xi, modes, desired, None if output is None else output.error,
                         fn + ft + pfn + pft, margin + pmargin, bands, law_xi, nan_m, nan_m)
         pose, ghost = poses(X, desired)
-        return StepRow(pose, ghost, frames, chains, edges, modes, surface, predicted, drawn_segments, values)
+        return StepRow(pose, ghost, frames, chains, tuple(edges), tuple(modes), surface, predicted, drawn_segments,
+                       values)

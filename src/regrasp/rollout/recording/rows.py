@@ -63,14 +63,16 @@ class Layout:
 
 class Series(NamedTuple):
     """One logged step's plotted values, in the plots' units (module docstring of
-    :mod:`regrasp.rollout.recording`: mm, degrees, N, codes; NaN where absent), per plot entity."""
+    :mod:`regrasp.rollout.recording`: mm, degrees, N, codes; NaN where absent), per plot entity. Arrays, not lists:
+    a recording buffers its rows, and buffered lists (~20 a row) made the garbage collector run a full collection
+    (~70 ms) inside a rollout; it does not track arrays."""
 
-    error: list[float]  #: ``plots/error/position`` (x, y, each ξ [mm]) and ``plots/error/angle`` (β [deg])
-    xi: list[list[float]]  #: ``plots/xi/<finger>``, per finger its seven series
-    force: list[float]  #: ``plots/force``
-    cone_margin: list[float]  #: ``plots/cone_margin``
-    mode: list[float]  #: ``plots/mode``
-    phase: list[list[float]]  #: ``plots/phase/<finger>``, per finger
+    error: np.ndarray  #: ``plots/error/position`` (x, y, each ξ [mm]) and ``plots/error/angle`` (β [deg])
+    xi: np.ndarray  #: ``plots/xi/<finger>``, per finger its seven series (m, 7)
+    force: np.ndarray  #: ``plots/force``
+    cone_margin: np.ndarray  #: ``plots/cone_margin``
+    mode: np.ndarray  #: ``plots/mode``
+    phase: np.ndarray  #: ``plots/phase/<finger>``, per finger (m, 1)
 
 
 class StepRow(NamedTuple):
@@ -92,13 +94,13 @@ class StepRow(NamedTuple):
 
     pose: Pose
     desired: Pose | None
-    frames: list[np.ndarray]
+    frames: np.ndarray
     chains: np.ndarray
-    edges: list[int]
-    modes: list[ContactMode]
+    edges: tuple[int, ...]
+    modes: tuple[ContactMode, ...]
     surface: np.ndarray | None
     predicted: np.ndarray | None
-    segments: list[Segment]
+    segments: tuple[Segment, ...]
     series: Series
 
 
@@ -156,7 +158,7 @@ def poses(X: ArrayLike, desired: np.ndarray | None) -> tuple[Pose, Pose | None]:
 
 
 def segments(edges: Iterable[tuple[int, int]],
-             feasible_of: Callable[[int, int], Sequence[tuple[float, float]]]) -> list[Segment]:
+             feasible_of: Callable[[int, int], Sequence[tuple[float, float]]]) -> tuple[Segment, ...]:
     """The intervals drawn for the (finger, edge) pairs ``edges``: ``feasible_of(finger, edge)``'s, each with its
     slot, the how-many-th envelope along its edge (the drawing offsets them from the edge)."""
     out = []
@@ -165,8 +167,8 @@ def segments(edges: Iterable[tuple[int, int]],
         k = slot.get(edge, 0)
         slot[edge] = k + 1
         for lo, hi in feasible_of(i, edge):
-            out.append((i, edge, k, lo, hi))
-    return out
+            out.append((i, edge, k, float(lo), float(hi)))
+    return tuple(out)  # (of numbers only: untracked by the garbage collector once it has looked at it)
 
 
 def series(layout: Layout, X: ArrayLike, xi: Sequence[float], modes: Sequence[ContactMode],
@@ -203,8 +205,9 @@ def series(layout: Layout, X: ArrayLike, xi: Sequence[float], modes: Sequence[Co
             row = [xi[i], law_xi[i], lo, hi, lo_zone, hi_zone, planned_xi[i]]
         xi_rows.append([v * 1000.0 for v in row])
         phase_rows.append([phases[i]])
-    return Series(error=err[:3] + [v * 1000.0 for v in err[3:]], xi=xi_rows, force=forces, cone_margin=margins,
-                  mode=[float(MODE_CODES.get(mo, 2)) for mo in modes], phase=phase_rows)
+    return Series(error=np.array(err[:3] + [v * 1000.0 for v in err[3:]]), xi=np.array(xi_rows),
+                  force=np.array(forces, dtype=float), cone_margin=np.array(margins, dtype=float),
+                  mode=np.array([float(MODE_CODES.get(mo, 2)) for mo in modes]), phase=np.array(phase_rows))
 
 
 def supervised_row(layout: Layout, contacts: Sequence[PlantContact], step: SupervisedStep,
@@ -224,8 +227,9 @@ def supervised_row(layout: Layout, contacts: Sequence[PlantContact], step: Super
         np.asarray(step.planned_xi, dtype=float).tolist(),
         [float(PHASE_CODES.get(ph, math.nan)) for ph in step.phases])
     pose, ghost = poses(step.X, desired)
-    return StepRow(pose, ghost, frames, chains, edges, modes, surface, np.array(step.predicted, dtype=float),
-                   segments(enumerate(edges), lambda i, _edge: feasible[i]), values)
+    return StepRow(pose, ghost, frames, chains, tuple(edges), tuple(modes), surface,
+                   np.array(step.predicted, dtype=float), segments(enumerate(edges), lambda i, _edge: feasible[i]),
+                   values)
 
 
 #: How many lines fill a ξ panel's band (``plots/xi/<finger>/band``): between the danger zones, and in each zone.

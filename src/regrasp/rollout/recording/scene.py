@@ -126,7 +126,7 @@ class Scene:
     def _fingers(self, rows, chains):
         """Each link's outline placed by its joint frame and the joint chain, per finger; the joints as dots."""
         n, m = chains.shape[:2]
-        frames = np.stack([H for r in rows for H in r.frames]).reshape(n, m, 2, 4, 4)  # joints 1, 2 per finger
+        frames = np.stack([r.frames for r in rows]).reshape(n, m, 2, 4, 4)  # joints 1, 2 per finger
         for i, finger in enumerate(self.hand.fingers):
             width = finger.width
             strips = []
