@@ -27,7 +27,8 @@ if TYPE_CHECKING:
     from ...plants.simulation import StepRecord
 
 __all__ = ["BAND_LINES", "MODE_CODES", "PHASE_CODES", "ZONE_LINES", "Layout", "Segment", "Series", "StepRow",
-           "SupervisedStep", "band_fill", "poses", "segments", "series", "series_columns", "supervised_row"]
+           "SupervisedStep", "band_fill", "mode_codes", "poses", "segments", "series", "series_columns",
+           "supervised_row"]
 
 #: Contact mode → the value plotted under ``plots/mode`` (a ContactMode equals its string, so either looks up).
 MODE_CODES = {ContactMode.FIXED: 0, ContactMode.SLIDING: 1, ContactMode.SEPARATED: 2}
@@ -36,8 +37,6 @@ PHASE_CODES = {ContactPhase.FIXED: 0, ContactPhase.PRIMING: 1, ContactPhase.SLID
 
 #: One drawn feasible interval: (finger, edge, slot: the how-many-th envelope drawn along that edge, lo, hi [m]).
 Segment = tuple[int, int, int, float, float]
-#: A pose as drawn: (cos β, sin β, x [m], y [m]).
-Pose = tuple[float, float, float, float]
 
 
 @dataclass(frozen=True)
@@ -77,30 +76,32 @@ class Series(NamedTuple):
 
 class StepRow(NamedTuple):
     """One logged step's rows: what the scene draws (hand frame, metres, object frame for the edges) and the
-    plotted values.
+    plotted values. Arrays only (and the row's two tuples): a recording buffers its rows, and every buffered
+    container counts towards the garbage collector's next collection (a full one costs ~70-100 ms in a process that
+    has planned; arrays are not tracked).
 
     Attributes:
-        pose: The object's pose after the step.
-        desired: The desired pose, or None (no ghost).
+        pose: The object's pose after the step as drawn (cos β, sin β, x, y).
+        desired: The desired pose, likewise, or None (no ghost).
         frames: The fingers' joint frames (:meth:`HandDrawing.kinematics`).
         chains: The fingers' chains (m, 3, 2) [m].
-        edges: Each contact's edge now.
-        modes: Each contact's mode now.
+        edges: Each contact's edge now (m,).
+        modes: Each contact's mode now, as its :data:`MODE_CODES` (m,).
         surface: The plant's contact forces (f_n, f_t) per contact (m, 2) [N], or None.
         predicted: The controller's predicted contact forces in the hand frame (m, 2) [N], or None.
-        segments: The feasible intervals drawn.
+        segments: The feasible intervals drawn (S, 5) (:func:`segments`).
         series: The plotted values.
     """
 
-    pose: Pose
-    desired: Pose | None
+    pose: np.ndarray
+    desired: np.ndarray | None
     frames: np.ndarray
     chains: np.ndarray
-    edges: tuple[int, ...]
-    modes: tuple[ContactMode, ...]
+    edges: np.ndarray
+    modes: np.ndarray
     surface: np.ndarray | None
     predicted: np.ndarray | None
-    segments: tuple[Segment, ...]
+    segments: np.ndarray
     series: Series
 
 
@@ -150,25 +151,28 @@ class SupervisedStep(NamedTuple):
                    control.cone_margins, sup.bounds, sup.reference_xi, sup.planned_xi)
 
 
-def poses(X: ArrayLike, desired: np.ndarray | None) -> tuple[Pose, Pose | None]:
-    """The object's pose ``X`` and the desired pose (``desired``'s first three entries, or None) as drawn."""
+def poses(X: ArrayLike, desired: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """The object's pose ``X`` and the desired pose (``desired``'s first three entries, or None) as drawn: each
+    (cos β, sin β, x, y)."""
     x, y, beta = np.asarray(X, dtype=float).tolist()
-    ghost = None if desired is None else (math.cos(desired[2]), math.sin(desired[2]), desired[0], desired[1])
-    return (math.cos(beta), math.sin(beta), x, y), ghost
+    ghost = None if desired is None else np.array([math.cos(desired[2]), math.sin(desired[2]), desired[0],
+                                                   desired[1]])
+    return np.array([math.cos(beta), math.sin(beta), x, y]), ghost
 
 
 def segments(edges: Iterable[tuple[int, int]],
-             feasible_of: Callable[[int, int], Sequence[tuple[float, float]]]) -> tuple[Segment, ...]:
+             feasible_of: Callable[[int, int], Sequence[tuple[float, float]]]) -> np.ndarray:
     """The intervals drawn for the (finger, edge) pairs ``edges``: ``feasible_of(finger, edge)``'s, each with its
-    slot, the how-many-th envelope along its edge (the drawing offsets them from the edge)."""
+    slot, the how-many-th envelope along its edge (the drawing offsets them from the edge); (S, 5): finger, edge,
+    slot, lo, hi [m] (:data:`Segment`)."""
     out = []
     slot: dict[int, int] = {}
     for i, edge in edges:
         k = slot.get(edge, 0)
         slot[edge] = k + 1
         for lo, hi in feasible_of(i, edge):
-            out.append((i, edge, k, float(lo), float(hi)))
-    return tuple(out)  # (of numbers only: untracked by the garbage collector once it has looked at it)
+            out.append((i, edge, k, lo, hi))
+    return np.array(out, dtype=float).reshape(-1, 5)
 
 
 def series(layout: Layout, X: ArrayLike, xi: Sequence[float], modes: Sequence[ContactMode],
@@ -227,9 +231,14 @@ def supervised_row(layout: Layout, contacts: Sequence[PlantContact], step: Super
         np.asarray(step.planned_xi, dtype=float).tolist(),
         [float(PHASE_CODES.get(ph, math.nan)) for ph in step.phases])
     pose, ghost = poses(step.X, desired)
-    return StepRow(pose, ghost, frames, chains, tuple(edges), tuple(modes), surface,
+    return StepRow(pose, ghost, frames, chains, np.array(edges, dtype=np.intp), mode_codes(modes), surface,
                    np.array(step.predicted, dtype=float), segments(enumerate(edges), lambda i, _edge: feasible[i]),
                    values)
+
+
+def mode_codes(modes: Sequence[ContactMode]) -> np.ndarray:
+    """The contacts' modes as their :data:`MODE_CODES` (an unknown one: separated)."""
+    return np.array([MODE_CODES.get(mo, 2) for mo in modes], dtype=np.int8)
 
 
 #: How many lines fill a ξ panel's band (``plots/xi/<finger>/band``): between the danger zones, and in each zone.

@@ -22,7 +22,7 @@ from ...core.events import EventKind, Failure, FailureKind
 from ...core.intervals import danger_zones
 from ...core.polygon import Edge
 from .hand import HandDrawing, circle
-from .rows import StepRow
+from .rows import MODE_CODES, StepRow
 from .style import DANGER, MM, MODE_RGBA, colours, rgba
 
 if TYPE_CHECKING:
@@ -31,6 +31,9 @@ if TYPE_CHECKING:
 __all__ = ["Scene", "arrows_columns", "failure_label", "failure_marker", "strips_array", "strips_columns"]
 
 _SIGN = np.sign(MM)  # a vector [m] -> scene [mm]: MM with the force scale instead of 1000
+_CODE_RGBA = np.zeros(max(MODE_CODES.values()) + 1, dtype=np.uint32)  # a mode code's cone colour
+for _mode, _code in MODE_CODES.items():
+    _CODE_RGBA[_code] = MODE_RGBA[_mode]
 
 
 def strips_array(strips: np.ndarray) -> pa.Array:
@@ -163,24 +166,25 @@ class Scene:
             origins = vectors = np.zeros((0, m, 2))
         yield "scene/contacts/forces_predicted", arrows_columns(
             origins, vectors, [0 if r.predicted is None else m for r in rows])
-        sliding = np.array([[mo is ContactMode.SLIDING for mo in r.modes] for r in rows], dtype=bool)
-        half = np.arctan(np.where(sliding.reshape(n, m), self.kinetic, self.static))  # (n, m): μ_k sliding, else μ_s
+        codes = np.array([r.modes for r in rows], dtype=np.intp).reshape(n, m)
+        sliding = codes == MODE_CODES[ContactMode.SLIDING]
+        half = np.arctan(np.where(sliding, self.kinetic, self.static))  # (n, m): μ_k sliding, else μ_s
         ch, sh = np.cos(half)[..., None], np.sin(half)[..., None]
         perp_n = np.stack([-normals[..., 1], normals[..., 0]], axis=-1)
         ray_a = ch * normals + sh * perp_n
         ray_b = ch * normals - sh * perp_n
         L = self.cone_length / 1000.0
         cones = np.stack([tips + L * ray_a, tips, tips + L * ray_b], axis=2) * MM  # (n, m, 3, 2)
-        cone_colours = [MODE_RGBA.get(mo, MODE_RGBA[ContactMode.SEPARATED]) for r in rows for mo in r.modes]
+        cone_colours = _CODE_RGBA[codes.reshape(-1)]
         yield "scene/contacts/cones", strips_columns(cones.reshape(-1, 3, 2), [m] * n, cone_colours)
 
     def _envelopes(self, rows, c, s, RT, origin):
         """Each drawn interval as safe and danger segments just outside its edge (3 mm further per slot)."""
         n = len(rows)
-        drawn = [(k, *seg) for k, r in enumerate(rows) for seg in r.segments]
         counts = [len(r.segments) for r in rows]
-        if drawn:
-            step, finger, edge, slot, lo, hi = (np.array(col) for col in zip(*drawn))
+        if sum(counts):
+            finger, edge, slot, lo, hi = np.concatenate([r.segments for r in rows]).T
+            step = np.repeat(np.arange(n), counts)
             edge = edge.astype(np.intp)
             RTs = RT[step.astype(np.intp)]
             nrm = np.stack([c[step] * self.normals[edge, 0] - s[step] * self.normals[edge, 1],
