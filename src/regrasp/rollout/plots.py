@@ -32,7 +32,6 @@ __all__ = ["band_samples", "plot_frames", "plot_rollout", "rollout_title"]
 _MM = 1000.0
 _PHASE_COLOURS = {"fixed": "#2ca02c", "priming": "#9467bd", "sliding": "#ff7f0e", "settling": "#8c564b"}
 _BAND, _DANGER, _SLIDE = "#cfe8cf", "#f4b6b6", "#ffd8a8"
-_MAX_DOTS = 60
 
 
 def rollout_title(result: RolloutResult, scenario: Scenario | None = None, plant: str | None = None) -> str:
@@ -109,17 +108,14 @@ def plot_rollout(result: RolloutResult, path: str | Path, *, scenario: Scenario 
     colour = "#d62728" if failure is None else FAILURE_COLOURS.get(failure.kind.value, "#d62728")
     handles = {}
     for i, (ax, name) in enumerate(zip(axes[:, 0], result.names)):
-        ts, lo, hi, sampled = band_samples(t, result.bounds[:, i])
+        ts, lo, hi, _ = band_samples(t, result.bounds[:, i])
         lo, hi = lo * _MM, hi * _MM
         (lo_end, lo_zone), (hi_zone, hi_end) = danger_zones(lo, hi, danger_fraction)
         ax.fill_between(ts, lo_zone, hi_zone, color=_BAND, linewidth=0)
         ax.fill_between(ts, lo_end, lo_zone, color=_DANGER, linewidth=0)
         ax.fill_between(ts, hi_zone, hi_end, color=_DANGER, linewidth=0)
-        dots = sampled.sum() <= _MAX_DOTS  # (the samples as dots while they can be told apart)
-        if dots:
-            ax.plot(ts[sampled], lo[sampled], ".", ts[sampled], hi[sampled], ".", color="#5a8f5a", ms=2.5)
-        handles["band"] = Patch(color=_BAND, label="feasible band at the measured pose (the monitor's samples"
-                                + (", dots," if dots else "") + " joined)")
+        handles["band"] = Patch(color=_BAND, label="feasible band at the measured pose (the monitor's samples, "
+                                                   "joined)")
         handles["danger"] = Patch(color=_DANGER, label=f"danger zone ({100 * danger_fraction:g} % of the band at "
                                                        "each end)")
         sliding = np.array([p in ("priming", "sliding", "settling") for p in result.phases[:, i]])
