@@ -34,10 +34,11 @@ def figures(result, rollout, directory: Path | None, stem: str, frames: bool) ->
         return
     from regrasp.rollout.plots import plot_frames, plot_rollout
 
-    paths = [plot_rollout(result, directory / f"{stem}.png")]
+    named = dict(scenario=rollout.scenario, plant="project")
+    paths = [plot_rollout(result, directory / f"{stem}.png", **named)]
     if frames:
         paths.append(plot_frames(result, rollout.supervisor.hand, rollout.plant.polygon,
-                                 directory / f"{stem}_frames.png"))
+                                 directory / f"{stem}_frames.png", **named))
     for p in paths:
         print(f"    figure: {p}")
 

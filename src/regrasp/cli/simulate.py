@@ -267,7 +267,8 @@ def _simulate(args, scenario, run, common) -> tuple[int, str]:
     if args.plot is not None:
         from ..rollout.plots import plot_rollout
 
-        figures.append(str(plot_rollout(result, Path(args.plot) / "regrasp_rollout.png")))
+        figures.append(str(plot_rollout(result, Path(args.plot) / "regrasp_rollout.png", scenario=scenario,
+                                        plant=args.plant)))
     code = 0 if result.success else 1
     if args.json:
         doc = result.to_json_dict()

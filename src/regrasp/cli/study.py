@@ -264,7 +264,8 @@ def _sweep_study(args: argparse.Namespace, scenario, perturbation, plant: PlantS
     doc = {"sweep": name, "values": list(values), "studies": [r.to_json_dict() for r in results]}
     if directory is not None:
         (directory / "study_sweep.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")  # results first
-        doc["figures"] = [str(plot_sweep(name, results, directory / "study_sweep.png"))]
+        doc["figures"] = [str(plot_sweep(name, results, directory / "study_sweep.png",
+                                               gravity=scenario.gravity_in_hand))]
         (directory / "study_sweep.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")
     if args.json:
         json.dump(doc, sys.stdout)
@@ -365,7 +366,7 @@ def _cmd_study(args: argparse.Namespace) -> int:
     if directory is not None:
         # the results first: a long study is never lost to a figure
         (directory / "study.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")
-        figures = plot_study(result, directory)
+        figures = plot_study(result, directory, gravity=scenario.gravity_in_hand)
         doc["figures"] = [str(f) for f in figures]
         (directory / "study.json").write_text(json.dumps(doc) + "\n", encoding="utf-8")
     if args.json:

@@ -13,14 +13,15 @@ from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .intervals import Intervals
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["FAILURE_COLOURS", "FAILURE_COLOUR", "MM", "SUCCESS_COLOUR", "membership", "pyplot", "save_figure",
-           "stacked_axes"]
+__all__ = ["FAILURE_COLOURS", "FAILURE_COLOUR", "MM", "SUCCESS_COLOUR", "gravity_words", "membership", "pyplot",
+           "save_figure", "stacked_axes"]
 
 #: Millimetres per metre: the figures' lengths are in mm.
 MM = 1000.0
@@ -33,6 +34,19 @@ FAILURE_COLOUR = "tab:red"
 FAILURE_COLOURS = {"separation": "tab:purple", "unplanned_slip": "tab:orange", "collision": "tab:brown",
                    "left_envelope": "tab:pink", "left_edge": "tab:olive", "singular": "tab:gray",
                    "control": "tab:cyan", "no_schedule": "tab:blue", "interrupted": "black"}
+
+
+def gravity_words(gravity: ArrayLike) -> str:
+    """Gravity (2,) [m/s²] in the hand frame in words: ``gravity down`` / ``up`` / ``left`` / ``right`` when it
+    points along an axis, ``no gravity``, else its components."""
+    gx, gy = (float(v) for v in gravity)
+    size = float(np.hypot(gx, gy))
+    if size == 0.0:
+        return "no gravity"
+    for word, (ux, uy) in (("down", (0, -1)), ("up", (0, 1)), ("left", (-1, 0)), ("right", (1, 0))):
+        if abs(gx - size * ux) + abs(gy - size * uy) < 1e-9 * size:
+            return f"gravity {word}"
+    return f"gravity ({gx:g}, {gy:g}) m/s²"
 
 
 def pyplot() -> ModuleType:

@@ -69,8 +69,8 @@ def plot_conditions(plan: PlanResult, path: str | Path) -> Path:
         ax.set_ylabel("d [mm]")
         ax.set_title(f"{finger.name}: edge {finger.edge}, {finger.configuration} configuration")
         present = {s.condition.value for s in finger.samples}
-        ax.legend(handles=[*ax.get_legend_handles_labels()[0], *_condition_legend(present)], loc="upper right",
-                  fontsize=8, ncol=5)
+        ax.legend(handles=[*ax.get_legend_handles_labels()[0], *_condition_legend(present)], loc="upper left",
+                  bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)  # (beside the plot: it hid d(t))
         ax.set_ylim(min(d.min(), -l1) - 0.45 * l1, max(d.max(), l1) + 0.35 * l1)
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(f"{plan.scenario or 'plan'}: line distance d(t) and conditions I-IV (paper Fig. 2.9)")
@@ -109,9 +109,10 @@ def _envelope_axes(ax, plan: PlanResult, finger: FingerPlan, feasible: bool):
         if finger.initial_xi is not None:
             until = finger.initial_xi_feasible_until
             ax.plot([times[0], until], [finger.initial_xi * MM] * 2, color="#e7298a", lw=2,
-                    label=f"initial ξ = {finger.initial_xi * MM:.1f} mm, feasible until t = {until:.2f} s")
+                    label=f"initial ξ = {finger.initial_xi * MM:.1f} mm,\nfeasible until t = {until:.2f} s")
             handles.append(ax.get_legend_handles_labels()[0][-1])
-    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,
+              frameon=False)  # (beside the plot: it hid the sets)
     ax.set_ylabel("ξ [mm]")
     ax.set_title(f"{finger.name}: edge {finger.edge}, {finger.configuration} configuration")
 

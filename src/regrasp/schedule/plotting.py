@@ -1,7 +1,8 @@
 """PNG figure of a regrasp schedule, after the paper's Figure 4.3 (matplotlib, headless).
 
-* ``regrasp.png`` (Fig. 4.3, :func:`plot_schedule`): per finger its feasible band, the danger
-  zones within the required margin of its bounds, the scheduled contact and its slides.
+* ``regrasp.png`` (Fig. 4.3, :func:`plot_schedule`): per finger its feasible band, its danger zones
+  (:func:`~regrasp.core.intervals.danger_zones`: the same zones the rollout figures and the rerun recording draw),
+  the part within the schedule's required margin of its bounds, the scheduled contact and its slides.
 
 matplotlib is imported on first use (:mod:`regrasp.core.figures`).
 """
@@ -14,6 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.figures import MM, membership, save_figure, stacked_axes
+from ..core.intervals import DANGER_FRACTION, without_danger_zones
 
 if TYPE_CHECKING:
     from ..envelope.planner import PlanResult
@@ -24,8 +26,9 @@ __all__ = ["plot_schedule"]
 
 def plot_schedule(plan: PlanResult, schedule: RegraspSchedule, path: str | Path, *,
                   failure: NoScheduleError | None = None) -> Path:
-    """Paper Figure 4.3 for a planned schedule: per finger its feasible band over time, the zones
-    within the required envelope margin of its bounds (the danger zones the schedule keeps out of),
+    """Paper Figure 4.3 for a planned schedule: per finger its feasible band over time, its danger zones
+    (:data:`~regrasp.core.intervals.DANGER_FRACTION` of each interval at both ends), the parts within the required
+    envelope margin of its bounds (which the schedule keeps ξ_d out of),
     the scheduled contact ξ_d(t) and its slides (shaded, with their direction). With ``failure``
     (a :class:`~regrasp.schedule.schedule.NoScheduleError` whose ``partial`` is ``schedule``), the schedule
     is drawn up to the latest time any admissible state survives, which is marked with the reason."""
@@ -47,10 +50,13 @@ def plot_schedule(plan: PlanResult, schedule: RegraspSchedule, path: str | Path,
         pad = 0.08 * (edge_hi - edge_lo)
         grid = np.linspace(edge_lo - pad, edge_hi + pad, 600)
         feasible = [s.feasible for s in finger.samples]
-        safe = [tuple((lo + margin, hi - margin) for lo, hi in f if hi - lo > 2 * margin) for f in feasible]
-        img = membership(times, feasible, grid).astype(float) + membership(times, safe, grid)
-        cmap = ListedColormap(["white", "#fc9272", "#c6dbef"])
-        ax.imshow(img, origin="lower", aspect="auto", cmap=cmap, vmin=0, vmax=2, interpolation="nearest",
+        kept = [tuple((lo + margin, hi - margin) for lo, hi in f if hi - lo > 2 * margin) for f in feasible]
+        inside = membership(times, feasible, grid)
+        kept_in = membership(times, kept, grid)
+        safe = kept_in & membership(times, [without_danger_zones(f) for f in feasible], grid)
+        img = inside.astype(float) + kept_in + safe  # 0 out, 1 within the margin, 2 danger zone, 3 safe
+        cmap = ListedColormap(["white", "#cb181d", "#fc9272", "#c6dbef"])
+        ax.imshow(img, origin="lower", aspect="auto", cmap=cmap, vmin=0, vmax=3, interpolation="nearest",
                   extent=(times[0], times[-1], grid[0] * MM, grid[-1] * MM))
         for y in (edge_lo, edge_hi):
             ax.axhline(y * MM, color="#d95f02", ls="--", lw=1)
@@ -73,8 +79,9 @@ def plot_schedule(plan: PlanResult, schedule: RegraspSchedule, path: str | Path,
         ax.set_title(f"{finger.name}: edge {finger.edge}, {per}")
         ax.set_ylabel("ξ [mm]")
         ax.set_ylim(grid[0] * MM, grid[-1] * MM)
-    handles = [Patch(color="#c6dbef", label="feasible, with the margin"),
-               Patch(color="#fc9272", label=f"danger zone (within {margin * MM:g} mm of a bound)"),
+    handles = [Patch(color="#c6dbef", label="feasible"),
+               Patch(color="#fc9272", label=f"danger zone ({100 * DANGER_FRACTION:g} % of the band at each end)"),
+               Patch(color="#cb181d", label=f"within the required margin ({margin * MM:g} mm) of a bound"),
                Patch(color="#969696", alpha=0.25, label="slide (arrow: from, to)"),
                Line2D([], [], color="k", lw=1.8, label="scheduled contact ξ_d(t)"),
                Line2D([], [], color="#d95f02", ls="--", lw=1, label="edge ends")]

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 if TYPE_CHECKING:
     from .study import StudyResult
@@ -49,12 +50,17 @@ def drawn_factors(result: StudyResult) -> dict[str, tuple[str, np.ndarray]]:
     return out
 
 
-def study_title(result: StudyResult) -> str:
-    """What a study's figure is of: the scenario, the plant, the runs (and whether Ctrl-C cut the study short)."""
+def study_title(result: StudyResult, gravity: ArrayLike | None = None) -> str:
+    """What a study's figure is of: the scenario, the plant, the gravity (``gravity`` (2,) [m/s²] in the hand frame,
+    the scenario's; left out when None), the policy (a study's runs follow its schedule), the runs (and whether
+    Ctrl-C cut the study short)."""
+    from ..core.figures import gravity_words
+
     done = len(result.runs)
     runs = f"{done} of {result.requested_runs} runs" if result.interrupted else f"{done} runs"
-    return (f"{Path(result.scenario).stem} on the {result.plant} plant, seed {result.seed}: {runs} of "
-            f"{result.duration:.3g} s" + (" (interrupted)" if result.interrupted else ""))
+    where = "" if gravity is None else f", {gravity_words(gravity)}"
+    return (f"{Path(result.scenario).stem} on the {result.plant} plant{where}, scheduled policy, seed {result.seed}: "
+            f"{runs} of {result.duration:.3g} s" + (" (interrupted)" if result.interrupted else ""))
 
 
 def _sentence(ax, text: str) -> None:
@@ -104,14 +110,15 @@ def _rate_floor(lows: Sequence[float]) -> float:
     return max(0.0, float(np.floor(10.0 * min(lows))) / 10.0 - 0.1)
 
 
-def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
+def plot_study(result: StudyResult, directory: str | Path, *, gravity: ArrayLike | None = None) -> list[Path]:
     """Write the study's figures into ``directory`` (made if missing); their paths.
 
     * ``study_success.png``: the success rate against each drawn model error (binned, Wilson intervals);
     * ``study_failure_times.png``: when the failed runs failed, stacked by failure kind;
     * ``study_margins.png``: each run's smallest cone and envelope margins, successes and failures apart.
 
-    Each names the scenario and the plant (:func:`study_title`); the failure kinds have their colours
+    Each names the scenario, the plant, the gravity (``gravity``, the scenario's) and the policy
+    (:func:`study_title`); the failure kinds have their colours
     (:data:`~regrasp.core.figures.FAILURE_COLOURS`); a figure with nothing to draw says so in a sentence.
     """
     from matplotlib.ticker import MaxNLocator
@@ -126,7 +133,7 @@ def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
     ok = np.array([r.success for r in runs], dtype=bool)
     paths = []
     factors = drawn_factors(result)
-    title = study_title(result)
+    title = study_title(result, gravity)
     if not runs:
         for name in ("study_success.png", "study_failure_times.png", "study_margins.png"):
             fig, ax = plt.subplots(figsize=(6.0, 2.0))
@@ -150,7 +157,8 @@ def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
             ax.set_axis_off()
         for row in axes:
             row[0].set_ylabel("success rate [-]")
-        axes[0][0].legend(fontsize=7, loc="lower left")
+        fig.legend(*axes[0][0].get_legend_handles_labels(), fontsize=7, loc="outside lower center", ncol=3,
+                   frameon=False)  # (out of the panels: it would hide the failures' ticks)
         fig.suptitle(f"{title}: {result.successes}/{len(runs)} succeeded\n{result.perturbation.describe()}",
                      fontsize=9)
         paths.append(directory / "study_success.png")
@@ -199,7 +207,8 @@ def plot_study(result: StudyResult, directory: str | Path) -> list[Path]:
     return paths
 
 
-def plot_sweep(name: str, results: Sequence[StudyResult], path: str | Path) -> Path:
+def plot_sweep(name: str, results: Sequence[StudyResult], path: str | Path, *,
+               gravity: ArrayLike | None = None) -> Path:
     """``study_sweep.png``: each study's success rate (Wilson 95 % bars) and its runs' median smallest cone margin
     against the size of the perturbation ``name`` the studies differ in."""
     from ..core.figures import pyplot
@@ -225,7 +234,7 @@ def plot_sweep(name: str, results: Sequence[StudyResult], path: str | Path) -> P
     top.set_ylim(_rate_floor([lo for lo, _ in bars]) - 0.02, 1.02)
     top.set_ylabel("success rate [-]")
     rest = replace(results[0].perturbation, **{name: Perturbation.__dataclass_fields__[name].default})
-    top.set_title(f"{study_title(results[0])} a size\nbesides {name}: {rest.describe()}", fontsize=8)
+    top.set_title(f"{study_title(results[0], gravity)} a size\nbesides {name}: {rest.describe()}", fontsize=8)
     medians = [[o.min_cone_margin for o in r.runs if o.min_cone_margin is not None] for r in results]
     bottom.plot(x, [float(np.median(m)) if m else np.nan for m in medians], "s-")
     bottom.set_ylabel("median smallest cone margin [N]")

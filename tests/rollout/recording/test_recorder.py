@@ -21,12 +21,13 @@ from recordings import read
 from regrasp import Friction, Grasp, Hand, Plant, PlantContact, ReducedModel, RunSpec, load_scenario
 from regrasp.core.events import Event, EventSource, Failure, FailureKind
 from regrasp.core.exceptions import InvalidParameterError, RegraspError, UnknownEdgeError
+from regrasp.core.intervals import DANGER_FRACTION, danger_zones
 from regrasp.dynamics.control import Gains
 from regrasp.dynamics.laws import Proposition3Controller
 from regrasp.envelope.finger_envelope import FingerEnvelope
 from regrasp.plants.closed_loop import run_closed_loop
 from regrasp.rollout.recording.recorder import RolloutRecorder
-from regrasp.rollout.recording.rows import PHASE_CODES
+from regrasp.rollout.recording.rows import BAND_LINES, PHASE_CODES, ZONE_LINES
 
 pytestmark = pytest.mark.filterwarnings("error::rerun.error_utils.RerunWarning")
 
@@ -40,8 +41,9 @@ LO, HI, T_LEG = -0.007, 0.016, 1.5  # example 03's slide range [m] and leg durat
 SCENE = ["scene/object", "scene/desired", "scene/fingers/finger1", "scene/fingers/finger2", "scene/joints",
          "scene/contacts/forces", "scene/contacts/forces_predicted", "scene/contacts/cones",
          "scene/envelope/safe", "scene/envelope/danger"]
-PLOTS = ["plots/error", "plots/xi/finger1", "plots/xi/finger2", "plots/force", "plots/cone_margin", "plots/mode",
-         "plots/phase/finger1", "plots/phase/finger2"]
+PLOTS = ["plots/error/position", "plots/error/angle", "plots/xi/finger1", "plots/xi/finger2", "plots/xi/finger1/band",
+         "plots/xi/finger2/band", "plots/force", "plots/cone_margin", "plots/mode", "plots/phase/finger1",
+         "plots/phase/finger2"]
 STATIC = ["model/object/outline", "model/object/edges", "model/setup"]
 
 
@@ -99,7 +101,7 @@ def test_recorded_rollout_verifies_and_reads_back(tmp_path):
     assert set(STATIC) <= static, sorted(static)
     for entity in SCENE + PLOTS:
         assert rows[entity]["step"] == list(range(n + 1)), entity
-    assert rows["plots/error"]["time"] == [round(k * plant.dt * 1e9) for k in range(n + 1)]  # [ns]
+    assert rows["plots/error/position"]["time"] == [round(k * plant.dt * 1e9) for k in range(n + 1)]  # [ns]
 
     # the values are the rollout's: modes, ξ, forces and errors in the documented units
     last = {e: np.array(rows[e]["Scalars:scalars"][-1], dtype=float) for e in PLOTS}
@@ -111,12 +113,38 @@ def test_recorded_rollout_verifies_and_reads_back(tmp_path):
     assert np.isnan(xi1[6]) and np.isnan(last["plots/phase/finger1"]).all()  # no schedule, no supervisor
     fn1, fn2, ft1, ft2 = last["plots/force"][:4]
     assert fn1 > 0 and fn2 > 0 and abs(abs(ft1) - MU[0] * fn1) < 1e-6  # Coulomb at the sliding contact
-    assert np.abs(last["plots/error"]).max() < 0.5  # mm and deg
+    assert np.abs(last["plots/error/position"]).max() < 0.5 and abs(last["plots/error/angle"][0]) < 0.5  # mm, deg
+    assert len(last["plots/error/position"]) == 3 and len(last["plots/error/angle"]) == 1  # x, y, ξ [mm]; β [deg]
+    # the band's fill lines: inside the safe part, then inside each danger zone (lo.. lo + f w, hi - f w.. hi)
+    band = last["plots/xi/finger1/band"]
+    assert len(band) == BAND_LINES + 2 * ZONE_LINES
+    assert (xi1[4] < band[:BAND_LINES]).all() and (band[:BAND_LINES] < xi1[5]).all()
+    zones = band[BAND_LINES:]
+    assert ((xi1[2] < zones[:ZONE_LINES]) & (zones[:ZONE_LINES] < xi1[4])).all()
+    assert ((xi1[5] < zones[ZONE_LINES:]) & (zones[ZONE_LINES:] < xi1[3])).all()
     assert len(rows["scene/object"]["LineStrips2D:strips"][-1][0]) == 5  # closed rectangle
     assert len(rows["scene/fingers/finger1"]["LineStrips2D:strips"][-1]) == 3  # two links and the chain
     safe = rows["scene/envelope/safe"]["LineStrips2D:strips"][-1]
     danger = rows["scene/envelope/danger"]["LineStrips2D:strips"][-1]
     assert len(safe) == 2 and len(danger) == 4  # one interval per contact edge, a danger zone at each end
+
+
+def test_a_buffered_step_leaves_few_objects_for_the_garbage_collector(tmp_path):
+    """A row waiting to be sent holds arrays (untracked by the collector), not lists: buffered lists once triggered a
+    full collection (65-100 ms after a plan) inside a recorded rollout."""
+    import gc
+
+    plant, controller = setup()
+    with RolloutRecorder(plant, rrd_path=tmp_path / "gc.rrd", flush_every=10**6, plant_forces=False) as rec:
+        hook = rec.hook(plant, reference)
+        run_closed_loop(plant, controller, reference, 0.01, on_step=hook)  # (warm)
+        gc.collect()
+        before = len(gc.get_objects())
+        run_closed_loop(plant, controller, reference, 0.1, on_step=hook)  # 100 rows buffered
+        gc.collect()
+        kept = len(gc.get_objects()) - before
+    assert rec.steps_logged > 100
+    assert kept < 4 * 100, kept  # (a row and its series: 2; lists of lists: ~20)
 
 
 def test_decimation_logs_every_nth_step(tmp_path):
@@ -126,7 +154,7 @@ def test_decimation_logs_every_nth_step(tmp_path):
         run_closed_loop(plant, controller, reference, 0.05, on_step=rec.hook(plant, reference))
     verify(path)
     rows, *_ = read(path)
-    assert rows["plots/error"]["step"] == [0, 10, 20, 30, 40, 50]
+    assert rows["plots/error/position"]["step"] == [0, 10, 20, 30, 40, 50]
     assert np.isnan(rows["plots/force"]["Scalars:scalars"][-1][0])  # plant forces off: not plotted
     assert rec.steps_logged == 6
 
@@ -149,7 +177,7 @@ def test_interrupted_rollout_leaves_a_complete_file(tmp_path):
     assert rec.closed
     verify(path)
     rows, *_ = read(path)
-    assert rows["plots/error"]["step"] == list(range(8))
+    assert rows["plots/error/position"]["step"] == list(range(8))
     assert rows["scene/object"]["step"] == list(range(8))
 
 
@@ -203,8 +231,9 @@ def test_log_step_with_plant_steps_and_close_is_idempotent(tmp_path):
     assert np.allclose(logged[:, 2:4], [f[:, 1] for f in forces])
     # finger 1's envelopes on edges 0 (empty: condition I) and 1 (the whole edge); none for finger 2
     assert len(rows["scene/envelope/safe"]["LineStrips2D:strips"][-1]) == 1
-    err = np.array(rows["plots/error"]["Scalars:scalars"])
-    assert np.isnan(err[:, 3]).all() and np.isfinite(err[:, :3]).all()  # desired pose only: no ξ error
+    err = np.array(rows["plots/error/position"]["Scalars:scalars"])  # x, y, ξ [mm]
+    beta = np.array(rows["plots/error/angle"]["Scalars:scalars"])  # β [deg]
+    assert np.isnan(err[:, 2]).all() and np.isfinite(err[:, :2]).all() and np.isfinite(beta).all()  # no ξ error
 
 
 def test_recorders_are_independent_of_each_other_and_of_the_global_recording(tmp_path):
@@ -290,9 +319,10 @@ def test_a_buffered_rollout_recording_holds_each_steps_values_at_its_time(tmp_pa
     assert np.array_equal(force[1:, m:2 * m], result.forces_surface[:, :, 1])
     mode = np.array(rows["plots/mode"]["Scalars:scalars"], dtype=float)
     assert set(np.unique(mode)) <= {0.0, 1.0} and (mode[:, 1:] == 0.0).all()  # finger 1 may start priming
-    error = np.array(rows["plots/error"]["Scalars:scalars"], dtype=float)  # X_d - X [mm, mm, deg]
+    error = np.array(rows["plots/error/position"]["Scalars:scalars"], dtype=float)  # X_d - X [mm, mm]
+    angle = np.array(rows["plots/error/angle"]["Scalars:scalars"], dtype=float)  # [deg]
     assert np.allclose(error[1:n, :2], result.object_error[1:, :2] * 1e3, rtol=0.0, atol=1e-9)
-    assert np.allclose(error[1:n, 2], np.degrees(result.object_error[1:, 2]), rtol=0.0, atol=1e-9)
+    assert np.allclose(angle[1:n, 0], np.degrees(result.object_error[1:, 2]), rtol=0.0, atol=1e-9)
     for i, key in enumerate(result.names):
         xi = np.array(rows[f"plots/xi/{key}"]["Scalars:scalars"], dtype=float)  # ξ, desired, bounds... [mm]
         assert np.allclose(xi[1:n, 0], result.xi[1:, i] * 1e3, rtol=0.0, atol=1e-4)  # held vs tip: drift
@@ -362,8 +392,9 @@ def per_step_entities(names):
     keys = list(names)
     return (["scene/object", "scene/desired", "scene/joints", "scene/contacts/forces",
              "scene/contacts/forces_predicted", "scene/contacts/cones", "scene/envelope/safe", "scene/envelope/danger",
-             "plots/error", "plots/force", "plots/cone_margin", "plots/mode"]
+             "plots/error/position", "plots/error/angle", "plots/force", "plots/cone_margin", "plots/mode"]
             + [f"scene/fingers/{k}" for k in keys] + [f"plots/xi/{k}" for k in keys]
+            + [f"plots/xi/{k}/band" for k in keys]
             + [f"plots/phase/{k}" for k in keys])
 
 
@@ -399,6 +430,7 @@ def test_a_supervised_rollout_is_logged_from_its_records(tmp_path, monkeypatch):
 
     # the per-finger panels (Figure 4.3): ξ, ξ_d of the law, band, danger zones, the schedule's ξ_d
     f = rec.danger_fraction
+    assert f == DANGER_FRACTION  # (the one definition, as the PNG figures')
     for i, key in enumerate(names):
         xi = np.array(rows[f"plots/xi/{key}"]["Scalars:scalars"], dtype=float)[1:] / 1e3  # [m]
         sup = [r.supervision for r in records]
@@ -406,8 +438,8 @@ def test_a_supervised_rollout_is_logged_from_its_records(tmp_path, monkeypatch):
         assert nan_equal(xi[:, 0], [r.plant.xi[i] for r in records])
         assert nan_equal(xi[:, 1], [s.reference_xi[i] for s in sup])
         assert nan_equal(xi[:, 2:4], bounds)
-        width = bounds[:, 1] - bounds[:, 0]
-        assert nan_equal(xi[:, 4], bounds[:, 0] + f * width) and nan_equal(xi[:, 5], bounds[:, 1] - f * width)
+        (_, lo_zone), (hi_zone, _) = danger_zones(bounds[:, 0], bounds[:, 1], DANGER_FRACTION)
+        assert nan_equal(xi[:, 4], lo_zone) and nan_equal(xi[:, 5], hi_zone)
         assert np.isnan(xi[:, 6]).all()  # the paper's policy has no schedule
         phase = np.array(rows[f"plots/phase/{key}"]["Scalars:scalars"], dtype=float)[:, 0]
         assert np.isnan(phase[0])  # the initial state: no supervisor yet
@@ -461,6 +493,40 @@ def blueprint_origins(path: Path) -> set[str]:
     return origins
 
 
+def blueprint_views(path: Path) -> tuple[dict[str, tuple[str, str]], list[bool]]:
+    """Each view's entity (its id): (class, name), and every PlotLegend's visibility, from the stored blueprint."""
+    reader = RrdReader(path)
+    views: dict[str, dict] = {}
+    legends = []
+    for chunk in reader.stream(store=reader.blueprints()[0]).to_chunks():
+        batch = chunk.to_record_batch()
+        for column in ("ViewBlueprint:class_identifier", "ViewBlueprint:display_name"):
+            if column in batch.schema.names:
+                views.setdefault(chunk.entity_path, {})[column] = batch.column(column).to_pylist()[0][0]
+        if "PlotLegend:visible" in batch.schema.names:
+            legends += [v[0] for v in batch.column("PlotLegend:visible").to_pylist()]
+    named = {k: (v["ViewBlueprint:class_identifier"], v["ViewBlueprint:display_name"]) for k, v in views.items()}
+    return named, legends
+
+
+def test_the_plots_have_one_unit_each_no_legend_and_a_file_one_chunk_per_entity(tmp_path):
+    path = tmp_path / "layout.rrd"
+    rollout, result, _, _ = record_rollout(path, duration=0.1, decimation=10)
+    views, legends = blueprint_views(path)
+    plots = [name for kind, name in views.values() if kind == "TimeSeries"]
+    assert len(plots) == len(rollout.names) + 6 and len(legends) == len(plots) and not any(legends)
+    for name in plots:  # one unit per view (codes: none)
+        assert sum(unit in name for unit in ("[mm]", "[deg]", "[N]")) <= 1, name
+    assert "tracking error x, y, ξ [mm]" in plots and "tracking error β [deg]" in plots
+    # fewer, larger chunks: a file alone gets each entity's rows in one chunk (static styling apart)
+    reader = RrdReader(path)
+    per_entity: dict[str, int] = {}
+    for chunk in reader.stream().to_chunks():
+        if not chunk.is_static and chunk.entity_path.startswith(("/plots", "/scene")):
+            per_entity[chunk.entity_path] = per_entity.get(chunk.entity_path, 0) + 1
+    assert len(per_entity) >= 20 and set(per_entity.values()) == {1}, per_entity
+
+
 def test_a_decimated_supervised_rollout_has_one_row_per_k_steps_and_every_event(tmp_path):
     path = tmp_path / "decimated.rrd"
     rollout, result, records, rec = record_rollout(path, duration=0.1, decimation=10)
@@ -498,7 +564,8 @@ def test_a_schedules_xi_d_is_plotted(tmp_path):
 
 def test_a_collision_is_marked_on_the_colliding_link(tmp_path):
     """Without regrasps, finger 1's distal link hits the object (~1.29 s): the failure's ERROR
-    line and the link's outline in red, labelled with the reason, at the failure's time."""
+    line (with the reason) and the link's outline in red, labelled short (kind, finger, time: it stays in the
+    scene), at the failure's time."""
     path = tmp_path / "collision.rrd"
     rollout, result, _, _ = record_rollout(path, policy="none", duration=1.5, decimation=50)
     failure = result.failure
@@ -508,7 +575,8 @@ def test_a_collision_is_marked_on_the_colliding_link(tmp_path):
     rows, *_ = read(path)
     marks = rows["scene/failure"]
     assert marks["time"] == [round(failure.time * 1e9)] and marks["step"] == [result.steps]
-    assert failure.reason in marks["LineStrips2D:labels"][0][0]
+    label = marks["LineStrips2D:labels"][0][0]
+    assert label == f"collision (finger1) at t = {failure.time:.3f} s" and len(label) < 40
     (outline,) = marks["LineStrips2D:strips"][0]  # one link, one closed outline [mm, y flipped]
     pts = np.array(outline) * [1e-3, -1e-3]
     finger = rollout.plant.hand.fingers[0]

@@ -53,21 +53,27 @@ the viewer are mm with the sign of y flipped.
   each contact's own edge) for a supervised record, else :class:`~regrasp.envelope.finger_envelope.FingerEnvelope`
   ``.at`` the plant's current pose (the ``envelope_edges``).
 * ``scene/failure`` (logged once, by ``log_failure``, at the failure's time and the last step): the failure
-  marked in red, labelled with its reason: a collision's link
+  marked in red, labelled with its kind, finger and time (short, to stay in the view; the reason is in
+  ``events``): a collision's link
   outline (the colliding link of the plant's last ``collision`` event of that finger, both links
   if unknown), a circle around the tip of the contact any other contact failure names
   (separation, unplanned slip, left envelope or edge, singular), the object's outline for a
   failure of no one contact (the control law's); nothing for an interruption.
 
 **Plots** (under ``plots/``; each entity holds several series, named by static
-``rr.SeriesLines``; NaN where a value is absent): ``plots/error`` the tracking error (x, y [mm],
-β [deg], each reduced ξ [mm]), measured at the logged state against the desired S_d when the
-reference is known, otherwise the controller's ``ControlOutput.error``;
+``rr.SeriesLines``; NaN where a value is absent; one unit per entity and per view, the views' legends hidden:
+each view's name says what its lines are, and hovering a line names it): ``plots/error/position`` the tracking
+error's x, y and each reduced ξ [mm] and ``plots/error/angle`` its β [deg], measured at the logged state against the
+desired S_d when the reference is known, otherwise the controller's ``ControlOutput.error``;
 ``plots/xi/<finger>`` (one view per finger, Figure 4.3) seven series [mm]: 0 the actual ξ,
 1 the control law's ξ_d (the sliding law's ``reference_xi``, or the closed loop's S_d), 2-3 the
 feasible interval holding ξ (lo, hi; the supervisor's ``bounds``), 4-5 where the danger zones
-start (lo + f w, hi − f w with f = ``danger_fraction``, w = hi − lo), 6 the schedule's ξ_d
-(``planned_xi``); a separated contact's are all NaN; ``plots/force`` normal and tangential
+start (:func:`~regrasp.core.intervals.danger_zones`: lo + f w, hi − f w with f = ``danger_fraction``, by default
+:data:`~regrasp.core.intervals.DANGER_FRACTION` as in the PNG figures, w = hi − lo), 6 the schedule's ξ_d
+(``planned_xi``); a separated contact's are all NaN; ``plots/xi/<finger>/band`` fills that band (rerun's time
+series draw no filled area): :data:`~regrasp.rollout.recording.rows.BAND_LINES` wide translucent green lines evenly
+inside its safe part and :data:`~regrasp.rollout.recording.rows.ZONE_LINES` red ones inside each danger zone
+(:func:`~regrasp.rollout.recording.rows.band_fill`); ``plots/force`` normal and tangential
 forces (plant and predicted); ``plots/cone_margin`` μ f_n − |f_t| (plant and predicted; μ_s at a
 fixed contact, μ_k at a sliding one); ``plots/mode`` 0 fixed, 1 sliding, 2 separated
 (:data:`~regrasp.rollout.recording.rows.MODE_CODES`); ``plots/phase/<finger>`` the supervisor's phase of the
@@ -89,13 +95,14 @@ edges, modes and friction), the styling of every entity above, and the viewer's 
 **Cost.** Per logged step the recorder keeps what the step needs: Pinocchio forward kinematics
 (the joint frames and the chain), without a supervisor one ``FingerEnvelope.at`` per drawn edge
 (~20 µs each in the ``ideal`` geometry; a supervised record brings its own), and the plotted
-numbers. Every ``flush_every`` logged steps (default 500) and on closing it turns the buffered steps into each
+numbers. Every ``flush_every`` logged steps (default 5000 for a file alone: one chunk per entity, so that a viewer
+opens the file sooner; 500 with a viewer) and on closing it turns the buffered steps into each
 entity's rows with numpy operations over the whole block (outlines, arrows, cones, envelope segments) and sends
 them with one ``send_columns`` per entity (:mod:`~regrasp.rollout.recording.writer`), so a live viewer sees the
 data in blocks of that many steps. The recorded values are the same whatever ``flush_every`` is.
 ``RolloutRecorder.seconds_per_step`` reports the measured mean cost (about 0.1-0.2 ms on the three-finger
 rollout). **Size.** A 1 s three-finger rollout (``policy="paper"``, 1000 steps) writes 1.7 MB at decimation 1,
-0.39 MB at 10 and 0.27 MB at 100: about 1.4 kB per logged step on top of about 0.25 MB per file (each
+0.45 MB at 10 and 0.30 MB at 100: about 1.4 kB per logged step on top of about 0.29 MB per file (each
 entity's chunk schemas, static and per block sent).
 """
 

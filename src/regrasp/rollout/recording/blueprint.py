@@ -1,5 +1,6 @@
 """The viewer's layout stored in a recording (its default blueprint): the hand and the object with the events log
-on the left, each finger's ξ panel and the phases in the middle, the other time series on the right."""
+on the left, each finger's ξ panel and the phases in the middle, the other time series on the right; one unit per
+plot axis, the plots' legends hidden (each view's name says what its lines are)."""
 
 from __future__ import annotations
 
@@ -29,8 +30,14 @@ def scene_bounds(plant: PlantLike) -> rrb.VisualBounds2D:
     return rrb.VisualBounds2D(x_range=(float(lo[0]), float(hi[0])), y_range=(float(lo[1]), float(hi[1])))
 
 
+def _plot(origin: str, name: str, **kwargs) -> rrb.TimeSeriesView:
+    """A time-series view of ``origin`` (and its children) with its legend hidden: the view's name says what its
+    lines are, and hovering a line names it (a legend covered ~40 % of a panel)."""
+    return rrb.TimeSeriesView(origin=origin, name=name, plot_legend=rrb.PlotLegend(visible=False), **kwargs)
+
+
 def blueprint(plant: PlantLike, hand: HandDrawing) -> rrb.Blueprint:
-    """The recording's default blueprint for ``plant`` drawn as ``hand``."""
+    """The recording's default blueprint for ``plant`` drawn as ``hand``: one unit per plot axis."""
     scene = rrb.Spatial2DView(origin="scene", name="hand frame [mm] (y up)", visual_bounds=scene_bounds(plant))
     left = rrb.Vertical(
         rrb.Tabs(scene, rrb.Spatial2DView(origin="model/object", name="object frame [mm]"),
@@ -39,17 +46,17 @@ def blueprint(plant: PlantLike, hand: HandDrawing) -> rrb.Blueprint:
         row_shares=[3, 1],
     )
     middle = rrb.Vertical(
-        *[rrb.TimeSeriesView(origin=f"plots/xi/{f.key}", name=f"{f.name}: ξ, feasible band, danger zones, ξ_d [mm]")
-          for f in hand.fingers],
-        rrb.TimeSeriesView(origin="plots/phase", name="phase: 0 fixed, 1 priming, 2 sliding, 3 settling",
-                           axis_y=rrb.ScalarAxis(range=(-0.2, 3.2))),
+        *[_plot(f"plots/xi/{f.key}", f"{f.name} ξ [mm], ξ_d, band, danger zones") for f in hand.fingers],
+        _plot("plots/phase", "phase: 0 fixed, 1 priming, 2 sliding, 3 settling",
+              axis_y=rrb.ScalarAxis(range=(-0.2, 3.2))),
     )
     right = rrb.Vertical(
-        rrb.TimeSeriesView(origin="plots/error", name="tracking error: x, y, ξ [mm], β [deg]"),
-        rrb.TimeSeriesView(origin="plots/force", name="contact forces [N]"),
-        rrb.TimeSeriesView(origin="plots/cone_margin", name="friction-cone margin μ f_n − |f_t| [N]"),
-        rrb.TimeSeriesView(origin="plots/mode", name="contact mode: 0 fixed, 1 sliding, 2 separated",
-                           axis_y=rrb.ScalarAxis(range=(-0.2, 2.2))),
+        _plot("plots/error/position", "tracking error x, y, ξ [mm]"),
+        _plot("plots/error/angle", "tracking error β [deg]"),
+        _plot("plots/force", "contact forces [N]: f_n, f_t darker, predicted faint"),
+        _plot("plots/cone_margin", "friction-cone margin μ f_n − |f_t| [N]"),
+        _plot("plots/mode", "contact mode: 0 fixed, 1 sliding, 2 separated", axis_y=rrb.ScalarAxis(range=(-0.2, 2.2))),
+        row_shares=[3, 2, 3, 3, 2],
     )
     return rrb.Blueprint(
         rrb.Horizontal(left, middle, right, column_shares=[3, 2, 2]),

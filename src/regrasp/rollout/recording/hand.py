@@ -158,18 +158,19 @@ class HandDrawing:
         """Each finger's entity-path part."""
         return [f.key for f in self.fingers]
 
-    def kinematics(self, q: ArrayLike) -> tuple[list[np.ndarray], np.ndarray]:
+    def kinematics(self, q: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """The fingers' joint frames at joint angles ``q`` (2m,) [rad]: joints 1 and 2 of each finger as 4x4
-        homogeneous matrices in the hand frame (2m of them, finger by finger), and their chains (m, 3, 2) [m]:
-        joint 1, elbow and tip in the hand frame."""
-        chains = np.empty((len(self._models), 3, 2))
-        frames = []
+        homogeneous matrices in the hand frame ((2m, 4, 4), finger by finger), and their chains (m, 3, 2) [m]:
+        joint 1, elbow and tip in the hand frame. (Arrays, not lists: a recording buffers them, and the garbage
+        collector does not track arrays.)"""
+        m = len(self._models)
+        chains = np.empty((m, 3, 2))
+        frames = np.empty((2 * m, 4, 4))
         for i, (model, data, tip_placement) in enumerate(self._models):
             pin.forwardKinematics(model, data, q[2 * i:2 * i + 2])
             oMi = data.oMi
-            H1, H2 = oMi[1].homogeneous, oMi[2].homogeneous
-            frames.append(H1)
-            frames.append(H2)
+            frames[2 * i] = H1 = oMi[1].homogeneous
+            frames[2 * i + 1] = H2 = oMi[2].homogeneous
             chains[i, 0] = H1[:2, 3]
             chains[i, 1] = H2[:2, 3]
             chains[i, 2] = (oMi[2] * tip_placement).translation[:2]

@@ -17,7 +17,7 @@ from ...dynamics.control import ControlOutput
 from ...envelope.finger_envelope import EnvelopeSample, FingerEnvelope
 from ...plants.project.state import PlantStep
 from ...plants.simulation import PlantLike
-from .rows import Layout, StepRow, poses, segments, series
+from .rows import Layout, StepRow, mode_codes, poses, segments, series
 
 __all__ = ["PlantMeasure"]
 
@@ -155,4 +155,5 @@ class PlantMeasure:
         values = series(layout, X, xi, modes, desired, None if output is None else output.error,
                         fn + ft + pfn + pft, margin + pmargin, bands, law_xi, nan_m, nan_m)
         pose, ghost = poses(X, desired)
-        return StepRow(pose, ghost, frames, chains, edges, modes, surface, predicted, drawn_segments, values)
+        return StepRow(pose, ghost, frames, chains, np.array(edges, dtype=np.intp), mode_codes(modes), surface,
+                       predicted, drawn_segments, values)

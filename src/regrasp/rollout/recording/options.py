@@ -19,10 +19,17 @@ from ...core.validation import as_count, as_output_path
 from ...plants.project.state import PlantState
 from ...plants.simulation import PlantLike
 
-__all__ = ["RecorderOptions", "as_viewer_url", "checked_desired", "checked_options", "checked_plant_state",
-           "checked_step", "checked_time"]
+__all__ = ["FILE_BLOCK", "VIEWER_BLOCK", "RecorderOptions", "as_viewer_url", "checked_desired", "checked_options",
+           "checked_plant_state", "checked_step", "checked_time"]
 
 #: Where ``connect`` may point: a rerun gRPC URL such as ``rerun+http://127.0.0.1:9876/proxy``.
+#: Logged steps sent in one block (one chunk per entity) when the recording goes to a file alone: a whole rollout at
+#: ``regrasp simulate --rrd``'s decimation in one chunk per entity (fewer, larger chunks: the viewer opens a file
+#: sooner), and a bounded buffer for longer ones.
+FILE_BLOCK = 5000
+#: The same with a viewer, which sees the data in blocks of this many steps.
+VIEWER_BLOCK = 500
+
 _GRPC_URL = re.compile(r"^rerun(\+https?)?://[^/\s]+(/\S*)?$")
 
 
@@ -48,7 +55,8 @@ class RecorderOptions:
         recording_name: The name shown in the viewer.
         danger_fraction: Width of each danger zone, a fraction of its interval, in [0, 0.5).
         decimation: Log every n-th step (1 <= n <= 10**6).
-        flush_every: Send the buffered rows every this many logged steps (>= 1).
+        flush_every: Send the buffered rows every this many logged steps (>= 1; :data:`FILE_BLOCK` for a file alone,
+            :data:`VIEWER_BLOCK` with a viewer when not given).
         force_scale: Arrow length per newton [mm/N].
         cone_length: Length of the friction cones' rays [mm].
         plant_forces: Recompute the plant's forces without a ``PlantStep``.
@@ -79,7 +87,7 @@ def checked_options(plant: PlantLike, *, envelope_edges: Sequence[int | Sequence
                     rrd_path: str | Path | None, spawn: bool, connect: str | None, application_id: str,
                     recording_name: str | None, danger_fraction: float, decimation: int,
                     sliding: Sequence[int] | None, envelope_geometry: str, force_scale: float, cone_length: float,
-                    plant_forces: bool, envelope_tolerance: float, flush_every: int) -> RecorderOptions:
+                    plant_forces: bool, envelope_tolerance: float, flush_every: int | None) -> RecorderOptions:
     """A recorder's arguments (:class:`~regrasp.rollout.recording.recorder.RolloutRecorder`'s, the same names),
     checked and normalised. The envelope geometry is checked when the envelopes are made.
 
@@ -103,6 +111,8 @@ def checked_options(plant: PlantLike, *, envelope_edges: Sequence[int | Sequence
     if not (isinstance(danger_fraction, (int, float)) and 0.0 <= danger_fraction < 0.5):
         raise InvalidParameterError("danger_fraction", danger_fraction, "a fraction in [0, 0.5)")
     decimation = as_count("decimation", decimation, 1)
+    if flush_every is None:  # a file alone: large blocks (few chunks: a viewer opens it sooner); a viewer: 500
+        flush_every = FILE_BLOCK if not spawn and connect is None else VIEWER_BLOCK
     flush_every = as_count("flush_every", flush_every, 1)
     for name, value in (("force_scale", force_scale), ("cone_length", cone_length)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):

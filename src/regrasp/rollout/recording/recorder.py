@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike
 
 from ...core.events import EventSource
 from ...core.exceptions import InvalidParameterError
+from ...core.intervals import DANGER_FRACTION
 from ...dynamics.control import ControlOutput
 from ...kernels.decimation import logged
 from ...plants.project.state import PlantStep
@@ -88,7 +89,8 @@ class RolloutRecorder:
         application_id: Rerun application id.
         recording_name: Name shown in the viewer (default: the file's stem, or "rollout").
         danger_fraction: Width of each danger zone as a fraction of its feasible interval, in
-            [0, 0.5).
+            [0, 0.5) (default :data:`~regrasp.core.intervals.DANGER_FRACTION`, the zones the paper policy and the
+            PNG figures use; :func:`~regrasp.core.intervals.danger_zones`).
         decimation: Log every n-th step only (1 <= n <= 10**6).
         sliding: Contacts whose ξ are the reduced coordinates S[3:] (the controller's
             ``grasp.sliding``), for naming the error series. Default: the contacts in mode
@@ -105,7 +107,9 @@ class RolloutRecorder:
             0 recomputes it at every logged step.
         flush_every: Send the buffered rows every this many logged steps (the cost of a send is
             mostly per entity, so larger blocks are cheaper per step; a live viewer sees the
-            data in blocks of this many steps).
+            data in blocks of this many steps). Default: 5000 for a file alone (one chunk per entity for a
+            rollout of up to 5000 logged steps), 500 with a viewer
+            (:data:`~regrasp.rollout.recording.options.FILE_BLOCK`, ``VIEWER_BLOCK``).
 
     Attributes:
         plant: The recorder's plant.
@@ -134,7 +138,7 @@ class RolloutRecorder:
         connect: str | None = None,
         application_id: str = "regrasp",
         recording_name: str | None = None,
-        danger_fraction: float = 0.1,
+        danger_fraction: float = DANGER_FRACTION,
         decimation: int = 1,
         sliding: Sequence[int] | None = None,
         envelope_geometry: str = "ideal",
@@ -142,7 +146,7 @@ class RolloutRecorder:
         cone_length: float = 15.0,
         plant_forces: bool = True,
         envelope_tolerance: float = 1e-5,
-        flush_every: int = 500,
+        flush_every: int | None = None,
     ):
         # ---- validation first: a bad argument leaves nothing behind (no stream, no file)
         options = checked_options(

@@ -17,6 +17,7 @@ import rerun as rr
 from numpy.typing import ArrayLike
 
 from ...core.contact import ContactMode
+from ...core.intervals import danger_zones
 from ...core.planar import wrap_angle
 from ...supervisor.types import ContactPhase
 from .hand import HandDrawing
@@ -25,8 +26,9 @@ if TYPE_CHECKING:
     from ...plants.project.state import PlantContact
     from ...plants.simulation import StepRecord
 
-__all__ = ["MODE_CODES", "PHASE_CODES", "Layout", "Segment", "Series", "StepRow", "SupervisedStep", "poses",
-           "segments", "series", "series_columns", "supervised_row"]
+__all__ = ["BAND_LINES", "MODE_CODES", "PHASE_CODES", "ZONE_LINES", "Layout", "Segment", "Series", "StepRow",
+           "SupervisedStep", "band_fill", "mode_codes", "poses", "segments", "series", "series_columns",
+           "supervised_row"]
 
 #: Contact mode → the value plotted under ``plots/mode`` (a ContactMode equals its string, so either looks up).
 MODE_CODES = {ContactMode.FIXED: 0, ContactMode.SLIDING: 1, ContactMode.SEPARATED: 2}
@@ -35,8 +37,6 @@ PHASE_CODES = {ContactPhase.FIXED: 0, ContactPhase.PRIMING: 1, ContactPhase.SLID
 
 #: One drawn feasible interval: (finger, edge, slot: the how-many-th envelope drawn along that edge, lo, hi [m]).
 Segment = tuple[int, int, int, float, float]
-#: A pose as drawn: (cos β, sin β, x [m], y [m]).
-Pose = tuple[float, float, float, float]
 
 
 @dataclass(frozen=True)
@@ -62,42 +62,46 @@ class Layout:
 
 class Series(NamedTuple):
     """One logged step's plotted values, in the plots' units (module docstring of
-    :mod:`regrasp.rollout.recording`: mm, degrees, N, codes; NaN where absent), per plot entity."""
+    :mod:`regrasp.rollout.recording`: mm, degrees, N, codes; NaN where absent), per plot entity. Arrays, not lists:
+    a recording buffers its rows, and buffered lists (~20 a row) made the garbage collector run a full collection
+    (~70 ms) inside a rollout; it does not track arrays."""
 
-    error: list[float]  #: ``plots/error``
-    xi: list[list[float]]  #: ``plots/xi/<finger>``, per finger its seven series
-    force: list[float]  #: ``plots/force``
-    cone_margin: list[float]  #: ``plots/cone_margin``
-    mode: list[float]  #: ``plots/mode``
-    phase: list[list[float]]  #: ``plots/phase/<finger>``, per finger
+    error: np.ndarray  #: ``plots/error/position`` (x, y, each ξ [mm]) and ``plots/error/angle`` (β [deg])
+    xi: np.ndarray  #: ``plots/xi/<finger>``, per finger its seven series (m, 7)
+    force: np.ndarray  #: ``plots/force``
+    cone_margin: np.ndarray  #: ``plots/cone_margin``
+    mode: np.ndarray  #: ``plots/mode``
+    phase: np.ndarray  #: ``plots/phase/<finger>``, per finger (m, 1)
 
 
 class StepRow(NamedTuple):
     """One logged step's rows: what the scene draws (hand frame, metres, object frame for the edges) and the
-    plotted values.
+    plotted values. Arrays only (and the row's two tuples): a recording buffers its rows, and every buffered
+    container counts towards the garbage collector's next collection (a full one costs ~70-100 ms in a process that
+    has planned; arrays are not tracked).
 
     Attributes:
-        pose: The object's pose after the step.
-        desired: The desired pose, or None (no ghost).
+        pose: The object's pose after the step as drawn (cos β, sin β, x, y).
+        desired: The desired pose, likewise, or None (no ghost).
         frames: The fingers' joint frames (:meth:`HandDrawing.kinematics`).
         chains: The fingers' chains (m, 3, 2) [m].
-        edges: Each contact's edge now.
-        modes: Each contact's mode now.
+        edges: Each contact's edge now (m,).
+        modes: Each contact's mode now, as its :data:`MODE_CODES` (m,).
         surface: The plant's contact forces (f_n, f_t) per contact (m, 2) [N], or None.
         predicted: The controller's predicted contact forces in the hand frame (m, 2) [N], or None.
-        segments: The feasible intervals drawn.
+        segments: The feasible intervals drawn (S, 5) (:func:`segments`).
         series: The plotted values.
     """
 
-    pose: Pose
-    desired: Pose | None
-    frames: list[np.ndarray]
+    pose: np.ndarray
+    desired: np.ndarray | None
+    frames: np.ndarray
     chains: np.ndarray
-    edges: list[int]
-    modes: list[ContactMode]
+    edges: np.ndarray
+    modes: np.ndarray
     surface: np.ndarray | None
     predicted: np.ndarray | None
-    segments: list[Segment]
+    segments: np.ndarray
     series: Series
 
 
@@ -147,17 +151,20 @@ class SupervisedStep(NamedTuple):
                    control.cone_margins, sup.bounds, sup.reference_xi, sup.planned_xi)
 
 
-def poses(X: ArrayLike, desired: np.ndarray | None) -> tuple[Pose, Pose | None]:
-    """The object's pose ``X`` and the desired pose (``desired``'s first three entries, or None) as drawn."""
+def poses(X: ArrayLike, desired: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+    """The object's pose ``X`` and the desired pose (``desired``'s first three entries, or None) as drawn: each
+    (cos β, sin β, x, y)."""
     x, y, beta = np.asarray(X, dtype=float).tolist()
-    ghost = None if desired is None else (math.cos(desired[2]), math.sin(desired[2]), desired[0], desired[1])
-    return (math.cos(beta), math.sin(beta), x, y), ghost
+    ghost = None if desired is None else np.array([math.cos(desired[2]), math.sin(desired[2]), desired[0],
+                                                   desired[1]])
+    return np.array([math.cos(beta), math.sin(beta), x, y]), ghost
 
 
 def segments(edges: Iterable[tuple[int, int]],
-             feasible_of: Callable[[int, int], Sequence[tuple[float, float]]]) -> list[Segment]:
+             feasible_of: Callable[[int, int], Sequence[tuple[float, float]]]) -> np.ndarray:
     """The intervals drawn for the (finger, edge) pairs ``edges``: ``feasible_of(finger, edge)``'s, each with its
-    slot, the how-many-th envelope along its edge (the drawing offsets them from the edge)."""
+    slot, the how-many-th envelope along its edge (the drawing offsets them from the edge); (S, 5): finger, edge,
+    slot, lo, hi [m] (:data:`Segment`)."""
     out = []
     slot: dict[int, int] = {}
     for i, edge in edges:
@@ -165,7 +172,7 @@ def segments(edges: Iterable[tuple[int, int]],
         slot[edge] = k + 1
         for lo, hi in feasible_of(i, edge):
             out.append((i, edge, k, lo, hi))
-    return out
+    return np.array(out, dtype=float).reshape(-1, 5)
 
 
 def series(layout: Layout, X: ArrayLike, xi: Sequence[float], modes: Sequence[ContactMode],
@@ -198,12 +205,13 @@ def series(layout: Layout, X: ArrayLike, xi: Sequence[float], modes: Sequence[Co
         row = [nan] * 7
         if modes[i] is not ContactMode.SEPARATED:
             lo, hi = bands[i]
-            w = f * (hi - lo)
-            row = [xi[i], law_xi[i], lo, hi, lo + w, hi - w, planned_xi[i]]
+            (_, lo_zone), (hi_zone, _) = danger_zones(lo, hi, f)
+            row = [xi[i], law_xi[i], lo, hi, lo_zone, hi_zone, planned_xi[i]]
         xi_rows.append([v * 1000.0 for v in row])
         phase_rows.append([phases[i]])
-    return Series(error=err[:3] + [v * 1000.0 for v in err[3:]], xi=xi_rows, force=forces, cone_margin=margins,
-                  mode=[float(MODE_CODES.get(mo, 2)) for mo in modes], phase=phase_rows)
+    return Series(error=np.array(err[:3] + [v * 1000.0 for v in err[3:]]), xi=np.array(xi_rows),
+                  force=np.array(forces, dtype=float), cone_margin=np.array(margins, dtype=float),
+                  mode=np.array([float(MODE_CODES.get(mo, 2)) for mo in modes]), phase=np.array(phase_rows))
 
 
 def supervised_row(layout: Layout, contacts: Sequence[PlantContact], step: SupervisedStep,
@@ -223,15 +231,43 @@ def supervised_row(layout: Layout, contacts: Sequence[PlantContact], step: Super
         np.asarray(step.planned_xi, dtype=float).tolist(),
         [float(PHASE_CODES.get(ph, math.nan)) for ph in step.phases])
     pose, ghost = poses(step.X, desired)
-    return StepRow(pose, ghost, frames, chains, edges, modes, surface, np.array(step.predicted, dtype=float),
-                   segments(enumerate(edges), lambda i, _edge: feasible[i]), values)
+    return StepRow(pose, ghost, frames, chains, np.array(edges, dtype=np.intp), mode_codes(modes), surface,
+                   np.array(step.predicted, dtype=float), segments(enumerate(edges), lambda i, _edge: feasible[i]),
+                   values)
+
+
+def mode_codes(modes: Sequence[ContactMode]) -> np.ndarray:
+    """The contacts' modes as their :data:`MODE_CODES` (an unknown one: separated)."""
+    return np.array([MODE_CODES.get(mo, 2) for mo in modes], dtype=np.int8)
+
+
+#: How many lines fill a ξ panel's band (``plots/xi/<finger>/band``): between the danger zones, and in each zone.
+BAND_LINES, ZONE_LINES = 10, 2
+
+
+def band_fill(xi: np.ndarray) -> np.ndarray:
+    """The lines filling a block of ξ rows' band (n, 7) [mm] (series 2-5: lo, hi and where the danger zones start):
+    :data:`BAND_LINES` evenly inside the safe part, then :data:`ZONE_LINES` inside each danger zone, (n, B + 2 Z);
+    NaN where the row's band is."""
+    lo, hi, lo_zone, hi_zone = xi[:, 2:3], xi[:, 3:4], xi[:, 4:5], xi[:, 5:6]
+    safe = (np.arange(BAND_LINES) + 0.5) / BAND_LINES
+    zone = (np.arange(ZONE_LINES) + 0.5) / ZONE_LINES
+    return np.hstack([lo_zone + safe * (hi_zone - lo_zone), lo + zone * (lo_zone - lo),
+                      hi_zone + zone * (hi - hi_zone)])
 
 
 def series_columns(rows: Sequence[StepRow], keys: Sequence[str]) -> Iterator[tuple[str, rr.ComponentColumnList]]:
-    """``(entity path, columns)`` of the plots for a block of rows (one row per step), in a fixed order."""
-    yield "plots/error", _scalars([r.series.error for r in rows])
+    """``(entity path, columns)`` of the plots for a block of rows (one row per step), in a fixed order: the tracking
+    error in two entities of one unit each (``plots/error/position`` x, y and each reduced ξ [mm];
+    ``plots/error/angle`` β [deg]), each finger's ξ panel and the lines filling its band (:func:`band_fill`), the
+    forces, cone margins, modes and phases."""
+    error = np.array([r.series.error for r in rows], dtype=float)
+    yield "plots/error/position", _scalars(np.delete(error, 2, axis=1))
+    yield "plots/error/angle", _scalars(error[:, 2:3])
     for i, key in enumerate(keys):
-        yield f"plots/xi/{key}", _scalars([r.series.xi[i] for r in rows])
+        xi = np.array([r.series.xi[i] for r in rows], dtype=float)
+        yield f"plots/xi/{key}", _scalars(xi)
+        yield f"plots/xi/{key}/band", _scalars(band_fill(xi))
     yield "plots/force", _scalars([r.series.force for r in rows])
     yield "plots/cone_margin", _scalars([r.series.cone_margin for r in rows])
     yield "plots/mode", _scalars([r.series.mode for r in rows])
@@ -239,5 +275,5 @@ def series_columns(rows: Sequence[StepRow], keys: Sequence[str]) -> Iterator[tup
         yield f"plots/phase/{key}", _scalars([r.series.phase[i] for r in rows])
 
 
-def _scalars(values: list[list[float]]) -> rr.ComponentColumnList:
+def _scalars(values) -> rr.ComponentColumnList:
     return rr.Scalars.columns(scalars=np.array(values, dtype=float))

@@ -19,17 +19,21 @@ from rerun.encodings import Vec2DBatch
 
 from ...core.contact import ContactMode, Friction
 from ...core.events import EventKind, Failure, FailureKind
+from ...core.intervals import danger_zones
 from ...core.polygon import Edge
 from .hand import HandDrawing, circle
-from .rows import StepRow
+from .rows import MODE_CODES, StepRow
 from .style import DANGER, MM, MODE_RGBA, colours, rgba
 
 if TYPE_CHECKING:
     from ...plants.simulation import PlantLike
 
-__all__ = ["Scene", "arrows_columns", "failure_marker", "strips_array", "strips_columns"]
+__all__ = ["Scene", "arrows_columns", "failure_label", "failure_marker", "strips_array", "strips_columns"]
 
 _SIGN = np.sign(MM)  # a vector [m] -> scene [mm]: MM with the force scale instead of 1000
+_CODE_RGBA = np.zeros(max(MODE_CODES.values()) + 1, dtype=np.uint32)  # a mode code's cone colour
+for _mode, _code in MODE_CODES.items():
+    _CODE_RGBA[_code] = MODE_RGBA[_mode]
 
 
 def strips_array(strips: np.ndarray) -> pa.Array:
@@ -125,7 +129,7 @@ class Scene:
     def _fingers(self, rows, chains):
         """Each link's outline placed by its joint frame and the joint chain, per finger; the joints as dots."""
         n, m = chains.shape[:2]
-        frames = np.stack([H for r in rows for H in r.frames]).reshape(n, m, 2, 4, 4)  # joints 1, 2 per finger
+        frames = np.stack([r.frames for r in rows]).reshape(n, m, 2, 4, 4)  # joints 1, 2 per finger
         for i, finger in enumerate(self.hand.fingers):
             width = finger.width
             strips = []
@@ -162,31 +166,33 @@ class Scene:
             origins = vectors = np.zeros((0, m, 2))
         yield "scene/contacts/forces_predicted", arrows_columns(
             origins, vectors, [0 if r.predicted is None else m for r in rows])
-        sliding = np.array([[mo is ContactMode.SLIDING for mo in r.modes] for r in rows], dtype=bool)
-        half = np.arctan(np.where(sliding.reshape(n, m), self.kinetic, self.static))  # (n, m): μ_k sliding, else μ_s
+        codes = np.array([r.modes for r in rows], dtype=np.intp).reshape(n, m)
+        sliding = codes == MODE_CODES[ContactMode.SLIDING]
+        half = np.arctan(np.where(sliding, self.kinetic, self.static))  # (n, m): μ_k sliding, else μ_s
         ch, sh = np.cos(half)[..., None], np.sin(half)[..., None]
         perp_n = np.stack([-normals[..., 1], normals[..., 0]], axis=-1)
         ray_a = ch * normals + sh * perp_n
         ray_b = ch * normals - sh * perp_n
         L = self.cone_length / 1000.0
         cones = np.stack([tips + L * ray_a, tips, tips + L * ray_b], axis=2) * MM  # (n, m, 3, 2)
-        cone_colours = [MODE_RGBA.get(mo, MODE_RGBA[ContactMode.SEPARATED]) for r in rows for mo in r.modes]
+        cone_colours = _CODE_RGBA[codes.reshape(-1)]
         yield "scene/contacts/cones", strips_columns(cones.reshape(-1, 3, 2), [m] * n, cone_colours)
 
     def _envelopes(self, rows, c, s, RT, origin):
         """Each drawn interval as safe and danger segments just outside its edge (3 mm further per slot)."""
         n = len(rows)
-        drawn = [(k, *seg) for k, r in enumerate(rows) for seg in r.segments]
         counts = [len(r.segments) for r in rows]
-        if drawn:
-            step, finger, edge, slot, lo, hi = (np.array(col) for col in zip(*drawn))
+        if sum(counts):
+            finger, edge, slot, lo, hi = np.concatenate([r.segments for r in rows]).T
+            step = np.repeat(np.arange(n), counts)
             edge = edge.astype(np.intp)
             RTs = RT[step.astype(np.intp)]
             nrm = np.stack([c[step] * self.normals[edge, 0] - s[step] * self.normals[edge, 1],
                             s[step] * self.normals[edge, 0] + c[step] * self.normals[edge, 1]], axis=-1)
             offset = -(0.003 + 0.003 * slot)[:, None] * nrm
-            wdt = self.danger_fraction * (hi - lo)
-            u = np.stack([lo, lo + wdt, hi - wdt, hi], axis=1)  # (S, 4)
+            (_, lo_zone), (hi_zone, _) = danger_zones(lo, hi, self.danger_fraction)
+            wdt = lo_zone - lo
+            u = np.stack([lo, lo_zone, hi_zone, hi], axis=1)  # (S, 4)
             in_object = self.xi_origins[edge][:, None] + u[..., None] * self.xi_directions[edge][:, None]
             ends = in_object @ RTs + (origin[step.astype(np.intp)] + offset)[:, None]  # (S, 4, 2)
             safe = ends[:, 1:3] * MM
@@ -213,7 +219,8 @@ def _pad_last(points: np.ndarray, n: int) -> np.ndarray:
 
 def failure_marker(failure: Failure, plant: PlantLike, hand: HandDrawing,
                    object_closed: np.ndarray) -> rr.LineStrips2D | None:
-    """The red outline marking ``failure`` at ``plant``'s state (``scene/failure``), labelled with its reason: a
+    """The red outline marking ``failure`` at ``plant``'s state (``scene/failure``), labelled with its kind, contact and
+    time (:func:`failure_label`; its reason is the ``events`` log's ERROR line): a
     collision's link outline (the colliding link of the plant's last ``collision`` event of that finger, both
     links if unknown), a circle around the tip of the contact any other contact failure names, the object's
     outline (``object_closed`` (nv + 1, 2) [m], object frame) for a failure of no one contact; None for an
@@ -243,4 +250,11 @@ def failure_marker(failure: Failure, plant: PlantLike, hand: HandDrawing,
         else:
             strips = [chains[i, 2] + np.vstack([circle(0.004), circle(0.004)[:1]])]
     return rr.LineStrips2D([s * MM for s in strips], radii=1.2, colors=colours([rgba(DANGER)]),
-                           labels=[f"{kind.value}: {failure.reason}"], show_labels=True, draw_order=40.0)
+                           labels=[failure_label(failure)], show_labels=True, draw_order=40.0)
+
+
+def failure_label(failure: Failure) -> str:
+    """The failure marker's label, short enough to stay inside the scene: ``<kind> (<contact>) at t = … s`` (the
+    reason is the ``events`` log's ERROR line)."""
+    who = f" ({failure.contact})" if failure.contact else ""
+    return f"{FailureKind(failure.kind).value}{who} at t = {failure.time:.3f} s"

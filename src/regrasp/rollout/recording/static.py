@@ -12,7 +12,8 @@ import rerun as rr
 from ...plants.simulation import PlantLike
 from .hand import HandDrawing
 from .options import RecorderOptions
-from .style import DANGER, FORCE, GHOST, MM, OBJECT, PREDICTED, colours, darker, rgba
+from .rows import BAND_LINES, ZONE_LINES
+from .style import BAND, BAND_EDGE, DANGER, DANGER_FILL, FORCE, GHOST, MM, OBJECT, PREDICTED, colours, darker, rgba
 
 __all__ = ["log_static"]
 
@@ -99,19 +100,25 @@ def _log_series_styles(stream: rr.RecordingStream, hand: HandDrawing, options: R
     fingers = hand.fingers
     names = [f.name for f in fingers]
     finger_colours = [f.colour for f in fingers]
-    err_names = ["x [mm]", "y [mm]", "β [deg]"] + [f"ξ {fingers[i].name} [mm]" for i in options.sliding]
-    err_colours = [(31, 119, 180), (44, 160, 44), (214, 39, 40)] + [finger_colours[i] for i in options.sliding]
-    log("plots/error", rr.SeriesLines(names=err_names, colors=colours([rgba(c) for c in err_colours])), static=True)
+    err_names = ["x [mm]", "y [mm]"] + [f"ξ {fingers[i].name} [mm]" for i in options.sliding]
+    err_colours = [(31, 119, 180), (44, 160, 44)] + [finger_colours[i] for i in options.sliding]
+    log("plots/error/position", rr.SeriesLines(names=err_names, colors=colours([rgba(c) for c in err_colours])),
+        static=True)
+    log("plots/error/angle", rr.SeriesLines(names=["β [deg]"], colors=colours([rgba((214, 39, 40))])), static=True)
     pct = 100.0 * options.danger_fraction
     for f in fingers:
         c = f.colour
         log(f"plots/xi/{f.key}", rr.SeriesLines(
             names=[f"ξ {f.name}", f"ξ_d control law {f.name}", f"feasible lo {f.name}", f"feasible hi {f.name}",
-                   f"lo + {pct:g} % (danger) {f.name}", f"hi − {pct:g} % (danger) {f.name}",
+                   f"danger zone ({pct:g} %) ends {f.name}", f"danger zone ({pct:g} %) starts {f.name}",
                    f"ξ_d schedule {f.name}"],
-            colors=colours([rgba(c), rgba(darker(c, 0.5), 200), rgba(OBJECT), rgba(OBJECT),
+            colors=colours([rgba(c), rgba(darker(c, 0.5), 200), rgba(BAND_EDGE), rgba(BAND_EDGE),
                             rgba(DANGER, 160), rgba(DANGER, 160), rgba(c, 110)]),
-            widths=[2.0, 1.0, 1.5, 1.5, 1.0, 1.0, 3.0]), static=True)
+            widths=[2.0, 1.0, 1.0, 1.0, 0.5, 0.5, 3.0]), static=True)
+        log(f"plots/xi/{f.key}/band", rr.SeriesLines(  # (the band's fill: rows.band_fill)
+            names=[f"feasible band {f.name}"] * BAND_LINES + [f"danger zone {f.name}"] * (2 * ZONE_LINES),
+            colors=colours([rgba(BAND, 70)] * BAND_LINES + [rgba(DANGER_FILL, 110)] * (2 * ZONE_LINES)),
+            widths=[8.0] * BAND_LINES + [4.0] * (2 * ZONE_LINES)), static=True)
         log(f"plots/phase/{f.key}", rr.SeriesLines(names=[f.name], colors=colours([rgba(c)])), static=True)
     force_names = ([f"f_n {n}" for n in names] + [f"f_t {n}" for n in names]
                    + [f"f_n {n} (predicted)" for n in names] + [f"f_t {n} (predicted)" for n in names])

@@ -9,8 +9,8 @@ import numpy as np
 
 from ...core.contact import ContactMode
 
-__all__ = ["DANGER", "FINGER_COLOURS", "FORCE", "GHOST", "MM", "MODE_RGBA", "OBJECT", "PREDICTED", "Colour",
-           "colours", "darker", "rgba"]
+__all__ = ["BAND", "BAND_EDGE", "DANGER", "DANGER_FILL", "FINGER_COLOURS", "FORCE", "GHOST", "MM", "MODE_RGBA",
+           "OBJECT", "PREDICTED", "Colour", "colours", "darker", "rgba"]
 
 #: An (r, g, b) or (r, g, b, a) colour, each entry in 0..255.
 Colour = tuple[int, ...]
@@ -27,6 +27,9 @@ FORCE: Colour = (200, 30, 30)  #: the plant's contact forces
 PREDICTED: Colour = (255, 152, 150)  #: the controller's predicted forces
 OBJECT: Colour = (60, 60, 60)  #: the object
 GHOST: Colour = (140, 140, 140, 110)  #: the desired pose
+BAND: Colour = (120, 190, 120)  #: a ξ panel's feasible band (the PNG figures' green), filled translucent
+BAND_EDGE: Colour = (60, 120, 60)  #: its bounds
+DANGER_FILL: Colour = (230, 120, 120)  #: its danger zones (the PNG figures' red), filled translucent
 
 
 def rgba(colour: Colour, alpha: int = 255) -> int:
