@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from factories import DANGER_START_THREE
 from regrasp import ContactMode, FingerEnvelope, Friction, ModelErrors, PlantSpec, RunSpec, load_scenario
 from regrasp.core.events import EventKind, EventSource, FailureKind
 from regrasp.core.exceptions import InvalidParameterError, ScenarioError
@@ -20,7 +21,7 @@ SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
 @pytest.fixture(scope="module")
 def three_fingers_run():
     sc = load_scenario(SCENARIOS / "paper_trajectory_2_three_fingers.toml")
-    rollout = build_rollout(sc, RunSpec(duration=0.6), policy="paper")
+    rollout = build_rollout(sc, RunSpec(duration=0.6, xi0=DANGER_START_THREE), policy="paper")  # finger 1 slides
     return sc, rollout, rollout.run()
 
 
