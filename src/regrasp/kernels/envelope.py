@@ -134,7 +134,7 @@ def _reachable(p, d, pieces, out):
     return _merge(pieces, k, out)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _tip_and_elbow(p, d, nx, ny, s):
     """Tip and elbow (x, y, x, y) [m] relative to joint 1 for the tip at line coordinate s."""
     px = d * nx - s * ny
@@ -229,7 +229,7 @@ def _ideal(p, base, nb, d, nx, ny, verts, normals, offsets, extra, cuts, pieces,
     return _merge(pieces, count, out)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _free(p, shapes, d, nx, ny, s, verts, normals, offsets, nearest, exact=False):
     """Whether no footprint penetrates the object with the tip at line coordinate s
     (``EnvelopeEvaluator.free_test``)."""
