@@ -10,6 +10,7 @@ from regrasp.kernels import warm
 
 def test_a_rollout_needs_every_group_but_the_footprints():
     assert set(warm.ROLLOUT) == set(warm.ALL) - {"footprint"}
+    assert set(warm.STEP) == set(warm.ROLLOUT) - {"stretch"}
     assert set(warm.GROUPS) == set(warm.ALL)
     staged = [g for stage in warm.STAGES for worker in stage for g in worker]
     assert len(staged) == len(set(staged)) and set(staged) <= set(warm.ALL)
@@ -28,6 +29,8 @@ def test_background_workers_report_each_group_and_end():
     """Two workers side by side, then one (here from the warm cache: a second each), counted as they finish."""
     job = warm.BackgroundCompile([[["finger"], ["reduced"]], [["plant"]]])
     seen = []
-    job.wait(lambda done, total: seen.append((done, total)))
-    assert seen[-1] == (3, 3) and job.groups == ["finger", "reduced", "plant"]
+    job.wait(["finger", "reduced"], lambda done, total: seen.append((done, total)))
+    assert seen[-1] == (2, 2) and {"finger", "reduced"} <= job.finished
+    job.wait(job.groups)
+    assert job.finished == {"finger", "reduced", "plant"} and not job.pending("plant")
     assert [d for d, _ in seen] == sorted(d for d, _ in seen)

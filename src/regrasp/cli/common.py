@@ -134,10 +134,15 @@ class KernelLoad:
             stream.flush()
             set_wait_progress(self.bar)
 
-    def finish(self) -> float:
-        """Wait for the kernels and load them; the seconds since the command asked for them."""
+    def finish(self, stretches: bool = True) -> float:
+        """Wait for the kernels and load them (without ``stretches``, not the stretch kernel while a worker still
+        compiles it: a rollout decides, :meth:`regrasp.rollout.build.Rollout.run`); the seconds since the command
+        asked for them."""
         from ..kernels import warm_up
-        from ..kernels.warm import set_wait_progress
+        from ..kernels.warm import compiling, set_wait_progress
+
+        later = not stretches and compiling("stretch")
+        groups = tuple(g for g in self.groups if not (later and g == "stretch"))
 
         said = threading.Event()
         if self.said:
@@ -154,13 +159,16 @@ class KernelLoad:
         if not self.quiet and not self.said:
             timer.start()
         try:
-            warm_up(progress=lambda done, total: self.bar(done, total) if said.is_set() else None, groups=self.groups)
+            warm_up(progress=lambda done, total: self.bar(done, total) if said.is_set() else None, groups=groups)
         finally:
             timer.cancel()
-            set_wait_progress(None)
+            if not later:
+                set_wait_progress(None)
         seconds = time.monotonic() - self.start
         if said.is_set():
-            self.stream.write(f"regrasp: kernels compiled in {seconds:.0f} s\n")
+            self.stream.write(f"regrasp: kernels compiled in {seconds:.0f} s" + (
+                "; the stretch kernel goes on compiling in the background for the next runs (a short run takes its "
+                "steps without it, the same steps)" if later and compiling("stretch") else "") + "\n")
             self.stream.flush()
         return seconds
 

@@ -250,7 +250,7 @@ def _simulate(args, scenario, run, common, kernels: KernelLoad) -> tuple[int, st
             print(f"no schedule beyond t = {exc.latest_time:.3f} s ({exc.reason}); running the partial schedule",
                   file=sys.stderr)
         rollout = build_rollout(scenario, run, policy=args.policy, schedule=exc.partial, **common)
-    kernels.finish()  # (the plant's constructor waited for them already, if it runs them)
+    kernels.finish(stretches=False)  # (the plant's constructor waited for them already, if it runs them)
     # Ctrl-C from here until the recording is closed ends the run at a step's end (never inside the recorder)
     with InterruptAtStepEnd():
         recorder = None

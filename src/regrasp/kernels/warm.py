@@ -15,7 +15,6 @@ compile it at their first call.
 
 from __future__ import annotations
 
-import atexit
 import os
 import subprocess
 import sys
@@ -49,8 +48,8 @@ from .stretch_layout import (
     stretch_log,
 )
 
-__all__ = ["ALL", "GROUPS", "ROLLOUT", "STAGES", "BackgroundCompile", "compile_in_background", "compiling",
-           "is_cached", "set_wait_progress", "warm_up"]
+__all__ = ["ALL", "GROUPS", "ROLLOUT", "STAGES", "STEP", "STRETCH_WAIT_STEPS", "BackgroundCompile",
+           "compile_in_background", "compiling", "is_cached", "set_wait_progress", "warm_up"]
 
 
 @cache
@@ -194,6 +193,14 @@ ALL = tuple(GROUPS)
 #: What a rollout on the project plant calls (a plan, the laws, the plant, the stretches).
 ROLLOUT = tuple(g for g in ALL if g != "footprint")
 
+#: What a rollout calls without its compiled stretches (every step on the reference path).
+STEP = tuple(g for g in ROLLOUT if g != "stretch")
+
+#: A run shorter than this many steps does not wait for the stretch kernel while a worker still compiles it
+#: (:func:`compile_in_background`): it takes its steps on the reference path, the same steps (``tests/rollout/
+#: test_stretch.py``), about 0.1 ms a step slower, while the stretch kernel takes about 10 s of compiling.
+STRETCH_WAIT_STEPS = 100_000
+
 #: How :func:`compile_in_background` compiles the groups on a cold cache: stages one after the other, each of worker
 #: processes side by side, each compiling its groups in order. A kernel compiles its callees (the control step the
 #: QP's, the stretch kernel almost all), from the disk cache when a worker wrote them already: so the callees in the
@@ -220,14 +227,15 @@ def is_cached(group: str) -> bool:
 
 class BackgroundCompile:
     """Worker processes compiling kernel groups into the disk cache, stage after stage (:data:`STAGES`), driven by a
-    thread of this process; :attr:`done` counts the groups they finished."""
+    thread of this process; :attr:`finished` holds the groups they compiled. The workers run in a session of their
+    own and are not ended when this process exits: a group still compiling then (the stretch kernel, when a short
+    run did not wait for it) is cached for the next run."""
 
     def __init__(self, stages: list[list[list[str]]]):
         self.groups = [g for stage in stages for worker in stage for g in worker]
-        self.done = 0
+        self.finished: set[str] = set()
         self._changed = threading.Condition()
-        self._processes: list[subprocess.Popen] = []
-        self._stopped = self._finished = False
+        self._ended = False
         self._thread = threading.Thread(target=self._run, args=(stages,), daemon=True, name="regrasp-compile")
         self._thread.start()
 
@@ -238,14 +246,10 @@ class BackgroundCompile:
             for stage in stages:
                 readers = []
                 for worker in stage:
-                    with self._changed:
-                        if self._stopped:
-                            return
-                        proc = subprocess.Popen(
-                            [sys.executable, "-c", f"from regrasp.kernels.warm import _worker; _worker({worker!r})"],
-                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env,
-                            text=True)
-                        self._processes.append(proc)
+                    proc = subprocess.Popen(
+                        [sys.executable, "-c", f"from regrasp.kernels.warm import _worker; _worker({worker!r})"],
+                        stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env,
+                        text=True, start_new_session=True)
                     reader = threading.Thread(target=self._read, args=(proc,), daemon=True)
                     reader.start()
                     readers.append(reader)
@@ -253,35 +257,32 @@ class BackgroundCompile:
                     reader.join()
         finally:
             with self._changed:
-                self._finished = True
+                self._ended = True
                 self._changed.notify_all()
 
     def _read(self, proc: subprocess.Popen) -> None:
-        for _ in proc.stdout:  # (a line per group compiled)
+        for line in proc.stdout:  # (a line per group compiled)
             with self._changed:
-                self.done += 1
+                self.finished.add(line.strip())
                 self._changed.notify_all()
         proc.wait()
 
-    def wait(self, progress: Callable[[int, int], None] | None) -> None:
-        """Until every worker has ended, calling ``progress(done, total)`` as groups finish."""
-        total = len(self.groups)
+    def pending(self, group: str) -> bool:
+        """Whether the workers are still to compile ``group``."""
+        with self._changed:
+            return group in self.groups and group not in self.finished and not self._ended
+
+    def wait(self, groups: Iterable[str], progress: Callable[[int, int], None] | None = None) -> None:
+        """Until the workers have compiled ``groups`` (or ended), calling ``progress(done, total)`` of those as they
+        finish."""
+        wanted = set(groups) & set(self.groups)
         with self._changed:
             while True:
                 if progress is not None:
-                    progress(min(self.done, total), total)
-                if self._finished:
-                    break
+                    progress(len(wanted & self.finished), len(wanted))
+                if wanted <= self.finished or self._ended:
+                    return
                 self._changed.wait(1.0)
-        self._thread.join()
-
-    def stop(self) -> None:
-        """End the workers (this process exits before it needed them)."""
-        with self._changed:
-            self._stopped = True
-            for proc in self._processes:
-                if proc.poll() is None:
-                    proc.kill()
 
 
 _BACKGROUND: list[BackgroundCompile] = []
@@ -289,10 +290,13 @@ _WAIT_PROGRESS: list[Callable[[int, int], None] | None] = [None]
 
 
 def _worker(groups: list[str]) -> None:
-    """A worker process: compile ``groups`` in order, a line on stdout after each."""
+    """A worker process: compile ``groups`` in order, a line on stdout after each (read while this process lives)."""
     for group in groups:
         GROUPS[group][0]()
-        print(group, flush=True)
+        try:
+            print(group, flush=True)
+        except OSError:  # (the command has exited: the cache is what counts)
+            pass
 
 
 def _cores() -> int:
@@ -317,14 +321,15 @@ def compile_in_background(groups: Iterable[str] = ROLLOUT) -> list[str]:
         return []
     job = BackgroundCompile(stages)
     _BACKGROUND.append(job)
-    atexit.register(job.stop)
     return job.groups
 
 
-def compiling() -> bool:
-    """Whether worker processes are compiling kernels (:func:`compile_in_background`) that no :func:`warm_up` has
-    waited for yet."""
-    return bool(_BACKGROUND)
+def compiling(group: str | None = None) -> bool:
+    """Whether worker processes (:func:`compile_in_background`) are still compiling ``group`` (None: any group)."""
+    if not _BACKGROUND:
+        return False
+    job = _BACKGROUND[0]
+    return any(job.pending(g) for g in (job.groups if group is None else [group]))
 
 
 def set_wait_progress(progress: Callable[[int, int], None] | None) -> None:
@@ -336,20 +341,20 @@ def set_wait_progress(progress: Callable[[int, int], None] | None) -> None:
 def warm_up(progress: Callable[[int, int], None] | None = None, groups: Iterable[str] = ALL) -> None:
     """Load the kernel ``groups`` (default all) once in this process, on a one-finger dummy with the argument types
     the library passes (later calls return at once). Where the disk cache has none (a machine's first run) numba
-    compiles them: in the workers of :func:`compile_in_background` when it started them (this waits for them),
+    compiles them: in the workers of :func:`compile_in_background` when it started them (this waits for those),
     else here. ``progress(done, total)`` is called as groups finish."""
-    todo = [g for g in ALL if g in set(groups) and g not in _LOADED]
+    wanted = set(groups)
+    todo = [g for g in ALL if g in wanted and g not in _LOADED]
     if not todo:
         return
     progress = progress if progress is not None else _WAIT_PROGRESS[0]
-    done, total = 0, len(todo)
+    total = len(todo)
+    compiled: set[str] = set()
     if _BACKGROUND:
-        job = _BACKGROUND.pop()
-        compiled = [g for g in todo if g in job.groups]
-        job.wait(None if progress is None else lambda k, _: progress(min(k, len(compiled)), total))
-        done = len(compiled)
-    else:
-        compiled = []
+        job = _BACKGROUND[0]
+        compiled = set(todo) & set(job.groups)
+        job.wait(compiled, None if progress is None else lambda k, _: progress(k, total))
+    done = len(compiled)
     for group in todo:
         GROUPS[group][0]()
         _LOADED.add(group)
