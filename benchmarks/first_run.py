@@ -1,9 +1,10 @@
 """The first run on a fresh clone: ``pip install -e`` and the main command, timed (issue 26: ≤ 45 s on 2 cores).
 
-Run: python benchmarks/first_run.py [REPO] [--keep] [--json]
+Run: python benchmarks/first_run.py [REPO] [--rev REV] [--keep] [--json]
 
 What it does, in a temporary directory:
-1. ``git clone REPO`` (default: the repository this script is in; its committed HEAD, not uncommitted changes): a
+1. ``git clone REPO`` (default: the repository this script is in; its committed HEAD, not uncommitted changes, or
+   ``--rev``): a
    fresh clone has no numba cache (numba caches next to each kernel's source, in ``__pycache__``);
 2. ``python -m venv --system-site-packages``: the dependencies come from this machine's Python (numpy, pinocchio,
    coal, numba, rerun, ...), as they would from a warm pip cache, not downloaded: what is timed is regrasp's own
@@ -58,6 +59,7 @@ def load() -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("repo", nargs="?", default=str(ROOT), help="the repository to clone (default: this one)")
+    parser.add_argument("--rev", help="check this revision out in the clone (default: its HEAD)")
     parser.add_argument("--keep", action="store_true", help="keep the temporary directory (its path is printed)")
     parser.add_argument("--json", action="store_true", help="one JSON document on stdout")
     args = parser.parse_args()
@@ -69,6 +71,10 @@ def main() -> None:
         seconds, proc = run(["git", "clone", "--quiet", args.repo, str(clone)], work, env)
         if proc.returncode:
             fail("git clone", proc)
+        if args.rev is not None:
+            seconds, proc = run(["git", "checkout", "--quiet", args.rev], clone, env)
+            if proc.returncode:
+                fail("git checkout", proc)
         head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=clone, capture_output=True, text=True,
                               check=False).stdout.strip()
         seconds, proc = run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], work, env)
