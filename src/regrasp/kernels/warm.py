@@ -61,6 +61,7 @@ def _dummy() -> tuple:
     fingers["effort1"] = fingers["effort2"] = np.inf
     plant = np.zeros((), dtype=PLANT_PARAMETERS)
     plant["mass"], plant["inertia"], plant["dt"] = 1.0, 1.0, 1e-3
+    plant = plant[()]  # (a record, as the plant passes it)
     iks = np.zeros(1, dtype=FINGER_IK)
     iks["l1"], iks["l2"], iks["outer"], iks["sigma"] = 1.0, 1.0, 2.0, 1.0
     edges = np.zeros(1, dtype=CONTACT_EDGE)
