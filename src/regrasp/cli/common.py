@@ -129,7 +129,7 @@ class KernelLoad:
         self.said = bool(self.background) and not quiet
         if self.said:
             stream.write("regrasp: compiling the numba kernels once per machine and numba version, in worker "
-                         "processes while this one goes on (about 30 s on 2 cores); later runs load them from "
+                         "processes while this one goes on (about 20-30 s on 2 cores); later runs load them from "
                          "numba's cache in about a second\n")
             stream.flush()
             set_wait_progress(self.bar)
@@ -150,7 +150,7 @@ class KernelLoad:
 
         def notice() -> None:
             said.set()
-            self.stream.write("regrasp: compiling the numba kernels: once per machine and numba version, about 1 min "
+            self.stream.write("regrasp: compiling the numba kernels: once per machine and numba version, about 40 s "
                               "on one core; later runs load them from numba's cache in about a second\n")
             self.stream.flush()
 

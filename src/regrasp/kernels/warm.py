@@ -2,8 +2,8 @@
 
 :func:`warm_up` loads kernel groups (:data:`GROUPS`) in this process, each with the argument types the library
 passes, on a one-finger dummy: from numba's disk cache in about a second for all, else compiling them (numba
-compiles a kernel on its first call in a process and caches it, ``cache=True``). A cold compile of every group takes
-about 40 s of CPU, most of it numba's own typing and lowering (Python, one core). So on a cold cache
+compiles a kernel on its first call in a process and caches it, ``cache=True``). A cold compile of a rollout's groups
+takes about 35 s of CPU, most of it numba's own typing and lowering (Python, one core). So on a cold cache
 :func:`compile_in_background` compiles the groups in worker processes, two at a time (:data:`STAGES`: the callees
 first, the stretch kernel that calls them last), which fill the disk cache while this process goes on (a command
 plans meanwhile); :func:`warm_up` then waits for them and loads what they wrote.
@@ -205,7 +205,7 @@ STRETCH_WAIT_STEPS = 100_000
 #: How :func:`compile_in_background` compiles the groups on a cold cache: stages one after the other, each of worker
 #: processes side by side, each compiling its groups in order. A kernel compiles its callees (the control step the
 #: QP's, the stretch kernel almost all), from the disk cache when a worker wrote them already: so the callees in the
-#: first stage (about 16 and 8 s of CPU), the stretch kernel (about 10 s) in the second. The envelope sample is not
+#: first stage (about 14 and 5 s of CPU), the stretch kernel (about 10 s) in the second. The envelope sample is not
 #: there: a command's planning calls it first, in its own process, which caches it for the stretch kernel.
 STAGES = ((("force", "control", "sliding"), ("finger", "reduced", "plant")), (("footprint", "stretch"),))
 
