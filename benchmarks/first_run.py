@@ -4,14 +4,15 @@ Run: python benchmarks/first_run.py [REPO] [--rev REV] [--keep] [--json]
 
 What it does, in a temporary directory:
 1. ``git clone REPO`` (default: the repository this script is in; its committed HEAD, not uncommitted changes, or
-   ``--rev``): a
-   fresh clone has no numba cache (numba caches next to each kernel's source, in ``__pycache__``);
+   ``--rev``): a fresh clone has no numba cache (numba caches next to each kernel's source, in ``__pycache__``) and
+   no Python bytecode;
 2. ``python -m venv --system-site-packages``: the dependencies come from this machine's Python (numpy, pinocchio,
    coal, numba, rerun, ...), as they would from a warm pip cache, not downloaded: what is timed is regrasp's own
    install and first run, not the network;
 3. times ``pip install -e CLONE`` and then the main command in the clone, ``regrasp simulate --periods 3 --rrd
-   rollout.rrd``, separately and in total (wall time, ``time.perf_counter`` around each subprocess), and a second,
-   warm run of the same command for comparison;
+   rollout.rrd``, separately and in total (wall time, ``time.perf_counter`` around each subprocess); then, 15 s
+   later (a worker may go on compiling the stretch kernel after a short first run), ``regrasp [plan|simulate|study]
+   --help`` and a second, warm run of the main command;
 4. checks the rollout succeeded (exit status 0, ``result: SUCCESS``, the recording written), and that the
    ``regrasp`` it ran imported the clone's package, not another install.
 
@@ -97,13 +98,19 @@ def main() -> None:
         first_stderr = proc.stderr
         summary = next((line.strip() for line in proc.stdout.splitlines() if "wall time" in line), "")
         time.sleep(15.0)  # (a worker that goes on compiling the stretch kernel after a short first run: let it end)
+        helps = {}
+        for sub in ([], ["plan"], ["simulate"], ["study"]):
+            seconds, proc = run([regrasp, *sub, "--help"], clone, env)
+            if proc.returncode or not proc.stdout.startswith("usage:"):
+                fail(f"regrasp {' '.join(sub)} --help", proc)
+            helps[" ".join(["regrasp", *sub, "--help"])] = seconds
         warm, proc = run([regrasp, *COMMAND], clone, env)
         if proc.returncode:
             fail("the warm run", proc)
         warm_summary = next((line.strip() for line in proc.stdout.splitlines() if "wall time" in line), "")
         result = {"commit": head, "cores": os.cpu_count(), "load_before": load_before, "load_after": load(),
                   "install_s": install, "first_run_s": first, "total_s": install + first, "warm_run_s": warm,
-                  "target_s": TARGET, "first_run_summary": summary, "warm_run_summary": warm_summary,
+                  "target_s": TARGET, "help_s": helps, "first_run_summary": summary, "warm_run_summary": warm_summary,
                   "first_run_stderr": first_stderr.strip().splitlines()}
     finally:
         if args.keep:
@@ -120,6 +127,8 @@ def main() -> None:
     print(f"  total                      {install + first:6.1f} s  (target {TARGET:g} s"
           f"{', met' if install + first <= TARGET else ', NOT met'})")
     print(f"  the same command, warm     {warm:6.1f} s")
+    for label, seconds in helps.items():
+        print(f"  {label:26s} {seconds:6.2f} s")
     print(f"  first run's summary: {summary}")
     print(f"  warm run's summary:  {warm_summary}")
     for line in result["first_run_stderr"]:
