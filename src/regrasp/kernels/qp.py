@@ -118,7 +118,7 @@ def householder_into(r: np.ndarray, y: np.ndarray) -> float:
         r[j, j] = v0  # (column j below the diagonal is v's tail already)
         if vnorm > 0.0:
             _reflect(r, j, j + 1, 2.0 / vnorm, r)
-            _reflect(r, j, 0, 2.0 / vnorm, y)
+            _reflect(r, j, np.int64(0), 2.0 / vnorm, y)  # (not the literal 0: one compile of _reflect)
         r[j, j] = alpha
         largest = max(largest, abs(alpha))
         smallest = min(smallest, abs(alpha))
