@@ -55,3 +55,10 @@ def test_benchmark_table_quick_smoke():
     assert 0 < rollout["simulated_s"] <= rollout["requested_s"] + 1e-9
     plan = doc["regrasp_plan"]
     assert plan["median_s"] > 0 and plan["periodic"] is True and plan["slides"] >= plan["slides_lower_bound"] > 0
+
+
+def test_first_run_benchmark_answers_its_help():
+    """benchmarks/first_run.py clones, installs and runs for a minute: only its --help here (no timing)."""
+    proc = subprocess.run([sys.executable, str(BENCH / "first_run.py"), "--help"], capture_output=True, text=True,
+                          timeout=HANG_SECONDS, check=False)
+    assert proc.returncode == 0 and proc.stdout.startswith("usage:") and "--json" in proc.stdout

@@ -49,7 +49,7 @@ def test_loading_cached_kernels_says_nothing_and_compiling_them_says_so(monkeypa
     common.compile_kernels(stream=quiet)  # (the session's kernels are loaded: at once, nothing said)
     assert quiet.getvalue() == ""
 
-    def slow_warm_up(progress=None):  # a cold machine: still compiling when the notice is due
+    def slow_warm_up(progress=None, groups=None):  # a cold machine of one core: still compiling at the notice
         deadline = time.monotonic() + 60.0
         while "compiling" not in loud.getvalue() and time.monotonic() < deadline:
             time.sleep(0.01)
@@ -58,8 +58,37 @@ def test_loading_cached_kernels_says_nothing_and_compiling_them_says_so(monkeypa
 
     loud = io.StringIO()
     monkeypatch.setattr(kernels, "warm_up", slow_warm_up)
+    monkeypatch.setattr(kernels.warm, "compile_in_background", lambda groups: [])
     monkeypatch.setattr(common, "COMPILE_NOTICE_AFTER", 0.01)
     seconds = common.compile_kernels(stream=loud)
     lines = loud.getvalue().splitlines()
     assert lines[0].startswith("regrasp: compiling the numba kernels: once per machine")
     assert lines[-1] == f"regrasp: kernels compiled in {seconds:.0f} s"
+
+
+def test_a_cold_cache_is_said_at_once_and_its_workers_progress_is_shown(monkeypatch):
+    """On a cold cache the kernels compile in worker processes: said when the command starts (its planning goes on),
+    then a progress line while it waits for them, then the seconds it took."""
+    import io
+
+    import regrasp.cli.common as common
+    import regrasp.kernels as kernels
+    import regrasp.kernels.warm as warm
+
+    def waiting_warm_up(progress=None, groups=None):
+        for k in range(1, 5):
+            progress(k, 4)
+
+    monkeypatch.setattr(warm, "compile_in_background", lambda groups: ["force", "control"])
+    monkeypatch.setattr(kernels, "warm_up", waiting_warm_up)
+    loud = io.StringIO()
+    load = common.KernelLoad(stream=loud)
+    assert loud.getvalue().startswith("regrasp: compiling the numba kernels once per machine")
+    assert "worker processes" in loud.getvalue()
+    seconds = load.finish()
+    lines = loud.getvalue().splitlines()
+    assert any(line.startswith(f"{common.COMPILING}: 2/4") for line in lines)
+    assert lines[-1] == f"regrasp: kernels compiled in {seconds:.0f} s"
+    quiet = io.StringIO()
+    common.KernelLoad(stream=quiet, quiet=True).finish()
+    assert quiet.getvalue() == ""

@@ -166,3 +166,18 @@ def test_every_participant_follows_the_stretch_protocol(scenario):
     for participant in (sup.executor, sup.monitor, sup.policy, rollout.plant.kernel, rollout.disturbance):
         assert isinstance(participant, StretchParticipant), type(participant).__name__
     assert not isinstance(sup, StretchParticipant)
+
+
+def test_a_short_run_does_not_wait_for_a_stretch_kernel_still_compiling(scenario, monkeypatch):
+    """On a machine's first run a worker may still be compiling the stretch kernel (regrasp.kernels.warm): a short
+    run then takes its steps on the reference path (the same steps); with the kernel loaded it runs stretches."""
+    import regrasp.rollout.build as build
+
+    monkeypatch.setattr(build, "compiling", lambda group=None: group == "stretch")
+    rollout = build_rollout(scenario, RunSpec(duration=0.05))
+    rollout.run()
+    assert rollout.stretches is None
+    monkeypatch.undo()
+    rollout = build_rollout(scenario, RunSpec(duration=0.05))
+    rollout.run()
+    assert rollout.stretches is not None and rollout.stretches.enabled

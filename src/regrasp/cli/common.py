@@ -20,8 +20,9 @@ if TYPE_CHECKING:
     from ..core.pad import Pad
     from ..plants.spec import PlantSpec
 
-__all__ = ["DEFAULT_SCENARIO", "STARTED", "ProgressBar", "add_plant_arguments", "compile_kernels", "count_argument",
-           "nonnegative", "number_argument", "output_directory", "output_file", "pad_option", "plant_spec", "positive"]
+__all__ = ["DEFAULT_SCENARIO", "STARTED", "KernelLoad", "ProgressBar", "add_plant_arguments", "compile_kernels",
+           "count_argument", "nonnegative", "number_argument", "output_directory", "output_file", "pad_option",
+           "plant_spec", "positive"]
 
 #: When the command line started (``time.monotonic()``, at the CLI's import, before any heavy import): a summary's
 #: "in all" wall time counts imports, planning and compiling too.
@@ -103,36 +104,79 @@ class ProgressBar:
 #: Loading the kernels takes about a second from numba's disk cache; longer, they are being compiled [s].
 COMPILE_NOTICE_AFTER = 2.0
 
+#: The progress line's label while kernels compile.
+COMPILING = "regrasp: compiling kernels (once per machine)"
 
-def compile_kernels(quiet: bool = False, stream: TextIO = sys.stderr) -> float:
-    """Load every numba kernel (:func:`~regrasp.kernels.warm_up`) before the work starts, saying so on ``stream``
-    when it takes longer than a cache load: on a machine's first run (or after an upgrade) numba compiles them, once,
-    for a minute or two. The seconds it took."""
-    from ..kernels import warm_up
 
-    start = time.monotonic()
-    said = threading.Event()
-    bar = ProgressBar("regrasp: compiling kernels", stream)
+class KernelLoad:
+    """The numba kernels a command needs (``groups``, :data:`regrasp.kernels.warm.GROUPS`), loaded before its runs.
 
-    def notice() -> None:
-        said.set()
-        stream.write("regrasp: compiling the numba kernels: once per machine and version, about 1-2 min on 2 cores; "
-                     "the next runs load them from the cache in about a second\n")
-        stream.flush()
+    Made at the command's start: on a cold disk cache (a machine's first run, a new numba) it starts compiling them in
+    worker processes (:func:`~regrasp.kernels.warm.compile_in_background`) and says so on ``stream`` at once, so the
+    command's planning goes on meanwhile; :meth:`finish` (or a plant's constructor, which loads them too) waits for
+    them with a progress line on ``stream`` (drawn on a terminal, plain lines elsewhere) and loads them. On one
+    core they compile in :meth:`finish`, said when that takes longer than a cache load (:data:`COMPILE_NOTICE_AFTER`).
+    """
 
-    timer = threading.Timer(COMPILE_NOTICE_AFTER, notice)
-    timer.daemon = True
-    if not quiet:
-        timer.start()
-    try:
-        warm_up(progress=lambda done, total: bar(done, total) if said.is_set() else None)
-    finally:
-        timer.cancel()
-    seconds = time.monotonic() - start
-    if said.is_set():
-        stream.write(f"regrasp: kernels compiled in {seconds:.0f} s\n")
-        stream.flush()
-    return seconds
+    def __init__(self, groups: tuple[str, ...] | None = None, quiet: bool = False, stream: TextIO = sys.stderr):
+        from ..kernels.warm import ROLLOUT, compile_in_background, set_wait_progress
+
+        self.groups = ROLLOUT if groups is None else groups
+        self.quiet, self.stream = quiet, stream
+        self.start = time.monotonic()
+        self.bar = ProgressBar(COMPILING, stream, lines=True)
+        self.background = compile_in_background(self.groups)
+        self.said = bool(self.background) and not quiet
+        if self.said:
+            stream.write("regrasp: compiling the numba kernels once per machine and numba version, in worker "
+                         "processes while this one goes on (about 20-30 s on 2 cores); later runs load them from "
+                         "numba's cache in about a second\n")
+            stream.flush()
+            set_wait_progress(self.bar)
+
+    def finish(self, stretches: bool = True) -> float:
+        """Wait for the kernels and load them (without ``stretches``, not the stretch kernel while a worker still
+        compiles it: a rollout decides, :meth:`regrasp.rollout.build.Rollout.run`); the seconds since the command
+        asked for them."""
+        from ..kernels import warm_up
+        from ..kernels.warm import compiling, set_wait_progress
+
+        later = not stretches and compiling("stretch")
+        groups = tuple(g for g in self.groups if not (later and g == "stretch"))
+
+        said = threading.Event()
+        if self.said:
+            said.set()
+
+        def notice() -> None:
+            said.set()
+            self.stream.write("regrasp: compiling the numba kernels: once per machine and numba version, about 40 s "
+                              "on one core; later runs load them from numba's cache in about a second\n")
+            self.stream.flush()
+
+        timer = threading.Timer(COMPILE_NOTICE_AFTER, notice)
+        timer.daemon = True
+        if not self.quiet and not self.said:
+            timer.start()
+        try:
+            warm_up(progress=lambda done, total: self.bar(done, total) if said.is_set() else None, groups=groups)
+        finally:
+            timer.cancel()
+            if not later:
+                set_wait_progress(None)
+        seconds = time.monotonic() - self.start
+        if said.is_set():
+            self.stream.write(f"regrasp: kernels compiled in {seconds:.0f} s" + (
+                "; the stretch kernel goes on compiling in the background for the next runs (a short run takes its "
+                "steps without it, the same steps)" if later and compiling("stretch") else "") + "\n")
+            self.stream.flush()
+        return seconds
+
+
+def compile_kernels(quiet: bool = False, stream: TextIO = sys.stderr, groups: tuple[str, ...] | None = None) -> float:
+    """Load the numba kernels ``groups`` (default those of a rollout) before the work starts (:class:`KernelLoad`
+    made and finished at once); the seconds it took."""
+    return KernelLoad(groups, quiet, stream).finish()
 
 
 def output_directory(option: str, path: str | os.PathLike[str]) -> Path:

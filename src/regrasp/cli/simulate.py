@@ -29,9 +29,9 @@ from ..core.validation import MAX_COUNT
 from .common import (
     DEFAULT_SCENARIO,
     STARTED,
+    KernelLoad,
     ProgressBar,
     add_plant_arguments,
-    compile_kernels,
     count_argument,
     nonnegative,
     output_directory,
@@ -219,16 +219,17 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     common = dict(settings=settings, regrasp_settings=RegraspSettings(**options), plant=plant)
     run = RunSpec(periods=args.periods, duration=args.duration)
     run.resolve(scenario)  # (a run of no step, or past what the trajectory allows: refused before the plan)
-    compile_kernels(quiet=args.json)  # (a machine's first run compiles them: said, not a silent minute)
+    # (a machine's first run compiles them, in worker processes while this one plans: said, with progress)
+    kernels = KernelLoad(quiet=args.json)
     # OSQP's C library prints "Polishing not needed" on fd 1 even with verbose=False: keep stdout for the result
     with captured_fd(1):
-        code, output = _simulate(args, scenario, run, common)
+        code, output = _simulate(args, scenario, run, common, kernels)
     sys.stdout.write(output + "\n")
     return code
 
 
-def _simulate(args, scenario, run, common) -> tuple[int, str]:
-    """Run the rollout: (exit status, what to print on stdout)."""
+def _simulate(args, scenario, run, common, kernels: KernelLoad) -> tuple[int, str]:
+    """Run the rollout (``kernels`` loaded before it): (exit status, what to print on stdout)."""
     from ..plants.simulation import InterruptAtStepEnd
     from ..rollout.build import build_rollout
     from ..schedule.schedule import NoScheduleError, ScheduleLimit
@@ -249,6 +250,7 @@ def _simulate(args, scenario, run, common) -> tuple[int, str]:
             print(f"no schedule beyond t = {exc.latest_time:.3f} s ({exc.reason}); running the partial schedule",
                   file=sys.stderr)
         rollout = build_rollout(scenario, run, policy=args.policy, schedule=exc.partial, **common)
+    kernels.finish(stretches=False)  # (the plant's constructor waited for them already, if it runs them)
     # Ctrl-C from here until the recording is closed ends the run at a step's end (never inside the recorder)
     with InterruptAtStepEnd():
         recorder = None

@@ -44,9 +44,10 @@ noise, the slip sensor
 and the actuation delay
 ==========================  =========================================================  =================================
 
-:func:`warm_up` loads every kernel (compiling it where the cache has none): a compiled
+:func:`warm_up` (:mod:`.warm`) loads kernel groups (compiling them where the cache has none): a compiled
 :class:`~regrasp.plants.project.plant.Plant` and a study's worker call it when built, so a rollout's timed loop never
-pays for it.
+pays for it; on a machine's first run :func:`compile_in_background` compiles them in worker processes, side by side,
+while the command plans.
 
 Every kernel reads named fields (numpy record dtypes: :data:`FINGER_PARAMETERS`, :data:`FINGER_TERMS`,
 :data:`PLANT_CONTACT`, :data:`PLANT_PARAMETERS`, :data:`ENVELOPE_PARAMETERS`, :data:`FOOTPRINT`),
@@ -55,10 +56,7 @@ never positional tuples. Compiled code is cached on disk
 """
 
 import hashlib
-from collections.abc import Callable
 from pathlib import Path
-
-import numpy as np
 
 from .control import control_layout, control_step_into, sliding_step_into
 from .envelope import ENVELOPE_PARAMETERS, envelope_sample_into, feasible_capacity, tip_is_free, workspace_size
@@ -78,23 +76,12 @@ from .plant import (
 )
 from .reduced import CONTACT_EDGE, FINGER_IK, reduced_terms
 from .stretch import stretch_into
-from .stretch_layout import (
-    SLIDER,
-    STRETCH_SETTINGS,
-    STRETCH_STATE,
-    StretchDisturbance,
-    StretchExecutor,
-    StretchLaw,
-    StretchMonitor,
-    StretchPlant,
-    StretchRows,
-    StretchSchedule,
-    stretch_log,
-)
+from .stretch_layout import SLIDER, STRETCH_SETTINGS, STRETCH_STATE
+from .warm import ALL, ROLLOUT, compile_in_background, warm_up
 
 __all__ = ["CONTACT_EDGE", "ENVELOPE_PARAMETERS", "FINGER_IK", "FINGER_PARAMETERS", "FINGER_TERMS", "FIXED",
            "FOOTPRINT", "PLANT_CONTACT", "PLANT_PARAMETERS", "SEPARATED", "SLIDER", "SLIDING", "STRETCH_SETTINGS",
-           "STRETCH_STATE", "WARM_UP_STEPS", "control_layout",
+           "STRETCH_STATE", "WARM_UP_STEPS", "ALL", "ROLLOUT", "compile_in_background", "control_layout",
            "control_step_into", "envelope_sample_into", "feasible_capacity", "finger_parameters", "finger_terms",
            "finger_terms_at", "footprint_distances", "internal_force_into", "output_size", "plant_evaluate",
            "plant_step_into", "reduced_terms", "sliding_step_into", "stretch_into", "tip_is_free", "warm_up",
@@ -123,114 +110,5 @@ def _drop_stale_caches() -> None:
 
 _drop_stale_caches()  # (before any kernel runs: numba reads a cache at a kernel's first call)
 
-_WARM = []
-
-
-#: The kernel groups :func:`warm_up` loads, in order (what its ``progress`` counts).
-WARM_UP_STEPS = 8
-
-
-def warm_up(progress: Callable[[int, int], None] | None = None) -> None:
-    """Load every kernel once in this process, on a one-finger dummy with the argument types the library
-    passes (later calls return at once). On a machine's first run (no disk cache yet) this is where numba
-    compiles them: ``progress(done, WARM_UP_STEPS)`` is called after each group."""
-    if _WARM:
-        return
-    step = iter(range(1, WARM_UP_STEPS + 1))
-
-    def done() -> None:
-        if progress is not None:
-            progress(next(step), WARM_UP_STEPS)
-    fingers = np.zeros(1, dtype=FINGER_PARAMETERS)
-    for name in ("m1", "m2", "i1", "i2", "d2x", "tx"):
-        fingers[name] = 1.0
-    fingers["effort1"] = fingers["effort2"] = np.inf
-    plant = np.zeros((), dtype=PLANT_PARAMETERS)
-    plant["mass"], plant["inertia"], plant["dt"] = 1.0, 1.0, 1e-3
-    contacts = np.zeros(1, dtype=PLANT_CONTACT)
-    contacts["mode"] = SEPARATED
-    zeros = np.zeros(2)
-    finger_terms(fingers, zeros, zeros, zeros, True)
-    done()
-    plant_evaluate(fingers, plant, contacts, np.zeros(13), zeros)
-    plant_step_into(fingers, plant, contacts, np.zeros(13), zeros, np.full((1, 9), np.nan), np.zeros((1, 2)),
-                    np.empty(output_size(1)), np.empty(1, dtype=FINGER_TERMS), np.empty(1, np.bool_), np.empty((1, 7)))
-    done()
-    iks = np.zeros(1, dtype=FINGER_IK)
-    iks["l1"], iks["l2"], iks["outer"], iks["sigma"] = 1.0, 1.0, 2.0, 1.0
-    edges = np.zeros(1, dtype=CONTACT_EDGE)
-    edges["tx"], edges["ny"] = 1.0, 1.0
-    reduced_terms(fingers, iks, edges, zeros, True, np.zeros(1), np.full(1, -1, dtype=np.int64),
-                  np.array([1.0, 0.0, 0.0]), np.zeros(3))
-    done()
-    # the internal force on a one-contact problem with a one-dimensional null space (a 2 x 1 A)
-    rows = np.zeros((1, 2))
-    rows[0, 0] = 1.0
-    internal_force_into(np.array([[1.0], [0.0]]), zeros, np.array([[1.0, 0.0, 0.0, 1.0]]), rows, np.zeros(1), 1,
-                        np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0, np.zeros((1, 4)), zeros, np.full(2, np.inf),
-                        np.empty(2), np.empty(2))
-    done()
-    # a control step with the argument types a controller passes (its answer here: take the reference path)
-    s = np.zeros((5, 3))
-    s[0, 1] = 1.0
-    control_step_into(fingers, iks, edges, zeros, True, np.zeros(1), np.full(1, -1, dtype=np.int64), s[0], s[1], s[2],
-                      s[3], s[4], np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0), 1e8, np.ones(1), True,
-                      rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0,
-                      np.empty(control_layout(1, 3)["f_hat"].stop))
-    done()
-    sliding_step_into(fingers, iks, edges, zeros, True, np.zeros(1), np.full(1, -1, dtype=np.int64), s[0], s[1], s[2],
-                      s[3], s[4], np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0, np.int64), np.zeros(0),
-                      np.zeros(0), True, 1e-3, 1e8, np.ones(1), True, rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0,
-                      np.zeros(1), 1.0, 0.0, np.empty(control_layout(1, 3)["f_hat"].stop))
-    done()
-    _warm_envelope()
-    done()
-    _warm_stretch(fingers, plant, iks, edges, rows)
-    done()
-    _WARM.append(True)
-
-
-def _warm_stretch(fingers, plant, iks, edges, rows) -> None:
-    """The stretch kernel with the argument types :class:`regrasp.rollout.stretch.CompiledStretches` passes
-    (no step)."""
-    m = 1
-    head = (fingers, iks, edges, np.zeros(2), True, np.zeros(1), np.full(1, -1, dtype=np.int64))
-    contacts = np.zeros(m, dtype=PLANT_CONTACT)
-    size = 4 * m + 9
-    executor = StretchExecutor(np.zeros(m, np.bool_), np.zeros(m), np.zeros(m), np.zeros(3), np.zeros(0, dtype=SLIDER))
-    monitor = StretchMonitor(np.zeros((m, 1, 2)), np.zeros(m, np.int64), np.zeros((m, 2)), np.zeros((m, 2)),
-                             np.zeros(m), *envelope_arguments(None, m), np.zeros((m, 3), np.int64))
-    law = StretchLaw(head, np.ones(3), np.ones(3), np.ones(3), 1.0, np.zeros(0), np.zeros(0), False, 0.0, 1e8,
-                     np.ones(m), True, rows, np.zeros(1), 1, np.zeros(1, np.bool_), 0.0, np.zeros(1), 1.0, 0.0,
-                     np.empty(control_layout(m, 3)["f_hat"].stop))
-    plant_arguments = StretchPlant(fingers, plant, contacts, np.zeros(size), np.zeros(output_size(m)),
-                                   np.full((m, 9), np.nan), np.zeros((m, 2)), np.empty(output_size(m)),
-                                   np.empty(m, dtype=FINGER_TERMS), np.empty(m, np.bool_), np.empty((m, 7)))
-    rows_out = StretchRows(np.empty((0, m)), np.empty((0, m, 2)), np.empty((0, m)), np.empty((0, 3)),
-                           np.empty((0, 3)), np.empty((0, 2 * m)), np.empty((0, m, 2)), np.empty((0, m)),
-                           np.empty((0, m)), np.ones(m))
-    stretch_into(np.zeros((), dtype=STRETCH_SETTINGS)[()], np.zeros(1, dtype=STRETCH_STATE), np.zeros(0),
-                 np.zeros((0, 9)), executor, monitor, StretchSchedule(np.zeros(1), np.zeros((1, m))), law,
-                 plant_arguments, rows_out, stretch_log(0, m, 1), 0, 0,
-                 StretchDisturbance(np.zeros((0, 0)), np.zeros((1, m), np.bool_), np.zeros((1, 2 * m))), False)
-
-
-def _warm_envelope() -> None:
-    """The envelope kernels on a unit square and a finger below it (read-only footprints, as the library's)."""
-    shapes = np.zeros(1, dtype=FOOTPRINT)
-    shapes["ux"], shapes["hu"], shapes["hv"] = 1.0, 0.5, 0.1
-    shapes.flags.writeable = False
-    params = np.zeros(1, dtype=ENVELOPE_PARAMETERS)
-    for name, value in (("o1y", -2.0), ("l1", 1.0), ("l2", 1.0), ("l1sq", 1.0), ("l2sq", 1.0), ("outer_sq", 4.0),
-                        ("sign", 1.0), ("n0y", 1.0), ("c0y", -0.5), ("xi_lo", -0.5), ("xi_hi", 0.5), ("grid", 2),
-                        ("tol", 0.1), ("half_thickness", 2.0)):
-        params[name] = value
-    vertices = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
-    normals = np.array([[0.0, 1.0], [-1.0, 0.0], [0.0, -1.0], [1.0, 0.0]])
-    rows = feasible_capacity(2, 4)
-    envelope_sample_into(params, shapes, vertices, normals, 0.0, 0.0, 0.0, np.empty(3), np.empty((4, 2)),
-                         np.empty((4, 2)), np.empty(4, np.bool_), np.empty(4, np.int64), np.empty(rows),
-                         np.empty((rows, 2)), np.empty(workspace_size(2, 4)))
-    tip_is_free(params, shapes, vertices, normals, 0.0, 0.0, 0.0, 0.0, np.empty(2))
-    footprint_distances(shapes, vertices, normals, 2.0, np.zeros(3),
-                        np.array([0.0, -2.0, 0.0, 1.0, 0.0, -1.0, 1.0, 0.0]), np.empty(1))
+#: The kernel groups :func:`warm_up` loads by default (what its ``progress`` counts).
+WARM_UP_STEPS = len(ALL)

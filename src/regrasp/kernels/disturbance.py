@@ -11,6 +11,7 @@ import math
 
 import numba
 
+from .arrays import copy_into
 from .plant import SLIDING
 
 __all__ = ["actuate_into", "measure_into"]
@@ -34,10 +35,10 @@ def measure_into(settings, st, contacts, y, last, xi, z, slips, slips_new, X_m, 
         return st.slips
     depth = slips.shape[0]
     count = st.slips
-    slips_new[:] = slips
+    copy_into(slips_new, slips)
     if count == depth:  # (a full deque drops its oldest)
         for d in range(depth - 1):
-            slips_new[d] = slips_new[d + 1]
+            copy_into(slips_new[d], slips_new[d + 1])
         count -= 1
     for i in range(m):
         if math.isnan(settings.slip_threshold):
@@ -76,22 +77,22 @@ def actuate_into(settings, st, tau, z, commands, commands_new, applied):
     steps ago, plus the drawn noise); the command deque's new length."""
     n2 = tau.shape[0]
     if not settings.delayed:
-        applied[:] = tau
+        copy_into(applied, tau)
         return st.commands
     depth = commands.shape[0]
     count = st.commands
-    commands_new[:] = commands
+    copy_into(commands_new, commands)
     if count == 0:  # (before the run the hand held the first command)
         for d in range(depth - 1):
-            commands_new[d] = tau
+            copy_into(commands_new[d], tau)
         count = depth - 1
     if count == depth:
         for d in range(depth - 1):
-            commands_new[d] = commands_new[d + 1]
+            copy_into(commands_new[d], commands_new[d + 1])
         count -= 1
-    commands_new[count] = tau
+    copy_into(commands_new[count], tau)
     count += 1
-    applied[:] = commands_new[0]
+    copy_into(applied, commands_new[0])
     if settings.o_torque >= 0:
         for j in range(n2):
             applied[j] = applied[j] + (0.0 + settings.torque_sigma * z[settings.o_torque + j])

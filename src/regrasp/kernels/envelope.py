@@ -134,7 +134,7 @@ def _reachable(p, d, pieces, out):
     return _merge(pieces, k, out)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _tip_and_elbow(p, d, nx, ny, s):
     """Tip and elbow (x, y, x, y) [m] relative to joint 1 for the tip at line coordinate s."""
     px = d * nx - s * ny
@@ -206,11 +206,11 @@ def _ideal(p, base, nb, d, nx, ny, verts, normals, offsets, extra, cuts, pieces,
             et, root = ey * nx - ex * ny, math.sqrt(disc)
             extra[ne], extra[ne + 1] = et - root, et + root
             ne += 2
-    count = 0
+    count = np.int64(0)  # (not the literal 0: numba would compile _merge for it too)
     for j in range(nb):
         lo, hi = base[j, 0], base[j, 1]
         cuts[0], cuts[1] = lo, hi
-        nc = 2
+        nc = np.int64(2)  # (not a literal: see count)
         for t in extra[:ne]:
             if lo < t < hi:
                 cuts[nc] = t
@@ -229,7 +229,7 @@ def _ideal(p, base, nb, d, nx, ny, verts, normals, offsets, extra, cuts, pieces,
     return _merge(pieces, count, out)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _free(p, shapes, d, nx, ny, s, verts, normals, offsets, nearest, exact=False):
     """Whether no footprint penetrates the object with the tip at line coordinate s
     (``EnvelopeEvaluator.free_test``)."""
@@ -303,7 +303,7 @@ def envelope_sample_into(params, shapes, vertices, normals, x, y, beta, scalars,
         return nr, 0, 0
     object_in_hand(vertices, normals, x, y, c, sn, verts, norms, offsets)
     nh = _ideal(p, base, nb, d, nx, ny, verts, norms, offsets, extra, cuts, ideal_scratch, hints)
-    count = 0
+    count = np.int64(0)  # (not the literal 0: numba would compile _merge for it too)
     nf = 0
     for j in range(nb):
         lo, hi = base[j, 0], base[j, 1]

@@ -99,7 +99,7 @@ def condition_2x2(a: float, b: float, c: float, d: float) -> float:
     return math.sqrt(0.5 * (total + disc) / small)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def finger_terms_into(p, q1, q2, v1, v2, gx, gy, damped, out):
     """:func:`finger_terms` of one finger (record ``p``, :data:`FINGER_PARAMETERS`) at joint positions ``q1``, ``q2``
     [rad] and velocities ``v1``, ``v2`` [rad/s], gravity (``gx``, ``gy``) [m/s^2] in the hand frame (``damped``: with

@@ -70,7 +70,7 @@ def object_in_hand(vertices, normals, x, y, c, s, verts_out, normals_out, offset
         offsets_out[k] = kx * px + ky * py
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _point_segment_sq(px, py, ax, ay, bx, by):
     """Squared distance [m²] from (px, py) to the segment (ax, ay)–(bx, by)."""
     dx, dy = bx - ax, by - ay
@@ -83,7 +83,7 @@ def _point_segment_sq(px, py, ax, ay, bx, by):
     return ex * ex + ey * ey
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def footprint_distance(fp, ox, oy, c, s, verts, normals, offsets, half_thickness, exact):
     """Signed distance [m] of the footprint ``fp`` (:data:`FOOTPRINT`) in the link frame at (ox, oy) [m] with
     direction (c, s) (hand frame) to the polygon (``verts``, ``normals``, ``offsets`` of
@@ -131,7 +131,7 @@ def footprint_distance(fp, ox, oy, c, s, verts, normals, offsets, half_thickness
     return max(gap - rad, -half_thickness)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def links_collide_at(shapes, o1x, o1y, c1, s1, x2, y2, c2, s2, verts, normals, offsets, half_thickness, nearest,
                      exact):
     """Whether any footprint has a negative signed distance to the polygon (:func:`object_in_hand`): link 1's

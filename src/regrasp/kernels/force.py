@@ -187,7 +187,8 @@ def internal_force_into(A: np.ndarray, f_m: np.ndarray, frames: np.ndarray, coef
     margin2 = np.zeros(rows + n_torque)
     for r in range(rows):
         out_r = r if r < n_ineq else r + n_torque
-        C2[out_r] = C[r]
+        for j in range(m2):  # (a loop: a row assignment compiles a formatted shape check)
+            C2[out_r, j] = C[r, j]
         lower2[out_r] = lower[r]
         is_cone2[out_r] = is_cone[r]
         if target > 0.0:

@@ -21,6 +21,7 @@ import math
 
 import numba
 import numpy as np
+from numba import types
 
 from .finger import FINGER_TERMS, condition_2x2, finger_terms_into
 
@@ -52,6 +53,35 @@ _TOL = 1e-9
 #: A torque that exceeds its limit by at most this [relative to max(1, limit)] is clipped but not called saturated:
 #: a controller that keeps the limit puts its torque on it up to round-off (:mod:`regrasp.plants.saturation`).
 SATURATION_TOLERANCE = 1e-9
+
+
+#: LAPACK's LU solve (``dgesv``) through numba's helper library, as numba's ``np.linalg.solve`` calls it: the same
+#: answer, without compiling numba's general ``solve`` (its checks, 2-D branches and shape errors: about 2 s of a
+#: cold compile).
+_F8P = types.CPointer(types.float64)
+_GESV = types.ExternalFunction("numba_xgesv", types.intc(types.char, types.intp, types.intp, _F8P, types.intp,
+                                                         types.CPointer(types.intc), _F8P, types.intp))
+
+
+@numba.njit(cache=True)
+def _solve(a, b):
+    """``np.linalg.solve(a, b)`` for a (k, k) and b (k,) (:data:`_GESV`): its answer, and its
+    ``LinAlgError`` for a non-finite or singular a."""
+    n = b.size
+    fortran = np.empty((n, n))  # (a's copy in Fortran order: fortran.T; dgesv destroys it)
+    x = np.empty(n)
+    for i in range(n):
+        if not math.isfinite(b[i]):
+            raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
+        x[i] = b[i]
+        for j in range(n):
+            if not math.isfinite(a[i, j]):
+                raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
+            fortran[j, i] = a[i, j]
+    pivots = np.empty(n, dtype=np.intc)
+    if n > 0 and _GESV(100, n, 1, fortran.ctypes, n, pivots.ctypes, x.ctypes, n) != 0:
+        raise np.linalg.LinAlgError("Matrix is singular to machine precision.")
+    return x
 
 
 @numba.njit(cache=True)
@@ -130,7 +160,7 @@ def _evaluate(fingers, plant, contacts, y, tau, terms, dy, forces):
                 if finger_of[q] == finger_of[r]:
                     value -= ux * col[q, 0] + uy * col[q, 1]
                 a[r, q] = value
-        lam = np.linalg.solve(a, rhs[:k])
+        lam = _solve(a, rhs[:k])
         for q in range(k):
             i = finger_of[q]
             forces[i, 0] += col[q, 0] * lam[q]

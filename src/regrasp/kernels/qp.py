@@ -24,8 +24,11 @@ and the KKT conditions on random problems.
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
+from numba import types
 
 __all__ = ["INFEASIBLE", "NOT_CONVERGED", "SOLVED", "back_substitute", "diagonal_qp", "householder_into",
            "least_distance", "matmul", "matvec", "nnls"]
@@ -34,6 +37,14 @@ __all__ = ["INFEASIBLE", "NOT_CONVERGED", "SOLVED", "back_substitute", "diagonal
 SOLVED, INFEASIBLE, NOT_CONVERGED = 0, 1, 2
 
 _EPS = np.finfo(np.float64).eps
+
+#: LAPACK's least-squares solver (``dgelsd``, singular values below machine precision dropped) through numba's helper
+#: library, as numba's ``np.linalg.lstsq`` calls it: the same answer, without compiling numba's general ``lstsq``
+#: (its checks, complex and 2-D branches, residuals and shape errors: about 3.5 s of a cold compile).
+_F8P = types.CPointer(types.float64)
+_GELSD = types.ExternalFunction("numba_ez_gelsd", types.intc(
+    types.char, types.intp, types.intp, types.intp, _F8P, types.intp, _F8P, types.intp, _F8P, types.float64,
+    types.CPointer(types.intc)))
 
 
 @numba.njit(cache=True)
@@ -107,7 +118,7 @@ def householder_into(r: np.ndarray, y: np.ndarray) -> float:
         r[j, j] = v0  # (column j below the diagonal is v's tail already)
         if vnorm > 0.0:
             _reflect(r, j, j + 1, 2.0 / vnorm, r)
-            _reflect(r, j, 0, 2.0 / vnorm, y)
+            _reflect(r, j, np.int64(0), 2.0 / vnorm, y)  # (not the literal 0: one compile of _reflect)
         r[j, j] = alpha
         largest = max(largest, abs(alpha))
         smallest = min(smallest, abs(alpha))
@@ -128,16 +139,42 @@ def back_substitute(upper: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True)
+def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.linalg.lstsq(a, b)[0]`` for a (rows, cols) and b (rows,): the minimum-norm least-squares solution by
+    LAPACK's ``dgelsd`` (:data:`_GELSD`, called as numba's ``np.linalg.lstsq`` calls it)."""
+    rows, cols = a.shape
+    if rows == 0 or cols == 0:
+        raise np.linalg.LinAlgError("Arrays cannot be empty")
+    size = max(rows, cols)
+    fortran = np.empty((cols, rows))  # (a's copy in Fortran order: fortran.T; dgelsd destroys it)
+    rhs = np.zeros(size)
+    for i in range(rows):
+        if not math.isfinite(b[i]):
+            raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
+        rhs[i] = b[i]
+        for j in range(cols):
+            if not math.isfinite(a[i, j]):
+                raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
+            fortran[j, i] = a[i, j]
+    singular = np.empty(min(rows, cols))
+    rank = np.empty(1, dtype=np.intc)
+    info = _GELSD(100, rows, cols, 1, fortran.ctypes, rows, rhs.ctypes, size, singular.ctypes, -1.0, rank.ctypes)
+    if info != 0:  # (numba's errors: < 0 cannot happen here)
+        raise ValueError("Internal algorithm failed to converge.")
+    return rhs[:cols].copy()
+
+
+@numba.njit(cache=True)
 def _least_squares(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """argmin ‖a x - b‖ for a (rows, cols) by :func:`householder_into`; a rank-deficient or wide a goes to
-    ``np.linalg.lstsq``."""
+    LAPACK's minimum-norm solution (:func:`_lstsq`, ``np.linalg.lstsq``'s)."""
     rows, cols = a.shape
     if cols > rows:
-        return np.linalg.lstsq(a, b)[0]
+        return _lstsq(a, b)
     r = a.copy()
     y = b.copy().reshape(rows, 1)
     if not householder_into(r, y) > max(rows, cols) * _EPS * 10.0:
-        return np.linalg.lstsq(a, b)[0]
+        return _lstsq(a, b)
     return back_substitute(r, y[:cols, 0].copy())
 
 
@@ -173,7 +210,8 @@ def nnls(E: np.ndarray, f: np.ndarray, u: np.ndarray, max_iterations: int) -> bo
             cols = np.nonzero(passive)[0]
             sub = np.empty((n, cols.size))
             for c in range(cols.size):
-                sub[:, c] = E[:, cols[c]]
+                for i in range(n):
+                    sub[i, c] = E[i, cols[c]]
             sol = _least_squares(sub, f)
             z[:] = 0.0
             positive = True
@@ -182,7 +220,8 @@ def nnls(E: np.ndarray, f: np.ndarray, u: np.ndarray, max_iterations: int) -> bo
                 if sol[c] <= 0.0:
                     positive = False
             if positive:
-                u[:] = z
+                for j in range(r):
+                    u[j] = z[j]
                 break
             if z[t] <= 0.0 and u[t] == 0.0 and passive[t]:  # the entering column itself (only round-off)
                 passive[t] = False

@@ -35,6 +35,7 @@ import math
 import numba
 import numpy as np
 
+from .arrays import copy_into
 from .control import CONTROL_OK, control_step_into, sliding_step_into
 from .decimation import logged
 from .disturbance import actuate_into, measure_into
@@ -157,7 +158,8 @@ def stretch_into(settings, state, times, desired, executor, monitor, schedule, l
                     return k, STRETCH_HANDOFF, worst, last_err
                 new_counts[i] = n_feasible
                 new_evaluation[i, 0], new_evaluation[i, 1], new_evaluation[i, 2] = n_reach, n_base, n_feasible
-                new_intervals[i, :n_feasible] = feasible[:n_feasible]
+                for j in range(n_feasible):
+                    new_intervals[i, j, 0], new_intervals[i, j, 1] = feasible[j, 0], feasible[j, 1]
             if st.evaluated:
                 st.clobbered = True  # (until this step is committed)
             active, active_counts = new_intervals, new_counts
@@ -170,8 +172,8 @@ def stretch_into(settings, state, times, desired, executor, monitor, schedule, l
             margins[i] = margin
             rows_margin[k, i], rows_bounds[k, i, 0], rows_bounds[k, i, 1] = margin, lo, hi
         if fresh:  # the bounds' rates (EnvelopeMonitor.read)
-            new_rates[:] = rates
-            new_speed[:] = bound_speed
+            copy_into(new_rates, rates)
+            copy_into(new_speed, bound_speed)
             if not math.isnan(st.previous_time) and t > st.previous_time:
                 for i in range(m):
                     fastest = 0.0
@@ -252,7 +254,7 @@ def stretch_into(settings, state, times, desired, executor, monitor, schedule, l
                                              singular_threshold, margin_mu, use_qp, coefficients, lower, n_ineq,
                                              is_cone, target, margin_column, weight, aim, control_out)
         else:
-            trial_directions[:] = directions
+            copy_into(trial_directions, directions)
             indices = np.empty(p, np.int64)
             kinetics = np.empty(p)
             for c in range(p):
@@ -298,32 +300,32 @@ def stretch_into(settings, state, times, desired, executor, monitor, schedule, l
             if settings.integral > 0.0:
                 sl.integral = integral_new[3 + c]
         if not settings.fixed_law:
-            directions[:] = trial_directions
+            copy_into(directions, trial_directions)
         for a in range(3):
             rows_pose[k, a] = plant_out[2 * n2 + a]
         for a in range(n2):
             rows_q[k, a] = plant_out[a]
-        last[:] = plant_out
-        y[:] = plant_out[:size]
+        copy_into(last, plant_out)
+        copy_into(y, plant_out[:size])
         if fresh:
-            intervals[:] = new_intervals
-            counts[:] = new_counts
+            copy_into(intervals, new_intervals)
+            copy_into(counts, new_counts)
             for i in range(m):
                 previous_bounds[i, 0], previous_bounds[i, 1] = rows_bounds[k, i, 0], rows_bounds[k, i, 1]
-            rates[:] = new_rates
-            bound_speed[:] = new_speed
+            copy_into(rates, new_rates)
+            copy_into(bound_speed, new_speed)
             st.previous_time = t
             st.calls = 0
             st.evaluated, st.clobbered = True, False
-            evaluation_counts[:] = new_evaluation
+            copy_into(evaluation_counts, new_evaluation)
         if deciding:
             st.decision_time = min(t + settings.decision_period - 1e-9, settings.slide_due)
         st.calls += 1
         if settings.sensed:
-            slips[:] = slips_new
+            copy_into(slips, slips_new)
             st.slips = slip_count
         if settings.delayed:
-            commands[:] = commands_new
+            copy_into(commands, commands_new)
             st.commands = command_count
         if logged(first_index + k + 1, log_every):
             for i in range(m):
@@ -334,7 +336,9 @@ def stretch_into(settings, state, times, desired, executor, monitor, schedule, l
                 log_xi[entry, i] = plant_out[size + 6 * m + i]  # (the plant step's ξ after it)
                 log_reference[entry, i] = np.nan
                 log_counts[entry, i] = counts[i]
-                log_intervals[entry, i, :counts[i]] = intervals[i, :counts[i]]
+                for j in range(counts[i]):
+                    for b in range(2):
+                        log_intervals[entry, i, j, b] = intervals[i, j, b]
             for a in range(3):
                 log_error[entry, a] = control_out[o_error + a]
             for c in range(p):

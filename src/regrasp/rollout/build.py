@@ -34,6 +34,7 @@ from ..core.health import HealthCriteria, HealthMonitor
 from ..core.measurement import Measurement
 from ..core.validation import as_finite_array, expect_type, step_count
 from ..envelope.planner import PlanResult, plan_scenario
+from ..kernels.warm import STRETCH_WAIT_STEPS, compiling, warm_up
 from ..model.hand import Hand
 from ..model.scenario import Scenario
 from ..plants.disturbance import Disturbance
@@ -116,7 +117,7 @@ class Rollout:
         return None
 
     def run(self, *, recorder: RolloutRecorder | None = None, progress: Callable[[int, int], None] | None = None,
-            interruptible: bool = True, compiled_stretches: bool = True) -> RolloutResult:
+            interruptible: bool = True, compiled_stretches: bool | None = None) -> RolloutResult:
         """Run to ``duration`` or the first failure.
 
         Args:
@@ -126,10 +127,15 @@ class Rollout:
             progress: Called as ``progress(done, total)`` every 50 steps and at the end.
             interruptible: Ctrl-C ends the run with an ``INTERRUPTED`` failure (else it propagates).
             compiled_stretches: Run the steps between the supervisor's decisions in compiled stretches
-                (:mod:`regrasp.rollout.stretch`; the same steps, faster); False: every step on the reference path.
+                (:mod:`regrasp.rollout.stretch`; the same steps, faster); False: every step on the reference path;
+                None (default): compiled stretches, unless a worker process still compiles their kernel (a
+                machine's first run) and the run is shorter than
+                :data:`~regrasp.kernels.warm.STRETCH_WAIT_STEPS` steps.
         """
         plant = self.plant
         total = step_count("duration", self.duration, plant.dt)  # (a run of no step is refused)
+        if compiled_stretches is None:
+            compiled_stretches = not (compiling("stretch") and total < STRETCH_WAIT_STEPS)
         rows = RolloutRows(total, plant.hand.m, plant.friction)
         consumers = [rows.add]
         if recorder is not None:
@@ -142,6 +148,8 @@ class Rollout:
         if compiled_stretches:
             stretches = CompiledStretches(self.supervisor, plant, rows, total, recorder=recorder,
                                           disturbance=self.disturbance, force_floor=self.health.force_floor)
+            if stretches.enabled:  # (their kernel: at once when loaded; else it waits for a worker, or compiles)
+                warm_up(groups=("stretch",))
         health = HealthMonitor(self.health, self.names, plant.dt)
         judged = 0
 

@@ -243,9 +243,9 @@ def _init_worker(*shared: object) -> None:
     once per run. A worker ignores Ctrl-C (the terminal sends it to the whole process group): the study decides."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _JOB["shared"] = shared
-    from ..kernels import warm_up
+    from ..kernels import ROLLOUT, warm_up
 
-    warm_up()  # (every kernel loaded before the first run: no run's wall time pays for it)
+    warm_up(groups=ROLLOUT)  # (every kernel loaded before the first run: no run's wall time pays for it)
 
 
 def _pool_run(draw: RunDraw) -> RunOutcome:

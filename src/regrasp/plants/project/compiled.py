@@ -78,8 +78,10 @@ class PlantKernel:
             self._contacts = (key, out)
         return out
 
-    def parameters(self) -> np.ndarray:
-        """The plant's constants as a :data:`~regrasp.kernels.plant.PLANT_PARAMETERS` record (cached)."""
+    def parameters(self) -> np.void:
+        """The plant's constants as a :data:`~regrasp.kernels.plant.PLANT_PARAMETERS` record (cached; a record, not
+        a 0-d array of one: numba then reads its fields as numbers, not as 0-d arrays whose arithmetic it compiles
+        as array expressions, slower to compile and to run)."""
         hand, equations = self.hand, self.equations
         gx, gy = hand.gravity_in_hand.tolist()
         key = (equations.mass, equations.inertia, gx, gy, equations.alpha, hand.damping_enabled, self.dt,
@@ -88,7 +90,7 @@ class PlantKernel:
             record = np.zeros((), dtype=PLANT_PARAMETERS)
             for name, value in zip(PLANT_PARAMETERS.names, key):
                 record[name] = value
-            self._parameters = (key, record)
+            self._parameters = (key, record[()])
         return self._parameters[1]
 
     @staticmethod

@@ -61,7 +61,7 @@ from ...core.validation import (
     expect_sequence_of,
     expect_type,
 )
-from ...kernels import warm_up
+from ...kernels.warm import ROLLOUT, STEP, compiling, warm_up
 from ...model.collision import UrdfCollisionChecker
 from ...model.hand import Hand
 from ..saturation import Saturation
@@ -187,7 +187,7 @@ class Plant:
         #: Whether :meth:`step` runs the compiled kernel.
         self.compiled = hand.use_kernels(compiled)
         if self.compiled:
-            warm_up()
+            warm_up(groups=STEP if compiling("stretch") else ROLLOUT)  # (a run decides on its stretches)
         #: The motors' torque limits (module docstring).
         self.saturation = Saturation(hand.effort_limit.tolist())
 
