@@ -21,9 +21,9 @@ import math
 
 import numba
 import numpy as np
-from numba import types
 
 from .finger import FINGER_TERMS, condition_2x2, finger_terms_into
+from .lapack import gesv
 
 __all__ = ["FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SATURATION_TOLERANCE", "SEPARATED", "SLIDING", "output_size",
            "plant_evaluate", "plant_step_into"]
@@ -55,18 +55,11 @@ _TOL = 1e-9
 SATURATION_TOLERANCE = 1e-9
 
 
-#: LAPACK's LU solve (``dgesv``) through numba's helper library, as numba's ``np.linalg.solve`` calls it: the same
-#: answer, without compiling numba's general ``solve`` (its checks, 2-D branches and shape errors: about 2 s of a
-#: cold compile).
-_F8P = types.CPointer(types.float64)
-_GESV = types.ExternalFunction("numba_xgesv", types.intc(types.char, types.intp, types.intp, _F8P, types.intp,
-                                                         types.CPointer(types.intc), _F8P, types.intp))
-
-
 @numba.njit(cache=True)
 def _solve(a, b):
-    """``np.linalg.solve(a, b)`` for a (k, k) and b (k,) (:data:`_GESV`): its answer, and its
-    ``LinAlgError`` for a non-finite or singular a."""
+    """``np.linalg.solve(a, b)`` for a (k, k) and b (k,) (LAPACK's ``dgesv``, :func:`~regrasp.kernels.lapack.gesv`,
+    as numba's ``solve`` calls it, without compiling numba's general ``solve``: about 2 s of a cold compile): its
+    answer, and its ``LinAlgError`` for a non-finite or singular a."""
     n = b.size
     fortran = np.empty((n, n))  # (a's copy in Fortran order: fortran.T; dgesv destroys it)
     x = np.empty(n)
@@ -78,8 +71,7 @@ def _solve(a, b):
             if not math.isfinite(a[i, j]):
                 raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
             fortran[j, i] = a[i, j]
-    pivots = np.empty(n, dtype=np.intc)
-    if n > 0 and _GESV(100, n, 1, fortran.ctypes, n, pivots.ctypes, x.ctypes, n) != 0:
+    if n > 0 and gesv(fortran, x) != 0:
         raise np.linalg.LinAlgError("Matrix is singular to machine precision.")
     return x
 

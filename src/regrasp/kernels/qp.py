@@ -28,7 +28,8 @@ import math
 
 import numba
 import numpy as np
-from numba import types
+
+from .lapack import gelsd
 
 __all__ = ["INFEASIBLE", "NOT_CONVERGED", "SOLVED", "back_substitute", "diagonal_qp", "householder_into",
            "least_distance", "matmul", "matvec", "nnls"]
@@ -37,15 +38,6 @@ __all__ = ["INFEASIBLE", "NOT_CONVERGED", "SOLVED", "back_substitute", "diagonal
 SOLVED, INFEASIBLE, NOT_CONVERGED = 0, 1, 2
 
 _EPS = np.finfo(np.float64).eps
-
-#: LAPACK's least-squares solver (``dgelsd``, singular values below machine precision dropped) through numba's helper
-#: library, as numba's ``np.linalg.lstsq`` calls it: the same answer, without compiling numba's general ``lstsq``
-#: (its checks, complex and 2-D branches, residuals and shape errors: about 3.5 s of a cold compile).
-_F8P = types.CPointer(types.float64)
-_GELSD = types.ExternalFunction("numba_ez_gelsd", types.intc(
-    types.char, types.intp, types.intp, types.intp, _F8P, types.intp, _F8P, types.intp, _F8P, types.float64,
-    types.CPointer(types.intc)))
-
 
 @numba.njit(cache=True)
 def matvec(a: np.ndarray, x: np.ndarray, transpose: bool = False) -> np.ndarray:
@@ -141,7 +133,8 @@ def back_substitute(upper: np.ndarray, y: np.ndarray) -> np.ndarray:
 @numba.njit(cache=True)
 def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``np.linalg.lstsq(a, b)[0]`` for a (rows, cols) and b (rows,): the minimum-norm least-squares solution by
-    LAPACK's ``dgelsd`` (:data:`_GELSD`, called as numba's ``np.linalg.lstsq`` calls it)."""
+    LAPACK's ``dgelsd`` (:func:`~regrasp.kernels.lapack.gelsd`, called as numba's ``np.linalg.lstsq`` calls it, without
+    compiling numba's general ``lstsq``: about 3.5 s of a cold compile)."""
     rows, cols = a.shape
     if rows == 0 or cols == 0:
         raise np.linalg.LinAlgError("Arrays cannot be empty")
@@ -157,8 +150,7 @@ def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
                 raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
             fortran[j, i] = a[i, j]
     singular = np.empty(min(rows, cols))
-    rank = np.empty(1, dtype=np.intc)
-    info = _GELSD(100, rows, cols, 1, fortran.ctypes, rows, rhs.ctypes, size, singular.ctypes, -1.0, rank.ctypes)
+    info, _ = gelsd(fortran, rows, cols, rhs, singular)
     if info != 0:  # (numba's errors: < 0 cannot happen here)
         raise ValueError("Internal algorithm failed to converge.")
     return rhs[:cols].copy()
