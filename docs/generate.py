@@ -195,6 +195,7 @@ BLOCKS: dict[str, Block] = {
                               figures={k: f"docs/images/robustness_drake/{v}" for k, v in STUDY_FIGURES.items()}),
     # speed: measured, never checked
     "benchmarks": Block("python benchmarks/run.py", as_printed, slow=True, measured=True),
+    "first-run": Block("python benchmarks/first_run.py", slow=True, measured=True),
 }
 
 
