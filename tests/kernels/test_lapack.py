@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from regrasp.kernels.lapack import gelsd, gesv
+from regrasp.kernels.lapack import checked_fortran_copy, gelsd, gesv
 
 
 def fortran_copy(a: np.ndarray) -> np.ndarray:
@@ -41,3 +41,12 @@ def test_gelsd_is_numpys_lstsq(rows, cols):
         assert info == 0 and rank == expected_rank
         np.testing.assert_allclose(rhs[:cols], x, rtol=1e-10, atol=1e-12)
         np.testing.assert_allclose(singular, expected_singular, rtol=1e-12, atol=1e-14)
+
+
+@pytest.mark.parametrize("where", ["a", "b"])
+def test_a_non_finite_entry_is_numpys_error(where):
+    a, b = np.eye(2), np.ones(2)
+    (a if where == "a" else b)[1, ...] = np.nan
+    fortran, rhs = np.empty((2, 2)), np.empty(2)
+    with pytest.raises(np.linalg.LinAlgError, match="infs or NaNs"):
+        checked_fortran_copy(a, b, fortran, rhs)

@@ -13,13 +13,15 @@ Fortran's convention: every argument by pointer, matrices column-major, ``info``
 
 from __future__ import annotations
 
+import math
+
 import llvmlite.binding
 import numba
 import numpy as np
 from numba import types
 from numba.extending import get_cython_function_address
 
-__all__ = ["gelsd", "gesv"]
+__all__ = ["checked_fortran_copy", "gelsd", "gesv"]
 
 _I4P = types.CPointer(types.intc)
 _F8P = types.CPointer(types.float64)
@@ -37,6 +39,21 @@ _DGESV = _external("dgesv", _I4P, _I4P, _F8P, _I4P, _I4P, _F8P, _I4P, _I4P)
 #: dgelsd(m, n, nrhs, a, lda, b, ldb, s, rcond, rank, work, lwork, iwork, info)
 _DGELSD = _external("dgelsd", _I4P, _I4P, _I4P, _F8P, _I4P, _F8P, _I4P, _F8P, _F8P, _I4P, _F8P, _I4P, _I4P,
                     _I4P)
+
+
+@numba.njit(cache=True)
+def checked_fortran_copy(a: np.ndarray, b: np.ndarray, fortran: np.ndarray, rhs: np.ndarray) -> None:
+    """a (rows, cols) into ``fortran`` (cols, rows: a column-major) and b (rows,) into the head of ``rhs``, raising
+    numpy's ``LinAlgError`` for a non-finite entry as ``np.linalg.solve`` and ``lstsq`` do."""
+    rows, cols = a.shape
+    for i in range(rows):
+        if not math.isfinite(b[i]):
+            raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
+        rhs[i] = b[i]
+        for j in range(cols):
+            if not math.isfinite(a[i, j]):
+                raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
+            fortran[j, i] = a[i, j]
 
 
 @numba.njit(cache=True)

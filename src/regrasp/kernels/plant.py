@@ -23,7 +23,7 @@ import numba
 import numpy as np
 
 from .finger import FINGER_TERMS, condition_2x2, finger_terms_into
-from .lapack import gesv
+from .lapack import checked_fortran_copy, gesv
 
 __all__ = ["FIXED", "PLANT_CONTACT", "PLANT_PARAMETERS", "SATURATION_TOLERANCE", "SEPARATED", "SLIDING", "output_size",
            "plant_evaluate", "plant_step_into"]
@@ -63,14 +63,7 @@ def _solve(a, b):
     n = b.size
     fortran = np.empty((n, n))  # (a's copy in Fortran order: fortran.T; dgesv destroys it)
     x = np.empty(n)
-    for i in range(n):
-        if not math.isfinite(b[i]):
-            raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
-        x[i] = b[i]
-        for j in range(n):
-            if not math.isfinite(a[i, j]):
-                raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
-            fortran[j, i] = a[i, j]
+    checked_fortran_copy(a, b, fortran, x)
     if n > 0 and gesv(fortran, x) != 0:
         raise np.linalg.LinAlgError("Matrix is singular to machine precision.")
     return x

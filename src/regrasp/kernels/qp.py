@@ -24,12 +24,10 @@ and the KKT conditions on random problems.
 
 from __future__ import annotations
 
-import math
-
 import numba
 import numpy as np
 
-from .lapack import gelsd
+from .lapack import checked_fortran_copy, gelsd
 
 __all__ = ["INFEASIBLE", "NOT_CONVERGED", "SOLVED", "back_substitute", "diagonal_qp", "householder_into",
            "least_distance", "matmul", "matvec", "nnls"]
@@ -141,14 +139,7 @@ def _lstsq(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     size = max(rows, cols)
     fortran = np.empty((cols, rows))  # (a's copy in Fortran order: fortran.T; dgelsd destroys it)
     rhs = np.zeros(size)
-    for i in range(rows):
-        if not math.isfinite(b[i]):
-            raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
-        rhs[i] = b[i]
-        for j in range(cols):
-            if not math.isfinite(a[i, j]):
-                raise np.linalg.LinAlgError("Array must not contain infs or NaNs.")
-            fortran[j, i] = a[i, j]
+    checked_fortran_copy(a, b, fortran, rhs)
     singular = np.empty(min(rows, cols))
     info, _ = gelsd(fortran, rows, cols, rhs, singular)
     if info != 0:  # (numba's errors: < 0 cannot happen here)
