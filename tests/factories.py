@@ -124,8 +124,8 @@ def force_lp(polygon, edges, pose, acc, xi, ratios, mu_s, limits, gravity, *, ma
     and contacts at ``xi`` [m] on ``edges``: an LP in the hand-frame forces f = (f_1x, f_1y, ...),
     Newton-Euler written here, every normal force in [f_min, f_max] (``limits``), a contact with
     ``ratios[i]`` = r on its cone edge t.f = r n.f, the others inside their static cones
-    (``mu_s``) by ``limits.cone_margin``. With ``maximise_margin``: the largest smallest such cone
-    margin [N] (None when infeasible)."""
+    (``mu_s`` less ``limits.friction_margin``) by ``limits.cone_margin``. With ``maximise_margin``: the largest
+    smallest such cone margin [N] (None when infeasible)."""
     m = len(edges)
     R = rot(pose[2])
     rows_eq, rhs_eq, rows_ub, rhs_ub = [], [], [], []
@@ -158,7 +158,7 @@ def force_lp(polygon, edges, pose, acc, xi, ratios, mu_s, limits, gravity, *, ma
         rhs_ub += [-floors[i], limits.f_max]
         if ratios[i] is None:  # |t.f| <= mu n.f - c  (c the margin variable when maximising)
             for sign in (1.0, -1.0):
-                row = sign * t_row - mu_s[i] * n_row
+                row = sign * t_row - (mu_s[i] - getattr(limits, "friction_margin", 0.0)) * n_row
                 row[-1] = 1.0 if maximise_margin else 0.0
                 rows_ub.append(row)
                 rhs_ub.append(0.0 if maximise_margin else -limits.cone_margin)

@@ -41,6 +41,8 @@ def _case(rng):
         ratios[0] = None
     limits = ForceLimits(rng.uniform(0.05, 0.3), rng.uniform(3.0, 20.0), rng.uniform(0.0, 0.2),
                          *rng.uniform(0.0, 0.6, 2))  # (the floors of sliders and of the holders while they slide)
+    if rng.random() < 0.5:  # the executor's friction margin, a coefficient off μ_s
+        limits = replace(limits, friction_margin=float(rng.uniform(0.0, 0.1)))
     return polygon, edges, pose, acc, gravity, frictions, ratios, limits
 
 
@@ -113,7 +115,9 @@ def test_force_system_has_the_largest_smallest_margin(seed):
     system = force_system(geo, pose[2], acc, xi, ratios, mu_s, limits)
     assert system.feasible
     fixed = [i for i, r in enumerate(ratios) if r is None]
-    assert min(system.cone_margins[fixed]) == pytest.approx(best, abs=1e-7)
+    # (the reported margins are the cone's own, μ_s f_n - |f_t|; the maximised one is off μ_s - friction_margin)
+    assert min(system.cone_margins[fixed] - limits.friction_margin * system.normal[fixed]) == pytest.approx(best,
+                                                                                                           abs=1e-7)
     # the system balances the object (hand-frame Newton-Euler, written here)
     R = rot(pose[2])
     total, moment = np.zeros(2), 0.0
@@ -171,8 +175,9 @@ def test_vertices_are_on_their_active_constraints():
             n = R @ polygon.edge(k).inward_normal
             total += a * n + b * np.array([-n[1], n[0]])
         np.testing.assert_allclose(total, polygon.mass * (acc[:2] - gravity), atol=1e-8)
-        active = sum(abs(a - limits.f_min) < 1e-8 or abs(a - limits.f_max) < 1e-8 for a in lam)
-        active += sum(abs(mu_s[i] * a - abs(b) - limits.cone_margin) < 1e-8
+        active = sum(abs(a - floor) < 1e-8 or abs(a - limits.f_max) < 1e-8 for a, floor in zip(lam,
+                                                                                              limits.floors(ratios)))
+        active += sum(abs((mu_s[i] - limits.friction_margin) * a - abs(b) - limits.cone_margin) < 1e-8
                       for i, (a, b) in enumerate(zip(lam, tau)) if ratios[i] is None)
         d = len(edges) + sum(r is None for r in ratios)
         assert active >= d - 2
@@ -192,6 +197,6 @@ def test_floors_load_the_sliders_and_the_holders_while_one_slides():
 
 
 LIMITS_TABLE = fields_of(ForceLimits(0.2, 20.0, 0.2, 0.3, 0.3), {
-    "pos": ("f_min", "f_max"), "nonneg": ("cone_margin", "slider_floor", "holder_preload")})
+    "pos": ("f_min", "f_max"), "nonneg": ("cone_margin", "slider_floor", "holder_preload", "friction_margin")})
 
 test_each_limit_refuses_bad_values, test_each_limit_refuses_generated_bad_values = field_tests(LIMITS_TABLE)

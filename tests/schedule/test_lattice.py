@@ -33,10 +33,13 @@ def _random_lattice(rng, m, cells, layers, p_max, breakaway):
     lo, hi = table()
     mid_lo, mid_hi = table()
     break_lo = break_hi = None
-    slots = np.full((M, m), -1, dtype=np.int64)
-    if breakaway:
-        needs = np.array([[d[i] != 0 for i in range(m)] for d in combos]) & (rng.random((M, m)) < 0.5)
-        slots[needs] = np.arange(int(needs.sum()))
+    slots = np.full((M, 2 ** m), -1, dtype=np.int64)
+    if breakaway:  # a random check (or none) per move vector and starter mask
+        masks = np.array([[all(d[i] != 0 for i in range(m) if (bits >> i) & 1) for bits in range(2 ** m)]
+                          for d in combos])
+        masks[:, 0] = False
+        needs = masks & (rng.random((M, 2 ** m)) < 0.6)
+        slots[needs] = rng.integers(0, max(int(needs.sum()), 1), size=int(needs.sum()))
         break_lo, break_hi = table((layers, n_o, max(int(needs.sum()), 1)))
     rest_only = np.zeros(layers, dtype=bool)
     rest_only[[0, 1, layers - 1]] = True
@@ -82,12 +85,12 @@ def _transition_ok(lat, k, prev_cells, prev_mu, cells, mu):
         return False
     if np.count_nonzero(d) >= 2 and not _inside(lat.mid_lo, lat.mid_hi, k, _other(lat, cells), mu, x_new):
         return False  # (the middle's table is indexed by the new cells)
-    if lat.break_lo is not None:  # a starting contact breaks away, the others in the union move
-        for i, (di, ei) in enumerate(zip(d, e)):
-            slot = lat.breakaway_slot[u, i]
-            if di != 0 and ei == 0 and slot >= 0:
-                if not _inside(lat.break_lo, lat.break_hi, k - 1, _other(lat, prev_cells), slot, x_old):
-                    return False
+    if lat.break_lo is not None:  # the starting contacts break away together, the others in the union move
+        bits = sum(1 << i for i, (di, ei) in enumerate(zip(d, e)) if di != 0 and ei == 0)
+        slot = lat.breakaway_slot[u, bits]
+        if bits and slot >= 0 and not _inside(lat.break_lo, lat.break_hi, k - 1, _other(lat, prev_cells), slot,
+                                              x_old):
+            return False
     return True
 
 

@@ -110,7 +110,7 @@ def test_a_planned_priming_overshoot_gets_breakaway_tables_where_mu_s_is_mu_k():
     sc = load_scenario(SCENARIO)
     sc = dataclasses.replace(sc, contacts=tuple(dataclasses.replace(c, friction=Friction(0.5, 0.5))
                                                 for c in sc.contacts))
-    plain = build_problem(sc, RegraspSettings(periodic=False), t_end=0.6)
+    plain = build_problem(sc, RegraspSettings(periodic=False, prime_overshoot=0.0), t_end=0.6)
     assert (plain.lattice.breakaway_slot < 0).all()
     _check_breakaway(build_problem(sc, RegraspSettings(periodic=False, prime_overshoot=0.05), t_end=0.6))
 
@@ -119,8 +119,14 @@ def _check_breakaway(problem):
     rng = np.random.default_rng(2)
     lat = problem.lattice
     combos = lat.combos
-    slots = {int(s): (mu, i) for (mu, i), s in np.ndenumerate(lat.breakaway_slot) if s >= 0}
-    assert len(slots) == sum(np.count_nonzero(d) for d in combos)  # every slider may start (mu_s > mu_k)
+    m = combos.shape[1]
+    slots = {}  # slot: (move vector, the contacts primed together)
+    for (mu, bits), s in np.ndenumerate(lat.breakaway_slot):
+        if s >= 0:
+            slots.setdefault(int(s), (mu, frozenset(i for i in range(m) if (bits >> i) & 1)))
+    # every non-empty set of a move vector's sliders may start together (mu_s > mu_k), each mask its own check
+    assert len(slots) == sum(2 ** np.count_nonzero(d) - 1 for d in combos)
+    assert all(lat.breakaway_slot[mu, sum(1 << i for i in primed)] == s for s, (mu, primed) in slots.items())
     h, ramp, dt = problem.settings.xi_resolution, problem.settings.ramp, problem.dt
     mu_s = [f.static for f in problem.friction]
     edges = [c.edge for c in problem.scenario.contacts]
@@ -128,7 +134,7 @@ def _check_breakaway(problem):
     seen = []
     for _ in range(120):
         k, slot = int(rng.integers(0, lat.layers)), int(rng.choice(list(slots)))
-        mu, i = slots[slot]
+        mu, primed = slots[slot]
         other = int(rng.integers(0, lat.break_lo.shape[1]))
         cells = _cells(problem, other)
         axis_cell = int(rng.integers(0, len(problem.grids[lat.axis])))
@@ -139,14 +145,16 @@ def _check_breakaway(problem):
         if min(abs(x_axis - lo), abs(x_axis - hi)) < 1e-6:
             continue
         overshoot = problem.settings.prime_overshoot  # (the executor's priming, planned)
-        ratios = [None if d == 0 else d * (f.static + overshoot if j == i else f.kinetic)
+        ratios = [None if d == 0 else d * (f.static + overshoot if j in primed else f.kinetic)
                   for j, (d, f) in enumerate(zip(combos[mu], problem.friction))]
-        back = 0.5 * ramp / dt * h * np.where(np.arange(len(xi)) == i, 0, combos[mu])
+        back = 0.5 * ramp / dt * h * np.array([0 if j in primed else d for j, d in enumerate(combos[mu])])
         both = True
+        # (at a break-away the executor's last fallback keeps f_min alone and no cone margin in newtons)
+        limits = dataclasses.replace(problem.limits, slider_floor=0.0, holder_preload=0.0, cone_margin=0.0)
         for t, pos in ((problem.times[k], xi), (problem.times[k] - 0.5 * ramp, xi - back)):
             smp = traj.sample(float(np.clip(t, traj.t_start, traj.t_end)))
             both &= force_lp(problem.scenario.polygon, edges, smp.pose, smp.acceleration, pos, ratios, mu_s,
-                             problem.limits, problem.scenario.gravity_in_hand)
+                             limits, problem.scenario.gravity_in_hand)
         assert (lo <= x_axis <= hi) == both
         seen.append(both)
     assert 0.05 < np.mean(seen) < 0.95
@@ -193,7 +201,8 @@ def test_a_lattice_too_large_for_memory_is_refused_up_front():
 
 
 SETTINGS_TABLE = fields_of(RegraspSettings(), {
-    "nonneg": ("envelope_margin", "cone_margin", "prime_overshoot", "slider_floor", "holder_preload"),
+    "nonneg": ("envelope_margin", "cone_margin", "friction_margin", "prime_overshoot", "slider_floor",
+               "holder_preload"),
     "pos": ("f_min", "f_max", "max_slide_speed", "max_slide_acceleration", "xi_resolution", "comfort_margin"),
     "count1": ("max_sliders", "envelope_substeps", "verify_substeps", "period_candidates"), "count0": ("max_repairs",),
     "flag": ("periodic",), "geometry": ("geometry",)},

@@ -15,8 +15,10 @@ linearly in ξ for given forces.** So for one time and one contact mode, the for
 the force balance and the contact constraints,
 
 * every contact pushes, :math:`f_{min} \le \lambda_i \le f_{max}`;
-* a fixed contact stays inside its static cone with a margin :math:`c` [N]:
-  :math:`\mu_{s,i} \lambda_i - |\tau_i| \ge c`;
+* a fixed contact stays inside its static cone with a friction margin :math:`\delta` [-] and a margin
+  :math:`c` [N]: :math:`(\mu_{s,i} - \delta) \lambda_i - |\tau_i| \ge c` (the executor's internal-force law
+  keeps :math:`|\tau_i| \le (\mu_{s,i} - \delta) \lambda_i`,
+  :class:`~regrasp.dynamics.internal_force.settings.InternalForceSettings`);
 * a contact on a cone edge (sliding with :math:`\mu_k`, or breaking away at :math:`\mu_s`) has
   :math:`\tau_i = r_i \lambda_i` with the signed ratio :math:`r_i = s_i \mu_i`,
 
@@ -66,10 +68,12 @@ class ForceLimits:
     Attributes:
         f_min: Smallest normal force [N] (> 0).
         f_max: Largest normal force [N] (finite).
-        cone_margin: Fixed contacts keep μ_s f_n - |f_t| >= this [N].
+        cone_margin: Fixed contacts keep (μ_s - friction_margin) f_n - |f_t| >= this [N].
         slider_floor: A contact on a cone edge (sliding or breaking away) pushes with at least this [N] (0: f_min).
         holder_preload: While any contact is on a cone edge, the fixed ones push with at least this [N] (0: f_min):
             the executor's floors (:class:`~regrasp.supervisor.settings.ExecutorSettings`), planned.
+        friction_margin: Fixed contacts keep |f_t| <= (μ_s - this) f_n [-] (a coefficient, as the executor's
+            ``InternalForceSettings.friction_margin``), besides ``cone_margin``.
     """
 
     f_min: float
@@ -77,10 +81,12 @@ class ForceLimits:
     cone_margin: float
     slider_floor: float = 0.0
     holder_preload: float = 0.0
+    friction_margin: float = 0.0
 
     def __post_init__(self):
         check_fields(self, as_positive_float, ("f_min", "f_max"))
-        check_fields(self, as_positive_float, ("cone_margin", "slider_floor", "holder_preload"), allow_zero=True)
+        check_fields(self, as_positive_float, ("cone_margin", "slider_floor", "holder_preload", "friction_margin"),
+                     allow_zero=True)
         if not self.f_max > self.f_min:
             raise InvalidParameterError("f_max", self.f_max, f"a finite normal force > f_min = {self.f_min} [N]")
         for name in ("slider_floor", "holder_preload"):
@@ -166,9 +172,9 @@ def _inequalities(m: int, ratios, static_mu, limits: ForceLimits):
         rows += [row, -row]
         rhs += [floor, -limits.f_max]
     for k, i in enumerate(fixed):
-        for sign in (-1.0, 1.0):  # μ λ - τ >= c and μ λ + τ >= c
+        for sign in (-1.0, 1.0):  # (μ - δ) λ - τ >= c and (μ - δ) λ + τ >= c
             row = np.zeros(d)
-            row[i], row[m + k] = static_mu[i], sign
+            row[i], row[m + k] = static_mu[i] - limits.friction_margin, sign
             rows.append(row)
             rhs.append(limits.cone_margin)
     return np.array(rows), np.array(rhs), fixed

@@ -15,7 +15,8 @@ speed is :math:`h/\Delta t`. A state is admissible when
 Where one contact stops and another starts at the same layer, their slides' ramps overlap there,
 so the force system must also exist at :math:`t_{k-1}` with both sliding (the *union* move). A
 contact that starts a slide must also break away: a force system with it on its static cone edge
-at :math:`t_{k-1}`, the others in the union move (checked when μ_s > μ_k). With two or more sliders the
+at :math:`t_{k-1}`, the others in the union move (checked when μ_s + the priming overshoot > μ_k); contacts that
+start together break away together (the executor primes them at once). With two or more sliders the
 feasible positions need not be convex (the plane less two convex sets), so the middle of their
 move is checked too.
 
@@ -92,10 +93,11 @@ class Lattice:
         mid_lo, mid_hi: The same at the middle of the interval ending at each layer, with the
             sliders half a cell back, for move vectors of two or more sliders (±inf for the others):
             indexed by the layer's own cells (others and axis), the bounds shifted accordingly.
-        break_lo, break_hi: The same with one starting contact on its static edge, (N + 1, n_others,
-            slots), or None when no contact's μ_s exceeds its μ_k: the intersection of the intervals at
-            the layer and at the real start, half a ramp earlier, with the other sliders that far back.
-        breakaway_slot: Per move vector and contact, the slot of that check, or -1 (none needed), (M, m).
+        break_lo, break_hi: The same with the starting contacts on their static edges (primed), (N + 1, n_others,
+            slots), or None when no contact's μ_s (+ the priming overshoot) exceeds its μ_k: the intersection of the
+            intervals at the layer and at the real start, half a ramp earlier, with the other sliders that far back.
+        breakaway_slot: Per move vector (the union move) and starter mask (bit i: contact i starts), the slot of
+            that check, or -1 (none needed), (M, 2^m).
         rest_only: Layers whose states must not move (the first and last intervals), (N + 1,) bool.
         slide_cost: K, the cost of one slide.
         move_cost: Secondary cost per moving contact and interval.
@@ -210,14 +212,8 @@ def _layer(V_old, lo_old, n_old, lo_new, n_new, env_new, prox_new, tlo_new, thi_
                         tlo_old[other_old, u] - _TOL <= x_old <= thi_old[other_old, u] + _TOL):
                     continue
                 if use_break and pair_bits[r]:
-                    fine = True
-                    for i in range(m):
-                        slot = break_slot[u, i]
-                        if (pair_bits[r] >> i) & 1 and slot >= 0:
-                            if not (blo_old[other_old, slot] - _TOL <= x_old <= bhi_old[other_old, slot] + _TOL):
-                                fine = False
-                                break
-                    if not fine:
+                    slot = break_slot[u, pair_bits[r]]  # (the starters primed together)
+                    if slot >= 0 and not (blo_old[other_old, slot] - _TOL <= x_old <= bhi_old[other_old, slot] + _TOL):
                         continue
                 best, arg = value, pair_old[r]
             if arg >= 0:

@@ -54,7 +54,7 @@ from ..model.scenario import Scenario
 from .diagnosis import diagnose
 from .force_polytope import force_system, force_vertices, torque_excess
 from .lattice import cells_of, flat_index, move_runs, path, run
-from .problem import Problem, RegraspSettings, build_problem, slide_ratios, window_margin
+from .problem import Problem, RegraspSettings, breakaway_limits, build_problem, slide_ratios, window_margin
 from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide, first_minimum, slides_at
 from .torque import TorqueModel
 
@@ -136,10 +136,11 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
     limits = settings.force_limits()
     mu_s = [f.static for f in problem.friction]
     starts = []
-    for s in schedule.slides:  # break-away: the slider primed past its static edge as it starts
-        t = np.array([s.start])
+    for s in schedule.slides:  # break-away: the slider primed past its static edge as it starts, with any other
+        t = np.array([s.start])  # slide that starts with it (the executor primes them together)
         st = schedule.at(t + 1e-9)
-        starts.append((s, float(s.start), st.direction[0], schedule.at(t).xi[0], traj.sample(
+        together = [o.contact for o in schedule.slides if abs(o.start - s.start) <= 1e-9]
+        starts.append((s, together, float(s.start), st.direction[0], schedule.at(t).xi[0], traj.sample(
             np.clip(t, traj.t_start, traj.t_end))))
     groups: dict[tuple, list] = {}  # the sample times by mode
     for k in range(len(times)):
@@ -159,10 +160,10 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
                                         at.xi[k], slide_ratios(direction, problem.friction), mu_s, limits)
                 if why is not None:
                     violations.append((float(times[k]), *why))
-    for s, t, direction, xi, smp in starts:
+    for s, together, t, direction, xi, smp in starts:
         fv = force_vertices(problem.geometry, smp.pose[:, 2], smp.acceleration,
-                            slide_ratios(direction, problem.friction, breaking=s.contact,
-                                         overshoot=settings.prime_overshoot), mu_s, limits)
+                            slide_ratios(direction, problem.friction, breaking=together,
+                                         overshoot=settings.prime_overshoot), mu_s, breakaway_limits(limits))
         if not _holds(*fv.at(0), xi):
             violations.append((t, "breakaway", s.contact))
     return sorted(violations), first_minimum(margins, times, problem.names)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from ..core.contact import Friction
     from ..core.trajectory import Trajectory
 
-__all__ = ["Problem", "RegraspSettings", "build_problem", "slide_ratios", "trajectory_period"]
+__all__ = ["Problem", "RegraspSettings", "breakaway_limits", "build_problem", "slide_ratios", "trajectory_period"]
 
 #: The largest force tables a problem may build [bytes] (four float32 tables per layer, cell of the
 #: other contacts and move vector: about 80 MiB for the three-finger paper scenario)
@@ -49,13 +49,19 @@ class RegraspSettings:
     Attributes:
         envelope_margin: Every contact stays this far inside its feasible set [m] (≥ half the
             ``xi_resolution``, so that a one-cell move stays inside too).
-        cone_margin: Every fixed contact keeps μ_s f_n - |f_t| ≥ this [N].
+        cone_margin: Every fixed contact keeps (μ_s - ``friction_margin``) f_n - |f_t| ≥ this [N].
         f_min, f_max: Every contact's normal force within ``[f_min, f_max]`` [N].
-        prime_overshoot: Plan each break-away with the slider's friction ratio at μ_s + this [-] (the executor's
-            priming overshoot, ``ExecutorSettings.prime_overshoot``), so that the holders keep their margins through
-            it. Off by default: on the default scenario 0.05 tightens the schedule (3.0 mm of envelope margin instead
-            of 5.0 mm), which under model error costs more than it buys (``docs/derivations.md``, "Contact health
-            and keeping the loads").
+        friction_margin: Every fixed contact also keeps |f_t| <= (μ_s - this) f_n [-] (a coefficient, unlike
+            ``cone_margin``: it grows with the load). A planned force system must be one the executor's
+            internal-force law accepts: its held contacts keep ``InternalForceSettings.friction_margin`` where the
+            forces allow, then its ``fallback_friction_margin``, then its ``last_friction_margin`` (0 in
+            :meth:`~regrasp.supervisor.settings.SupervisorSettings.robust`: the model's cone), so 0 here is what
+            that executor accepts; plan with its fallback margin (0.05) for an executor without a last one.
+        prime_overshoot: Plan each break-away with the slider's friction ratio at μ_s + this [-]: the executor's
+            priming overshoot at its start (``ExecutorSettings.prime_overshoot``, 0.01 in
+            :meth:`~regrasp.supervisor.settings.SupervisorSettings.robust`), where the nominal plant breaks away.
+            Contacts that start together are primed together and checked so (:mod:`regrasp.schedule.lattice`), and
+            a break-away is checked with the limits of the executor's last fallback (:func:`breakaway_limits`).
         slider_floor: A sliding (or breaking-away) contact pushes with at least this [N] ...
         holder_preload: ... and the held ones with at least this while any contact slides [N] (0: ``f_min``):
             on a compliant contact the slider is the one that loses its load first, and the holders take what a
@@ -83,7 +89,8 @@ class RegraspSettings:
     cone_margin: float = DEFAULT_CONE_MARGIN
     f_min: float = 0.2
     f_max: float = 20.0
-    prime_overshoot: float = 0.0
+    friction_margin: float = 0.0
+    prime_overshoot: float = 0.01
     slider_floor: float = 0.3
     holder_preload: float = 0.3
     max_slide_speed: float = 0.05
@@ -101,8 +108,8 @@ class RegraspSettings:
     def __post_init__(self):
         check_fields(self, as_positive_float, ("max_slide_speed", "max_slide_acceleration", "xi_resolution", "f_min",
                                                "f_max"))
-        check_fields(self, as_positive_float, ("envelope_margin", "cone_margin", "prime_overshoot", "slider_floor",
-                                               "holder_preload"), allow_zero=True)
+        check_fields(self, as_positive_float, ("envelope_margin", "cone_margin", "friction_margin", "prime_overshoot",
+                                               "slider_floor", "holder_preload"), allow_zero=True)
         if self.comfort_margin is None:
             object.__setattr__(self, "comfort_margin", self.envelope_margin + 4e-3)
         check_fields(self, as_positive_float, ("comfort_margin",))
@@ -132,7 +139,7 @@ class RegraspSettings:
     def force_limits(self, cone_margin: float | None = None) -> ForceLimits:
         """The force limits these settings plan with (``cone_margin``: another margin [N] than theirs)."""
         return ForceLimits(self.f_min, self.f_max, self.cone_margin if cone_margin is None else cone_margin,
-                           self.slider_floor, self.holder_preload)
+                           self.slider_floor, self.holder_preload, self.friction_margin)
 
     @property
     def ramp(self) -> float:
@@ -192,11 +199,21 @@ def _cell_margins(sample, grid: np.ndarray) -> np.ndarray:
     return out
 
 
-def slide_ratios(direction: Iterable[int], friction: Iterable[Friction], breaking: int | None = None,
+def breakaway_limits(limits: ForceLimits) -> ForceLimits:
+    """The limits a break-away is planned with: what the executor's internal force keeps at a priming in its last
+    fallback (:mod:`regrasp.supervisor.fallbacks`), the held contacts' friction margin (its
+    ``fallback_friction_margin``, the planner's ``friction_margin``) and ``f_min``; its floors are given up first and
+    its cone margin [N] is a target, not a constraint, so ``slider_floor``, ``holder_preload`` and ``cone_margin``
+    do not apply (a priming lasts a few milliseconds on the nominal plant)."""
+    return replace(limits, slider_floor=0.0, holder_preload=0.0, cone_margin=0.0)
+
+
+def slide_ratios(direction: Iterable[int], friction: Iterable[Friction], breaking: int | Iterable[int] | None = None,
                  overshoot: float = 0.0) -> list[float | None]:
-    """Per contact None (fixed) or the signed force ratio τ/λ = s μ_k (s (μ_s + ``overshoot``) for ``breaking``:
-    the executor primes a break-away past the static cone's edge)."""
-    return [None if d == 0 else d * (f.static + overshoot if i == breaking else f.kinetic)
+    """Per contact None (fixed) or the signed force ratio τ/λ = s μ_k (s (μ_s + ``overshoot``) for the contact or
+    contacts ``breaking``: the executor primes a break-away past the static cone's edge)."""
+    primed = set() if breaking is None else {breaking} if isinstance(breaking, (int, np.integer)) else set(breaking)
+    return [None if d == 0 else d * (f.static + overshoot if i in primed else f.kinetic)
             for i, (d, f) in enumerate(zip(direction, friction))]
 
 
@@ -246,6 +263,11 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
     poses = traj.pose(np.clip(sub_times, traj.t_start, traj.t_end))
     sub_samples = [[env.at(pose, float(t)) for t, pose in zip(sub_times, poses)] for env in envelopes]
     friction = tuple(c.friction for c in contacts)
+    for c in contacts:
+        if not settings.friction_margin < c.friction.static:
+            raise InvalidParameterError("friction_margin", settings.friction_margin,
+                                        f"a friction margin below every contact's mu_s ({c.finger.name}: "
+                                        f"{c.friction.static:g})")
     p_max = min(m - 1, 2 * m - 3) if settings.max_sliders is None else min(settings.max_sliders, m - 1, 2 * m - 3)
     combos = motion_combos(m, p_max)
     sizes = sorted(len(g) for g in grids)
@@ -340,11 +362,11 @@ def _force_tables(geo, sample, middle, early, lead: float, combos, friction, lim
     h = grids[0][1] - grids[0][0] if len(grids[0]) > 1 else 0.0
     columns = [i for i in range(m) if i != axis]
 
-    def table(ratios, smp=sample, shift=None, keep=None):
+    def table(ratios, smp=sample, shift=None, keep=None, lim=limits):
         """(lo, hi) per layer and cell of the others, with the positions ``shift`` [m] (m,) back (``keep``: a list
-        to append the polytope's vertices to)."""
+        to append the polytope's vertices to; ``lim``: the limits)."""
         grid = others if shift is None else others - np.array([shift[i] for i in columns])
-        fv = force_vertices(geo, smp.pose[:, 2], smp.acceleration, ratios, mu_s, limits)
+        fv = force_vertices(geo, smp.pose[:, 2], smp.acceleration, ratios, mu_s, lim)
         if keep is not None:
             keep.append(fv)
         out = np.empty((2, n_layers, len(others)), dtype=np.float32)
@@ -364,18 +386,27 @@ def _force_tables(geo, sample, middle, early, lead: float, combos, friction, lim
             mid_lo[:, :, mu], mid_hi[:, :, mu] = table(slide_ratios(d, friction), middle, 0.5 * h * np.asarray(d))
     needs = np.array([[d[i] != 0 and friction[i].static + overshoot > friction[i].kinetic + 1e-12 for i in range(m)]
                       for d in combos])
-    slots = np.full((M, m), -1, dtype=np.int64)
+    # one check per move vector u and set S of the contacts that start breaking away in it together (the executor
+    # primes them at once): the slot of every starter mask (bit i: contact i starts) is that of its contacts in need
+    slots = np.full((M, 2 ** m), -1, dtype=np.int64)
     blo = bhi = None
     if needs.any():
-        pairs = list(zip(*np.nonzero(needs)))
-        blo = np.empty((n_layers, len(others), len(pairs)), dtype=np.float32)
+        checks: dict[tuple[int, int], int] = {}
+        for mu in range(M):
+            for bits in range(1, 2 ** m):
+                if any((bits >> i) & 1 and combos[mu, i] == 0 for i in range(m)):
+                    continue  # (only sliders start)
+                primed = sum(1 << i for i in range(m) if (bits >> i) & 1 and needs[mu, i])
+                if primed:
+                    slots[mu, bits] = checks.setdefault((mu, primed), len(checks))
+        blo = np.empty((n_layers, len(others), len(checks)), dtype=np.float32)
         bhi = np.empty_like(blo)
-        for slot, (mu, i) in enumerate(pairs):
-            slots[mu, i] = slot
-            ratios = slide_ratios(combos[mu], friction, breaking=int(i), overshoot=overshoot)
-            at_layer = table(ratios)
-            others_back = lead * h * np.where(np.arange(m) == i, 0, combos[mu])
-            real = table(ratios, early, others_back)
+        for (mu, primed), slot in checks.items():
+            breaking = [i for i in range(m) if (primed >> i) & 1]
+            ratios = slide_ratios(combos[mu], friction, breaking=breaking, overshoot=overshoot)
+            at_layer = table(ratios, lim=breakaway_limits(limits))
+            others_back = lead * h * np.where(np.isin(np.arange(m), breaking), 0, combos[mu])
+            real = table(ratios, early, others_back, lim=breakaway_limits(limits))
             blo[:, :, slot] = np.maximum(at_layer[0], real[0])
             bhi[:, :, slot] = np.minimum(at_layer[1], real[1])
     return lo, hi, blo, bhi, slots, mid_lo, mid_hi, vertices

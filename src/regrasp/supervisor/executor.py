@@ -395,7 +395,7 @@ class SlideExecutor:
         if floors and any(f > internal_force.f_min for f in floors):
             internal_force = replace(internal_force, floors=floors)
         if not relaxed and internal_force.fallback_friction_margin is not None:
-            internal_force = replace(internal_force, fallback_friction_margin=None)
+            internal_force = replace(internal_force, fallback_friction_margin=None, last_friction_margin=None)
         modes = [ContactMode.SLIDING if i in sliders else ContactMode.FIXED for i in range(self.hand.m)]
         model = ReducedModel(self.hand, self.grasp.with_modes(modes), self.xi, object_mass=self.object_mass,
                              object_inertia=self.object_inertia)

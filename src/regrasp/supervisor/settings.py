@@ -41,7 +41,9 @@ class ExecutorSettings:
         prime_overshoot: Priming asks for |f_t| = (μ_s + this) f_n at first [-], just past the static cone's edge,
             so that the contact starts to slip by itself before the sliding law takes over (switching to the
             sliding law while the contact is still stuck makes the plant redistribute the forces for one step and
-            can slip another contact) ...
+            can slip another contact). The excess past the plant's μ_s is what the slip releases in one step: two
+            contacts primed together at 0.05 pulled a 1.1 N slider 2.9-4.0 N off its edge (issue 27's ω 2.5 rad/s,
+            200 g variant), at 0.01 it kept 0.30 N; so start low and grow ...
         prime_overshoot_max: ... and up to (μ_s + this) f_n at the end of ``prime_time`` [-].
         start_speed: The priming ends when the contact is sensed sliding and moving in the slide's direction
             faster than this [m/s] (None: sensed sliding is enough).
@@ -320,9 +322,12 @@ class SupervisorSettings:
                holder_preload: float = 0.3) -> SupervisorSettings:
         """Settings for a hand whose plant differs from the model and whose sensors and actuators are not
         perfect (``docs/derivations.md``, "§4, executed" and "Robustness"): the fixed contacts kept 0.1 inside
-        their cones in ratio (0.05 where no force allows more) and ``cone_margin`` [N] inside where the forces
-        allow, the sliders' ξ at 60 rad/s, integral action (0.3 ω³), a priming whose overshoot grows from 0.05
-        to 0.25 over 40 ms and lasts until the contact moves the right way at 1 mm/s, the sliders' kinetic
+        their cones in ratio (0.05 where no force allows more, and the model's cone itself where none allows even
+        that: what the schedule planner plans, ``RegraspSettings.friction_margin``) and ``cone_margin`` [N] inside
+        where the forces allow, the sliders' ξ at 60 rad/s, integral action (0.3 ω³), a priming whose overshoot
+        grows from 0.01 to 0.25 over 40 ms (so a contact breaks away about where the plant's μ_s is, with little
+        force to spare: ``RegraspSettings.prime_overshoot``) and lasts until the contact moves the right way at
+        1 mm/s, the sliders' kinetic
         friction estimated from the sensed forces (10 ms, from the break-away on), settling with 0.05 N of static
         margin, the held contacts' model positions following their sensed ones through a 20 ms filter, and the
         runtime envelopes evaluated every 10th step (100 Hz at 1 kHz; what a stale reading can miss:
@@ -337,10 +342,11 @@ class SupervisorSettings:
         else with :func:`dataclasses.replace` on the branch (e.g. ``replace(s, executor=replace(s.executor,
         prime_overshoot=0.01))``)."""
         executor = ExecutorSettings(
-            slide_omega=60.0, integral=0.3, prime_time=0.04, prime_overshoot_max=0.25, friction_filter_time=0.01,
+            slide_omega=60.0, integral=0.3, prime_time=0.04, prime_overshoot=0.01, prime_overshoot_max=0.25,
+            friction_filter_time=0.01,
             breakaway_estimate=True, settle_margin=0.05, start_speed=1e-3, hold_filter_time=0.02,
             internal_force=InternalForceSettings(f_min=0.2, friction_margin=0.1, target_cone_margin=cone_margin,
-                                                 fallback_friction_margin=0.05),
+                                                 fallback_friction_margin=0.05, last_friction_margin=0.0),
             actuation_delay=actuation_delay, tip_radius=tip_radius, hold_resolution=hold_resolution,
             slider_floor=slider_floor, holder_preload=holder_preload, reflex_below=0.1, reflex_floor=0.4,
             handover_time=0.03)

@@ -250,3 +250,32 @@ def test_a_fallback_margin_answers_where_the_margin_cannot_be_kept_and_only_ther
     for bad in (0.05, 0.1, -0.01, np.nan):  # at least the margin, negative, not a number
         with pytest.raises(InvalidParameterError, match="fallback_friction_margin"):
             InternalForceSettings(friction_margin=0.05, fallback_friction_margin=bad)
+
+
+def test_the_last_friction_margin_answers_where_the_fallback_cannot_be_kept():
+    """A chain of two relaxations: with the margin and the fallback both above the largest feasible margin m* (the
+    LP's), the solver answers with the last margin, below m*, inside its cones; without it, it fails."""
+    chained = 0
+    for kind, seed in CASES:
+        case = random_case(kind, seed)
+        A, f_m, frames, fixed, mu, modes, friction = (case[k] for k in ("A", "f_m", "frames", "fixed", "mu", "modes",
+                                                                        "friction"))
+        if not any(fixed):
+            continue
+        base = dataclasses.replace(case["settings"], target_cone_margin=0.2)
+        grid = np.linspace(0.0, min(mu[i] for i in range(len(mu)) if fixed[i]), 21)
+        feasible = [m for m in grid if best_margin(case, dataclasses.replace(base, friction_margin=m)) is not None]
+        if len(feasible) < 2 or len(feasible) + 1 >= len(grid):
+            continue
+        low, high, higher = feasible[-2], grid[len(feasible)], grid[len(feasible) + 1]
+        strict = dataclasses.replace(base, friction_margin=higher, fallback_friction_margin=high)
+        with pytest.raises(InternalForceInfeasibleError):
+            InternalForceSolver(strict).solve(A, f_m, frames, modes, friction)
+        solver = InternalForceSolver(dataclasses.replace(strict, last_friction_margin=low))
+        result = solver.solve(A, f_m, frames, modes, friction)
+        scale = max(1.0, np.abs(f_m).max())
+        assert solver.relaxations == 1 and result.feasible
+        assert worst_violation(result.forces, frames, fixed, mu, dataclasses.replace(base, friction_margin=low)) \
+            <= 10 * base.tolerance * scale
+        chained += 1
+    assert chained >= 10, chained

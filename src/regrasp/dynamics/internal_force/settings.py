@@ -33,6 +33,9 @@ class InternalForceSettings:
         fallback_friction_margin: Where no internal force keeps the fixed contacts ``friction_margin`` inside their
             cones, the solver answers with this smaller friction margin [-] instead of failing (None: it fails). A
             margin that covers an uncertain μ is a preference; the cone of the model's μ is the limit.
+        last_friction_margin: Where no internal force keeps even ``fallback_friction_margin``, the solver answers
+            with this one [-] (e.g. 0: the model's cone itself) instead of failing (None: it fails); only with a
+            ``fallback_friction_margin`` above it.
         floors: Per contact, a larger minimum normal force [N] than ``f_min`` (empty: none; contact i's floor is
             max(f_min, floors[i])): a contact pre-loaded for a neighbour's break-away, or one a reflex loads.
     """
@@ -44,6 +47,7 @@ class InternalForceSettings:
     target_cone_margin: float = 0.0
     fallback_friction_margin: float | None = None
     floors: tuple[float, ...] = ()
+    last_friction_margin: float | None = None
 
     def __post_init__(self):
         check_fields(self, as_positive_float, ("f_min", "friction_margin", "target_cone_margin"), allow_zero=True)
@@ -67,6 +71,12 @@ class InternalForceSettings:
         if fallback is not None and not 0.0 <= fallback < self.friction_margin:
             raise InvalidParameterError("fallback_friction_margin", fallback,
                                         f"None or a friction margin in [0, friction_margin = {self.friction_margin:g})")
+        check_fields(self, as_finite_float, ("last_friction_margin",), optional=True)
+        last = self.last_friction_margin
+        if last is not None and not (fallback is not None and 0.0 <= last < fallback):
+            raise InvalidParameterError("last_friction_margin", last,
+                                        "None, or a friction margin in [0, fallback_friction_margin) with a "
+                                        f"fallback_friction_margin (it is {fallback})")
 
     def floor(self, i: int) -> float:
         """Contact i's least normal force [N]: ``f_min``, or its larger entry in ``floors``."""

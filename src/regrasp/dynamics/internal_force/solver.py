@@ -163,7 +163,8 @@ class InternalForceSolver:
             if self._relaxed is None:
                 self._relaxed = InternalForceSolver(
                     replace(self.settings, friction_margin=self.settings.fallback_friction_margin,
-                            fallback_friction_margin=None), compiled=self.compiled)
+                            fallback_friction_margin=self.settings.last_friction_margin, last_friction_margin=None),
+                    compiled=self.compiled)
             self.relaxations += 1
             return self._relaxed.solve_floats(constraint_matrix, motion_forces, frames, modes, friction, cone_edge,
                                               start, torques)
