@@ -1,0 +1,36 @@
+"""Issue 27's two variants of the default three-finger scenario (``tests/fixtures/issue27_variant_*.toml``): the
+first plans a schedule and runs it over two periods on the project plant; the second ends with a physical reason
+(the forces), not with a verification that never converges."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from regrasp import RunSpec, load_scenario
+from regrasp.rollout.build import build_rollout
+from regrasp.schedule import NoScheduleError, ScheduleLimit, plan_regrasps
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
+
+
+@pytest.mark.slow
+def test_the_first_variant_runs_its_schedule_over_two_periods():
+    scenario = load_scenario(FIXTURES / "issue27_variant_a.toml")
+    rollout = build_rollout(scenario, RunSpec(duration=scenario.trajectory.t_end), policy="scheduled")
+    result = rollout.run()
+    assert result.schedule is not None and len(result.schedule.slides) >= 3
+    assert result.success, result.failure
+    assert result.replans == 0
+    aborted = [e for e in result.events if e.kind.value in ("slide_aborted", "replan_failed")]
+    assert not aborted, aborted[:3]
+
+
+@pytest.mark.slow
+def test_the_second_variant_ends_for_a_physical_reason():
+    scenario = load_scenario(FIXTURES / "issue27_variant_b.toml")
+    with pytest.raises(NoScheduleError) as info:
+        plan_regrasps(scenario)
+    assert info.value.limit is ScheduleLimit.FORCES
+    assert "finger1" in str(info.value)
