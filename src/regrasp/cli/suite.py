@@ -115,7 +115,8 @@ def suite_summary(result: SuiteResult, spec: SuiteSpec | None = None) -> str:
             failed = [o for o in ran if not o.success and str(o.failure_kind) == kind]
             times = ", ".join(f"{o.index} at t = {o.failure_time:.3f} s" if o.failure_time is not None else
                               str(o.index) for o in failed[:8])
-            lines.append(f"    failed, {kind}: {count} (variants {times}{', ...' if len(failed) > 8 else ''})")
+            lines.append(f"    failed, {kind}: {count} (variant{'s' if count > 1 else ''} {times}"
+                         f"{', ...' if len(failed) > 8 else ''})")
     elif not result.plan_only and scheduled:
         lines.append("  success given a schedule: n/a (no rollout finished)")
     cold = sum(o.cold for o in result.outcomes if o.plan_seconds is not None)
