@@ -18,10 +18,15 @@ __all__ = ["process_runs"]
 _JOB: dict = {}
 
 
-def _init_worker(function: Callable, *shared: object) -> None:
-    """A pool worker's job function and shared inputs, handed over once per worker, not once per job."""
+def _init_worker(threads: int | None, function: Callable, *shared: object) -> None:
+    """A pool worker's numba threads, job function and shared inputs, handed over once per worker, not once per
+    job."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _JOB["function"], _JOB["shared"] = function, shared
+    if threads is not None:
+        import numba
+
+        numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
     from ..kernels import ROLLOUT, warm_up
 
     warm_up(groups=ROLLOUT)  # (every kernel loaded before the first job: no job's wall time pays for it)
@@ -32,10 +37,13 @@ def _pool_run(item: object) -> object:
     return _JOB["function"](first, item, *rest)
 
 
-def process_runs(workers: int, function: Callable, shared: tuple, items: Sequence) -> Iterator:
+def process_runs(workers: int, function: Callable, shared: tuple, items: Sequence, *,
+                 threads: int | None = None) -> Iterator:
     """``function(shared[0], item, *shared[1:])`` for each item, on a pool of ``workers`` spawned processes, as they
     finish (in no particular order). ``function`` must be importable by name (a module's top-level function) and the
-    shared inputs and items picklable. Closing the generator early terminates the workers."""
+    shared inputs and items picklable. ``threads``: the numba threads of each worker (None: numba's default, one per
+    core; jobs whose kernels are parallel, as the schedule's lattice, want the cores shared out, else the workers'
+    threads oversubscribe them). Closing the generator early terminates the workers."""
     with multiprocessing.get_context("spawn").Pool(workers, initializer=_init_worker,
-                                                   initargs=(function, *shared)) as pool:
+                                                   initargs=(threads, function, *shared)) as pool:
         yield from pool.imap_unordered(_pool_run, items)  # (the pool's exit terminates the workers)

@@ -17,6 +17,7 @@ finished.
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -146,7 +147,8 @@ def run_suite(spec: SuiteSpec | str | Path, *, workers: int = 1, ray_address: st
         warm_up(groups=ROLLOUT)  # (as a pool's worker does: no variant's wall time pays for them)
         source = _here(shared, indices)
     else:
-        source = process_runs(min(workers, spec.variants), run_variant, shared, indices)
+        workers = min(workers, spec.variants)  # (the schedule's lattice is parallel: the cores shared out)
+        source = process_runs(workers, run_variant, shared, indices, threads=max(1, (os.cpu_count() or 1) // workers))
     outcomes: list[VariantOutcome] = []
     try:
         if progress is not None:
