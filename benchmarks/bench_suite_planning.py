@@ -11,9 +11,9 @@ The rollout kernels are loaded before the first variant (as ``regrasp suite`` do
 also loads the planner's compiled kernels from numba's cache (counted: ``cold``).
 
 Reported: the median, 95th percentile and largest planning time [s] and peak memory [MiB] over the variants, and the
-count with a schedule. With ``--workers 2`` on a 2-core machine the two processes' planners share the cores (the
-lattice is parallel): the times are a loaded machine's, longer than ``--workers 1``'s. A benchmark, not a test:
-nothing is asserted.
+count with a schedule. With ``--workers K`` each process plans with its share of the cores (numba's threads; the
+lattice is parallel): a variant's time is then its share's, longer than ``--workers 1``'s, and the wall time shorter.
+A benchmark, not a test: nothing is asserted.
 
 Run (from any directory)::
 
