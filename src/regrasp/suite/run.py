@@ -8,8 +8,8 @@ A variant is planned as ``regrasp plan --regrasp`` plans (:func:`~regrasp.envelo
 success criterion), with no model error and no noise: the plant is the model. Its planning is timed
 (``time.perf_counter``) and its peak memory measured (:mod:`regrasp.suite.memory`: the worker's peak resident set
 size). On a pool of processes each worker gets its share of the cores for numba's threads (the schedule's lattice
-is parallel), so that the workers do not oversubscribe them. A job carries the spec (the base scenario's document and absolute file paths): Ray workers on other machines
-need the scenario's and the URDFs' files at the same paths.
+is parallel), so that the workers do not oversubscribe them. A job carries the spec (the base scenario's document
+and absolute file paths): Ray workers on other machines need the scenario's and the URDFs' files at the same paths.
 
 The results are the same whatever the workers and their order (each variant depends only on the spec and its index);
 the timings and memory are not. With ``interruptible``, Ctrl-C ends a suite at once and keeps the variants that
