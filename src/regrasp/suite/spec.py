@@ -13,9 +13,15 @@ r"""A suite's spec (TOML): a base scenario, and the ranges and choices its varia
     "trajectory.omega" = {uniform = [1.5, 3.0]}        # the same, spelled out
     "fingers.palm.base.0" = [0.02, 0.04]               # an array's component: its index (the palm's base x)
     "fingers.finger1.edge" = {choices = [1]}           # one of a list, each as likely
-    "trajectory" = {choices = [{type = "ellipse", cx = 0.0, cy = 0.12, a = 0.09, b = 0.05,
-                                omega = {uniform = [1.5, 3.0]}}]}   # a whole table; a range inside is drawn too
     "hand.gravity_angle" = [-0.2, 0.2]                 # gravity turned by this angle [rad], counter-clockwise
+
+    [[vary.trajectory.choices]]                        # a whole table to choose (an inline table stays on one line)
+    type = "ellipse"
+    cx = 0.0
+    cy = 0.12
+    a = 0.09
+    b = 0.05
+    omega = {uniform = [1.5, 3.0]}                     # a range inside a chosen table is drawn too
 
 A key of ``[vary]`` is a path into the scenario's TOML document (:mod:`regrasp.model.scenario`, every key in
 ``docs/scenario.md``): its tables and keys joined by dots, a finger by its name or index (``fingers.palm``,
