@@ -131,6 +131,8 @@ def _outcomes(plt: object, result: SuiteResult, path: Path) -> Path:
 def _distribution(ax: object, values: list[float], without: list[float], unit: str, what: str) -> None:
     """A histogram of ``values`` (with a schedule) stacked on ``without`` (no schedule), its empirical CDF on a second
     axis and its p50 and p95 as lines."""
+    from matplotlib.ticker import MaxNLocator
+
     from ..core.figures import FAILURE_COLOURS, SUCCESS_COLOUR
 
     both = np.array(values + without, dtype=float)
@@ -144,6 +146,7 @@ def _distribution(ax: object, values: list[float], without: list[float], unit: s
             label=["with a schedule", "without"])
     ax.set_xlabel(f"{what} [{unit}]")
     ax.set_ylabel("variants")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ordered = np.sort(both)
     cdf = ax.twinx()
     cdf.step(ordered, np.arange(1, ordered.size + 1) / ordered.size, where="post", color="black", lw=1.0,
@@ -194,6 +197,8 @@ def _reasons(plt: object, result: SuiteResult, path: Path) -> Path:
         fig.savefig(path, dpi=110, bbox_inches="tight")
         plt.close(fig)
         return path
+    from matplotlib.ticker import MaxNLocator
+
     rows = sorted(counts.items(), key=lambda kv: -kv[1][0])
     fig, ax = plt.subplots(figsize=(8.0, 1.2 + 0.4 * len(rows)))
     ax.barh(range(len(rows)), [n for _, (n, _) in rows], color=[c for _, (_, c) in rows])
@@ -202,6 +207,7 @@ def _reasons(plt: object, result: SuiteResult, path: Path) -> Path:
     ax.set_yticks(range(len(rows)), [label for label, _ in rows], fontsize=8)
     ax.invert_yaxis()
     ax.set_xlabel("variants")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlim(0, max(n for _, (n, _) in rows) * 1.15)
     ax.set_title(f"{suite_title(result)}\nvariants by outcome", fontsize=8)
     fig.savefig(path, dpi=110, bbox_inches="tight")
