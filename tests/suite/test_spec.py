@@ -106,3 +106,18 @@ def test_a_spec_built_in_code_is_checked():
         SuiteSpec("s", BASE, base, ("object.mass",), 1)
     spec = SuiteSpec("s", BASE, base, (Varied("object.mass", ("object", "mass"), 0.05, 0.1),), 2, seed=3)
     assert spec.where == "<suite s>" and spec.varied[0].describe() == "U(0.05, 0.1)"
+
+
+def test_the_modules_example_is_a_valid_spec(tmp_path):
+    """The spec module's docstring example reads (its scenario's path made this checkout's)."""
+    import re
+
+    from regrasp.suite import spec as module
+
+    example = re.search(r"code-block:: toml\n\n(.*?)\n\n[A-Z]", module.__doc__, re.S).group(1)
+    text = "\n".join(line[4:] for line in example.splitlines())
+    text = text.replace('"../scenarios/paper_trajectory_2_three_fingers.toml"', f'"{BASE}"')
+    (tmp_path / "spec.toml").write_text(text)
+    spec = load_suite_spec(tmp_path / "spec.toml")
+    assert [v.key for v in spec.varied][:3] == ["object.width", "trajectory.omega", "fingers.palm.base.0"]
+    assert spec.varied[-1].key == "trajectory" and spec.variants == 120
