@@ -4,7 +4,8 @@ Run: python benchmarks/bench_help.py [--repeat N] [--json]
 
 Timed, each ``N`` times (default 5) in a fresh subprocess (``time.perf_counter`` around
 ``subprocess.run``: the interpreter's start, the imports before argparse answers, the output):
-* ``python -m regrasp.cli.main --help`` and ``... plan --help``, ``... simulate --help``, ``... study --help``;
+* ``python -m regrasp.cli.main --help`` and ``... plan --help``, ``... simulate --help``, ``... study --help``,
+  ``... suite --help``;
 * ``python examples/NN_*.py --help`` for every numbered example.
 The processes import the regrasp of this checkout (``src`` first on ``PYTHONPATH``). Reports the median and the
 largest time of each command in seconds and marks those over the 1 s target; a command that fails or does not
@@ -30,7 +31,7 @@ TARGET = 1.0  # [s], issue 26
 def commands() -> list[tuple[str, list[str]]]:
     """(label, argv after the interpreter) of every command timed."""
     cli = [(" ".join(["regrasp", *sub, "--help"]), ["-m", "regrasp.cli.main", *sub, "--help"])
-           for sub in ([], ["plan"], ["simulate"], ["study"])]
+           for sub in ([], ["plan"], ["simulate"], ["study"], ["suite"])]
     examples = sorted((ROOT / "examples").glob("[0-9][0-9]_*.py"))
     return cli + [(f"examples/{p.name} --help", [str(p), "--help"]) for p in examples]
 

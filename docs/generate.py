@@ -142,6 +142,7 @@ def _under(folder: str, names: Iterable[str]) -> dict[str, str]:
 
 
 PLANNER_FIGURES = ("d.png", "feasible.png", "reachable.png")
+SUITE_FIGURES = ("suite_outcomes.png", "suite_planning.png", "suite_reasons.png", "suite.json")
 SECTION_4 = ("fig_4_2_trajectory_1.png", "fig_4_2_trajectory_1_frames.png", "fig_4_3_three_fingers.png",
              "fig_4_4_gravity_up.png", "fig_4_4_gravity_up_frames.png")
 
@@ -193,6 +194,11 @@ BLOCKS: dict[str, Block] = {
                                figures={k: f"docs/images/robustness_mujoco/{v}" for k, v in STUDY_FIGURES.items()}),
     "robustness-drake": Block(STUDY.replace("--runs 200", "--runs 100") + " --plant drake", slow=True,
                               figures={k: f"docs/images/robustness_drake/{v}" for k, v in STUDY_FIGURES.items()}),
+    # task suites (issue 27): the planning times and memory are measured, so the blocks are never compared
+    "suite-small": Block("regrasp suite --variants 12 --workers 2 --plot {out}", as_printed, slow=True, measured=True,
+                         figures=_under("suite_small", SUITE_FIGURES)),
+    "suite": Block("regrasp suite --workers 2 --plot {out}", as_printed, slow=True, measured=True,
+                   figures=_under("suite", SUITE_FIGURES)),
     # speed: measured, never checked
     "benchmarks": Block("python benchmarks/run.py", as_printed, slow=True, measured=True),
     "first-run": Block("python benchmarks/first_run.py", slow=True, measured=True),

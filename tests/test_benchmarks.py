@@ -62,3 +62,13 @@ def test_first_run_benchmark_answers_its_help():
     proc = subprocess.run([sys.executable, str(BENCH / "first_run.py"), "--help"], capture_output=True, text=True,
                           timeout=HANG_SECONDS, check=False)
     assert proc.returncode == 0 and proc.stdout.startswith("usage:") and "--json" in proc.stdout
+
+
+def test_suite_planning_benchmark_quick_smoke():
+    """benchmarks/bench_suite_planning.py --variants 1: one variant planned, its time and memory (no timing
+    assertions)."""
+    proc = subprocess.run([sys.executable, str(BENCH / "bench_suite_planning.py"), "--variants", "1", "--json"],
+                          capture_output=True, text=True, timeout=HANG_SECONDS, check=False)
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["variants"] == 1 and doc["plan_seconds"]["p95"] > 0 and doc["peak_memory_mib"]["p95"] > 0

@@ -20,9 +20,9 @@ if TYPE_CHECKING:
     from ..core.pad import Pad
     from ..plants.spec import PlantSpec
 
-__all__ = ["DEFAULT_SCENARIO", "STARTED", "KernelLoad", "ProgressBar", "add_plant_arguments", "compile_kernels",
-           "count_argument", "nonnegative", "number_argument", "output_directory", "output_file", "pad_option",
-           "plant_spec", "positive"]
+__all__ = ["DEFAULT_SCENARIO", "DEFAULT_SUITE", "STARTED", "KernelLoad", "ProgressBar", "add_plant_arguments",
+           "compile_kernels", "count_argument", "nonnegative", "number_argument", "output_directory", "output_file",
+           "pad_option", "plant_spec", "positive", "ray_address_argument"]
 
 #: When the command line started (``time.monotonic()``, at the CLI's import, before any heavy import): a summary's
 #: "in all" wall time counts imports, planning and compiling too.
@@ -33,6 +33,8 @@ T = TypeVar("T", int, float)
 #: The default scenario (in the source tree's examples/).
 DEFAULT_SCENARIO = Path(__file__).resolve().parents[3] / "examples" / "scenarios" / \
     "paper_trajectory_2_three_fingers.toml"
+#: The default suite's spec (in the source tree's examples/).
+DEFAULT_SUITE = DEFAULT_SCENARIO.parents[1] / "suites" / "default.toml"
 
 
 def number_argument(kind: type[T], expected: str, accept: Callable[[T], bool]) -> Callable[[str], T]:
@@ -69,6 +71,17 @@ def count_argument(least: int, most: int) -> Callable[[str], int]:
         except (ValueError, InvalidParameterError):  # (int() refuses 'abc', '1.5' and more than 4300 digits)
             raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
     return parse
+
+
+def ray_address_argument(text: str) -> str:
+    """``--ray ADDRESS``'s type: an address :func:`~regrasp.study.ray_cluster.parse_ray_address` takes (it is reached
+    when the work starts, before any planning)."""
+    from ..study.ray_cluster import parse_ray_address
+
+    try:
+        return parse_ray_address("--ray", text).text
+    except InvalidParameterError as exc:
+        raise argparse.ArgumentTypeError(f"expected {exc.expected}, got {text!r}") from None
 
 
 class ProgressBar:

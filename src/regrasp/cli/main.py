@@ -1,5 +1,6 @@
 """The regrasp command line: ``regrasp plan`` (:mod:`regrasp.cli.plan`), ``regrasp simulate``
-(:mod:`regrasp.cli.simulate`) and ``regrasp study`` (:mod:`regrasp.cli.study`).
+(:mod:`regrasp.cli.simulate`), ``regrasp study`` (:mod:`regrasp.cli.study`) and ``regrasp suite``
+(:mod:`regrasp.cli.suite`).
 
 Exit status: 0 success, 1 a result that says no (infeasible, a failed rollout), 2 bad input (a typed error, one
 line on stderr), 130 interrupted.
@@ -12,7 +13,7 @@ import sys
 from collections.abc import Sequence
 
 from ..core.exceptions import RegraspError
-from . import plan, simulate, study
+from . import plan, simulate, study, suite
 
 __all__ = ["build_parser", "main"]
 
@@ -40,6 +41,14 @@ def build_parser() -> argparse.ArgumentParser:
                     "Wilson 95 % interval, the failures by kind and time and the margins. The perturbations default "
                     "to the scenario's [study] table; a flag overrides its key. Exit status 0: the study ran, 2: bad "
                     "input, 130: Ctrl-C (the runs that finished are summarised and written first)."))
+    suite.configure(sub.add_parser(
+        "suite", help="a task suite: variants of a scenario drawn from a spec's ranges, planned and run",
+        description="Draw variants of a scenario from the ranges and choices of a suite spec (TOML), plan each (the "
+                    "envelope, then the regrasp schedule; timed, with the planning's peak memory) and run each "
+                    "scheduled one on the plant. Prints the fraction with a schedule (Wilson 95 %), why the others "
+                    "have none (grouped), success given a schedule, the failures by kind and the planning time and "
+                    "memory percentiles. Exit status 0: the suite ran, 2: bad input (a spec's bad key is named), 130: "
+                    "Ctrl-C (the variants that finished are summarised and written first)."))
     return parser
 
 

@@ -24,7 +24,6 @@ from typing import TYPE_CHECKING
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import MAX_COUNT, MAX_RUNS, MAX_SEED, MAX_WORKERS
 from ..model.noise import MAX_DELAY_STEPS
-from ..study.ray_cluster import parse_ray_address
 from .common import (
     DEFAULT_SCENARIO,
     ProgressBar,
@@ -35,6 +34,7 @@ from .common import (
     output_directory,
     output_file,
     plant_spec,
+    ray_address_argument,
 )
 
 if TYPE_CHECKING:
@@ -52,15 +52,6 @@ _half_width = number_argument(float, "a relative half-width in [0, 1)", lambda v
 _seconds = number_argument(float, "a finite duration > 0 [s]", lambda v: 0.0 < v < float("inf"))
 #: Default runs of a study.
 RUNS = 20
-
-
-def _ray_address(text: str) -> str:
-    """``--ray ADDRESS``'s type: an address :func:`~regrasp.study.ray_cluster.parse_ray_address` takes (it is reached
-    when the study starts, before the plan)."""
-    try:
-        return parse_ray_address("--ray", text).text
-    except InvalidParameterError as exc:
-        raise argparse.ArgumentTypeError(f"expected {exc.expected}, got {text!r}") from None
 
 
 #: Each perturbation's flag: (metavar, help, argument type); the bounds are the library's.
@@ -114,7 +105,7 @@ def configure(p: argparse.ArgumentParser) -> None:
                    help="the study's seed (default 0)")
     p.add_argument("--workers", type=count_argument(1, MAX_WORKERS), default=None, metavar="K",
                    help="worker processes (default: one per core); the results do not depend on it")
-    p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS", type=_ray_address,
+    p.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS", type=ray_address_argument,
                    help="run on Ray: a local cluster of --workers CPUs, or the cluster at ADDRESS ('auto', HOST:PORT "
                         "or ray://HOST[:PORT], reached within seconds before the plan); the results are the same as "
                         "on processes")

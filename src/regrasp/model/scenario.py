@@ -66,7 +66,7 @@ from .finger import Finger, as_effort_limit
 from .geometry import Geometry, as_geometry
 from .perturbation import Perturbation
 
-__all__ = ["FingerContact", "Scenario", "load_scenario"]
+__all__ = ["FingerContact", "Scenario", "load_scenario", "scenario_from_document"]
 
 #: The friction when neither a finger nor [hand] gives one.
 
@@ -433,6 +433,16 @@ def load_scenario(path: str | Path) -> Scenario:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ScenarioError(path, None, f"not valid TOML: {exc}") from exc
+    return scenario_from_document(data, path)
+
+
+def scenario_from_document(data: dict, path: str | Path) -> Scenario:
+    """A scenario from a TOML document already read (a dict, as :mod:`tomllib` gives it: a suite's variant,
+    :mod:`regrasp.suite.variants`), validated as :func:`load_scenario` validates a file; ``path``: the file it stands
+    for (relative URDF paths are relative to it, and errors name it)."""
+    path = Path(expect_type("path", path, (str, Path), "a path (str or pathlib.Path)"))
+    if not isinstance(data, dict):
+        raise ScenarioError(path, None, f"expected a TOML document (a table), got {short_repr(data)}")
     top = _Reader(path, data, "")
     name = top.string("name", path.stem)
     description = top.string("description", "")

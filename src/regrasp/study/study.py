@@ -19,8 +19,6 @@ run is judged by a Ctrl-C), in run order (:attr:`StudyResult.interrupted`).
 from __future__ import annotations
 
 import math
-import multiprocessing
-import signal
 import time
 from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
@@ -37,6 +35,7 @@ from ..model.perturbation import Perturbation
 from ..model.softness import ContactSoftness, SoftnessRanges
 from ..plants.spec import PlantSpec
 from .draws import RunDraw, draw_runs
+from .pool import process_runs
 from .ray_cluster import check_ray_address, ray_runs, require_ray
 
 if TYPE_CHECKING:
@@ -235,24 +234,6 @@ class StudyResult:
                              for r in self.runs]}
 
 
-_JOB: dict = {}
-
-
-def _init_worker(*shared: object) -> None:
-    """A pool worker's shared inputs (``run_once``'s arguments but the draw), handed over once per worker, not
-    once per run. A worker ignores Ctrl-C (the terminal sends it to the whole process group): the study decides."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _JOB["shared"] = shared
-    from ..kernels import ROLLOUT, warm_up
-
-    warm_up(groups=ROLLOUT)  # (every kernel loaded before the first run: no run's wall time pays for it)
-
-
-def _pool_run(draw: RunDraw) -> RunOutcome:
-    scenario, *rest = _JOB["shared"]
-    return run_once(scenario, draw, *rest)
-
-
 def _on_processes(workers: int, shared: tuple, draws: tuple[RunDraw, ...]) -> Iterator[RunOutcome]:
     """The runs' outcomes as they finish: in this process (a run ended by Ctrl-C raises KeyboardInterrupt, it is
     not an outcome) or on a pool of ``workers`` processes (closing the generator terminates the pool)."""
@@ -263,10 +244,7 @@ def _on_processes(workers: int, shared: tuple, draws: tuple[RunDraw, ...]) -> It
                 raise KeyboardInterrupt
             yield outcome
         return
-    # "spawn", not Linux's default "fork": the parent has run OpenMP code (planning), and forking such a
-    # process aborts the child ("fork() called from a process already using GNU OpenMP")
-    with multiprocessing.get_context("spawn").Pool(workers, initializer=_init_worker, initargs=shared) as pool:
-        yield from pool.imap_unordered(_pool_run, draws)  # (the pool's exit terminates the workers)
+    yield from process_runs(workers, run_once, shared, draws)  # (closing it terminates the workers)
 
 
 def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
