@@ -148,11 +148,12 @@ class Lattice:
 
 
 @numba.njit(cache=True, parallel=True)
-def _layer(V_old, lo_old, n_old, lo_new, n_new, env_new, prox_new, tlo_new, thi_new, tlo_old, thi_old,
+def _layer(V_old, alive_old, lo_old, n_old, lo_new, n_new, env_new, prox_new, tlo_new, thi_new, tlo_old, thi_old,
            mlo_new, mhi_new, blo_old, bhi_old, use_break, break_slot, combos, pair_ptr, pair_old, pair_starts,
            pair_bits, pair_union, K, move_cost, moving, axis, axis_grid, other_strides, rest_only):
     """One layer of the dynamic program: the new layer's values and back pointers (module docstring).
-    Arrays are position-major: values (P, M), force tables (n_others, M), break-away (n_others, slots)."""
+    Arrays are position-major: values (P, M), force tables (n_others, M), break-away (n_others, slots); ``alive_old``
+    (P_old,): whether an old position has a finite value in some move vector (the others are passed over)."""
     M, m = combos.shape
     P = 1
     for i in range(m):
@@ -193,7 +194,7 @@ def _layer(V_old, lo_old, n_old, lo_new, n_new, env_new, prox_new, tlo_new, thi_
                 q_old += idx * stride
                 stride *= n_old[i]
                 other_old += c * other_strides[i]
-            if not inside:
+            if not inside or not alive_old[q_old]:
                 continue
             x_old = axis_grid[cells[p, axis] - combos[mu, axis]]
             if not (tlo_old[other_old, mu] - _TOL <= x_old <= thi_old[other_old, mu] + _TOL):
@@ -354,7 +355,8 @@ def run(lat: Lattice, start: Sequence[int] | np.ndarray | None = None,
         if not new_box[1].all():
             break
         args = (lat.break_lo[k - 1], lat.break_hi[k - 1]) if use_break else (dummy, dummy)
-        V, back = _layer(V, boxes[-1][0], boxes[-1][1], new_box[0], new_box[1], lat.env_ok[k],
+        alive = np.isfinite(V).any(axis=1)
+        V, back = _layer(V, alive, boxes[-1][0], boxes[-1][1], new_box[0], new_box[1], lat.env_ok[k],
                          lat.proximity[k], lat.lo[k], lat.hi[k], lat.lo[k - 1], lat.hi[k - 1], lat.mid_lo[k],
                          lat.mid_hi[k], args[0], args[1],
                          use_break, lat.breakaway_slot, lat.combos, lat.pair_ptr, lat.pair_old, lat.pair_starts,
