@@ -18,7 +18,6 @@ on its static edge (primed by ``prime_overshoot``) where μ_s + overshoot > μ_k
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -35,8 +34,6 @@ __all__ = ["BlockTables", "ModeVertices", "block_tables", "pair_table"]
 
 #: Slack [m] of the interval tests (the exact lattice's)
 TOL = 1e-8
-#: The most floats one call of force_vertices may hold (its candidates times the times of one call)
-_CHUNK_FLOATS = 3e7
 
 
 class ModeVertices:
@@ -72,19 +69,8 @@ class ModeVertices:
         return found[k]
 
     def _compute(self, smp, ratios: tuple) -> list:
-        m = len(ratios)
-        fixed = sum(r is None for r in ratios)
-        d, rows = m + fixed, 2 * m + 2 * fixed
-        per_time = math.comb(rows, d - 2) * (d + rows)
-        chunk = max(1, int(_CHUNK_FLOATS // per_time))
-        out = []
-        for s in range(0, len(smp.pose), chunk):
-            fv = force_vertices(self._geometry, smp.pose[s:s + chunk, 2], smp.acceleration[s:s + chunk], ratios,
-                                self._mu_s, self._limits)
-            for k in range(len(fv.valid)):
-                lam, q = fv.at(k)
-                out.append((np.ascontiguousarray(lam), np.ascontiguousarray(q)))
-        return out
+        fv = force_vertices(self._geometry, smp.pose[:, 2], smp.acceleration, ratios, self._mu_s, self._limits)
+        return [tuple(np.ascontiguousarray(a) for a in fv.at(k)) for k in range(len(fv.valid))]
 
 
 def pair_table(lam: np.ndarray, q: np.ndarray, xi: np.ndarray, i: int, j: int, gi: np.ndarray,

@@ -296,7 +296,14 @@ def plan_decomposed(problem: Problem, check: Check) -> tuple[np.ndarray, np.ndar
     start = time.perf_counter()
     report = DescentReport()
     verts = ModeVertices(problem)
-    paths = [initial_path(problem, i) for i in range(len(problem.grids))]
+    paths, errors = [], []
+    for i in range(len(problem.grids)):
+        try:
+            paths.append(initial_path(problem, i))
+        except NoScheduleError as e:
+            errors.append(e)
+    if errors:  # the earliest reason
+        raise min(errors, key=lambda e: e.latest_time)
     cells = np.stack([p[0] for p in paths], axis=1)
     moves = np.stack([p[1] for p in paths], axis=1)
     bans: dict = {}

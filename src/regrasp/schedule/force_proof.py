@@ -47,9 +47,9 @@ def positions_admit_forces(geometry: ForceGeometry, beta: float, acceleration: A
         row[i] = 1.0
         rows.append(row)
         rhs.append(limits.f_max)
-        for sign, bound in ((1.0, box[i, 0]), (-1.0, -box[i, 1])):  # a λ - g <= 0, g - b λ <= 0
+        for coefficient, sign in ((box[i, 0], -1.0), (-box[i, 1], 1.0)):  # a λ - g <= 0, g - b λ <= 0
             row = np.zeros(d)
-            row[i], row[g0 + i] = sign * bound, -sign
+            row[i], row[g0 + i] = coefficient, sign
             rows.append(row)
             rhs.append(0.0)
     for k, i in enumerate(fixed):
