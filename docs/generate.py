@@ -160,6 +160,8 @@ BLOCKS: dict[str, Block] = {
     "schedule-three-fingers": Block(f"regrasp plan {T3} --regrasp", after(r"regrasp schedule")),
     "schedule-three-fingers-figure": Block(f"regrasp plan {T3} --regrasp --plot {{out}}", None,
                                            figures={"regrasp.png": "docs/images/trajectory_2/regrasp.png"}),
+    "schedule-four-fingers-figure": Block("regrasp plan examples/scenarios/four_fingers.toml --regrasp --plot {out}",
+                                          None, figures={"regrasp.png": "docs/images/four_fingers/regrasp.png"}),
     "schedule-two-fingers": Block(f"regrasp plan {T2} --regrasp", after(r"regrasp schedule"),
                                   status=(1,)),
     "schedule-gravity-up": Block(f"regrasp plan {UP} --regrasp", after(r"regrasp schedule")),
@@ -196,6 +198,7 @@ BLOCKS: dict[str, Block] = {
     # speed: measured, never checked
     "benchmarks": Block("python benchmarks/run.py", as_printed, slow=True, measured=True),
     "first-run": Block("python benchmarks/first_run.py", slow=True, measured=True),
+    "many-fingers": Block("python benchmarks/bench_many_fingers.py", as_printed, slow=True, measured=True),
 }
 
 

@@ -310,7 +310,8 @@ def plan_decomposed(problem: Problem, check: Check) -> tuple[np.ndarray, np.ndar
     violations: list = []
     for attempt in range(problem.settings.max_repairs + 1):
         cells, moves, value = _descend(problem, verts, cells, moves, bans, report)
-        fails = path_failures(problem, verts, cells, moves, bans)
+        # (the objective counts the failures: only then list them)
+        fails = path_failures(problem, verts, cells, moves, bans) if value >= _big(problem) else []
         if fails:
             report.seconds = time.perf_counter() - start
             raise _failure(problem, fails, report)

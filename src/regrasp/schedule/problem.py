@@ -119,7 +119,8 @@ class RegraspSettings:
         if self.geometry is not None:
             object.__setattr__(self, "geometry", as_geometry("geometry", self.geometry, "'ideal', 'urdf' or None"))
         self.force_limits()
-        if self.method not in (None, "exact", "decomposition"):
+        if self.method is not None and not (isinstance(self.method, str) and self.method in ("exact",
+                                                                                           "decomposition")):
             raise InvalidParameterError("method", self.method, "'exact', 'decomposition' or None")
         if self.envelope_margin < 0.5 * self.xi_resolution:
             raise InvalidParameterError("envelope_margin", self.envelope_margin,
