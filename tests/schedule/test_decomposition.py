@@ -112,6 +112,21 @@ def test_four_fingers_get_a_verified_periodic_schedule():
     assert schedule.min_envelope_margin >= settings.envelope_margin
 
 
+def test_four_fingers_whose_forces_couple_them_get_a_verified_schedule():
+    """With f_max = 3 N and a 1 N cone margin each finger's best path alone fails the forces (the descent's start
+    fails at dozens of layers): the pair programs coordinate the fingers, and the schedule verifies."""
+    scenario = load_scenario(FOUR)
+    settings = RegraspSettings(cone_margin=1.0, f_max=3.0, xi_resolution=2e-3)
+    problem = build_problem(scenario, settings, force_tables=False)
+    verts = ModeVertices(problem)
+    paths = [initial_path(problem, i) for i in range(4)]
+    cells, moves = np.stack([p[0] for p in paths], axis=1), np.stack([p[1] for p in paths], axis=1)
+    assert len(path_failures(problem, verts, cells, moves, {})) > 10
+    schedule = plan_regrasps(scenario, settings)
+    assert verify(problem, schedule, 8)[0] == []
+    assert schedule.min_cone_margin >= settings.cone_margin
+
+
 def test_the_exact_planner_refuses_four_fingers_and_the_default_dispatches():
     scenario = load_scenario(FOUR)
     with pytest.raises(InvalidParameterError, match="force tables"):
