@@ -127,6 +127,17 @@ def test_four_fingers_whose_forces_couple_them_get_a_verified_schedule():
     assert schedule.min_cone_margin >= settings.cone_margin
 
 
+@pytest.mark.slow
+def test_decomposition_finds_as_few_slides_as_the_exact_planner_on_a_coarse_four_finger_lattice():
+    """3 mm cells and two sliders at most: the exact lattice holds four fingers; with forces that couple them (f_max
+    3 N, cone margin 1 N) the exact optimum needs the three-contact coordination the best-improvement descent finds."""
+    scenario = load_scenario(FOUR)
+    coarse = dict(xi_resolution=3e-3, envelope_margin=1.5e-3, max_sliders=2, f_max=3.0, cone_margin=1.0)
+    exact = plan_regrasps(scenario, RegraspSettings(method="exact", **coarse))
+    found = plan_regrasps(scenario, RegraspSettings(method="decomposition", **coarse))
+    assert len(found.slides) == len(exact.slides) >= exact.slides_lower_bound
+
+
 def test_the_exact_planner_refuses_four_fingers_and_the_default_dispatches():
     scenario = load_scenario(FOUR)
     with pytest.raises(InvalidParameterError, match="force tables"):

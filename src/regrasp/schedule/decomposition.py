@@ -13,9 +13,11 @@ lattice, its transition rules and its objective, but optimises two contacts at a
    (:mod:`regrasp.schedule.block_tables`). Its objective is lexicographic: the number of intervals whose force checks
    fail (a penalty, not a prohibition, so that an infeasible start can improve), the slides, the proximity and moves.
    The program is exact given the others and the current path is among its candidates, so **the objective never
-   increases**; the descent stops when no pair improves it.
+   increases**. Each step solves every pair's program and takes the best one's path (best improvement: the first
+   improving pair taken at once stops at more slides); the descent stops when no pair improves the objective.
 3. **Periodic trajectories.** Each pair's program ends where it starts: it is run from the pair's current start cells
-   and, when a free-start program shows it could do better, from that program's start and end cells.
+   and, when a free-start program shows it could do better, from that program's start and end cells and from the
+   middle of its best free path over two periods (the steady regime).
 4. **Verification.** A path without failures goes through the exact planner's schedule and verification; a violation
    bans the path's states around it (counted as failures) and the descent goes on.
 5. **Honest failure.** When the descent stalls with failures, the planner tries to prove at each failing time that
@@ -24,8 +26,8 @@ lattice, its transition rules and its objective, but optimises two contacts at a
    (``SEARCH``), which is not a proof that none exists.
 
 **Cost.** A pair's program has :math:`n^2 \cdot 9` states per layer and nine predecessors each; its tables take
-:math:`O(N \cdot M_{pair} \cdot V \cdot n)` (V vertices of the polytope, :math:`M_{pair}` ≤ 81 move pairs); one sweep
-over the :math:`\binom{m}{2}` pairs costs :math:`O(m^2 N n^2)`: polynomial in m, where the exact program's
+:math:`O(N \cdot M_{pair} \cdot V \cdot n)` (V vertices of the polytope, :math:`M_{pair}` ≤ 81 move pairs); one step
+of the :math:`\binom{m}{2}` pairs costs :math:`O(m^2 N n^2)`: polynomial in m, where the exact program's
 :math:`O(N n^m 3^m)` is not. The modes are capped at ``max_sliders`` (2 by default) sliders, :math:`O(m^2)` of them.
 """
 
@@ -53,8 +55,8 @@ __all__ = ["DescentReport", "block_solve", "initial_path", "path_value", "plan_d
 #: A verification callback: the violations (time [s], what, contact index or None) of a path (cells, moves)
 Check = Callable[[np.ndarray, np.ndarray], list]
 
-#: Most sweeps over the pairs before the descent stops anyway
-MAX_SWEEPS = 40
+#: Most improvements before the descent stops anyway
+MAX_IMPROVEMENTS = 100
 
 
 @dataclass
@@ -185,7 +187,7 @@ def block_solve(problem: Problem, verts: ModeVertices, cells: np.ndarray, moves:
         tried = set()
         while candidates:
             start = tuple(int(c) for c in candidates.pop(0))
-            if start in tried:
+            if start in tried or min(start) < 0:
                 continue
             tried.add(start)
             V, back, last = solve(start, start)
@@ -196,7 +198,7 @@ def block_solve(problem: Problem, verts: ModeVertices, cells: np.ndarray, moves:
                 if last_w == L - 1 and (best is None or W[:, :, 0].min() < best[0] - 1e-6):
                     p = np.unravel_index(int(np.argmin(W[:, :, 0])), W.shape[:2])
                     free, _ = block_path(PAIR_MOVES, back_w, int(p[0]), int(p[1]), 0)
-                    candidates += [free[0], free[-1]]
+                    candidates += [_steady_start(tables, lat, big), free[0], free[-1]]
     else:
         V, back, last = solve((-1, -1) if given is None else given, (-1, -1))
         if last == L - 1:
@@ -211,30 +213,43 @@ def block_solve(problem: Problem, verts: ModeVertices, cells: np.ndarray, moves:
     return value + tables.frozen_cost, new_cells, new_moves
 
 
+def _steady_start(tables, lat, big: float) -> np.ndarray:
+    """The pair's cells in the middle of its best free path over two periods (the frozen paths and the trajectory
+    repeat): a start in the steady regime, as the exact planner's second period finds one."""
+    L = len(tables.adm)
+
+    def twice(a: np.ndarray) -> np.ndarray:
+        return np.concatenate([a, a[1:]])
+
+    V, back, last = block_dp(twice(tables.env_ok), twice(tables.prox), PAIR_MOVES, twice(tables.adm),
+                             twice(tables.new_ok), twice(tables.old_ok), twice(tables.trans_idx), tables.trans_tab,
+                             tables.init_ok, np.array([-1, -1]), np.array([-1, -1]), lat.slide_cost, lat.move_cost,
+                             big)
+    if last < 2 * (L - 1):
+        return np.array([-1, -1])
+    p = np.unravel_index(int(np.argmin(V[:, :, 0])), V.shape[:2])
+    cells, _ = block_path(PAIR_MOVES, back, int(p[0]), int(p[1]), 0)
+    return cells[L - 1]
+
+
 def _descend(problem: Problem, verts: ModeVertices, cells: np.ndarray, moves: np.ndarray, bans: dict,
              report: DescentReport) -> tuple[np.ndarray, np.ndarray, float]:
-    """Pair updates until none improves the objective (module docstring, step 2)."""
+    """Pair updates, the best of all pairs each time, until none improves the objective (module docstring, step 2)."""
     m = cells.shape[1]
     pairs = list(itertools.combinations(range(m), 2))
     value = path_value(problem, cells, moves, path_failures(problem, verts, cells, moves, bans))
     report.values.append(value)
-    fresh: set = set()  # pairs whose program has seen the current path
-    for _ in range(MAX_SWEEPS):
-        improved = False
-        for block in pairs:
-            if block in fresh:
-                continue
-            found, new_cells, new_moves = block_solve(problem, verts, cells, moves, block, bans)
-            report.block_solves += 1
-            fresh.add(block)
-            if found < value - 1e-6:
-                cells, moves, value = new_cells, new_moves, found
-                report.improvements += 1
-                report.values.append(value)
-                fresh = {block}
-                improved = True
-        if not improved:
+    for _ in range(MAX_IMPROVEMENTS):
+        # every pair's program on the current path; the best one's path is taken (best improvement: the first
+        # improving pair taken at once gets stuck in more slides, measured in docs/derivations.md)
+        found = [block_solve(problem, verts, cells, moves, block, bans) for block in pairs]
+        report.block_solves += len(pairs)
+        best, new_cells, new_moves = min(found, key=lambda f: f[0])
+        if not best < value - 1e-6:
             break
+        cells, moves, value = new_cells, new_moves, best
+        report.improvements += 1
+        report.values.append(value)
     return cells, moves, value
 
 
