@@ -21,7 +21,10 @@ path's corners, so they deviate from it by at most v·ramp/8 (covered by a plann
 envelope margin). The envelope is checked on a window of sub-samples around each layer, the forces
 at the layers. The planner then **verifies** its schedule on a finer time grid (envelopes at the
 schedule's exact positions, forces in the exact modes, break-away at each slide's start, all with
-the exact margins) and re-plans around any violation (``max_repairs`` times).
+the exact margins) and re-plans around any violation (``max_repairs`` times). With more contacts than the lattice's
+force tables hold (four on the default lattice), or ``settings.method = "decomposition"``, the decomposition planner
+searches the same lattice two contacts at a time instead, at a cost polynomial in their number
+(:mod:`regrasp.schedule.decomposition`), with the same objective and verification.
 
 **Objective**, in this order: (1) every constraint above, at the required margins; (2) the fewest
 slides; (3) the least time near the envelope's bounds: the sum over layers and contacts of
