@@ -159,6 +159,24 @@ def test_an_emptying_envelope_is_named():
     assert info.value.latest_time < 0.2
 
 
+def test_no_force_system_at_all_is_proven():
+    """f_max 0.25 N cannot carry the object's weight: the linear programs prove it at the start."""
+    settings = RegraspSettings(f_max=0.25, slider_floor=0.1, holder_preload=0.1, xi_resolution=2e-3, periodic=False,
+                               method="decomposition")
+    with pytest.raises(NoScheduleError) as info:
+        plan_regrasps(load_scenario(THREE), settings, t_end=1.2)
+    assert info.value.limit is ScheduleLimit.FORCES and info.value.latest_time == 0.0
+    assert "linear program" in str(info.value)
+
+
+def test_two_fingers_fail_the_forces_as_the_exact_planner_says():
+    """Two fingers on trajectory 2: the one pair's program is exact, so its failure is a proof (FORCES), never
+    SEARCH."""
+    with pytest.raises(NoScheduleError) as info:
+        plan_regrasps(load_scenario(SCENARIOS / "paper_trajectory_2.toml"), RegraspSettings(method="decomposition"))
+    assert info.value.limit is ScheduleLimit.FORCES
+
+
 @pytest.mark.parametrize("seed", range(12))
 def test_the_linear_program_agrees_with_a_sampler(small_problem, seed):
     """Infeasible ⇒ no sampled positions admit forces; feasible ⇒ its positions admit forces by the vertex test."""

@@ -298,11 +298,16 @@ def _failure(problem: Problem, fails: list, report: DescentReport) -> NoSchedule
                                        "force system with the required margins, in any mode of at most "
                                        f"{_p_max(problem)} sliders (a linear program per mode)")
     t = _when(problem, fails[0])
+    if len(problem.names) == 2:  # (the one pair's program is the whole problem's: exact)
+        return NoScheduleError(t, ScheduleLimit.FORCES, problem.names,
+                               f"no path of the two contacts keeps a force system at every layer (their program is "
+                               f"exact; its best path fails the force checks at {len(fails)} layer(s), the first at "
+                               f"t = {t:.3f} s)")
     return NoScheduleError(t, ScheduleLimit.SEARCH, problem.names,
                            f"the decomposition planner's search found no schedule (its best path still fails the force "
                            f"checks at {len(fails)} layer(s), the first at t = {t:.3f} s, after {report.block_solves} "
-                           "pair programs); this is not a proof that none exists: try method = 'exact' where it fits, "
-                           "or other margins")
+                           "pair program(s)); this is not a proof that none exists: try method = 'exact' where it "
+                           "fits, or other margins")
 
 
 def plan_decomposed(problem: Problem, check: Check) -> tuple[np.ndarray, np.ndarray, DescentReport]:
