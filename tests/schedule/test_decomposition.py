@@ -177,6 +177,19 @@ def test_two_fingers_fail_the_forces_as_the_exact_planner_says():
     assert info.value.limit is ScheduleLimit.FORCES
 
 
+def test_a_failed_search_says_it_is_no_proof():
+    """One slider at a time on three fingers: the exact planner proves no schedule exists (its forces diagnosis);
+    the decomposition finds none either but proves nothing, and says so (SEARCH), not a made-up physical reason."""
+    scenario = load_scenario(THREE)
+    settings = dict(max_sliders=1, xi_resolution=2e-3)
+    with pytest.raises(NoScheduleError) as exact:
+        plan_regrasps(scenario, RegraspSettings(method="exact", **settings))
+    with pytest.raises(NoScheduleError) as found:
+        plan_regrasps(scenario, RegraspSettings(method="decomposition", **settings))
+    assert exact.value.limit is ScheduleLimit.FORCES
+    assert found.value.limit is ScheduleLimit.SEARCH and "not a proof" in str(found.value)
+
+
 @pytest.mark.parametrize("seed", range(12))
 def test_the_linear_program_agrees_with_a_sampler(small_problem, seed):
     """Infeasible ⇒ no sampled positions admit forces; feasible ⇒ its positions admit forces by the vertex test."""
