@@ -26,6 +26,10 @@ Items and their floors:
 * the regrasp schedule of the three-finger scenario (``plan_regrasps``, default settings): the
   median wall time of whole plans (after one warm-up plan that loads numba's compiled kernels;
   three timed plans, one with ``--quick``), target ≤ 10 s;
+* the regrasp schedules of the four- and five-finger scenarios (the decomposition planner): one plan each in a fresh
+  process by ``benchmarks/bench_many_fingers.py`` (its wall time and the process's peak memory; four fingers only with
+  ``--quick``; that script alone takes medians of three and compares both planners on three fingers), targets four
+  fingers ≤ 60 s and ≤ 4 GiB, five ≤ 3 min;
 * the rollout of paper trajectory 2 with the palm finger (``paper_trajectory_2_three_fingers.toml``,
   two periods at 1 kHz, or until it fails): real-time factor = simulated time / wall time, with compiled
   stretches (the default) and on the reference path (every step through the supervisor), with
@@ -43,6 +47,8 @@ Medians of repeated calls (time.perf_counter); the Pinocchio floors time batches
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -268,6 +274,15 @@ def regrasp_plan_seconds(quick: bool) -> dict:
             "min_envelope_margin_m": schedule.min_envelope_margin, "min_cone_margin_n": schedule.min_cone_margin}
 
 
+def many_fingers(quick: bool) -> dict:
+    """``benchmarks/bench_many_fingers.py``: four and five fingers planned once each in a fresh process (four only
+    with ``quick``)."""
+    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_many_fingers.py"), "--cases",
+                           "quick" if quick else "many", "--repeats", "1", "--json"], capture_output=True, text=True,
+                          check=True)
+    return json.loads(done.stdout)
+
+
 def batch_us(fn, batch: int = 1000, repeats: int = 7) -> float:
     """Median over ``repeats`` of the mean time of ``batch`` calls (for sub-microsecond calls)."""
     fn()
@@ -366,12 +381,13 @@ def main() -> None:
     results["rollout_policies"] = rollout_policies(args.quick)
     results["study_throughput"] = study_throughput(args.quick)
     results["regrasp_plan"] = regrasp_plan_seconds(args.quick)
+    results["many_fingers"] = many_fingers(args.quick)
     if args.json:
         print(json.dumps(results))
         return
     print(f"{'item':28s} {'median [us]':>12s} {'floor [us]':>11s} {'ratio':>7s}")
     for key, value in results.items():
-        if key in ("rollout_realtime_factor", "regrasp_plan", "rollout_policies", "study_throughput"):
+        if key in ("rollout_realtime_factor", "regrasp_plan", "rollout_policies", "study_throughput", "many_fingers"):
             continue
         med, floor = value["median_us"], value["floor_us"]
         ratio = f"{med / floor:6.1f}x" if floor else "     -"
@@ -394,6 +410,11 @@ def main() -> None:
     rp = results["regrasp_plan"]
     print(f"regrasp schedule, three fingers  {rp['median_s']:6.2f} s median of {len(rp['runs_s'])} plans "
           f"({rp['slides']} slides per period, fewest possible {rp['slides_lower_bound']}; target <= 10 s)")
+    for value in results["many_fingers"].values():
+        target = "<= 60 s, <= 4096 MiB" if value["fingers"] == 4 else "<= 180 s"
+        print(f"regrasp schedule, {value['fingers']} fingers   {value['median_s']:6.2f} s, peak "
+              f"{value['median_peak_mib']:.0f} MiB ({value['slides']} slides per period; {value['planner']} planner, "
+              f"a fresh process; target {target})")
     print(f"(Pinocchio floor of one 2-finger dynamics evaluation: {floor_dyn:.1f} us; "
           f"persistent OSQP solve of the 2-finger QP: {osqp_floor:.1f} us; supervisor floors: one "
           f"envelope sample per finger; tracked: its coal calls)")

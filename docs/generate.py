@@ -132,6 +132,7 @@ class Block:
 T1, T2 = "examples/scenarios/paper_trajectory_1.toml", "examples/scenarios/paper_trajectory_2.toml"
 T3 = "examples/scenarios/paper_trajectory_2_three_fingers.toml"
 UP = "examples/scenarios/paper_trajectory_2_gravity_up.toml"
+F4, F5 = "examples/scenarios/four_fingers.toml", "examples/scenarios/five_fingers.toml"
 STUDY = f"regrasp study {T3} --runs 200 --periods 2 --workers 2 --seed 1 --plot {{out}}"
 STUDY_FIGURES = {n: n for n in ("study_success.png", "study_failure_times.png", "study_margins.png", "study.json")}
 ROBUSTNESS = {k: f"docs/images/robustness/{v}" for k, v in STUDY_FIGURES.items()}
@@ -161,6 +162,11 @@ BLOCKS: dict[str, Block] = {
     "schedule-three-fingers": Block(f"regrasp plan {T3} --regrasp", after(r"regrasp schedule")),
     "schedule-three-fingers-figure": Block(f"regrasp plan {T3} --regrasp --plot {{out}}", None,
                                            figures={"regrasp.png": "docs/images/trajectory_2/regrasp.png"}),
+    "schedule-four-fingers": Block(f"regrasp plan {F4} --regrasp", after(r"regrasp schedule")),
+    "schedule-five-fingers": Block(f"regrasp plan {F5} --regrasp", after(r"regrasp schedule"), slow=True),
+    "simulate-four-fingers": Block(f"regrasp simulate {F4} --periods 2", slow=True),
+    "schedule-four-fingers-figure": Block(f"regrasp plan {F4} --regrasp --plot {{out}}", None,
+                                          figures={"regrasp.png": "docs/images/four_fingers/regrasp.png"}),
     "schedule-two-fingers": Block(f"regrasp plan {T2} --regrasp", after(r"regrasp schedule"),
                                   status=(1,)),
     "schedule-gravity-up": Block(f"regrasp plan {UP} --regrasp", after(r"regrasp schedule")),
@@ -202,6 +208,7 @@ BLOCKS: dict[str, Block] = {
     # speed: measured, never checked
     "benchmarks": Block("python benchmarks/run.py", as_printed, slow=True, measured=True),
     "first-run": Block("python benchmarks/first_run.py", slow=True, measured=True),
+    "many-fingers": Block("python benchmarks/bench_many_fingers.py", as_printed, slow=True, measured=True),
 }
 
 

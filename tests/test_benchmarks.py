@@ -55,6 +55,7 @@ def test_benchmark_table_quick_smoke():
     assert 0 < rollout["simulated_s"] <= rollout["requested_s"] + 1e-9
     plan = doc["regrasp_plan"]
     assert plan["median_s"] > 0 and plan["periodic"] is True and plan["slides"] >= plan["slides_lower_bound"] > 0
+    assert [v["fingers"] for v in doc["many_fingers"].values()] == [4]  # (--quick: four fingers only)
 
 
 def test_first_run_benchmark_answers_its_help():
@@ -72,3 +73,14 @@ def test_suite_planning_benchmark_quick_smoke():
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
     assert doc["variants"] == 1 and doc["plan_seconds"]["p95"] > 0 and doc["peak_memory_mib"]["p95"] > 0
+
+
+def test_many_fingers_benchmark_quick_smoke():
+    """benchmarks/bench_many_fingers.py --cases quick --json: four fingers planned in a fresh process, its time and
+    peak memory reported (no timing assertions)."""
+    proc = subprocess.run([sys.executable, str(BENCH / "bench_many_fingers.py"), "--cases", "quick", "--json"],
+                          capture_output=True, text=True, timeout=HANG_SECONDS, check=False)
+    assert proc.returncode == 0, proc.stderr
+    (four,) = json.loads(proc.stdout).values()
+    assert four["fingers"] == 4 and four["planner"] == "decomposition" and four["slides"] > 0
+    assert four["median_s"] > 0 and four["median_peak_mib"] > 0

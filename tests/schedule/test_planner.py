@@ -55,7 +55,7 @@ def check_schedule(scenario, schedule, settings: RegraspSettings) -> dict:
     env_min = min(env.at(pose, float(t)).margin(float(x))
                   for j, (t, pose) in enumerate(zip(times, sample.pose)) for env, x in zip(envelopes, at.xi[j]))
     assert env_min >= settings.envelope_margin - 1e-9
-    limits = ForceLimits(settings.f_min, settings.f_max, settings.cone_margin)
+    limits = ForceLimits(settings.f_min, settings.f_max, settings.cone_margin, friction_margin=settings.friction_margin)
     friction = [c.friction for c in scenario.contacts]
     mu_s = [f.static for f in friction]
     edges = [c.edge for c in scenario.contacts]
@@ -63,14 +63,19 @@ def check_schedule(scenario, schedule, settings: RegraspSettings) -> dict:
         ratios = [None if d == 0 else d * f.kinetic for d, f in zip(at.direction[j], friction)]
         assert force_lp(scenario.polygon, edges, sample.pose[j], sample.acceleration[j], at.xi[j], ratios, mu_s,
                         limits, scenario.gravity_in_hand), f"no force system at t = {times[j]:.4f} s"
-    for s in schedule.slides:  # break-away on the static edge as the slide starts
+    # break-away as the slide starts: the contacts that start together primed together past their static edges
+    # (mu_s + prime_overshoot, the executor's priming), the held ones inside the cones the executor's internal force
+    # keeps as its last resort (friction_margin; f_min, no floors, no cone margin in newtons: its target)
+    breakaway = ForceLimits(settings.f_min, settings.f_max, 0.0, friction_margin=settings.friction_margin)
+    for s in schedule.slides:
         t = s.start
         start = schedule.at(t)
         moving = schedule.at(t + 1e-6)
-        ratios = [None if d == 0 else d * (f.static if i == s.contact else f.kinetic)
+        together = {o.contact for o in schedule.slides if abs(o.start - t) < 1e-9}
+        ratios = [None if d == 0 else d * (f.static + settings.prime_overshoot if i in together else f.kinetic)
                   for i, (d, f) in enumerate(zip(moving.direction, friction))]
         smp = traj.sample(t)
-        assert force_lp(scenario.polygon, edges, smp.pose, smp.acceleration, start.xi, ratios, mu_s, limits,
+        assert force_lp(scenario.polygon, edges, smp.pose, smp.acceleration, start.xi, ratios, mu_s, breakaway,
                         scenario.gravity_in_hand), f"{s.name} cannot break away at t = {t:.4f} s"
     # the profiles
     fine = np.linspace(schedule.t_start, schedule.t_end, 40001)

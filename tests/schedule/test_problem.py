@@ -205,9 +205,10 @@ SETTINGS_TABLE = fields_of(RegraspSettings(), {
                "holder_preload"),
     "pos": ("f_min", "f_max", "max_slide_speed", "max_slide_acceleration", "xi_resolution", "comfort_margin"),
     "count1": ("max_sliders", "envelope_substeps", "verify_substeps", "period_candidates"), "count0": ("max_repairs",),
-    "flag": ("periodic",), "geometry": ("geometry",)},
-    optional=("max_sliders", "comfort_margin", "periodic", "geometry"),
-    good={"max_sliders": 2, "periodic": True, "geometry": "urdf"})
+    "flag": ("periodic",), "geometry": ("geometry",), "choice": ("method",)},
+    optional=("max_sliders", "comfort_margin", "periodic", "geometry", "method"),
+    good={"max_sliders": 2, "periodic": True, "geometry": "urdf", "method": "decomposition"},
+    choices={"method": ("exact", "decomposition")})
 
 test_each_setting_refuses_bad_values, test_each_setting_refuses_generated_bad_values = field_tests(SETTINGS_TABLE)
 

@@ -57,6 +57,9 @@ from ..core.exceptions import InvalidParameterError
 from ..core.polygon import ConvexPolygon
 from ..core.validation import as_positive_float, check_fields
 
+#: The most floats :func:`force_vertices` holds per block of times (its candidates' solutions and slacks)
+_CHUNK_FLOATS = 2e7
+
 __all__ = ["ForceGeometry", "ForceLimits", "ForceVertices", "TorqueExcess", "force_system", "force_vertices",
            "torque_excess", "xi_intervals"]
 
@@ -144,7 +147,8 @@ class ForceVertices:
     r"""The vertices of the force polytope P at T times for one contact mode.
 
     Attributes:
-        normal: λ per vertex and contact [N], (T, V, m); rows of invalid candidates are NaN.
+        normal: λ per vertex and contact [N], (T, V, m); rows of invalid candidates are NaN (each time's vertices
+            first; V: the most vertices any time has).
         tangential: τ per vertex and contact [N], (T, V, m).
         offset: q = Σ λ_i A_i + τ_i B_i - I_o α per vertex [N m], (T, V).
         valid: Which candidates are vertices of P, (T, V) bool (P empty at t: none).
@@ -240,13 +244,23 @@ def force_vertices(geometry: ForceGeometry, beta: ArrayLike, acceleration: Array
     scale_a = np.max(np.abs(A), axis=(1, 2))
     regular = np.abs(np.linalg.det(A)) > 1e-12 * scale_a ** d
     inverse = np.linalg.inv(A[regular])  # (C, d, d)
-    b = np.empty((T, len(inverse), d))
-    b[:, :, :2] = F[:, None]
-    b[:, :, 2:] = h[combos[regular]][None]
-    x = np.einsum("cij,tcj->tci", inverse, b)
     scale = max(1.0, limits.f_max)
-    slack = np.einsum("rd,tcd->tcr", G, x) - h
-    valid = np.all(slack >= -1e-9 * scale, axis=-1)
+    # a few times at once (the candidates number C(2m + 2 fixed, d - 2): 126k for five fixed contacts), each time's
+    # vertices packed first in candidate order, the rows past the most any time has dropped
+    chunk = max(1, int(_CHUNK_FLOATS // max(1, len(inverse) * (d + len(G)))))
+    parts = []
+    for s in range(0, T, chunk):
+        b = np.empty((len(F[s:s + chunk]), len(inverse), d))
+        b[:, :, :2] = F[s:s + chunk, None]
+        b[:, :, 2:] = h[combos[regular]][None]
+        x = np.einsum("cij,tcj->tci", inverse, b)
+        slack = np.einsum("rd,tcd->tcr", G, x) - h
+        valid = np.all(slack >= -1e-9 * scale, axis=-1)
+        order = np.argsort(~valid, axis=1, kind="stable")[:, :max(1, int(valid.sum(axis=1).max(initial=0)))]
+        parts.append((np.take_along_axis(x, order[..., None], axis=1), np.take_along_axis(valid, order, axis=1)))
+    width = max(p[0].shape[1] for p in parts)
+    x = np.concatenate([np.pad(p[0], ((0, 0), (0, width - p[0].shape[1]), (0, 0))) for p in parts])
+    valid = np.concatenate([np.pad(p[1], ((0, 0), (0, width - p[1].shape[1]))) for p in parts])
     x[~valid] = np.nan
     lam, tau = _forces(x, m, ratios, fixed)
     offset = lam @ geometry.moment_normal + tau @ geometry.moment_tangent - geometry.inertia * acceleration[:, 2:3]

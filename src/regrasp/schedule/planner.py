@@ -21,7 +21,10 @@ path's corners, so they deviate from it by at most v·ramp/8 (covered by a plann
 envelope margin). The envelope is checked on a window of sub-samples around each layer, the forces
 at the layers. The planner then **verifies** its schedule on a finer time grid (envelopes at the
 schedule's exact positions, forces in the exact modes, break-away at each slide's start, all with
-the exact margins) and re-plans around any violation (``max_repairs`` times).
+the exact margins) and re-plans around any violation (``max_repairs`` times). With more contacts than the lattice's
+force tables hold (four on the default lattice), or ``settings.method = "decomposition"``, the decomposition planner
+searches the same lattice two contacts at a time instead, at a cost polynomial in their number
+(:mod:`regrasp.schedule.decomposition`), with the same objective and verification.
 
 **Objective**, in this order: (1) every constraint above, at the required margins; (2) the fewest
 slides; (3) the least time near the envelope's bounds: the sum over layers and contacts of
@@ -51,6 +54,7 @@ from numpy.typing import ArrayLike
 
 from ..core.exceptions import InvalidParameterError
 from ..model.scenario import Scenario
+from .decomposition import plan_decomposed
 from .diagnosis import diagnose
 from .force_polytope import force_system, force_vertices, torque_excess
 from .lattice import cells_of, flat_index, move_runs, path, run
@@ -334,6 +338,23 @@ def _solve(problem: Problem, bans: dict, hint=None) -> tuple:
     return best[1], best[2], lower
 
 
+def _plan_decomposed(problem: Problem, start: float, progress: Progress | None, total: int) -> RegraspSchedule:
+    """The decomposition planner's schedule (:mod:`regrasp.schedule.decomposition`), verified as the exact one's."""
+    verified: list = []
+
+    def check(cells: np.ndarray, moves: np.ndarray) -> list:
+        draft = _schedule(problem, cells, moves, 0.0, None, None, forces=False)
+        violations, least = verify(problem, draft, problem.settings.verify_substeps)
+        verified[:] = [least]
+        return violations
+
+    cells, moves, _ = plan_decomposed(problem, check)
+    schedule = _schedule(problem, cells, moves, time.perf_counter() - start, None, verified[0])
+    if progress is not None:
+        progress(total, total)
+    return schedule
+
+
 def plan_regrasps(scenario: Scenario, settings: RegraspSettings = RegraspSettings(), *,
                   start_time: float | None = None, xi0: ArrayLike | None = None, t_end: float | None = None,
                   progress: Progress | None = None) -> RegraspSchedule:
@@ -356,9 +377,12 @@ def plan_regrasps(scenario: Scenario, settings: RegraspSettings = RegraspSetting
         raise InvalidParameterError("settings", settings, "a RegraspSettings")
     start = time.perf_counter()
     total = 3 + settings.max_repairs
-    problem = build_problem(scenario, settings, start_time=start_time, xi0=xi0, t_end=t_end)
+    problem = build_problem(scenario, settings, start_time=start_time, xi0=xi0, t_end=t_end,
+                            force_tables={"exact": True, "decomposition": False, None: None}[settings.method])
     if progress is not None:
         progress(1, total)
+    if not problem.exact:
+        return _plan_decomposed(problem, start, progress, total)
     bans: dict = {}
     hint = lower = None
     for attempt in range(settings.max_repairs + 1):

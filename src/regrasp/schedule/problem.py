@@ -71,7 +71,8 @@ class RegraspSettings:
         max_slide_acceleration: Largest slide acceleration [m/s²] (≥ max_slide_speed² /
             xi_resolution: a slide's ramps fit in one time step).
         xi_resolution: Cell size of the contact grid [m].
-        max_sliders: Most contacts sliding at once (None: min(m - 1, 2m - 3)).
+        max_sliders: Most contacts sliding at once (None: min(m - 1, 2m - 3) for the exact lattice; the decomposition
+            planner caps it at 2, so that its modes number O(m²): polynomial in m).
         comfort_margin: Envelope margin [m] above which a contact costs nothing (the objective's
             third term; None: ``envelope_margin`` + 4 mm).
         envelope_substeps: Envelope sub-samples per time step in the lattice's windows.
@@ -83,6 +84,10 @@ class RegraspSettings:
         max_repairs: Re-plans after a failed verification before giving up.
         period_candidates: Start states tried for a periodic schedule, in order: the middle and the end of
             the best two-period path, then the free program's best end state.
+        method: The planner: ``"exact"`` (the lattice's dynamic program over all contacts at once, exponential in
+            their number), ``"decomposition"`` (block-coordinate descent over pairs of contacts,
+            :mod:`regrasp.schedule.decomposition`: polynomial, not a proof of optimality) or None: the exact one when
+            its force tables fit in their budget (three fingers), else the decomposition.
     """
 
     envelope_margin: float = 1e-3
@@ -104,6 +109,7 @@ class RegraspSettings:
     geometry: Geometry | None = None
     max_repairs: int = 8
     period_candidates: int = 3
+    method: str | None = None
 
     def __post_init__(self):
         check_fields(self, as_positive_float, ("max_slide_speed", "max_slide_acceleration", "xi_resolution", "f_min",
@@ -120,6 +126,9 @@ class RegraspSettings:
         if self.geometry is not None:
             object.__setattr__(self, "geometry", as_geometry("geometry", self.geometry, "'ideal', 'urdf' or None"))
         self.force_limits()
+        if self.method is not None and not (isinstance(self.method, str) and self.method in ("exact",
+                                                                                           "decomposition")):
+            raise InvalidParameterError("method", self.method, "'exact', 'decomposition' or None")
         if self.envelope_margin < 0.5 * self.xi_resolution:
             raise InvalidParameterError("envelope_margin", self.envelope_margin,
                                         f">= xi_resolution / 2 = {0.5 * self.xi_resolution:g} m")
@@ -189,6 +198,7 @@ class Problem:
     torque: TorqueModel | None = None
     torque_excess: np.ndarray | None = None
     free_tables: tuple | None = None
+    exact: bool = True
 
 
 def _cell_margins(sample, grid: np.ndarray) -> np.ndarray:
@@ -218,10 +228,13 @@ def slide_ratios(direction: Iterable[int], friction: Iterable[Friction], breakin
 
 
 def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: float | None = None,
-                  xi0: ArrayLike | None = None, t_end: float | None = None) -> Problem:
+                  xi0: ArrayLike | None = None, t_end: float | None = None,
+                  force_tables: bool | None = True) -> Problem:
     """The lattice of the module docstring for ``scenario`` (``xi0``: start positions [m], which then
     lie on the grid; ``start_time``/``t_end``: the horizon [s], default the trajectory's domain or,
-    periodic, its first period)."""
+    periodic, its first period; ``force_tables``: False for the decomposition planner's problem, without the
+    force and torque tables (``exact`` False, at most ``max_sliders`` or 2 sliders), None: with them when they fit in
+    their budget)."""
     traj = scenario.trajectory
     contacts = scenario.contacts
     m = len(contacts)
@@ -272,7 +285,11 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
     combos = motion_combos(m, p_max)
     sizes = sorted(len(g) for g in grids)
     table_bytes = 4 * 4 * (n_steps + 1) * int(np.prod(sizes[:-1])) * len(combos)  # lo, hi, mid lo, mid hi
-    if table_bytes > _TABLE_BUDGET:
+    if force_tables is None:
+        force_tables = table_bytes <= _TABLE_BUDGET
+    if not force_tables:
+        combos = motion_combos(m, min(settings.max_sliders or 2, m - 1, 2 * m - 3))
+    if force_tables and table_bytes > _TABLE_BUDGET:
         raise InvalidParameterError(
             "scenario", scenario.name,
             f"a lattice whose force tables fit in {_TABLE_BUDGET / 2**30:.0f} GiB: {m} contacts with "
@@ -290,12 +307,17 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
     axis = int(np.argmax([len(g) for g in grids]))
     middle = traj.sample(np.clip(np.append(times[0], 0.5 * (times[1:] + times[:-1])), traj.t_start, traj.t_end))
     early = traj.sample(np.clip(times - 0.5 * ramp, traj.t_start, traj.t_end))
-    lo, hi, blo, bhi, slots, mid_lo, mid_hi, vertices = _force_tables(geo, sample, middle, early, 0.5 * ramp / dt,
-                                                                      combos, friction, limits, grids, axis,
-                                                                      settings.prime_overshoot)
+    if force_tables:
+        lo, hi, blo, bhi, slots, mid_lo, mid_hi, vertices = _force_tables(
+            geo, sample, middle, early, 0.5 * ramp / dt, combos, friction, limits, grids, axis,
+            settings.prime_overshoot)
+    else:  # (the decomposition planner checks the forces itself: empty tables)
+        lo = hi = mid_lo = mid_hi = np.empty((n_steps + 1, 0, len(combos)), dtype=np.float32)
+        blo = bhi = vertices = None
+        slots = np.full((len(combos), m), -1, dtype=np.int64)
     torque = TorqueModel(scenario)
     torque_excess, free_tables = None, None
-    if torque.limited:
+    if torque.limited and force_tables:
         torque_excess, free_tables = _torque_tables(torque, sample, grids, combos, vertices, speed, axis, lo, hi,
                                                     lattice_env)
     del vertices
@@ -307,7 +329,7 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
                       slide_cost=1.0 + (n_steps + 1) * m * (1.0 + move_cost), move_cost=move_cost)
     return Problem(scenario, settings, tuple(c.finger.name for c in contacts), friction, bool(periodic), times, dt,
                    grids, envelopes, sub_times, sub_samples, geo, limits, envelope_buffer, lattice, start_cells, torque,
-                   torque_excess, free_tables)
+                   torque_excess, free_tables, bool(force_tables))
 
 
 def _window(k: int, q: int, n_steps: int) -> slice:

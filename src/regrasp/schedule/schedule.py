@@ -383,6 +383,7 @@ class ScheduleLimit(str, Enum):
     PERIODIC = "periodic"    #: schedules exist, but none ends a period where it starts
     VERIFICATION = "verification"  #: the planner's schedules keep failing its fine-grid check
     TORQUE = "torque"        #: no force system within the joints' torque limits (the finger, joint and time named)
+    SEARCH = "search"        #: the decomposition planner's search found none (not a proof that none exists)
 
 
 class NoScheduleError(RegraspError):
