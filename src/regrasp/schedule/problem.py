@@ -372,9 +372,10 @@ def _force_tables(geo, sample, middle, early, lead: float, combos, friction, lim
                   overshoot: float = 0.0):
     """The lattice's interval tables (float32): the modes at the layers; for two or more sliders at
     each interval's middle (``middle``: the trajectory there, layer k's entry for the interval ending
-    at it) with the sliders half a cell back; and where μ_s + ``overshoot`` > μ_k the break-away of each
-    starting contact (primed to μ_s + ``overshoot``), both at the layer and where it really starts, ``early`` (the
-    trajectory half a ramp before the layer) with the other sliders ``lead`` cells back."""
+    at it) with the sliders half a cell back; and where μ_s + ``overshoot`` > μ_k the break-away of the contacts
+    that start together (primed together to μ_s + ``overshoot``, with :func:`breakaway_limits`), both at the layer
+    and where they really start, ``early`` (the trajectory half a ramp before the layer) with the other sliders
+    ``lead`` cells back."""
     m = len(grids)
     n_layers = len(sample.pose)
     vertices: list = []  # per move vector, the polytope's vertices at the layers
