@@ -34,3 +34,13 @@ def test_the_second_variant_ends_for_a_physical_reason():
         plan_regrasps(scenario)
     assert info.value.limit is ScheduleLimit.FORCES
     assert "finger1" in str(info.value)
+
+
+@pytest.mark.slow
+def test_forces_that_fail_between_layers_are_planned_around():
+    """The third variant's side fingers, sliding together, pass a thin set of positions without forces between two
+    layers: the re-plans keep that move vector out of a widening window of layers, and the schedule verifies."""
+    scenario = load_scenario(FIXTURES / "issue27_variant_c.toml")
+    schedule = plan_regrasps(scenario)
+    assert schedule.periodic and len(schedule.slides) >= 4
+    assert schedule.min_envelope_margin >= 1e-3 and schedule.min_cone_margin >= 0.2 - 1e-9

@@ -311,12 +311,12 @@ def _intersect(a, b) -> tuple[np.ndarray, np.ndarray]:
 
 
 def run(lat: Lattice, start: Sequence[int] | np.ndarray | None = None,
-        bans: Mapping[int, Iterable[tuple[int, Iterable[int]]]] | None = None,
+        bans: Mapping[int, Iterable[tuple[int, Iterable[int] | None]]] | None = None,
         end: Sequence[int] | np.ndarray | None = None, init: LatticeRun | None = None, *,
         keep_backs: bool = True) -> LatticeRun:
     """Sweep the layers. ``start``: global cells of the contacts at layer 0 (at rest), or None for
-    every admissible rest state; ``bans``: {layer: [(move vector, global cells), ...]} states to
-    exclude; ``end``: global cells the path must reach at the last layer (states that cannot are
+    every admissible rest state; ``bans``: {layer: [(move vector, global cells or None: every position), ...]}
+    states to exclude; ``end``: global cells the path must reach at the last layer (states that cannot are
     pruned), or None; ``init``: a finished run of a periodic lattice whose final values (at rest)
     start this one (a second period), or None; ``keep_backs``: False when no path will be traced
     back (a run's back pointers take about 100 MB for three fingers)."""
@@ -372,6 +372,9 @@ def run(lat: Lattice, start: Sequence[int] | np.ndarray | None = None,
 
 def _apply_bans(V, box, banned) -> None:
     for mu, cells in banned:
+        if cells is None:  # the move vector at every position
+            V[:, mu] = np.inf
+            continue
         p = flat_index(cells, box)
         if p >= 0:
             V[p, mu] = np.inf

@@ -214,15 +214,24 @@ def _holds(lam: np.ndarray, offset: np.ndarray, xi: np.ndarray) -> bool:
     return phi.min() <= 1e-10 and phi.max() >= -1e-10
 
 
-def _bans(problem: Problem, violations, cells, moves) -> dict:
-    """The path's states at the layers around each violation, to exclude when re-planning."""
+def _bans(problem: Problem, violations, cells, moves, width: int = 0) -> dict:
+    """The path's states at the layers around each violation, to exclude when re-planning; and where the forces fail
+    between two layers while contacts slide (the lattice checks the forces at the layers and, for two sliders, at the
+    interval's middle: a thin set of positions without forces can lie between), that move vector at every position
+    over the ``width`` layers on either side (the same slides a layer later cross the same set)."""
     index = {tuple(d): mu for mu, d in enumerate(problem.lattice.combos.tolist())}
     bans: dict[int, list] = {}
-    for t, _, _ in violations:
-        k = int((t - problem.times[0]) / problem.dt)
+    for t, what, _ in violations:
+        at = (t - problem.times[0]) / problem.dt
+        k = int(at)
         for j in (k, k + 1):
             if 0 <= j < len(cells):
                 bans.setdefault(j, []).append((index[tuple(moves[j].tolist())], cells[j].copy()))
+        between = abs(at - round(at)) > 1e-6
+        if width and what == "forces" and between and k + 1 < len(moves) and moves[k + 1].any():
+            mu = index[tuple(moves[k + 1].tolist())]
+            for j in range(max(1, k + 1 - width), min(len(cells), k + 2 + width)):
+                bans.setdefault(j, []).append((mu, None))
     return bans
 
 
@@ -398,7 +407,7 @@ def plan_regrasps(scenario: Scenario, settings: RegraspSettings = RegraspSetting
             if progress is not None:
                 progress(total, total)
             return schedule
-        bans = _merge(bans, _bans(problem, violations, cells, moves))
+        bans = _merge(bans, _bans(problem, violations, cells, moves, width=attempt + 1))
     t, what, i = violations[0]
     limit = ScheduleLimit.TORQUE if what.startswith("torque") else ScheduleLimit.VERIFICATION
     raise NoScheduleError(t, limit, problem.names if i is None else (problem.names[i],),
