@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = ["FAILURE_COLOURS", "FAILURE_COLOUR", "MM", "SUCCESS_COLOUR", "gravity_words", "membership", "pyplot",
-           "save_figure", "stacked_axes"]
+           "save_figure", "say_instead", "stacked_axes"]
 
 #: Millimetres per metre: the figures' lengths are in mm.
 MM = 1000.0
@@ -73,6 +73,12 @@ def membership(times: np.ndarray, sets_per_sample: Sequence[Intervals], grid: np
         for lo, hi in intervals:
             img[:, k] |= (grid >= lo) & (grid <= hi)
     return img
+
+
+def say_instead(ax: object, text: str) -> None:
+    """An axis that has nothing to draw says so, in words (``text``), instead of showing empty ranges."""
+    ax.set_axis_off()
+    ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", wrap=True)
 
 
 def save_figure(fig: Figure, path: str | Path, layout: bool = True) -> Path:

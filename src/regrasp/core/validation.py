@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import os
 import tempfile
+import tomllib
 from collections.abc import Callable, Iterable, Mapping
 from collections.abc import Set as AbstractSet
 from pathlib import Path
@@ -17,7 +18,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from .exceptions import InvalidParameterError
+from .exceptions import InvalidParameterError, ScenarioError
 
 _NOT_NUMBERS = (bool, np.bool_, str, bytes, complex, np.complexfloating)
 _NUMBER_KINDS = frozenset("iuf")
@@ -198,6 +199,21 @@ def file_problem(path: Path, what: str = "file") -> str | None:
         reason = getattr(exc, "strerror", None) or str(exc)
         return f"not a usable file name ({type(exc).__name__}: {reason})"
     return None if found else f"{what} not found"
+
+
+def read_toml(path: str | Path, what: str = "file") -> tuple[Path, dict]:
+    """(``path``, its TOML document), or a :class:`~regrasp.core.exceptions.ScenarioError` naming the file: not a path
+    (``InvalidParameterError``), not a file (:func:`file_problem`, ``what`` naming it), or not valid TOML."""
+    if not isinstance(path, (str, Path)):
+        raise InvalidParameterError("path", path, f"a {what}'s path (str or pathlib.Path)")
+    path = Path(path)
+    problem = file_problem(path, what)
+    if problem is not None:
+        raise ScenarioError(path, None, problem)
+    try:
+        return path, tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ScenarioError(path, None, f"not valid TOML: {exc}") from exc
 
 
 #: The longest name of one path component [bytes] where the file system does not say (NAME_MAX on Linux and macOS),

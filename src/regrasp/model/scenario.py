@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import difflib
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -61,6 +60,7 @@ from ..core.validation import (
     expect_sequence_of,
     expect_type,
     file_problem,
+    read_toml,
 )
 from .finger import Finger, as_effort_limit
 from .geometry import Geometry, as_geometry
@@ -423,16 +423,7 @@ def _pad(path: Path, table: Any) -> Pad | None:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file; raises ScenarioError naming the file and key."""
-    if not isinstance(path, (str, Path)):
-        raise InvalidParameterError("path", path, "a scenario file's path (str or pathlib.Path)")
-    path = Path(path)
-    problem = file_problem(path, "scenario file")
-    if problem is not None:
-        raise ScenarioError(path, None, problem)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ScenarioError(path, None, f"not valid TOML: {exc}") from exc
+    path, data = read_toml(path, "scenario file")
     return scenario_from_document(data, path)
 
 

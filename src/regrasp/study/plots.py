@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..core.figures import say_instead
+
 if TYPE_CHECKING:
     from .study import StudyResult
 
@@ -61,12 +63,6 @@ def study_title(result: StudyResult, gravity: ArrayLike | None = None) -> str:
     where = "" if gravity is None else f", {gravity_words(gravity)}"
     return (f"{Path(result.scenario).stem} on the {result.plant} plant{where}, scheduled policy, seed {result.seed}: "
             f"{runs} of {result.duration:.3g} s" + (" (interrupted)" if result.interrupted else ""))
-
-
-def _sentence(ax, text: str) -> None:
-    """An axis that has nothing to draw says so, in words, instead of showing empty ranges."""
-    ax.set_axis_off()
-    ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", wrap=True)
 
 
 def _bins(x: np.ndarray, ok: np.ndarray, bins: int) -> tuple[list[float], list[float], list[float], list[float]]:
@@ -137,7 +133,7 @@ def plot_study(result: StudyResult, directory: str | Path, *, gravity: ArrayLike
     if not runs:
         for name in ("study_success.png", "study_failure_times.png", "study_margins.png"):
             fig, ax = plt.subplots(figsize=(6.0, 2.0))
-            _sentence(ax, f"{title}:\nno run finished")
+            say_instead(ax, f"{title}:\nno run finished")
             paths.append(directory / name)
             fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
             plt.close(fig)
@@ -178,7 +174,7 @@ def plot_study(result: StudyResult, directory: str | Path, *, gravity: ArrayLike
         ax.set_title(f"{title}\n{len(bad)} of {len(runs)} runs failed", fontsize=9)
         ax.legend(fontsize=8)
     else:  # (an empty histogram's axes would run from -0.05 to 0.05 runs)
-        _sentence(ax, f"{title}:\nno run failed")
+        say_instead(ax, f"{title}:\nno run failed")
     paths.append(directory / "study_failure_times.png")
     fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
     plt.close(fig)
@@ -199,7 +195,7 @@ def plot_study(result: StudyResult, directory: str | Path, *, gravity: ArrayLike
             ax.yaxis.set_major_locator(MaxNLocator(integer=True))
             ax.legend(fontsize=8)
         else:
-            _sentence(ax, f"{label}:\nno run measured one")
+            say_instead(ax, f"{label}:\nno run measured one")
     fig.suptitle(title, fontsize=9)
     paths.append(directory / "study_margins.png")
     fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
@@ -219,7 +215,7 @@ def plot_sweep(name: str, results: Sequence[StudyResult], path: str | Path, *,
     results = [r for r in results if r.runs]  # (a study Ctrl-C stopped before any run finished has no rate)
     if not results:
         fig, ax = plt.subplots(figsize=(6.0, 2.0))
-        _sentence(ax, f"--sweep {name}: no run finished")
+        say_instead(ax, f"--sweep {name}: no run finished")
         fig.savefig(path, dpi=110, bbox_inches="tight")
         plt.close(fig)
         return path

@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.figures import say_instead
+
 if TYPE_CHECKING:
     from .result import SuiteResult, VariantOutcome
 
@@ -89,18 +91,13 @@ def _style(o: VariantOutcome) -> tuple[str, str, str]:
     return f"refused: {o.limit}", _REFUSED, "s"
 
 
-def _sentence(ax: object, text: str) -> None:
-    ax.set_axis_off()
-    ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", wrap=True)
-
-
 def _outcomes(plt: object, result: SuiteResult, path: Path) -> Path:
     """``suite_outcomes.png``: each variant over the two most influential drawn values, by outcome."""
     keys = influential(result)[:2]
     title = suite_title(result)
     if not result.outcomes or not keys:
         fig, ax = plt.subplots(figsize=(7.0, 2.0))
-        _sentence(ax, f"{title}:\n" + ("no variant finished" if not result.outcomes else "no numeric drawn value"))
+        say_instead(ax, f"{title}:\n" + ("no variant finished" if not result.outcomes else "no numeric drawn value"))
         fig.savefig(path, dpi=110, bbox_inches="tight")
         plt.close(fig)
         return path
@@ -137,7 +134,7 @@ def _distribution(ax: object, values: list[float], without: list[float], unit: s
 
     both = np.array(values + without, dtype=float)
     if not both.size:
-        _sentence(ax, f"{what}: not measured")
+        say_instead(ax, f"{what}: not measured")
         return
     lo, hi = float(both.min()), float(both.max())
     span = (lo, hi) if hi > lo else (lo - 0.5, hi + 0.5)
@@ -193,7 +190,7 @@ def _reasons(plt: object, result: SuiteResult, path: Path) -> Path:
         counts.setdefault(label, [0, colour])[0] += 1
     if not counts:
         fig, ax = plt.subplots(figsize=(7.0, 2.0))
-        _sentence(ax, f"{suite_title(result)}:\nno variant finished")
+        say_instead(ax, f"{suite_title(result)}:\nno variant finished")
         fig.savefig(path, dpi=110, bbox_inches="tight")
         plt.close(fig)
         return path

@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.exceptions import InvalidParameterError, ScenarioError, short_repr
-from ..core.validation import MAX_RUNS, MAX_SEED, as_count, expect_type, file_problem
+from ..core.validation import MAX_RUNS, MAX_SEED, as_count, expect_type, file_problem, read_toml
 from .document import GRAVITY_ANGLE, apply_values
 
 __all__ = ["GRAVITY_ANGLE", "ROOTS", "SuiteSpec", "Varied", "load_suite_spec"]
@@ -276,16 +276,7 @@ def _integer(path: Path, data: dict, key: str, least: int, most: int) -> int:
 def load_suite_spec(path: str | Path) -> SuiteSpec:
     """Read and check a suite's spec (module docstring); a :class:`~regrasp.core.exceptions.ScenarioError` naming the
     file and key for anything wrong, the values of every varied key checked through the scenario's validation."""
-    if not isinstance(path, (str, Path)):
-        raise InvalidParameterError("path", path, "a suite spec's path (str or pathlib.Path)")
-    path = Path(path)
-    problem = file_problem(path, "suite spec")
-    if problem is not None:
-        raise ScenarioError(path, None, problem)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ScenarioError(path, None, f"not valid TOML: {exc}") from exc
+    path, data = read_toml(path, "suite spec")
     for key in data:
         if key not in _TOP:
             near = difflib.get_close_matches(key, _TOP, n=1)

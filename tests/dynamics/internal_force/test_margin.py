@@ -207,20 +207,28 @@ def test_cone_edges_are_validated(edges):
         InternalForceSolver().solve(A, np.zeros(6), frames, model.grasp.modes, 0.5, edges)
 
 
-def test_a_fallback_margin_answers_where_the_margin_cannot_be_kept_and_only_there():
-    """For each random case, the largest friction margin the LP still finds feasible, m*: with margin above m*
-    and a fallback below it the solver answers with forces inside the fallback's cones (and fails without the
-    fallback); with a margin the forces allow, the fallback is not used and the answer is the plain one."""
-    relaxed = kept = 0
+def _margin_cases():
+    """Each random case with a fixed contact: (case, its settings with a 0.2 N target margin, a grid of friction
+    margins from 0 to the fixed contacts' least μ, the grid's margins the LP finds feasible)."""
     for kind, seed in CASES:
         case = random_case(kind, seed)
-        A, f_m, frames, fixed, mu, modes, friction = (case[k] for k in ("A", "f_m", "frames", "fixed", "mu", "modes",
-                                                                        "friction"))
+        fixed, mu = case["fixed"], case["mu"]
         if not any(fixed):
             continue
         base = dataclasses.replace(case["settings"], target_cone_margin=0.2)
         grid = np.linspace(0.0, min(mu[i] for i in range(len(mu)) if fixed[i]), 21)
         feasible = [m for m in grid if best_margin(case, dataclasses.replace(base, friction_margin=m)) is not None]
+        yield case, base, grid, feasible
+
+
+def test_a_fallback_margin_answers_where_the_margin_cannot_be_kept_and_only_there():
+    """For each random case, the largest friction margin the LP still finds feasible, m*: with margin above m*
+    and a fallback below it the solver answers with forces inside the fallback's cones (and fails without the
+    fallback); with a margin the forces allow, the fallback is not used and the answer is the plain one."""
+    relaxed = kept = 0
+    for case, base, grid, feasible in _margin_cases():
+        A, f_m, frames, fixed, mu, modes, friction = (case[k] for k in ("A", "f_m", "frames", "fixed", "mu", "modes",
+                                                                        "friction"))
         if len(feasible) < 2 or feasible[-1] == grid[-1]:
             continue
         # infeasible at high (the LP); low a grid step inside the feasible margins (at their very edge the
@@ -256,15 +264,9 @@ def test_the_last_friction_margin_answers_where_the_fallback_cannot_be_kept():
     """A chain of two relaxations: with the margin and the fallback both above the largest feasible margin m* (the
     LP's), the solver answers with the last margin, below m*, inside its cones; without it, it fails."""
     chained = 0
-    for kind, seed in CASES:
-        case = random_case(kind, seed)
+    for case, base, grid, feasible in _margin_cases():
         A, f_m, frames, fixed, mu, modes, friction = (case[k] for k in ("A", "f_m", "frames", "fixed", "mu", "modes",
                                                                         "friction"))
-        if not any(fixed):
-            continue
-        base = dataclasses.replace(case["settings"], target_cone_margin=0.2)
-        grid = np.linspace(0.0, min(mu[i] for i in range(len(mu)) if fixed[i]), 21)
-        feasible = [m for m in grid if best_margin(case, dataclasses.replace(base, friction_margin=m)) is not None]
         if len(feasible) < 2 or len(feasible) + 1 >= len(grid):
             continue
         low, high, higher = feasible[-2], grid[len(feasible)], grid[len(feasible) + 1]
