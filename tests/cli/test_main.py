@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hang_guard import HANG_SECONDS
+from hang_guard import HANG_SECONDS, interrupted_run
 from regrasp import load_scenario, plan_scenario
 from regrasp.cli.main import main
 
@@ -197,20 +197,10 @@ def test_ctrl_c_ends_a_simulation_with_a_partial_result_and_a_complete_recording
 def test_ctrl_c_ends_a_study_keeping_the_runs_it_finished(tmp_path):
     """Ctrl-C once a tenth of the runs finished (the progress line on stderr says so, through a pipe too): exit
     130, the finished runs summarised and written (study.json, the figures), the workers stopped, no traceback."""
-    import signal
 
-    proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli.main", "study", "--runs", "100", "--workers", "2",
-                             "--duration", "0.5", "--seed", "3", "--plot", "out"], cwd=tmp_path,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    seen = []
-    for line in proc.stderr:  # (event-driven: no clock to race)
-        seen.append(line)
-        if "(10%)" in line:
-            break
-    proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=HANG_SECONDS)
-    err = "".join(seen) + err
-    assert proc.returncode == 130, (out, err)
+    code, out, err = interrupted_run(["study", "--runs", "100", "--workers", "2", "--duration", "0.5", "--seed", "3",
+                                      "--plot", "out"], tmp_path)
+    assert code == 130, (out, err)
     assert "regrasp study: 100 runs: 0/100 (0%)" in err and "Traceback" not in err
     doc = json.loads((tmp_path / "out" / "study.json").read_text())
     assert doc["interrupted"] and doc["requested_runs"] == 100 and 10 <= doc["runs"] < 100

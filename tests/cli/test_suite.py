@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from hang_guard import HANG_SECONDS
+from hang_guard import HANG_SECONDS, interrupted_run
 from regrasp.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -80,20 +80,10 @@ def test_json_has_the_reasons(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_ctrl_c_ends_a_suite_keeping_the_variants_it_finished(tmp_path):
-    import signal
 
     spec = spec_file(tmp_path, "paper_trajectory_2.toml", 40, '"object.mass" = [0.09, 0.11]\n')
-    proc = subprocess.Popen([sys.executable, "-m", "regrasp.cli.main", "suite", str(spec), "--workers", "2",
-                             "--plot", "out"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    seen = []
-    for line in proc.stderr:  # (event-driven: no clock to race)
-        seen.append(line)
-        if "(10%)" in line:
-            break
-    proc.send_signal(signal.SIGINT)
-    out, err = proc.communicate(timeout=HANG_SECONDS)
-    err = "".join(seen) + err
-    assert proc.returncode == 130, (out, err)
+    code, out, err = interrupted_run(["suite", str(spec), "--workers", "2", "--plot", "out"], tmp_path)
+    assert code == 130, (out, err)
     assert "Traceback" not in err
     doc = json.loads((tmp_path / "out" / "suite.json").read_text())
     assert doc["interrupted"] and doc["requested"] == 40 and 4 <= doc["variants"] < 40
