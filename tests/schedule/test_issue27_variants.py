@@ -10,7 +10,7 @@ import pytest
 
 from regrasp import RunSpec, load_scenario
 from regrasp.rollout.build import build_rollout
-from regrasp.schedule import NoScheduleError, ScheduleLimit, plan_regrasps
+from regrasp.schedule import NoScheduleError, RegraspSettings, ScheduleLimit, plan_regrasps
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 
@@ -44,3 +44,17 @@ def test_forces_that_fail_between_layers_are_planned_around():
     schedule = plan_regrasps(scenario)
     assert schedule.periodic and len(schedule.slides) >= 4
     assert schedule.min_envelope_margin >= 1e-3 and schedule.min_cone_margin >= 0.2 - 1e-9
+
+
+def test_no_two_periods_in_a_row_is_a_proof_that_no_periodic_schedule_exists():
+    """The fourth variant has a schedule over one period but none over two in a row: a periodic schedule run twice
+    would be one, so the planner says PERIODIC, with when the second period dies; where it only failed to find one
+    from the starts it tried, it says SEARCH (no proof)."""
+    scenario = load_scenario(FIXTURES / "issue27_variant_d.toml")
+    with pytest.raises(NoScheduleError) as info:
+        plan_regrasps(scenario)
+    assert info.value.limit is ScheduleLimit.PERIODIC
+    assert "no schedule runs two periods in a row" in str(info.value)
+    assert info.value.latest_time > scenario.trajectory.period
+    one = plan_regrasps(scenario, RegraspSettings(periodic=False), t_end=scenario.trajectory.period)
+    assert not one.periodic and len(one.slides) >= 1

@@ -328,23 +328,42 @@ def _solve(problem: Problem, bans: dict, hint=None) -> tuple:
         if np.array_equal(cells2[0], cells2[-1]) and len(move_runs(moves2)) <= lower:
             return cells2, moves2, lower  # the best two-period path repeats its second period
         candidates += [cells2[0], cells2[-1]]
+        candidates += _best_rest_states(second, problem.settings.period_candidates)
+    else:  # a periodic schedule run twice is a two-period path from one of the first period's end states: none is
+        into = float(problem.times[max(second.last_layer, 0)] - problem.times[0])
+        raise NoScheduleError(float(problem.times[-1]) + into, ScheduleLimit.PERIODIC, problem.names,
+                              f"no schedule runs two periods in a row: from every state the first period can end in, "
+                              f"the second dies by {into:.3f} s into it (a non-periodic one over one period exists, "
+                              f"with {lower} slide(s): settings.periodic = False)")
     del second
-    candidates.append(free_end)
-    best, tried = None, set()
-    for start in candidates[:problem.settings.period_candidates]:
+    candidates.insert(2, free_end)
+    best, tried = None, []
+    for start in candidates:
         if tuple(start) in tried:
             continue
-        tried.add(tuple(start))
+        if len(tried) == problem.settings.period_candidates:
+            break
+        tried.append(tuple(start))
         found = _periodic_from(problem, start, bans)
         if found is not None and (best is None or found[0] < best[0]):
             best = found
             if int(found[0] // K) <= lower:
                 break  # as few slides as any schedule: optimal
-    if best is None:
-        raise NoScheduleError(float(problem.times[-1]), ScheduleLimit.PERIODIC, problem.names,
-                              f"no schedule ends a period where it starts (tried {len(tried)} start states; "
-                              f"a non-periodic one with {lower} slide(s) exists: settings.periodic = False)")
+    if best is None:  # (not a proof: the program tried these starts, not every one)
+        raise NoScheduleError(float(problem.times[-1]), ScheduleLimit.SEARCH, problem.names,
+                              f"no schedule from the {len(tried)} start states tried ends a period where it starts "
+                              f"(not a proof that none does; a non-periodic one with {lower} slide(s) exists: "
+                              "settings.periodic = False)")
     return best[1], best[2], lower
+
+
+def _best_rest_states(result, count: int) -> list:
+    """The global cells of up to ``count`` of the cheapest states at rest in ``result``'s last layer, cheapest first
+    (starts a periodic schedule may try: the end of a second period is in the steady regime)."""
+    V = result.values[:, 0]
+    order = np.argsort(V, kind="stable")[:count]
+    box = result.boxes[result.last_layer]
+    return [cells_of(int(p), box) for p in order if np.isfinite(V[p])]
 
 
 def _plan_decomposed(problem: Problem, start: float, progress: Progress | None, total: int) -> RegraspSchedule:

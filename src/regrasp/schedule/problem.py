@@ -82,8 +82,10 @@ class RegraspSettings:
         geometry: Envelope geometry, a :class:`~regrasp.model.geometry.Geometry` or its string (None: the
             scenario's).
         max_repairs: Re-plans after a failed verification before giving up.
-        period_candidates: Start states tried for a periodic schedule, in order: the middle and the end of
-            the best two-period path, then the free program's best end state.
+        period_candidates: Distinct start states tried for a periodic schedule, in order: the middle and the end of
+            the best two-period path, the free program's best end state, then the cheapest states at rest at the
+            two-period program's end. None found from them is not a proof that none exists
+            (``ScheduleLimit.SEARCH``).
         method: The planner: ``"exact"`` (the lattice's dynamic program over all contacts at once, exponential in
             their number), ``"decomposition"`` (block-coordinate descent over pairs of contacts,
             :mod:`regrasp.schedule.decomposition`: polynomial, not a proof of optimality) or None: the exact one when
@@ -108,7 +110,7 @@ class RegraspSettings:
     periodic: bool | None = None
     geometry: Geometry | None = None
     max_repairs: int = 8
-    period_candidates: int = 3
+    period_candidates: int = 8
     method: str | None = None
 
     def __post_init__(self):

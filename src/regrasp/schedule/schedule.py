@@ -383,7 +383,9 @@ class ScheduleLimit(str, Enum):
     PERIODIC = "periodic"    #: schedules exist, but none ends a period where it starts
     VERIFICATION = "verification"  #: the planner's schedules keep failing its fine-grid check
     TORQUE = "torque"        #: no force system within the joints' torque limits (the finger, joint and time named)
-    SEARCH = "search"        #: the decomposition planner's search found none (not a proof that none exists)
+    #: a search found none (the decomposition planner's, or a periodic schedule's from the starts tried): not a proof
+    #: that none exists
+    SEARCH = "search"
 
 
 class NoScheduleError(RegraspError):
