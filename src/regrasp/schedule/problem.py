@@ -110,7 +110,7 @@ class RegraspSettings:
     periodic: bool | None = None
     geometry: Geometry | None = None
     max_repairs: int = 8
-    period_candidates: int = 8
+    period_candidates: int = 3
     method: str | None = None
 
     def __post_init__(self):
