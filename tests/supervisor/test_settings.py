@@ -23,7 +23,7 @@ TABLE = [
                 "friction_resolution", "control_period", "control_omega", "slide_omega", "hold_resolution",
                 "hold_filter_time", "reflex_time", "handover_load_max"),
         "nonneg": ("start_speed", "settle_margin", "integral", "tip_radius", "slider_floor", "holder_preload",
-                   "reflex_below", "reflex_floor", "handover_time"),
+                   "reflex_below", "reflex_floor", "handover_time", "reprime_overshoot_step"),
         "count0": ("max_reprimes", "actuation_delay"), "flag": ("breakaway_estimate",), "type": ("internal_force",)},
         optional=("start_speed", "friction_filter_time", "hold_resolution", "hold_filter_time"),
         good={"start_speed": 1e-3, "friction_filter_time": 0.01, "hold_filter_time": 0.02}),

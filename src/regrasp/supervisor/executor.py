@@ -375,7 +375,8 @@ class SlideExecutor:
         for i, a in sorted(self._active.items()):
             if self.phases[i] is ContactPhase.PRIMING:
                 ramp = min(1.0, (self._now - a.phase_start) / s.prime_time)
-                overshoot = s.prime_overshoot + ramp * (s.prime_overshoot_max - s.prime_overshoot)
+                first = min(s.prime_overshoot_max, s.prime_overshoot + a.reprimes * s.reprime_overshoot_step)
+                overshoot = first + ramp * (s.prime_overshoot_max - first)
                 edges.append(ConeEdge(i, a.order.direction, self.friction[i].static + overshoot))
             elif self.phases[i] is ContactPhase.SETTLING and a.still == 0 and settle_edges:  # (stuck: the fixed
                 # law's own cone)

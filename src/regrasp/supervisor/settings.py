@@ -45,6 +45,10 @@ class ExecutorSettings:
             contacts primed together at 0.05 pulled a 1.1 N slider 2.9-4.0 N off its edge (issue 27's ω 2.5 rad/s,
             200 g variant), at 0.01 it kept 0.30 N; so start low and grow ...
         prime_overshoot_max: ... and up to (μ_s + this) f_n at the end of ``prime_time`` [-].
+        reprime_overshoot_step: A re-priming (a planned slide stuck on its way, ``max_reprimes``) starts this much
+            higher per re-priming so far [-] (at most ``prime_overshoot_max``): a compliant contact primed gently
+            breaks away and grips again as its friction builds up (Drake, 1 mm tips: five re-primings at +0.01 and
+            the slide given up), so each new try pushes harder.
         start_speed: The priming ends when the contact is sensed sliding and moving in the slide's direction
             faster than this [m/s] (None: sensed sliding is enough).
         settle_undershoot: A slide that ends with the contact still sliding settles with the fixed-contact law
@@ -117,6 +121,7 @@ class ExecutorSettings:
     prime_time: float = 0.02
     prime_overshoot: float = 0.05
     prime_overshoot_max: float = 0.05
+    reprime_overshoot_step: float = 0.0
     start_speed: float | None = None
     settle_undershoot: float = 0.05
     settle_margin: float = 0.0
@@ -149,6 +154,7 @@ class ExecutorSettings:
         check_fields(self, as_positive_float, ("omega_n", "zeta", "prime_overshoot", "prime_overshoot_max",
                                                "settle_undershoot", "arrive_tolerance", "arrive_speed", "control_omega",
                                                "slide_omega", "friction_min_force", "friction_resolution"))
+        check_fields(self, as_positive_float, ("reprime_overshoot_step",), allow_zero=True)
         for name in ("omega_n", "control_omega", "slide_omega"):  # (their squares are gains)
             if getattr(self, name) > 1e6:
                 raise InvalidParameterError(name, getattr(self, name), "a frequency of at most 1e6 rad/s")
@@ -326,8 +332,8 @@ class SupervisorSettings:
         that: what the schedule planner plans, ``RegraspSettings.friction_margin``) and ``cone_margin`` [N] inside
         where the forces allow, the sliders' ξ at 60 rad/s, integral action (0.3 ω³), a priming whose overshoot
         grows from 0.01 to 0.25 over 40 ms (so a contact breaks away about where the plant's μ_s is, with little
-        force to spare: ``RegraspSettings.prime_overshoot``) and lasts until the contact moves the right way at
-        1 mm/s, the sliders' kinetic
+        force to spare: ``RegraspSettings.prime_overshoot``; each re-priming of a slide stuck on its way starts 0.04
+        higher) and lasts until the contact moves the right way at 1 mm/s, the sliders' kinetic
         friction estimated from the sensed forces (10 ms, from the break-away on), settling with 0.05 N of static
         margin, the held contacts' model positions following their sensed ones through a 20 ms filter, and the
         runtime envelopes evaluated every 10th step (100 Hz at 1 kHz; what a stale reading can miss:
@@ -343,7 +349,7 @@ class SupervisorSettings:
         prime_overshoot=0.01))``)."""
         executor = ExecutorSettings(
             slide_omega=60.0, integral=0.3, prime_time=0.04, prime_overshoot=0.01, prime_overshoot_max=0.25,
-            friction_filter_time=0.01,
+            reprime_overshoot_step=0.04, friction_filter_time=0.01,
             breakaway_estimate=True, settle_margin=0.05, start_speed=1e-3, hold_filter_time=0.02,
             internal_force=InternalForceSettings(f_min=0.2, friction_margin=0.1, target_cone_margin=cone_margin,
                                                  fallback_friction_margin=0.05, last_friction_margin=0.0),
