@@ -203,10 +203,11 @@ def test_a_lattice_too_large_for_memory_is_refused_up_front():
 SETTINGS_TABLE = fields_of(RegraspSettings(), {
     "nonneg": ("envelope_margin", "cone_margin", "friction_margin", "prime_overshoot", "slider_floor",
                "holder_preload"),
-    "pos": ("f_min", "f_max", "max_slide_speed", "max_slide_acceleration", "xi_resolution", "comfort_margin"),
+    "pos": ("f_min", "f_max", "max_slide_speed", "max_slide_acceleration", "xi_resolution", "comfort_margin",
+            "sliding_friction_factor"),
     "count1": ("max_sliders", "envelope_substeps", "verify_substeps", "period_candidates"), "count0": ("max_repairs",),
     "flag": ("periodic",), "geometry": ("geometry",), "choice": ("method",)},
-    optional=("max_sliders", "comfort_margin", "periodic", "geometry", "method"),
+    optional=("max_sliders", "comfort_margin", "periodic", "geometry", "method", "sliding_friction_factor"),
     good={"max_sliders": 2, "periodic": True, "geometry": "urdf", "method": "decomposition"},
     choices={"method": ("exact", "decomposition")})
 

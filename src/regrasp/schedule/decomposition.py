@@ -45,7 +45,7 @@ from .block_dp import PAIR_MOVES, SINGLE_MOVES, block_dp, block_path
 from .block_tables import ModeVertices, block_tables
 from .force_proof import positions_admit_forces
 from .problem import slide_ratios
-from .schedule import NoScheduleError, ScheduleLimit
+from .schedule import NoScheduleError, ScheduleLimit, verification_limit
 
 if TYPE_CHECKING:
     from .problem import Problem
@@ -346,7 +346,6 @@ def plan_decomposed(problem: Problem, check: Check) -> tuple[np.ndarray, np.ndar
                 if 0 <= j < len(cells):
                     bans.setdefault(j, []).append((tuple(cells[j].tolist()), tuple(moves[j].tolist())))
     t, what, i = violations[0]
-    limit = ScheduleLimit.TORQUE if what.startswith("torque") else ScheduleLimit.VERIFICATION
-    raise NoScheduleError(t, limit, problem.names if i is None else (problem.names[i],),
+    raise NoScheduleError(t, verification_limit(what), problem.names if i is None else (problem.names[i],),
                           f"the schedule still fails its verification after {problem.settings.max_repairs} re-plans "
                           f"({len(violations)} violations, the first: {what} at t = {t:.3f} s)")

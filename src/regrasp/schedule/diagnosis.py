@@ -154,6 +154,10 @@ def diagnose(problem: Problem, free: LatticeRun, partial: RegraspSchedule | None
     if torque is not None:
         return NoScheduleError(latest, ScheduleLimit.TORQUE, (torque[0],), torque[1],
                                partial=partial if last >= 0 else None)
+    posed = _painleve_limited(problem, last)
+    if posed is not None:
+        return NoScheduleError(latest, ScheduleLimit.PAINLEVE, (posed[0],), posed[1],
+                               partial=partial if last >= 0 else None)
     if last < 0:
         return NoScheduleError(latest, ScheduleLimit.FORCES, names,
                                f"no start state at t = {latest:.3f} s has a force system with the required margins",
@@ -236,6 +240,43 @@ def _torque_limited(problem, last: int) -> tuple[str, str] | None:
     latest = float(problem.times[max(last, 0)])
     return name, (f"{what} (joint torque limit; the latest admissible time is t = {latest:.3f} s, and without the "
                   f"limits a schedule survives until t = {float(problem.times[free.last_layer]):.3f} s)")
+
+
+def _painleve_limited(problem, last: int) -> tuple[str, str] | None:
+    """(the contact, the reason) where the slides' well-posedness is what ran out (:mod:`regrasp.schedule.well_posed`):
+    the program on the force tables before its cut (``problem.posed_tables``) survives beyond layer ``last``; the
+    reason names the first slide of that program's path after ``last`` that the cut excludes; else None."""
+    if problem.posed_tables is None:
+        return None
+    lat = problem.lattice
+    uncut_lat = dataclasses.replace(lat, lo=problem.posed_tables[0], hi=problem.posed_tables[1])
+    uncut = run(uncut_lat, start=problem.start_cells)
+    if uncut.last_layer <= last:
+        return None
+    _, mu, p = uncut.best()
+    cells, moves = path(uncut_lat, uncut, uncut.last_layer, mu, p)
+    index = {tuple(d): j for j, d in enumerate(lat.combos.tolist())}
+    times, factor = problem.times, problem.settings.sliding_friction_factor
+    latest = float(times[max(last, 0)])
+    mask, pairs = problem.posed_mask
+
+    def excluded(k: int, i: int) -> bool:
+        mu = index[tuple(moves[k].tolist())]
+        a, b, ok = pairs.get(mu, (0, 0, None))
+        return not mask[k, mu, i, cells[k, i]] or (ok is not None and not ok[k, cells[k, a], cells[k, b]])
+
+    for first, i, d, end in sorted(move_runs(moves, first=max(last, 0) + 1)):
+        bad = [k for k in range(first, end + 1) if excluded(k, i)]
+        if bad:
+            name, f = problem.names[i], problem.friction[i]
+            return name, (f"after t = {latest:.3f} s the envelopes need {name} to slide {'+' if d > 0 else '-'}xi "
+                          f"(in [{times[max(first - 1, 0)]:.3f}, {times[end]:.3f}] s), and where they allow it, from "
+                          f"t = {times[bad[0]]:.3f} s, friction ({factor:g} x its mu_k = {f.kinetic:g}) would make "
+                          "that slide's contact problem ill-posed (Painleve's paradox: its normal force would need "
+                          "torques known to a vanishing precision, or the finger jams or lifts off; "
+                          "RegraspSettings.sliding_friction_factor)")
+    return problem.names[0], (f"after t = {latest:.3f} s no slide the envelopes need is well-posed "
+                              f"at {factor:g} x the kinetic friction (Painleve's paradox)")
 
 
 def _never_allowed(problem, i: int, d: int, k0: int, k1: int) -> bool:

@@ -59,8 +59,17 @@ from .diagnosis import diagnose
 from .force_polytope import force_system, force_vertices, torque_excess
 from .lattice import cells_of, flat_index, move_runs, path, run
 from .problem import Problem, RegraspSettings, breakaway_limits, build_problem, slide_ratios, window_margin
-from .schedule import NoScheduleError, RegraspSchedule, ScheduleLimit, Slide, first_minimum, slides_at
+from .schedule import (
+    NoScheduleError,
+    RegraspSchedule,
+    ScheduleLimit,
+    Slide,
+    first_minimum,
+    slides_at,
+    verification_limit,
+)
 from .torque import TorqueModel
+from .well_posed import violations as well_posed_violations
 
 __all__ = ["RegraspSettings", "plan_regrasps"]
 
@@ -164,6 +173,10 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
                                         at.xi[k], slide_ratios(direction, problem.friction), mu_s, limits)
                 if why is not None:
                     violations.append((float(times[k]), *why))
+    factor = settings.sliding_friction_factor
+    if factor is not None:
+        violations += well_posed_violations(problem.torque, problem.scenario, times, sample.pose, at.xi, at.direction,
+                                            problem.friction, factor)
     for s, together, t, direction, xi, smp in starts:
         fv = force_vertices(problem.geometry, smp.pose[:, 2], smp.acceleration,
                             slide_ratios(direction, problem.friction, breaking=together,
@@ -228,7 +241,8 @@ def _bans(problem: Problem, violations, cells, moves, width: int = 0) -> dict:
             if 0 <= j < len(cells):
                 bans.setdefault(j, []).append((index[tuple(moves[j].tolist())], cells[j].copy()))
         between = abs(at - round(at)) > 1e-6
-        if width and what == "forces" and between and k + 1 < len(moves) and moves[k + 1].any():
+        thin = what == "forces" or what.startswith("painleve")
+        if width and thin and between and k + 1 < len(moves) and moves[k + 1].any():
             mu = index[tuple(moves[k + 1].tolist())]
             for j in range(max(1, k + 1 - width), min(len(cells), k + 2 + width)):
                 bans.setdefault(j, []).append((mu, None))
@@ -428,8 +442,7 @@ def plan_regrasps(scenario: Scenario, settings: RegraspSettings = RegraspSetting
             return schedule
         bans = _merge(bans, _bans(problem, violations, cells, moves, width=attempt + 1))
     t, what, i = violations[0]
-    limit = ScheduleLimit.TORQUE if what.startswith("torque") else ScheduleLimit.VERIFICATION
-    raise NoScheduleError(t, limit, problem.names if i is None else (problem.names[i],),
+    raise NoScheduleError(t, verification_limit(what), problem.names if i is None else (problem.names[i],),
                           f"the schedule still fails its verification after {settings.max_repairs} re-plans "
                           f"({len(violations)} violations, the first: {what} at t = {t:.3f} s)")
 

@@ -28,8 +28,9 @@ from ..envelope.finger_envelope import FingerEnvelope
 from ..model.geometry import Geometry, as_geometry
 from ..model.scenario import Scenario
 from .force_polytope import ForceGeometry, ForceLimits, force_vertices, xi_intervals
-from .lattice import Lattice, motion_combos
+from .lattice import Lattice, cut_tables, motion_combos
 from .torque import TorqueModel
+from .well_posed import lattice_geometry, slide_mask
 
 if TYPE_CHECKING:
     from ..core.contact import Friction
@@ -86,6 +87,11 @@ class RegraspSettings:
             the best two-period path, the free program's best end state, then the cheapest states at rest at the
             two-period program's end. None found from them is not a proof that none exists
             (``ScheduleLimit.SEARCH``).
+        sliding_friction_factor: Plan a slide only where the sliders' contact problem stays well-posed (no
+            Painlevé paradox: :mod:`regrasp.schedule.well_posed`) with this many times each slider's kinetic friction
+            [-] (≥ 1; None: no check). Near the paradox a slider's normal force needs torques known to a vanishing
+            precision; 1.25 leaves the plant 25 % more friction than the model, and a slider at the model's friction
+            at least a fifth of its frictionless normal mobility.
         method: The planner: ``"exact"`` (the lattice's dynamic program over all contacts at once, exponential in
             their number), ``"decomposition"`` (block-coordinate descent over pairs of contacts,
             :mod:`regrasp.schedule.decomposition`: polynomial, not a proof of optimality) or None: the exact one when
@@ -112,6 +118,7 @@ class RegraspSettings:
     max_repairs: int = 8
     period_candidates: int = 3
     method: str | None = None
+    sliding_friction_factor: float | None = 1.25
 
     def __post_init__(self):
         check_fields(self, as_positive_float, ("max_slide_speed", "max_slide_acceleration", "xi_resolution", "f_min",
@@ -125,6 +132,9 @@ class RegraspSettings:
         check_fields(self, as_count, ("max_repairs",))
         check_fields(self, as_count, ("max_sliders",), 1, optional=True)
         check_fields(self, as_flag, ("periodic",), optional=True)
+        check_fields(self, as_positive_float, ("sliding_friction_factor",), optional=True)
+        if self.sliding_friction_factor is not None and self.sliding_friction_factor < 1.0:
+            raise InvalidParameterError("sliding_friction_factor", self.sliding_friction_factor, ">= 1 (or None)")
         if self.geometry is not None:
             object.__setattr__(self, "geometry", as_geometry("geometry", self.geometry, "'ideal', 'urdf' or None"))
         self.force_limits()
@@ -178,7 +188,9 @@ class Problem:
     sub-sample times ``sub_times``, ``lattice``, ``limits`` (the planning limits, with buffers), ``torque`` the
     fingers' joint torque limits (:class:`~regrasp.schedule.torque.TorqueModel`), ``torque_excess`` the lattice's
     torque table where a joint has a limit (:meth:`~regrasp.schedule.torque.TorqueModel.cell_excess`) and
-    ``free_tables`` the force tables (lo, hi) before the limits cut them (None: they cut nothing).
+    ``free_tables`` the force tables (lo, hi) before the limits cut them (None: they cut nothing), ``posed_tables``
+    the tables before the slides' well-posedness cut them (:mod:`regrasp.schedule.well_posed`; None: it cut nothing)
+    and ``posed_mask`` its conditions (per cell, per pair of sliders: :func:`~regrasp.schedule.well_posed.slide_mask`).
     """
 
     scenario: Scenario
@@ -201,6 +213,8 @@ class Problem:
     torque_excess: np.ndarray | None = None
     free_tables: tuple | None = None
     exact: bool = True
+    posed_tables: tuple | None = None
+    posed_mask: tuple | None = None
 
 
 def _cell_margins(sample, grid: np.ndarray) -> np.ndarray:
@@ -318,10 +332,17 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
         blo = bhi = vertices = None
         slots = np.full((len(combos), m), -1, dtype=np.int64)
     torque = TorqueModel(scenario)
-    torque_excess, free_tables = None, None
+    torque_excess, free_tables, posed_tables, posed = None, None, None, None
+    joints = [torque.joint_angles(i, sample.pose, np.broadcast_to(g, (len(times), len(g))))
+              for i, g in enumerate(grids)] if force_tables else None
+    if force_tables and settings.sliding_friction_factor is not None:  # (the decomposition: its verification's)
+        posed, pairs = slide_mask(lattice_geometry(torque, scenario, grids, sample, joints), combos, friction,
+                                  settings.sliding_friction_factor, lattice_env, scenario.polygon.mass,
+                                  scenario.polygon.inertia)
+        posed_tables = cut_tables(posed, grids, axis, lo, hi, pairs)
     if torque.limited and force_tables:
         torque_excess, free_tables = _torque_tables(torque, sample, grids, combos, vertices, speed, axis, lo, hi,
-                                                    lattice_env)
+                                                    lattice_env, joints)
     del vertices
     rest_only = np.zeros(n_steps + 1, dtype=bool)
     rest_only[[0, 1, n_steps]] = True
@@ -331,7 +352,8 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
                       slide_cost=1.0 + (n_steps + 1) * m * (1.0 + move_cost), move_cost=move_cost)
     return Problem(scenario, settings, tuple(c.finger.name for c in contacts), friction, bool(periodic), times, dt,
                    grids, envelopes, sub_times, sub_samples, geo, limits, envelope_buffer, lattice, start_cells, torque,
-                   torque_excess, free_tables, bool(force_tables))
+                   torque_excess, free_tables, bool(force_tables), posed_tables,
+                   None if posed_tables is None else (posed, pairs))
 
 
 def _window(k: int, q: int, n_steps: int) -> slice:
@@ -438,7 +460,7 @@ def _force_tables(geo, sample, middle, early, lead: float, combos, friction, lim
 
 
 def _torque_tables(torque: TorqueModel, sample, grids, combos, vertices, speed: float, axis: int, lo: np.ndarray,
-                   hi: np.ndarray, env_ok: np.ndarray) -> tuple[np.ndarray, tuple | None]:
+                   hi: np.ndarray, env_ok: np.ndarray, joints: list | None = None) -> tuple[np.ndarray, tuple | None]:
     """The joint torque limits' necessary condition in the force tables (module docstring of
     :mod:`regrasp.schedule.torque`): per layer and move vector, a state whose other contacts sit on a cell that no
     force within a joint's limit allows is dropped (its interval emptied), and the axis's interval is cut to the
@@ -446,24 +468,7 @@ def _torque_tables(torque: TorqueModel, sample, grids, combos, vertices, speed: 
     returns the excess table (:meth:`~regrasp.schedule.torque.TorqueModel.cell_excess`) and the tables as they were
     (None when the limits excluded no cell); ``env_ok``: the envelope tables (a cell they exclude is not cut
     again)."""
-    excess = torque.cell_excess(sample, grids, combos, vertices, speed)
+    excess = torque.cell_excess(sample, grids, combos, vertices, speed, joints)
     # (N + 1, M, m, n_max); NaN: unreachable, and cells outside the envelopes: the envelope's business
     allowed = ~(excess > 0.0).any(axis=-1) | ~env_ok[:, None]
-    if allowed.all():
-        return excess, None
-    free = (lo.copy(), hi.copy())
-    m = len(grids)
-    columns = [i for i in range(m) if i != axis]
-    axis_grid = np.asarray(grids[axis])
-    for k, mu in zip(*np.nonzero(~allowed.all(axis=(2, 3)))):
-        ok_others = np.ones(1, dtype=bool)
-        for i in columns:
-            ok_others = np.outer(ok_others, allowed[k, mu, i, :len(grids[i])]).reshape(-1)
-        cells = np.flatnonzero(allowed[k, mu, axis, :len(axis_grid)])
-        lo[k, ~ok_others, mu], hi[k, ~ok_others, mu] = np.inf, -np.inf
-        if cells.size == 0:
-            lo[k, :, mu], hi[k, :, mu] = np.inf, -np.inf
-        else:
-            lo[k, :, mu] = np.maximum(lo[k, :, mu], axis_grid[cells[0]] - 1e-6)
-            hi[k, :, mu] = np.minimum(hi[k, :, mu], axis_grid[cells[-1]] + 1e-6)
-    return excess, free
+    return excess, cut_tables(allowed, grids, axis, lo, hi)

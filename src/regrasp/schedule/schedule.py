@@ -42,7 +42,8 @@ from ..core.validation import (
     expect_sequence_of,
 )
 
-__all__ = ["NoScheduleError", "RegraspSchedule", "ScheduleLimit", "ScheduleSample", "Slide", "slides_at"]
+__all__ = ["NoScheduleError", "RegraspSchedule", "ScheduleLimit", "ScheduleSample", "Slide", "slides_at",
+           "verification_limit"]
 
 
 @dataclass(frozen=True)
@@ -383,9 +384,19 @@ class ScheduleLimit(str, Enum):
     PERIODIC = "periodic"    #: schedules exist, but none ends a period where it starts
     VERIFICATION = "verification"  #: the planner's schedules keep failing its fine-grid check
     TORQUE = "torque"        #: no force system within the joints' torque limits (the finger, joint and time named)
+    #: no slide the envelopes need is well-posed there: friction makes the slider's contact problem ill-posed
+    #: (Painlevé's paradox; :mod:`regrasp.schedule.well_posed`)
+    PAINLEVE = "painleve"
     #: a search found none (the decomposition planner's, or a periodic schedule's from the starts tried): not a proof
     #: that none exists
     SEARCH = "search"
+
+
+def verification_limit(what: str) -> ScheduleLimit:
+    """The limit named when the verification keeps failing, its first violation being ``what``."""
+    if what.startswith("torque"):
+        return ScheduleLimit.TORQUE
+    return ScheduleLimit.PAINLEVE if what.startswith("painleve") else ScheduleLimit.VERIFICATION
 
 
 class NoScheduleError(RegraspError):

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.exceptions import UnreachableError
+from ..dynamics.painleve import tip_mobility
 from ..kernels.finger import finger_terms_at
 from ..model.hand import Hand
 from ..model.scenario import Scenario
@@ -148,6 +149,16 @@ class TorqueModel:
                 pass
         return q
 
+    def tip_mobility(self, i: int, joints: np.ndarray) -> np.ndarray:
+        r"""Finger i's tip mobility :math:`J M^{-1} J^T` [1/kg] (..., 2, 2) at joint angles ``joints`` (..., 2) [rad]
+        (:func:`~regrasp.dynamics.painleve.tip_mobility`); NaN where they are NaN (unreachable)."""
+        q = np.asarray(joints, dtype=float)
+        ok = np.isfinite(q).all(axis=-1)
+        jac, terms = self._terms(i, np.where(ok[..., None], q, 0.0).reshape(-1, 2), np.zeros((ok.size, 2)))
+        out = tip_mobility(jac, terms["M"]).reshape(q.shape[:-1] + (2, 2))
+        out[~ok] = np.nan
+        return out
+
     def _terms(self, i: int, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """J (k, 2, 2) and M (k, 2, 2), N (k, 2), J̇q̇ (k, 2) of finger i at k states (compiled terms, or Pinocchio
         where the hand's kernels disagree with it)."""
@@ -172,7 +183,7 @@ class TorqueModel:
         return jac, {"M": mass, "N": nle, "jdv": jdv}
 
     def cell_excess(self, sample: TrajectorySample, grids: list[np.ndarray], combos: np.ndarray, vertices: list,
-                    speed: float) -> np.ndarray:
+                    speed: float, joints: list[np.ndarray] | None = None) -> np.ndarray:
         r"""The lattice's necessary condition (:mod:`regrasp.schedule.problem`): per layer, move vector, contact,
         cell and joint, the least :math:`|\tau_{ij}| - e_{ij}` [N m] over the force polytope's vertices at the layer
         (``vertices``: per move vector its :class:`~regrasp.schedule.force_polytope.ForceVertices` at the layers of
@@ -180,14 +191,15 @@ class TorqueModel:
         direction; (N + 1, M, m, n_max, 2) float32, NaN where the finger cannot reach the cell or the polytope is
         empty. A cell whose excess is positive for a joint has no force system within that joint's limit, whatever
         the other contacts' positions: the projection of the polytope on one joint's torque is an interval, and
-        the moment balance only shrinks the polytope."""
+        the moment balance only shrinks the polytope. ``joints``: per contact its finger's joint angles at the layers
+        and cells (:meth:`joint_angles`), if known."""
         m, layers, n_max = len(grids), len(sample.time), max(len(g) for g in grids)
         out = np.full((layers, len(combos), m, n_max, 2), np.nan, dtype=np.float32)
         for i, grid in enumerate(grids):
             xi = np.broadcast_to(grid, (layers, len(grid)))
-            joints = self.joint_angles(i, sample.pose, xi)
+            q = self.joint_angles(i, sample.pose, xi) if joints is None else joints[i]
             per_direction = {d: self.contact(i, sample.pose, sample.velocity, sample.acceleration, xi, d * speed,
-                                             joints=joints) for d in sorted({int(d) for d in combos[:, i]})}
+                                             joints=q) for d in sorted({int(d) for d in combos[:, i]})}
             effort = self.effort[i].astype(np.float32)
             for mu, d in enumerate(combos):
                 torques, (lam, tau, empty) = per_direction[int(d[i])], _packed(vertices[mu], i)

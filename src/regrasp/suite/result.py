@@ -3,8 +3,8 @@
 the failures by kind, the planning time and peak memory percentiles; as JSON and back.
 
 A plan that ends without a schedule ends for a *physical* reason when its limit is one of :data:`PHYSICAL_LIMITS`
-(the envelopes, the slide speeds, the forces, periodicity, the joints' torques); a verification that kept failing or
-a variant the planner refused is not one (:attr:`SuiteResult.unexplained`).
+(the envelopes, the slide speeds, the forces, periodicity, the joints' torques, the slides' well-posedness); a
+verification that kept failing or a variant the planner refused is not one (:attr:`SuiteResult.unexplained`).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ NO_SCHEDULE = "no_schedule"
 #: Refused: its scenario, or the planner, refused the variant with a typed error (the error's type is its limit).
 REFUSED = "refused"
 #: The limits (:class:`~regrasp.schedule.schedule.ScheduleLimit` values) that are physical reasons for no schedule.
-PHYSICAL_LIMITS = ("envelope", "speed", "forces", "periodic", "torque")
+PHYSICAL_LIMITS = ("envelope", "speed", "forces", "periodic", "torque", "painleve")
 #: The percentiles a suite reports: (label, percent).
 PERCENTILES = (("p50", 50.0), ("p90", 90.0), ("p95", 95.0), ("max", 100.0))
 
