@@ -1,6 +1,7 @@
-"""Issue 27's two variants of the default three-finger scenario (``tests/fixtures/issue27_variant_*.toml``): the
+"""Issue 27's variants of the default three-finger scenario (``tests/fixtures/issue27_variant_*.toml``): the
 first plans a schedule and runs it over two periods on the project plant; the second ends with a physical reason
-(the forces), not with a verification that never converges."""
+(the forces), not with a verification that never converges; the others: forces that fail between layers, and no
+periodic schedule proven over two and over three periods in a row. (The fifth, Painlevé's: test_well_posed.py.)"""
 
 from __future__ import annotations
 
@@ -58,3 +59,14 @@ def test_no_two_periods_in_a_row_is_a_proof_that_no_periodic_schedule_exists():
     assert info.value.latest_time > scenario.trajectory.period
     one = plan_regrasps(scenario, RegraspSettings(periodic=False), t_end=scenario.trajectory.period)
     assert not one.periodic and len(one.slides) >= 1
+
+
+def test_no_three_periods_in_a_row_is_a_proof_too():
+    """The sixth variant runs two periods in a row but no periodic schedule comes from the starts tried; the third
+    period dies from every state the first two can end in, so none exists: PERIODIC, with when it dies, not SEARCH."""
+    scenario = load_scenario(FIXTURES / "issue27_variant_f.toml")
+    with pytest.raises(NoScheduleError) as info:
+        plan_regrasps(scenario)
+    assert info.value.limit is ScheduleLimit.PERIODIC
+    assert "no schedule runs three periods in a row" in str(info.value)
+    assert 2 * scenario.trajectory.period < info.value.latest_time < 3 * scenario.trajectory.period

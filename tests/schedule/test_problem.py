@@ -11,6 +11,7 @@ and half a ramp earlier with the other sliders that far back; the envelope table
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -25,12 +26,57 @@ from regrasp.schedule.problem import RegraspSettings, build_problem, trajectory_
 SCENARIO = Path(__file__).resolve().parents[2] / "examples" / "scenarios" / "paper_trajectory_2_three_fingers.toml"
 
 
+RAW = dict(position_margin=0.0, sliding_friction_factor=None)  # (the force tables as the LP gives them: no cuts)
+
+
+def _scenario():
+    sc = load_scenario(SCENARIO)
+    return dataclasses.replace(sc, contacts=tuple(dataclasses.replace(c, friction=Friction(0.6, 0.45))
+                                                  for c in sc.contacts))
+
+
 @pytest.fixture(scope="module")
 def problem():
-    sc = load_scenario(SCENARIO)
-    sc = dataclasses.replace(sc, contacts=tuple(dataclasses.replace(c, friction=Friction(0.6, 0.45))
-                                                for c in sc.contacts))
-    return build_problem(sc, RegraspSettings())
+    return build_problem(_scenario(), RegraspSettings(**RAW))
+
+
+def test_the_position_margin_erodes_the_tables_to_the_lp_on_every_neighbour(problem):
+    """With a one-cell position margin a table entry holds a position exactly where the LP finds a force system at
+    every position of the box around it: each contact at its cell or a neighbour (off the grid: none)."""
+    eroded = build_problem(_scenario(), RegraspSettings(position_margin=problem.settings.xi_resolution,
+                                                        sliding_friction_factor=None))
+    sc, lat = problem.scenario, problem.lattice
+    traj = sc.trajectory
+    edges = [c.edge for c in sc.contacts]
+    mu_s = [f.static for f in problem.friction]
+    rng = np.random.default_rng(3)
+    seen = []
+    while len(seen) < 30:
+        k, mu = int(rng.integers(0, lat.layers)), int(rng.integers(0, len(lat.combos)))
+        other = int(rng.integers(0, lat.lo.shape[1]))
+        cells = _cells(problem, other)
+        full = cells[:lat.axis] + [int(rng.integers(0, len(problem.grids[lat.axis])))] + cells[lat.axis:]
+        x_axis = problem.grids[lat.axis][full[lat.axis]]
+        lo, hi = float(eroded.lattice.lo[k, other, mu]), float(eroded.lattice.hi[k, other, mu])
+        if min(abs(x_axis - lo), abs(x_axis - hi)) < 1e-6 or not lat.lo[k, other, mu] <= x_axis <= lat.hi[k, other,
+                                                                                                          mu]:
+            continue  # (on a bound; or outside before the erosion: nothing to erode)
+        smp = traj.sample(float(problem.times[k]))
+        ratios = [None if d == 0 else d * f.kinetic for d, f in zip(lat.combos[mu], problem.friction)]
+        every = True
+        for shift in itertools.product((-1, 0, 1), repeat=len(full)):
+            near = [c + s for c, s in zip(full, shift)]
+            if not all(0 <= c < len(g) for c, g in zip(near, problem.grids)):
+                every = False
+                break
+            xi = np.array([g[c] for g, c in zip(problem.grids, near)])
+            if not force_lp(sc.polygon, edges, smp.pose, smp.acceleration, xi, ratios, mu_s, problem.limits,
+                            sc.gravity_in_hand):
+                every = False
+                break
+        assert (lo <= x_axis <= hi) == every, (k, mu, full)
+        seen.append(every)
+    assert 0 < np.mean(seen) < 1
 
 
 def _cells(problem, other: int) -> list[int]:
@@ -110,9 +156,9 @@ def test_a_planned_priming_overshoot_gets_breakaway_tables_where_mu_s_is_mu_k():
     sc = load_scenario(SCENARIO)
     sc = dataclasses.replace(sc, contacts=tuple(dataclasses.replace(c, friction=Friction(0.5, 0.5))
                                                 for c in sc.contacts))
-    plain = build_problem(sc, RegraspSettings(periodic=False, prime_overshoot=0.0), t_end=0.6)
+    plain = build_problem(sc, RegraspSettings(periodic=False, prime_overshoot=0.0, **RAW), t_end=0.6)
     assert (plain.lattice.breakaway_slot < 0).all()
-    _check_breakaway(build_problem(sc, RegraspSettings(periodic=False, prime_overshoot=0.05), t_end=0.6))
+    _check_breakaway(build_problem(sc, RegraspSettings(periodic=False, prime_overshoot=0.05, **RAW), t_end=0.6))
 
 
 def _check_breakaway(problem):
@@ -202,7 +248,7 @@ def test_a_lattice_too_large_for_memory_is_refused_up_front():
 
 SETTINGS_TABLE = fields_of(RegraspSettings(), {
     "nonneg": ("envelope_margin", "cone_margin", "friction_margin", "prime_overshoot", "slider_floor",
-               "holder_preload"),
+               "holder_preload", "position_margin"),
     "pos": ("f_min", "f_max", "max_slide_speed", "max_slide_acceleration", "xi_resolution", "comfort_margin",
             "sliding_friction_factor"),
     "count1": ("max_sliders", "envelope_substeps", "verify_substeps", "period_candidates"), "count0": ("max_repairs",),

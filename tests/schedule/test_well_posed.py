@@ -15,10 +15,11 @@ import pytest
 from regrasp import RunSpec, load_scenario
 from regrasp.dynamics.painleve import is_p_matrix, sliding_response
 from regrasp.rollout.build import build_rollout
-from regrasp.schedule import NoScheduleError, RegraspSettings, ScheduleLimit, plan_regrasps
+from regrasp.schedule import RegraspSettings, ScheduleLimit, plan_regrasps
 from regrasp.schedule.diagnosis import diagnose
-from regrasp.schedule.lattice import cut_tables, run
+from regrasp.schedule.lattice import run
 from regrasp.schedule.problem import build_problem
+from regrasp.schedule.tables import cut_tables
 from regrasp.schedule.well_posed import lattice_geometry, slide_mask, violations
 
 FIXTURE = Path(__file__).resolve().parents[1] / "fixtures" / "issue27_variant_e.toml"
@@ -52,9 +53,9 @@ def _brute(sc, geo, k: int, modes, cells, env_ok) -> tuple[bool, bool]:
 
 
 def test_the_lattice_condition_against_every_position_of_the_held_contacts():
-    """Where the lattice allows a slide some position of the held contacts makes it well-posed, and where every
-    position does the lattice allows it (its held contacts are sampled): on layers of the variant where it excludes
-    slides."""
+    """Where the lattice allows a slide some position of the held contacts makes it well-posed at both ends of its
+    interval, and where every position does the lattice allows it (its held contacts are sampled): on layers of the
+    variant where it excludes slides."""
     sc, problem = _problem()
     lat = problem.lattice
     sample = sc.trajectory.sample(problem.times)
@@ -77,6 +78,11 @@ def test_the_lattice_condition_against_every_position_of_the_held_contacts():
                 allowed = mask[k, mu, sliders[0], cells[0]] if len(sliders) == 1 else pairs[mu][2][k, cells[0],
                                                                                                     cells[1]]
                 some, every = _brute(sc, geo, k, modes, cells, lat.env_ok)
+                start = [c - modes[j] for c, j in zip(cells, sliders)]  # (the slide's start: a layer and a cell back)
+                if k > 0 and all(0 <= c < geo[j].points.shape[1] and lat.env_ok[k - 1, j, c] and geo[j].reachable[
+                        k - 1, c] for c, j in zip(start, sliders)):
+                    some_before, every_before = _brute(sc, geo, k - 1, modes, start, lat.env_ok)
+                    some, every = some and some_before, every and every_before
                 assert not allowed or some, (k, modes, cells)
                 assert allowed or not every, (k, modes, cells)
                 checked += 1

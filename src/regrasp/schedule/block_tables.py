@@ -19,10 +19,13 @@ of :func:`~regrasp.schedule.problem.breakaway_limits`, at the layer and half a r
 
 from __future__ import annotations
 
+import itertools
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.ndimage import binary_erosion
 
 from .block_dp import PAIR_MOVES
 from .force_polytope import force_vertices
@@ -77,17 +80,27 @@ class ModeVertices:
 
 
 def pair_table(lam: np.ndarray, q: np.ndarray, xi: np.ndarray, i: int, j: int, gi: np.ndarray,
-               gj: np.ndarray) -> np.ndarray:
+               gj: np.ndarray, margin: float = 0.0) -> np.ndarray:
     """Which block positions (ξ_i, ξ_j) ∈ ``gi`` × ``gj`` [m] admit a force system of the polytope (λ, q) with the
-    other contacts at ``xi`` [m] (m,) (its entries i and j ignored): (n_i, n_j) bool (module docstring)."""
+    other contacts at ``xi`` [m] (m,) (its entries i and j ignored): (n_i, n_j) bool (module docstring). With a
+    ``margin`` [m] (``RegraspSettings.position_margin``, whole cells of the grids), every position with each contact
+    at -, 0 or + it must admit one: the other contacts at each of their 3^(m-2) shifts, the block's cells and their
+    neighbours within the margin (off the grid: none)."""
     if len(lam) == 0:
         return np.zeros((len(gi), len(gj)), dtype=bool)
     others = np.ones(lam.shape[1], dtype=bool)
     others[[i, j]] = False
-    const = q - lam[:, others] @ xi[others]
-    rho = (const[:, None] - lam[:, i:i + 1] * gi[None, :]) / lam[:, j:j + 1]  # (V, n_i)
+    shifts = np.zeros((1, int(others.sum()))) if margin <= 0.0 else \
+        margin * np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=int(others.sum()))))
+    const = q[:, None] - lam[:, others] @ (xi[others][None, :] + shifts).T  # (V, E)
+    rho = (const[:, :, None] - lam[:, i, None, None] * gi[None, None, :]) / lam[:, j, None, None]  # (V, E, n_i)
     lo, hi = rho.min(axis=0), rho.max(axis=0)
-    return (lo[:, None] - TOL <= gj[None, :]) & (gj[None, :] <= hi[:, None] + TOL)
+    ok = ((lo[:, :, None] - TOL <= gj[None, None, :]) & (gj[None, None, :] <= hi[:, :, None] + TOL)).all(axis=0)
+    if margin > 0.0:
+        h = gi[1] - gi[0] if len(gi) > 1 else margin
+        cells = math.ceil(margin / h - 1e-9)
+        ok = binary_erosion(ok, structure=np.ones((3, 3), dtype=bool), iterations=cells, border_value=0)
+    return ok
 
 
 @dataclass(eq=False)
@@ -130,6 +143,7 @@ def block_tables(problem: Problem, verts: ModeVertices, cells: np.ndarray, moves
     fz = moves.copy()
     fz[:, [i, j]] = 0
     h, lead = settings.xi_resolution, 0.5 * settings.ramp / problem.dt
+    margin = settings.position_margin
     nb = len(PAIR_MOVES)
     full = np.repeat(fz[:, None, :], nb, axis=1)  # (L, nb, m): the whole move vector with each block move
     full[:, :, i], full[:, :, j] = PAIR_MOVES[None, :, 0], PAIR_MOVES[None, :, 1]
@@ -144,8 +158,8 @@ def block_tables(problem: Problem, verts: ModeVertices, cells: np.ndarray, moves
     def table(kind: str, ratios: tuple, k: int, shift: np.ndarray | None = None, breakaway: bool = False) -> np.ndarray:
         lam, q = verts.at(kind, ratios, k, breakaway)
         if shift is None:
-            return pair_table(lam, q, xi[k], i, j, gi, gj)
-        return pair_table(lam, q, xi[k] - shift, i, j, gi - shift[i], gj - shift[j])
+            return pair_table(lam, q, xi[k], i, j, gi, gj, margin)
+        return pair_table(lam, q, xi[k] - shift, i, j, gi - shift[i], gj - shift[j], margin)
 
     for k in range(1, L):
         for b in range(nb):

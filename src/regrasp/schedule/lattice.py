@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-__all__ = ["Lattice", "LatticeRun", "cells_of", "cut_tables", "flat_index", "motion_combos", "move_runs", "path", "run"]
+__all__ = ["Lattice", "LatticeRun", "cells_of", "flat_index", "motion_combos", "move_runs", "path", "run"]
 
 #: Slack [m] of the interval tests: the tables are float32 (ξ to ~1e-9 m)
 _TOL = 1e-8
@@ -414,52 +414,3 @@ def path(lat: Lattice, result: LatticeRun, k: int, mu: int, p: int) -> tuple[np.
         p = flat_index(c - lat.combos[mu], result.boxes[j - 1])
         mu = prev_mu
     return cells, moves
-
-
-def cut_tables(allowed: np.ndarray, grids: Sequence[np.ndarray], axis: int, lo: np.ndarray, hi: np.ndarray,
-               pairs: dict | None = None) -> tuple | None:
-    """Cut the force tables ``lo``, ``hi`` in place to a per-cell condition ``allowed`` (N + 1, M, m, n_max): per
-    layer and move vector, a state whose other contacts sit on a cell it excludes is dropped (its interval emptied),
-    and the axis's interval is cut to the span of its allowed cells (a superset: the verification checks exactly);
-    and to per-pair conditions ``pairs``, ``{mu: (a, b, (N + 1, n_a, n_b) bool)}`` (a < b: the cells of contacts a
-    and b allowed together in move vector mu), the same way. Returns the tables as they were (None: the conditions
-    excluded no cell)."""
-    pairs = {mu: p for mu, p in (pairs or {}).items() if not p[2].all()}
-    if allowed.all() and not pairs:
-        return None
-    free = (lo.copy(), hi.copy())
-    m = len(grids)
-    columns = [i for i in range(m) if i != axis]
-    axis_grid = np.asarray(grids[axis])
-    for k, mu in zip(*np.nonzero(~allowed.all(axis=(2, 3)))):
-        ok_others = np.ones(1, dtype=bool)
-        for i in columns:
-            ok_others = np.outer(ok_others, allowed[k, mu, i, :len(grids[i])]).reshape(-1)
-        cells = np.flatnonzero(allowed[k, mu, axis, :len(axis_grid)])
-        lo[k, ~ok_others, mu], hi[k, ~ok_others, mu] = np.inf, -np.inf
-        _cut_axis(lo, hi, k, mu, axis_grid, cells[0] if cells.size else None, cells[-1] if cells.size else None)
-    sizes = [len(grids[i]) for i in columns]
-    index = np.indices(sizes).reshape(len(columns), -1) if columns else np.zeros((0, 1), dtype=int)
-    for mu, (a, b, ok) in pairs.items():
-        for k in np.flatnonzero(~ok.all(axis=(1, 2))):
-            if axis not in (a, b):  # both among the others: drop their states the pair's condition excludes
-                lo[k, ~ok[k][index[columns.index(a)], index[columns.index(b)]], mu] = np.inf
-                hi[k, ~ok[k][index[columns.index(a)], index[columns.index(b)]], mu] = -np.inf
-                continue
-            other, along = (a, ok[k]) if b == axis else (b, ok[k].T)  # along: (other's cell, axis cell)
-            any_ok = along.any(axis=1)
-            first = np.where(any_ok, along.argmax(axis=1), 0)
-            last = np.where(any_ok, along.shape[1] - 1 - along[:, ::-1].argmax(axis=1), -1)
-            c = index[columns.index(other)]  # per state, the other slider's cell
-            lo[k, :, mu] = np.where(any_ok[c], np.maximum(lo[k, :, mu], axis_grid[first[c]] - 1e-6), np.inf)
-            hi[k, :, mu] = np.where(any_ok[c], np.minimum(hi[k, :, mu], axis_grid[last[c]] + 1e-6), -np.inf)
-    return free
-
-
-def _cut_axis(lo, hi, k: int, mu: int, axis_grid: np.ndarray, first: int | None, last: int | None) -> None:
-    """Cut layer k's intervals of move vector mu to the axis cells [first, last] (None: empty them)."""
-    if first is None:
-        lo[k, :, mu], hi[k, :, mu] = np.inf, -np.inf
-    else:
-        lo[k, :, mu] = np.maximum(lo[k, :, mu], axis_grid[first] - 1e-6)
-        hi[k, :, mu] = np.minimum(hi[k, :, mu], axis_grid[last] + 1e-6)

@@ -45,6 +45,7 @@ and which constraint ran out (:mod:`regrasp.schedule.diagnosis`).
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections.abc import Callable
@@ -161,12 +162,13 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
     torque = problem.torque if problem.torque is not None and problem.torque.limited else None
     if torque is not None:  # each contact's torques at the schedule's exact positions, rates and accelerations
         torques = _schedule_torques(torque, sample, at)
+    spread = _spread(len(problem.names), settings.position_margin)
     for direction, ks in groups.items():
         ks = np.array(ks)
         fv = force_vertices(problem.geometry, sample.pose[ks, 2], sample.acceleration[ks],
                             slide_ratios(direction, problem.friction), mu_s, limits)
         for j, k in enumerate(ks):
-            if not _holds(*fv.at(j), at.xi[k]):
+            if not _holds(*fv.at(j), at.xi[k], spread):
                 violations.append((float(times[k]), "forces", None))
             elif torque is not None:
                 why = _torque_violation(problem, torque, fv, j, torques[k], sample.pose[k, 2], sample.acceleration[k],
@@ -181,7 +183,7 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
         fv = force_vertices(problem.geometry, smp.pose[:, 2], smp.acceleration,
                             slide_ratios(direction, problem.friction, breaking=together,
                                          overshoot=settings.prime_overshoot), mu_s, breakaway_limits(limits))
-        if not _holds(*fv.at(0), xi):
+        if not _holds(*fv.at(0), xi, spread):
             violations.append((t, "breakaway", s.contact))
     return sorted(violations), first_minimum(margins, times, problem.names)
 
@@ -219,12 +221,22 @@ def _torque_violation(problem: Problem, torque: TorqueModel, fv, j: int, torques
             f"its limit is {torque.effort[i, joint]:.4f} N m)", i)
 
 
-def _holds(lam: np.ndarray, offset: np.ndarray, xi: np.ndarray) -> bool:
-    """Whether positions ``xi`` admit a force system of the polytope with vertices (λ, q)."""
+def _holds(lam: np.ndarray, offset: np.ndarray, xi: np.ndarray, spread: np.ndarray | None = None) -> bool:
+    """Whether positions ``xi`` (and ``xi`` + each row of ``spread``) admit a force system of the polytope with
+    vertices (λ, q)."""
     if len(lam) == 0:
         return False
-    phi = lam @ xi - offset
-    return phi.min() <= 1e-10 and phi.max() >= -1e-10
+    points = xi[None] if spread is None else xi[None] + spread
+    phi = lam @ points.T - offset[:, None]
+    return bool(np.all((phi.min(axis=0) <= 1e-10) & (phi.max(axis=0) >= -1e-10)))
+
+
+def _spread(m: int, margin: float) -> np.ndarray | None:
+    """The offsets of the positions a force system must also hold at: every contact at -margin, 0 or +margin
+    (``RegraspSettings.position_margin``), (3^m, m); None without a margin."""
+    if margin <= 0.0:
+        return None
+    return margin * np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=m)))
 
 
 def _bans(problem: Problem, violations, cells, moves, width: int = 0) -> dict:
@@ -344,11 +356,7 @@ def _solve(problem: Problem, bans: dict, hint=None) -> tuple:
         candidates += [cells2[0], cells2[-1]]
         candidates += _best_rest_states(second, problem.settings.period_candidates)
     else:  # a periodic schedule run twice is a two-period path from one of the first period's end states: none is
-        into = float(problem.times[max(second.last_layer, 0)] - problem.times[0])
-        raise NoScheduleError(float(problem.times[-1]) + into, ScheduleLimit.PERIODIC, problem.names,
-                              f"no schedule runs two periods in a row: from every state the first period can end in, "
-                              f"the second dies by {into:.3f} s into it (a non-periodic one over one period exists, "
-                              f"with {lower} slide(s): settings.periodic = False)")
+        raise _no_periodic(problem, second, 2, lower)
     del second
     candidates.insert(2, free_end)
     best, tried = None, []
@@ -363,12 +371,35 @@ def _solve(problem: Problem, bans: dict, hint=None) -> tuple:
             best = found
             if int(found[0] // K) <= lower:
                 break  # as few slides as any schedule: optimal
-    if best is None:  # (not a proof: the program tried these starts, not every one)
+    if best is None:  # a periodic schedule run k times is a k-period path: where none exists, a proof
+        chain = run(lat, bans=bans, init=run(lat, bans=bans, keep_backs=False), keep_backs=False)
+        for periods in range(3, _PROOF_PERIODS + 1):
+            chain = run(lat, bans=bans, init=chain, keep_backs=False)
+            if chain.last_layer < N:
+                raise _no_periodic(problem, chain, periods, lower)
+        # (not a proof: the program tried these starts, not every one)
         raise NoScheduleError(float(problem.times[-1]), ScheduleLimit.SEARCH, problem.names,
                               f"no schedule from the {len(tried)} start states tried ends a period where it starts "
                               f"(not a proof that none does; a non-periodic one with {lower} slide(s) exists: "
                               "settings.periodic = False)")
     return best[1], best[2], lower
+
+
+#: The most periods in a row the planner runs its program over to prove that no periodic schedule exists.
+_PROOF_PERIODS = 8
+
+
+def _no_periodic(problem: Problem, dead, periods: int, lower) -> NoScheduleError:
+    """The proof that no periodic schedule exists: the program run over ``periods`` periods in a row died (``dead``:
+    the last period's run), so a periodic schedule, run that many times, would be a path it lacks."""
+    t0, period = float(problem.times[0]), float(problem.times[-1] - problem.times[0])
+    into = float(problem.times[max(dead.last_layer, 0)]) - t0
+    words = {2: "two", 3: "three", 4: "four", 5: "five", 6: "six", 7: "seven", 8: "eight"}
+    return NoScheduleError(t0 + (periods - 1) * period + into, ScheduleLimit.PERIODIC, problem.names,
+                           f"no schedule runs {words.get(periods, periods)} periods in a row: from every state "
+                           + ("the first period" if periods == 2 else f"the first {words.get(periods - 1)} periods")
+                           + f" can end in, period {periods} dies by {into:.3f} s into it (a non-periodic one over "
+                           f"one period exists, with {lower} slide(s): settings.periodic = False)")
 
 
 def _best_rest_states(result, count: int) -> list:

@@ -28,7 +28,8 @@ from ..envelope.finger_envelope import FingerEnvelope
 from ..model.geometry import Geometry, as_geometry
 from ..model.scenario import Scenario
 from .force_polytope import ForceGeometry, ForceLimits, force_vertices, xi_intervals
-from .lattice import Lattice, cut_tables, motion_combos
+from .lattice import Lattice, motion_combos
+from .tables import cut_tables, erode_tables
 from .torque import TorqueModel
 from .well_posed import lattice_geometry, slide_mask
 
@@ -87,6 +88,12 @@ class RegraspSettings:
             the best two-period path, the free program's best end state, then the cheapest states at rest at the
             two-period program's end. None found from them is not a proof that none exists
             (``ScheduleLimit.SEARCH``).
+        position_margin: Every contact position within this of the planned one (each contact ± it) has a force
+            system too [m]: a slide that lags its plan, or a contact that creeps, keeps its forces. Near the edge of
+            the positions that have forces the loads needed grow without bound (two sliders on opposite edges: the
+            friction couple against the normal forces' moment), so a plan that grazes it fails on the plant as soon
+            as a slide lags. The lattice asks it of whole cells (``xi_resolution``, rounded up), the verification of
+            every contact at -, 0 and + this (3^m positions).
         sliding_friction_factor: Plan a slide only where the sliders' contact problem stays well-posed (no
             Painlevé paradox: :mod:`regrasp.schedule.well_posed`) with this many times each slider's kinetic friction
             [-] (≥ 1; None: no check). Near the paradox a slider's normal force needs torques known to a vanishing
@@ -118,13 +125,14 @@ class RegraspSettings:
     max_repairs: int = 8
     period_candidates: int = 3
     method: str | None = None
+    position_margin: float = 1e-3
     sliding_friction_factor: float | None = 1.25
 
     def __post_init__(self):
         check_fields(self, as_positive_float, ("max_slide_speed", "max_slide_acceleration", "xi_resolution", "f_min",
                                                "f_max"))
         check_fields(self, as_positive_float, ("envelope_margin", "cone_margin", "friction_margin", "prime_overshoot",
-                                               "slider_floor", "holder_preload"), allow_zero=True)
+                                               "slider_floor", "holder_preload", "position_margin"), allow_zero=True)
         if self.comfort_margin is None:
             object.__setattr__(self, "comfort_margin", self.envelope_margin + 4e-3)
         check_fields(self, as_positive_float, ("comfort_margin",))
@@ -327,6 +335,12 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
         lo, hi, blo, bhi, slots, mid_lo, mid_hi, vertices = _force_tables(
             geo, sample, middle, early, 0.5 * ramp / dt, combos, friction, limits, grids, axis,
             settings.prime_overshoot)
+        cells = math.ceil(settings.position_margin / h - 1e-9)
+        if cells:  # (every position within the margin of a state's has forces too)
+            sizes = [len(grids[i]) for i in range(m) if i != axis]
+            for a, b in ((lo, hi), (mid_lo, mid_hi), (blo, bhi)):
+                if a is not None:
+                    erode_tables(a, b, sizes, h, cells)
     else:  # (the decomposition planner checks the forces itself: empty tables)
         lo = hi = mid_lo = mid_hi = np.empty((n_steps + 1, 0, len(combos)), dtype=np.float32)
         blo = bhi = vertices = None

@@ -6,14 +6,18 @@ boundary a slider's normal force needs torques known to a vanishing precision, a
 lifts off, whatever the controller does. The condition depends on the configuration only (positions, not
 velocities or forces).
 
-* **The lattice** (:func:`slide_mask`): per layer, move vector, slider and cell, whether
-  :math:`A_{ii} > 0` (A's diagonal: the slider alone, the other sliders carrying no force, the fixed contacts'
-  fingers welded to the object) for some positions of the fixed contacts, sampled over their envelope-admissible
-  cells (``samples`` per contact, ends included). A necessary condition (up to the sampling of the fixed contacts,
-  on which A depends weakly: their fingers' inertia seen through the object); the cells it excludes cut the force
-  tables as the torque limits' do (:mod:`regrasp.schedule.problem`).
-* **The verification** (:func:`violations`): A at the schedule's own positions, a P-matrix check at every sample
-  where a contact slides.
+* **The lattice** (:func:`slide_mask`): per layer, move vector and cell of its one slider, whether
+  :math:`A_{ii} > 0`, and per pair of cells of its two sliders, whether their 2x2 A is a P-matrix (the fixed
+  contacts' fingers welded to the object), for some positions of the fixed contacts, sampled over their
+  envelope-admissible cells (``samples`` per contact, ends included), at both ends of the interval that ends at the
+  layer (a slide's start is a cell back, a layer earlier). A necessary condition up to that sampling (A depends on the
+  fixed contacts only through their fingers' inertia seen through the object); the cells and pairs it excludes cut
+  the force tables as the torque limits' do (:func:`~regrasp.schedule.tables.cut_tables`). With more sliders: each
+  one's diagonal entry.
+* **The verification** (:func:`violations`): A at the schedule's own positions, every principal minor, at every
+  sample where a contact slides. What it finds between two layers, or at a held contact's position the sampling
+  missed, the planner re-plans around (:mod:`regrasp.schedule.planner`: the move vector kept out of a widening window
+  of layers, as for forces that fail between layers).
 """
 
 from __future__ import annotations
@@ -76,7 +80,8 @@ def lattice_geometry(torque: TorqueModel, scenario: Scenario, grids: list[np.nda
 
 def slide_mask(geometry: list[ContactGeometry], combos: np.ndarray, friction: tuple[Friction, ...], factor: float,
                env_ok: np.ndarray, mass: float, inertia: float, samples: int = 5) -> tuple[np.ndarray, dict]:
-    """The lattice's condition (module docstring) from :func:`lattice_geometry`'s ``geometry``: per cell,
+    """The lattice's condition (module docstring) from :func:`lattice_geometry`'s ``geometry``, at both ends of the
+    interval that ends at each layer (at the layer, and at the layer before with the sliders a cell back): per cell,
     (N + 1, M, m, n_max) bool, True where the contact does not slide in the move vector, is not envelope-admissible
     (the envelope's business) or can slide well-posed there (the diagonal entry); and per move vector with two sliders
     (a, b), ``{mu: (a, b, (N + 1, n_a, n_b) bool)}``: where the pair's 2x2 response is a P-matrix (True where either
@@ -95,15 +100,30 @@ def slide_mask(geometry: list[ContactGeometry], combos: np.ndarray, friction: tu
         if len(sliders) == 2:
             key = tuple((j, d[j]) for j in sliders) + (fixed,)
             if key not in cache:
-                cache[key] = _mask(geometry, sliders, ratios, fixed, env_ok, mass, inertia, samples)
+                cache[key] = _both_ends(_mask(geometry, sliders, ratios, fixed, env_ok, mass, inertia, samples),
+                                        [d[j] for j in sliders])
             pairs[mu] = (sliders[0], sliders[1], cache[key])
             continue
         for i in sliders:  # (one slider; or more: their diagonals)
             one = (i, d[i], fixed)
             if one not in cache:
-                cache[one] = _mask(geometry, [i], ratios, fixed, env_ok, mass, inertia, samples)
+                cache[one] = _both_ends(_mask(geometry, [i], ratios, fixed, env_ok, mass, inertia, samples), [d[i]])
             out[:, mu, i, :cache[one].shape[1]] = cache[one]
     return out, pairs
+
+
+def _both_ends(ok: np.ndarray, moves: list[int]) -> np.ndarray:
+    """A slide's condition at both ends of the interval that ends at each layer: ``ok`` (N + 1, K_a[, K_b]) at the
+    layer, and at the layer before with each slider one cell back (``moves``: the sliders' directions; a cell whose
+    start is off the grid keeps its own value)."""
+    out = ok.copy()
+    index = [slice(1, None)]
+    before = [slice(0, -1)]
+    for d in moves:
+        index.append(slice(max(d, 0), ok.shape[len(index)] + min(d, 0)))
+        before.append(slice(max(-d, 0), ok.shape[len(before)] + min(-d, 0)))
+    out[tuple(index)] &= ok[tuple(before)]
+    return out
 
 
 def _wrenches(points: np.ndarray, force: np.ndarray) -> np.ndarray:
