@@ -42,7 +42,8 @@ def problem():
 
 def test_the_position_margin_erodes_the_tables_to_the_lp_on_every_neighbour(problem):
     """With a one-cell position margin a table entry holds a position exactly where the LP finds a force system at
-    every position of the box around it: each contact at its cell or a neighbour (off the grid: none)."""
+    every position of the box around it: each contact that slides in the move vector at its cell or a neighbour (off
+    the grid: none), the held ones at their cells."""
     eroded = build_problem(_scenario(), RegraspSettings(position_margin=problem.settings.xi_resolution,
                                                         sliding_friction_factor=None))
     sc, lat = problem.scenario, problem.lattice
@@ -52,11 +53,17 @@ def test_the_position_margin_erodes_the_tables_to_the_lp_on_every_neighbour(prob
     rng = np.random.default_rng(3)
     seen = []
     while len(seen) < 30:
-        k, mu = int(rng.integers(0, lat.layers)), int(rng.integers(0, len(lat.combos)))
+        k, mu = int(rng.integers(0, lat.layers)), int(rng.integers(1, len(lat.combos)))  # (a move: 0 is at rest)
         other = int(rng.integers(0, lat.lo.shape[1]))
         cells = _cells(problem, other)
-        full = cells[:lat.axis] + [int(rng.integers(0, len(problem.grids[lat.axis])))] + cells[lat.axis:]
-        x_axis = problem.grids[lat.axis][full[lat.axis]]
+        grid = problem.grids[lat.axis]
+        inside = np.flatnonzero((grid >= lat.lo[k, other, mu]) & (grid <= lat.hi[k, other, mu]))
+        if inside.size == 0:
+            continue
+        # (half the samples at the uneroded interval's ends, where the erosion decides)
+        axis_cell = int(rng.choice(inside[[0, -1]] if rng.random() < 0.5 else inside))
+        full = cells[:lat.axis] + [axis_cell] + cells[lat.axis:]
+        x_axis = grid[axis_cell]
         lo, hi = float(eroded.lattice.lo[k, other, mu]), float(eroded.lattice.hi[k, other, mu])
         if min(abs(x_axis - lo), abs(x_axis - hi)) < 1e-6 or not lat.lo[k, other, mu] <= x_axis <= lat.hi[k, other,
                                                                                                           mu]:
@@ -64,12 +71,14 @@ def test_the_position_margin_erodes_the_tables_to_the_lp_on_every_neighbour(prob
         smp = traj.sample(float(problem.times[k]))
         ratios = [None if d == 0 else d * f.kinetic for d, f in zip(lat.combos[mu], problem.friction)]
         every = True
-        for shift in itertools.product((-1, 0, 1), repeat=len(full)):
+        h = problem.settings.xi_resolution
+        for shift in itertools.product(*[(-1, 0, 1) if d != 0 else (0,) for d in lat.combos[mu]]):
             near = [c + s for c, s in zip(full, shift)]
-            if not all(0 <= c < len(g) for c, g in zip(near, problem.grids)):
-                every = False
+            if not all(0 <= c < len(g) for j, (c, g) in enumerate(zip(near, problem.grids)) if j != lat.axis):
+                every = False  # (another contact off its grid: no state; the axis's interval goes on past its grid)
                 break
-            xi = np.array([g[c] for g, c in zip(problem.grids, near)])
+            xi = np.array([x_axis + h * shift[j] if j == lat.axis else g[c]
+                           for j, (g, c) in enumerate(zip(problem.grids, near))])
             if not force_lp(sc.polygon, edges, smp.pose, smp.acceleration, xi, ratios, mu_s, problem.limits,
                             sc.gravity_in_hand):
                 every = False

@@ -80,26 +80,30 @@ class ModeVertices:
 
 
 def pair_table(lam: np.ndarray, q: np.ndarray, xi: np.ndarray, i: int, j: int, gi: np.ndarray,
-               gj: np.ndarray, margin: float = 0.0) -> np.ndarray:
+               gj: np.ndarray, margin: float = 0.0, moving: np.ndarray | None = None) -> np.ndarray:
     """Which block positions (ξ_i, ξ_j) ∈ ``gi`` × ``gj`` [m] admit a force system of the polytope (λ, q) with the
     other contacts at ``xi`` [m] (m,) (its entries i and j ignored): (n_i, n_j) bool (module docstring). With a
     ``margin`` [m] (``RegraspSettings.position_margin``, whole cells of the grids), every position with each contact
-    at -, 0 or + it must admit one: the other contacts at each of their 3^(m-2) shifts, the block's cells and their
-    neighbours within the margin (off the grid: none)."""
+    that moves (``moving``, (m,) bool) at -, 0 or + it must admit one: the moving other contacts at each of their
+    shifts, the block's cells and their neighbours along the moving ones within the margin (off the grid: none)."""
     if len(lam) == 0:
         return np.zeros((len(gi), len(gj)), dtype=bool)
     others = np.ones(lam.shape[1], dtype=bool)
     others[[i, j]] = False
-    shifts = np.zeros((1, int(others.sum()))) if margin <= 0.0 else \
-        margin * np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=int(others.sum()))))
-    const = q[:, None] - lam[:, others] @ (xi[others][None, :] + shifts).T  # (V, E)
+    moving = np.zeros(lam.shape[1], dtype=bool) if moving is None or margin <= 0.0 else np.asarray(moving, bool)
+    shifts = np.zeros((1, lam.shape[1]))
+    if (moving & others).any():
+        shifts = np.zeros((3 ** int((moving & others).sum()), lam.shape[1]))
+        shifts[:, moving & others] = margin * np.array(list(itertools.product((-1.0, 0.0, 1.0),
+                                                                              repeat=int((moving & others).sum()))))
+    const = q[:, None] - lam[:, others] @ (xi[others][None, :] + shifts[:, others]).T  # (V, E)
     rho = (const[:, :, None] - lam[:, i, None, None] * gi[None, None, :]) / lam[:, j, None, None]  # (V, E, n_i)
     lo, hi = rho.min(axis=0), rho.max(axis=0)
     ok = ((lo[:, :, None] - TOL <= gj[None, None, :]) & (gj[None, None, :] <= hi[:, :, None] + TOL)).all(axis=0)
-    if margin > 0.0:
+    if moving[i] or moving[j]:
         h = gi[1] - gi[0] if len(gi) > 1 else margin
-        cells = math.ceil(margin / h - 1e-9)
-        ok = binary_erosion(ok, structure=np.ones((3, 3), dtype=bool), iterations=cells, border_value=0)
+        structure = np.ones((3 if moving[i] else 1, 3 if moving[j] else 1), dtype=bool)
+        ok = binary_erosion(ok, structure=structure, iterations=math.ceil(margin / h - 1e-9), border_value=0)
     return ok
 
 
@@ -157,9 +161,10 @@ def block_tables(problem: Problem, verts: ModeVertices, cells: np.ndarray, moves
 
     def table(kind: str, ratios: tuple, k: int, shift: np.ndarray | None = None, breakaway: bool = False) -> np.ndarray:
         lam, q = verts.at(kind, ratios, k, breakaway)
+        moving = np.array([r is not None for r in ratios])
         if shift is None:
-            return pair_table(lam, q, xi[k], i, j, gi, gj, margin)
-        return pair_table(lam, q, xi[k] - shift, i, j, gi - shift[i], gj - shift[j], margin)
+            return pair_table(lam, q, xi[k], i, j, gi, gj, margin, moving)
+        return pair_table(lam, q, xi[k] - shift, i, j, gi - shift[i], gj - shift[j], margin, moving)
 
     for k in range(1, L):
         for b in range(nb):

@@ -162,9 +162,9 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
     torque = problem.torque if problem.torque is not None and problem.torque.limited else None
     if torque is not None:  # each contact's torques at the schedule's exact positions, rates and accelerations
         torques = _schedule_torques(torque, sample, at)
-    spread = _spread(len(problem.names), settings.position_margin)
     for direction, ks in groups.items():
         ks = np.array(ks)
+        spread = _spread(direction, settings.position_margin)
         fv = force_vertices(problem.geometry, sample.pose[ks, 2], sample.acceleration[ks],
                             slide_ratios(direction, problem.friction), mu_s, limits)
         for j, k in enumerate(ks):
@@ -183,7 +183,7 @@ def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[
         fv = force_vertices(problem.geometry, smp.pose[:, 2], smp.acceleration,
                             slide_ratios(direction, problem.friction, breaking=together,
                                          overshoot=settings.prime_overshoot), mu_s, breakaway_limits(limits))
-        if not _holds(*fv.at(0), xi, spread):
+        if not _holds(*fv.at(0), xi, _spread(direction, settings.position_margin)):
             violations.append((t, "breakaway", s.contact))
     return sorted(violations), first_minimum(margins, times, problem.names)
 
@@ -231,32 +231,42 @@ def _holds(lam: np.ndarray, offset: np.ndarray, xi: np.ndarray, spread: np.ndarr
     return bool(np.all((phi.min(axis=0) <= 1e-10) & (phi.max(axis=0) >= -1e-10)))
 
 
-def _spread(m: int, margin: float) -> np.ndarray | None:
-    """The offsets of the positions a force system must also hold at: every contact at -margin, 0 or +margin
-    (``RegraspSettings.position_margin``), (3^m, m); None without a margin."""
-    if margin <= 0.0:
+def _spread(direction, margin: float) -> np.ndarray | None:
+    """The offsets of the positions a force system must also hold at: every contact that moves in ``direction`` at
+    -margin, 0 or +margin (``RegraspSettings.position_margin``), the others at 0, (3^p, m); None without a margin or a
+    slider."""
+    sliders = [i for i, d in enumerate(direction) if d != 0]
+    if margin <= 0.0 or not sliders:
         return None
-    return margin * np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=m)))
+    out = np.zeros((3 ** len(sliders), len(direction)))
+    out[:, sliders] = margin * np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=len(sliders))))
+    return out
 
 
 def _bans(problem: Problem, violations, cells, moves, width: int = 0) -> dict:
     """The path's states at the layers around each violation, to exclude when re-planning; and where the forces fail
     between two layers while contacts slide (the lattice checks the forces at the layers and, for two sliders, at the
     interval's middle: a thin set of positions without forces can lie between), that move vector at every position
-    over the ``width`` layers on either side (the same slides a layer later cross the same set)."""
+    over the ``width`` layers on either side (the same slides a layer later cross the same set). A slide that is not
+    well-posed (Painlevé) likewise: the move vector of the named contact's slide (the one that starts within two
+    layers: a slide's ramp starts before its first layer), wherever the lattice's sampled check missed it."""
     index = {tuple(d): mu for mu, d in enumerate(problem.lattice.combos.tolist())}
     bans: dict[int, list] = {}
-    for t, what, _ in violations:
+    for t, what, i in violations:
         at = (t - problem.times[0]) / problem.dt
         k = int(at)
         for j in (k, k + 1):
             if 0 <= j < len(cells):
                 bans.setdefault(j, []).append((index[tuple(moves[j].tolist())], cells[j].copy()))
         between = abs(at - round(at)) > 1e-6
-        thin = what == "forces" or what.startswith("painleve")
-        if width and thin and between and k + 1 < len(moves) and moves[k + 1].any():
-            mu = index[tuple(moves[k + 1].tolist())]
-            for j in range(max(1, k + 1 - width), min(len(cells), k + 2 + width)):
+        if what.startswith("painleve") and i is not None:
+            at_slide = [j for j in (k, k + 1, k + 2) if 0 <= j < len(moves) and moves[j, i] != 0]
+            centre = at_slide[0] if at_slide else None
+        else:
+            centre = k + 1 if what == "forces" and between and k + 1 < len(moves) and moves[k + 1].any() else None
+        if width and centre is not None:
+            mu = index[tuple(moves[centre].tolist())]
+            for j in range(max(1, centre - width), min(len(cells), centre + 1 + width)):
                 bans.setdefault(j, []).append((mu, None))
     return bans
 

@@ -62,14 +62,21 @@ def _cut_axis(lo, hi, k: int, mu: int, axis_grid: np.ndarray, first: int | None,
         hi[k, :, mu] = np.minimum(hi[k, :, mu], axis_grid[last] + 1e-6)
 
 
-def erode_tables(lo: np.ndarray, hi: np.ndarray, sizes: Sequence[int], h: float, cells: int = 1) -> None:
-    """Erode interval tables (N + 1, S, K) in place by ``cells`` cells of ``h`` [m] in every direction: a state keeps
-    the axis positions x with [x - cells h, x + cells h] inside the intervals of its own state and of every state whose
-    other contacts are within ``cells`` cells of its own (S: their flat product of ``sizes``); a state off the grid
-    allows nothing."""
-    shape = (lo.shape[0], *sizes, lo.shape[2])
-    size = (1,) + (2 * cells + 1,) * len(sizes) + (1,)
-    lo[...] = (maximum_filter(lo.reshape(shape), size=size, mode="constant", cval=np.inf) + cells * h).reshape(
-        lo.shape)
-    hi[...] = (minimum_filter(hi.reshape(shape), size=size, mode="constant", cval=-np.inf) - cells * h).reshape(
-        hi.shape)
+def erode_tables(lo: np.ndarray, hi: np.ndarray, sizes: Sequence[int], h: float, moving: np.ndarray,
+                 cells: int = 1) -> None:
+    """Erode interval tables (N + 1, S, K) in place by ``cells`` cells of ``h`` [m] along the contacts that move in
+    each column: ``moving`` (K, m) bool, the axis contact last (S: the flat product of the other contacts' ``sizes``, in
+    their order). A state keeps the axis positions x with [x - cells h, x + cells h] (x alone when the axis contact
+    does not move) inside the intervals of its own state and of every state whose moving contacts are within
+    ``cells`` cells of its own; a state off the grid allows nothing."""
+    shape = (lo.shape[0], *sizes)
+    for k, move in enumerate(np.asarray(moving, dtype=bool)):
+        if not move.any():
+            continue
+        size = (1,) + tuple(2 * cells + 1 if m else 1 for m in move[:-1])
+        shift = cells * h if move[-1] else 0.0
+        column_lo, column_hi = lo[:, :, k].reshape(shape), hi[:, :, k].reshape(shape)
+        lo[:, :, k] = (maximum_filter(column_lo, size=size, mode="constant", cval=np.inf) + shift).reshape(
+            lo.shape[:2])
+        hi[:, :, k] = (minimum_filter(column_hi, size=size, mode="constant", cval=-np.inf) - shift).reshape(
+            hi.shape[:2])
