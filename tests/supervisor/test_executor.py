@@ -102,6 +102,34 @@ def test_a_planned_slide_that_sticks_on_the_way_is_primed_again():
     assert end.kind is EventKind.STUCK and ex.phases[0] is ContactPhase.FIXED
 
 
+def test_each_repriming_starts_its_overshoot_higher():
+    """``reprime_overshoot_step``: a planned slide stuck on its way is primed again from μ_s + prime_overshoot + its
+    re-primings so far times the step (at most ``prime_overshoot_max``), where the first priming started from μ_s +
+    prime_overshoot; the priming's own ramp then grows it towards the maximum over ``prime_time``."""
+    ex = executor(max_reprimes=3, prime_overshoot=0.01, prime_overshoot_max=0.1, reprime_overshoot_step=0.04,
+                  prime_time=0.04)
+    out = []
+    mu_s = SC.contacts[0].friction.static
+    order = SlideOrder(0, 1, 0.010, reference=lambda t: (-0.014 + 0.05 * t, 0.05, 0.0), planned_start=0.0,
+                       planned_end=0.5)
+
+    def ratio(t, m):
+        fn, ft = command(ex, t, m, out)[0].contact_forces_surface[0]
+        return ft / fn
+
+    ex.start(order, meas(0.0), out)
+    assert ratio(0.0, meas(0.0)) == pytest.approx(mu_s + 0.01, rel=1e-9)
+    t = 0.0
+    for reprimes, expected in ((1, 0.05), (2, 0.09), (3, 0.1)):
+        ex.advance(meas(t + 0.001, sliding=(True, False, False), xi_dot=(0.01, 0, 0)), out)  # slides ...
+        assert ex.phases[0] is ContactPhase.SLIDING
+        t += 0.05
+        stuck = meas(t, xi=(-0.013, XI[1], XI[2]))
+        assert ex.advance(stuck, out) == [] and ex.phases[0] is ContactPhase.PRIMING  # ... sticks: primed again
+        assert out[-1].values["reprime"] == reprimes
+        assert ratio(t, stuck) == pytest.approx(mu_s + expected, rel=1e-9)
+
+
 def test_the_sliders_kinetic_friction_is_estimated_from_the_sensed_forces():
     ex = executor(friction_filter_time=0.01)
     out = []

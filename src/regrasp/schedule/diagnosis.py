@@ -197,19 +197,26 @@ def diagnose(problem: Problem, free: LatticeRun, partial: RegraspSchedule | None
                            + _along_gravity(problem, when), rule=rule, partial=partial)
 
 
+def _outlives(problem, tables: tuple | None, last: int) -> tuple | None:
+    """(the lattice with the force tables ``tables`` (lo, hi) as they were before a cut, its run) when that run
+    survives beyond layer ``last`` (the cut is what ran out), else None (also without ``tables``: nothing was cut)."""
+    if tables is None:
+        return None
+    uncut = dataclasses.replace(problem.lattice, lo=tables[0], hi=tables[1])
+    result = run(uncut, start=problem.start_cells)
+    return (uncut, result) if result.last_layer > last else None
+
+
 def _torque_limited(problem, last: int) -> tuple[str, str] | None:
     """(the finger, the reason) where the joint torque limits are what ran out: the program on the force tables
     as they were before the limits cut them (``problem.free_tables``) survives beyond layer ``last``; else None.
     The reason names the joint and the time (the first layer no state survives), and the least torque that joint
     needs over its contact's envelope-admissible positions (the lattice's necessary condition,
     ``problem.torque_excess``), against its limit."""
-    if problem.free_tables is None:
+    found = _outlives(problem, problem.free_tables, last)
+    if found is None:
         return None
-    lat = problem.lattice
-    uncut = dataclasses.replace(lat, lo=problem.free_tables[0], hi=problem.free_tables[1])
-    free = run(uncut, start=problem.start_cells)
-    if free.last_layer <= last:
-        return None
+    lat, (_, free) = problem.lattice, found
     k = min(last + 1, lat.layers - 1)
     effort = problem.torque.effort
     best = None  # (least excess over the admissible cells, contact, joint)
@@ -246,13 +253,10 @@ def _painleve_limited(problem, last: int) -> tuple[str, str] | None:
     """(the contact, the reason) where the slides' well-posedness is what ran out (:mod:`regrasp.schedule.well_posed`):
     the program on the force tables before its cut (``problem.posed_tables``) survives beyond layer ``last``; the
     reason names the first slide of that program's path after ``last`` that the cut excludes; else None."""
-    if problem.posed_tables is None:
+    found = _outlives(problem, problem.posed_tables, last)
+    if found is None:
         return None
-    lat = problem.lattice
-    uncut_lat = dataclasses.replace(lat, lo=problem.posed_tables[0], hi=problem.posed_tables[1])
-    uncut = run(uncut_lat, start=problem.start_cells)
-    if uncut.last_layer <= last:
-        return None
+    lat, (uncut_lat, uncut) = problem.lattice, found
     _, mu, p = uncut.best()
     cells, moves = path(uncut_lat, uncut, uncut.last_layer, mu, p)
     index = {tuple(d): j for j, d in enumerate(lat.combos.tolist())}
