@@ -131,8 +131,7 @@ def test_four_fingers_whose_forces_couple_them_get_a_verified_schedule():
 def test_decomposition_finds_as_few_slides_as_the_exact_planner_on_a_coarse_four_finger_lattice():
     """3 mm cells and two sliders at most: the exact lattice holds four fingers; with forces that couple them (f_max
     3 N, cone margin 1 N) the exact optimum needs the three-contact coordination the best-improvement descent finds.
-    (The problem as it was built, without a position margin: on 3 mm cells the lattice's margin is a whole cell, and
-    with it the descent stops at 10 slides against the exact 8.)"""
+    (The problem as it was built, without a position margin: on 3 mm cells the lattice's margin is a whole cell.)"""
     scenario = load_scenario(FOUR)
     coarse = dict(xi_resolution=3e-3, envelope_margin=1.5e-3, max_sliders=2, f_max=3.0, cone_margin=1.0,
                   position_margin=0.0)

@@ -62,12 +62,12 @@ def test_no_two_periods_in_a_row_is_a_proof_that_no_periodic_schedule_exists():
 
 
 def test_no_three_periods_in_a_row_is_a_proof_too():
-    """The sixth variant, planned with a 2 mm position margin, runs two periods in a row but no periodic schedule comes
+    """The sixth variant, planned with a 3 mm position margin, runs two periods in a row but no periodic schedule comes
     from the starts tried; the third period dies from every state the first two can end in, so none exists: PERIODIC,
     with when it dies, not SEARCH (with the default 1 mm margin it has a periodic schedule)."""
     scenario = load_scenario(FIXTURES / "issue27_variant_f.toml")
     with pytest.raises(NoScheduleError) as info:
-        plan_regrasps(scenario, RegraspSettings(position_margin=2e-3))
+        plan_regrasps(scenario, RegraspSettings(position_margin=3e-3))
     assert info.value.limit is ScheduleLimit.PERIODIC
     assert "no schedule runs three periods in a row" in str(info.value)
     assert 2 * scenario.trajectory.period < info.value.latest_time < 3 * scenario.trajectory.period

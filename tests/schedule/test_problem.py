@@ -42,8 +42,8 @@ def problem():
 
 def test_the_position_margin_erodes_the_tables_to_the_lp_on_every_neighbour(problem):
     """With a one-cell position margin a table entry holds a position exactly where the LP finds a force system at
-    every position of the box around it: each contact that slides in the move vector at its cell or a neighbour (off
-    the grid: none), the held ones at their cells."""
+    every position of the box behind it: each contact that slides in the move vector at its cell or the one behind
+    (against its move: a slide that lags; off the grid: none), the held ones at their cells."""
     eroded = build_problem(_scenario(), RegraspSettings(position_margin=problem.settings.xi_resolution,
                                                         sliding_friction_factor=None))
     sc, lat = problem.scenario, problem.lattice
@@ -72,7 +72,7 @@ def test_the_position_margin_erodes_the_tables_to_the_lp_on_every_neighbour(prob
         ratios = [None if d == 0 else d * f.kinetic for d, f in zip(lat.combos[mu], problem.friction)]
         every = True
         h = problem.settings.xi_resolution
-        for shift in itertools.product(*[(-1, 0, 1) if d != 0 else (0,) for d in lat.combos[mu]]):
+        for shift in itertools.product(*[(0, -int(d)) if d != 0 else (0,) for d in lat.combos[mu]]):
             near = [c + s for c, s in zip(full, shift)]
             if not all(0 <= c < len(g) for j, (c, g) in enumerate(zip(near, problem.grids)) if j != lat.axis):
                 every = False  # (another contact off its grid: no state; the axis's interval goes on past its grid)

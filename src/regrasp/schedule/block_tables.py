@@ -80,30 +80,36 @@ class ModeVertices:
 
 
 def pair_table(lam: np.ndarray, q: np.ndarray, xi: np.ndarray, i: int, j: int, gi: np.ndarray,
-               gj: np.ndarray, margin: float = 0.0, moving: np.ndarray | None = None) -> np.ndarray:
+               gj: np.ndarray, margin: float = 0.0, moves: np.ndarray | None = None) -> np.ndarray:
     """Which block positions (ξ_i, ξ_j) ∈ ``gi`` × ``gj`` [m] admit a force system of the polytope (λ, q) with the
     other contacts at ``xi`` [m] (m,) (its entries i and j ignored): (n_i, n_j) bool (module docstring). With a
     ``margin`` [m] (``RegraspSettings.position_margin``, whole cells of the grids), every position with each contact
-    that moves (``moving``, (m,) bool) at -, 0 or + it must admit one: the moving other contacts at each of their
-    shifts, the block's cells and their neighbours along the moving ones within the margin (off the grid: none)."""
+    that moves (``moves``, (m,) in {-1, 0, 1}) where planned or up to the margin behind (a slide that lags) must admit
+    one: the moving other contacts at each of their shifts, the block's cells and their neighbours behind (off the
+    grid: none)."""
     if len(lam) == 0:
         return np.zeros((len(gi), len(gj)), dtype=bool)
     others = np.ones(lam.shape[1], dtype=bool)
     others[[i, j]] = False
-    moving = np.zeros(lam.shape[1], dtype=bool) if moving is None or margin <= 0.0 else np.asarray(moving, bool)
+    moves = np.zeros(lam.shape[1], dtype=int) if moves is None or margin <= 0.0 else np.asarray(moves, dtype=int)
+    behind = (moves != 0) & others
     shifts = np.zeros((1, lam.shape[1]))
-    if (moving & others).any():
-        shifts = np.zeros((3 ** int((moving & others).sum()), lam.shape[1]))
-        shifts[:, moving & others] = margin * np.array(list(itertools.product((-1.0, 0.0, 1.0),
-                                                                              repeat=int((moving & others).sum()))))
+    if behind.any():
+        shifts = np.zeros((2 ** int(behind.sum()), lam.shape[1]))
+        shifts[:, behind] = np.array(list(itertools.product((0.0, 1.0), repeat=int(behind.sum())))) \
+            * (-margin * moves[behind])
     const = q[:, None] - lam[:, others] @ (xi[others][None, :] + shifts[:, others]).T  # (V, E)
     rho = (const[:, :, None] - lam[:, i, None, None] * gi[None, None, :]) / lam[:, j, None, None]  # (V, E, n_i)
     lo, hi = rho.min(axis=0), rho.max(axis=0)
     ok = ((lo[:, :, None] - TOL <= gj[None, None, :]) & (gj[None, None, :] <= hi[:, :, None] + TOL)).all(axis=0)
-    if moving[i] or moving[j]:
+    if moves[i] or moves[j]:
         h = gi[1] - gi[0] if len(gi) > 1 else margin
-        structure = np.ones((3 if moving[i] else 1, 3 if moving[j] else 1), dtype=bool)
-        ok = binary_erosion(ok, structure=structure, iterations=math.ceil(margin / h - 1e-9), border_value=0)
+        cells = math.ceil(margin / h - 1e-9)
+        structure = np.zeros((2 * cells + 1, 2 * cells + 1), dtype=bool)
+        along = [slice(cells, cells + 1) if d == 0 else slice(0, cells + 1) if d > 0 else slice(cells, 2 * cells + 1)
+                 for d in (moves[i], moves[j])]
+        structure[tuple(along)] = True
+        ok = binary_erosion(ok, structure=structure, border_value=0)
     return ok
 
 
@@ -161,10 +167,10 @@ def block_tables(problem: Problem, verts: ModeVertices, cells: np.ndarray, moves
 
     def table(kind: str, ratios: tuple, k: int, shift: np.ndarray | None = None, breakaway: bool = False) -> np.ndarray:
         lam, q = verts.at(kind, ratios, k, breakaway)
-        moving = np.array([r is not None for r in ratios])
+        moves = np.array([0 if r is None else int(np.sign(r)) or 1 for r in ratios])
         if shift is None:
-            return pair_table(lam, q, xi[k], i, j, gi, gj, margin, moving)
-        return pair_table(lam, q, xi[k] - shift, i, j, gi - shift[i], gj - shift[j], margin, moving)
+            return pair_table(lam, q, xi[k], i, j, gi, gj, margin, moves)
+        return pair_table(lam, q, xi[k] - shift, i, j, gi - shift[i], gj - shift[j], margin, moves)
 
     for k in range(1, L):
         for b in range(nb):

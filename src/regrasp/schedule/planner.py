@@ -232,14 +232,15 @@ def _holds(lam: np.ndarray, offset: np.ndarray, xi: np.ndarray, spread: np.ndarr
 
 
 def _spread(direction, margin: float) -> np.ndarray | None:
-    """The offsets of the positions a force system must also hold at: every contact that moves in ``direction`` at
-    -margin, 0 or +margin (``RegraspSettings.position_margin``), the others at 0, (3^p, m); None without a margin or a
-    slider."""
+    """The offsets of the positions a force system must also hold at: every contact that moves in ``direction`` where
+    planned or ``margin`` behind (``RegraspSettings.position_margin``: a slide that lags), the others where planned,
+    (2^p, m); None without a margin or a slider."""
     sliders = [i for i, d in enumerate(direction) if d != 0]
     if margin <= 0.0 or not sliders:
         return None
-    out = np.zeros((3 ** len(sliders), len(direction)))
-    out[:, sliders] = margin * np.array(list(itertools.product((-1.0, 0.0, 1.0), repeat=len(sliders))))
+    out = np.zeros((2 ** len(sliders), len(direction)))
+    back = -margin * np.array([direction[i] for i in sliders], dtype=float)
+    out[:, sliders] = np.array(list(itertools.product((0.0, 1.0), repeat=len(sliders)))) * back
     return out
 
 

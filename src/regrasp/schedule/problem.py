@@ -88,12 +88,13 @@ class RegraspSettings:
             the best two-period path, the free program's best end state, then the cheapest states at rest at the
             two-period program's end. None found from them is not a proof that none exists
             (``ScheduleLimit.SEARCH``).
-        position_margin: Every position of the sliders within this of the planned ones (each slider ± it, the held
-            contacts where planned) has a force system too [m]: a slide that lags or leads its plan keeps its forces.
-            Near the edge of the positions that have forces the loads needed grow without bound (two sliders on
-            opposite edges: the friction couple against the normal forces' moment), so a plan that grazes it fails on
-            the plant as soon as a slide lags. The lattice asks it of whole cells (``xi_resolution``, rounded up), the
-            verification of every slider at -, 0 and + this (3^p positions).
+        position_margin: Every position of the sliders from the planned ones to this behind them (each slider where
+            planned or lagging by up to this, the held contacts where planned) has a force system too [m]: a slide
+            that lags its plan keeps its forces. Near the edge of the positions that have forces the loads needed
+            grow without bound (two sliders on opposite edges: the friction couple against the normal forces'
+            moment), so a plan that grazes it fails on the plant as soon as a slide lags. The lattice asks it of whole
+            cells (``xi_resolution``, rounded up), the verification of every slider where planned and this behind
+            (2^p positions).
         sliding_friction_factor: Plan a slide only where the sliders' contact problem stays well-posed (no
             Painlevé paradox: :mod:`regrasp.schedule.well_posed`) with this many times each slider's kinetic friction
             [-] (≥ 1; None: no check). Near the paradox a slider's normal force needs torques known to a vanishing
@@ -339,8 +340,8 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
         if cells:  # (every position of the sliders within the margin of a state's has forces too)
             sizes = [len(grids[i]) for i in range(m) if i != axis]
             order = [i for i in range(m) if i != axis] + [axis]
-            moving = combos[:, order] != 0
-            slot_moving = np.zeros((0 if blo is None else blo.shape[2], m), dtype=bool)
+            moving = combos[:, order]
+            slot_moving = np.zeros((0 if blo is None else blo.shape[2], m), dtype=int)
             for mu, bits in zip(*np.nonzero(slots >= 0)):
                 slot_moving[slots[mu, bits]] = moving[mu]
             for a, b, mv in ((lo, hi, moving), (mid_lo, mid_hi, moving), (blo, bhi, slot_moving)):

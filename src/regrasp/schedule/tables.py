@@ -62,21 +62,29 @@ def _cut_axis(lo, hi, k: int, mu: int, axis_grid: np.ndarray, first: int | None,
         hi[k, :, mu] = np.minimum(hi[k, :, mu], axis_grid[last] + 1e-6)
 
 
-def erode_tables(lo: np.ndarray, hi: np.ndarray, sizes: Sequence[int], h: float, moving: np.ndarray,
+def erode_tables(lo: np.ndarray, hi: np.ndarray, sizes: Sequence[int], h: float, moves: np.ndarray,
                  cells: int = 1) -> None:
-    """Erode interval tables (N + 1, S, K) in place by ``cells`` cells of ``h`` [m] along the contacts that move in
-    each column: ``moving`` (K, m) bool, the axis contact last (S: the flat product of the other contacts' ``sizes``, in
-    their order). A state keeps the axis positions x with [x - cells h, x + cells h] (x alone when the axis contact
-    does not move) inside the intervals of its own state and of every state whose moving contacts are within
-    ``cells`` cells of its own; a state off the grid allows nothing."""
+    """Erode interval tables (N + 1, S, K) in place by ``cells`` cells of ``h`` [m] behind the contacts that move in
+    each column: ``moves`` (K, m) in {-1, 0, 1}, the axis contact last (S: the flat product of the other contacts'
+    ``sizes``, in their order). A state keeps the axis positions x with the segment from x - d cells h to x (d its move;
+    x alone when it does not move) inside the intervals of its own state and of every state whose moving contacts are
+    up to ``cells`` cells behind their own, against their moves (a slide that lags its plan); a state off the grid
+    allows nothing."""
     shape = (lo.shape[0], *sizes)
-    for k, move in enumerate(np.asarray(moving, dtype=bool)):
+    for k, move in enumerate(np.asarray(moves, dtype=int)):
         if not move.any():
             continue
-        size = (1,) + tuple(2 * cells + 1 if m else 1 for m in move[:-1])
-        shift = cells * h if move[-1] else 0.0
+        footprint = np.zeros((1,) + tuple(2 * cells + 1 for _ in sizes), dtype=bool)
+        index = [0]
+        for d in move[:-1]:  # (offset -d .. -d cells: behind; 0 when held)
+            index.append(slice(cells, cells + 1) if d == 0 else slice(0, cells + 1) if d > 0 else
+                         slice(cells, 2 * cells + 1))
+        footprint[tuple(index)] = True
         column_lo, column_hi = lo[:, :, k].reshape(shape), hi[:, :, k].reshape(shape)
-        lo[:, :, k] = (maximum_filter(column_lo, size=size, mode="constant", cval=np.inf) + shift).reshape(
-            lo.shape[:2])
-        hi[:, :, k] = (minimum_filter(column_hi, size=size, mode="constant", cval=-np.inf) - shift).reshape(
+        lo[:, :, k] = maximum_filter(column_lo, footprint=footprint, mode="constant", cval=np.inf).reshape(lo.shape[:2])
+        hi[:, :, k] = minimum_filter(column_hi, footprint=footprint, mode="constant", cval=-np.inf).reshape(
             hi.shape[:2])
+        if move[-1] > 0:
+            lo[:, :, k] += cells * h
+        elif move[-1] < 0:
+            hi[:, :, k] -= cells * h
