@@ -337,7 +337,7 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
             geo, sample, middle, early, 0.5 * ramp / dt, combos, friction, limits, grids, axis,
             settings.prime_overshoot)
         cells = math.ceil(settings.position_margin / h - 1e-9)
-        if cells:  # (every position of the sliders within the margin of a state's has forces too)
+        if cells:  # (every position of the sliders up to the margin behind a state's has forces too)
             sizes = [len(grids[i]) for i in range(m) if i != axis]
             order = [i for i in range(m) if i != axis] + [axis]
             moving = combos[:, order]
@@ -354,7 +354,8 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
     torque = TorqueModel(scenario)
     torque_excess, free_tables, posed_tables, posed = None, None, None, None
     joints = [torque.joint_angles(i, sample.pose, np.broadcast_to(g, (len(times), len(g))))
-              for i, g in enumerate(grids)] if force_tables else None
+              for i, g in enumerate(grids)] if force_tables and (torque.limited or settings.sliding_friction_factor
+                                                                  is not None) else None
     if force_tables and settings.sliding_friction_factor is not None:  # (the decomposition: its verification's)
         posed, pairs = slide_mask(lattice_geometry(torque, scenario, grids, sample, joints), combos, friction,
                                   settings.sliding_friction_factor, lattice_env, scenario.polygon.mass,
