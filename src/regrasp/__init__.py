@@ -28,6 +28,7 @@ __version__ = "0.1.0"
 
 if TYPE_CHECKING:
     from .core.contact import ContactMode, Friction  # noqa: F401
+    from .core.curves import Disc, Ellipse, RoundedPolygon, SupportCurve  # noqa: F401
     from .core.events import EventKind, FailureKind  # noqa: F401
     from .core.exceptions import InvalidParameterError, RegraspError, ScenarioError  # noqa: F401
     from .core.polygon import ConvexPolygon  # noqa: F401

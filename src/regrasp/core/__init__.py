@@ -1,6 +1,6 @@
 """``regrasp.core``: Value types and arithmetic every concern shares: the contact's mode, friction and cone margin, the
-object (a convex polygon), its trajectory, what a hand senses (:class:`Measurement`), events and failures, the typed
-errors and the one validation layer."""
+object (a convex polygon, or a curved object: :mod:`regrasp.core.curves`), its trajectory, what a hand senses
+(:class:`Measurement`), events and failures, the typed errors and the one validation layer."""
 
 from __future__ import annotations
 
@@ -10,8 +10,10 @@ from .lazy import lazy_exports
 
 if TYPE_CHECKING:
     from .contact import DEFAULT_CONE_MARGIN, DEFAULT_FRICTION, ContactMode, Friction, FrictionLike, cone_margin  # noqa: F401
+    from .curves import CurvedObject, Disc, Ellipse, RoundedPolygon, SupportCurve, rounded  # noqa: F401
     from .events import Event, EventKind, EventSource, Failure, FailureKind  # noqa: F401
     from .exceptions import (  # noqa: F401
+        CurveError,
         FingerModelError,
         InvalidParameterError,
         MissingDependencyError,

@@ -102,6 +102,23 @@ class PolygonError(RegraspError, ValueError):
         super().__init__(message)
 
 
+class CurveError(RegraspError, ValueError):
+    """A curved object's parameters do not describe a valid convex closed curve (a radius that is not positive, a
+    support function whose radius of curvature is not positive somewhere, a corner radius too large for its polygon).
+
+    Attributes:
+        parameter: The offending parameter's name.
+        value: Its value as given.
+        where: Where the curve fails, when that is a place (a normal angle [rad], an edge index), else None.
+    """
+
+    def __init__(self, message: str, *, parameter: str, value: Any, where: float | int | None = None):
+        self.parameter = parameter
+        self.value = value
+        self.where = where
+        super().__init__(message)
+
+
 class UnknownEdgeError(RegraspError, IndexError):
     """An edge index does not exist on the polygon.
 

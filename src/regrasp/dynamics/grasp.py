@@ -34,7 +34,14 @@ the fingertip drags the object along its sliding direction), a fixed one is
 
 Time derivatives are exact (no numerical differentiation):
 :math:`\dot r_i = \omega \perp r_i + t_i \dot\xi_i`, :math:`\dot U_i^T = [\,0 \mid \perp\dot r_i\,]`,
-:math:`\dot R_{fi} = \omega \perp R_{fi}`.
+:math:`\dot R_{fi} = (\omega - \kappa_i \dot\xi_i) \perp R_{fi}`.
+
+**Curved objects** (:mod:`regrasp.core.curves`; ``docs/derivations.md``, "Contacts on curves"): a contact on a
+curve's one face has :math:`c_i(\xi_i)` with :math:`c_i' = t^o_i(\xi_i)` (ξ is the arc length) and a frame that
+turns with it, :math:`t^{o\prime}_i = \kappa_i n^o_i`, :math:`n^{o\prime}_i = -\kappa_i t^o_i`. The velocity
+relation above is unchanged (the curve's tangent is the sliding direction); the frame's rate gains
+:math:`-\kappa_i\dot\xi_i\perp`, which the paper's edge-only text (:math:`\dot R_f = \omega\perp R_f`) lacks.
+On such a grasp the frames depend on ξ: :meth:`Grasp.surface_frames` and the methods built on it take ``xi``.
 """
 
 from __future__ import annotations
@@ -45,6 +52,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.contact import ContactMode, FrictionLike, as_frictions
+from ..core.curves import CurvedObject
 from ..core.exceptions import InvalidParameterError, SlidingContactCountError
 from ..core.planar import rotation
 from ..core.polygon import ConvexPolygon
@@ -54,11 +62,13 @@ __all__ = ["ContactMode", "Grasp"]
 
 
 class Grasp:
-    r"""m contacts on a polygon's edges, each fixed or sliding, and their matrices.
+    r"""m contacts on an object's faces (a polygon's edges, or a curved object's one face 0), each fixed or
+    sliding, and their matrices.
 
     Args:
-        polygon: The object.
-        edges: Edge index of each contact (one per finger, in finger order).
+        polygon: The object: a :class:`~regrasp.core.polygon.ConvexPolygon` or a
+            :class:`~regrasp.core.curves.CurvedObject`.
+        edges: Face (edge) index of each contact (one per finger, in finger order).
         modes: ``"fixed"`` or ``"sliding"`` per contact.
 
     Raises:
@@ -66,7 +76,7 @@ class Grasp:
     """
 
     def __init__(self, polygon: ConvexPolygon, edges: Sequence[int], modes: Sequence[ContactMode | str]):
-        expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+        expect_type("polygon", polygon, (ConvexPolygon, CurvedObject), "a ConvexPolygon or a CurvedObject")
         edges = expect_sequence_of("edges", edges, object, "edge indices")
         modes = expect_sequence_of("modes", modes, object, "contact modes")
         if len(edges) != len(modes) or len(edges) == 0:
@@ -84,14 +94,20 @@ class Grasp:
         self.p = len(self.sliding)
         if 2 * self.m < 3 + self.p:
             raise SlidingContactCountError(self.m, self.p)
-        self._origins = np.array([e.xi_origin for e in self.edges])  # (m, 2) object frame
-        self._tangents = np.array([e.xi_direction for e in self.edges])
-        self._normals = np.array([e.inward_normal for e in self.edges])
+        #: Per contact, whether its face is curved (a curved object's); ``curved``: whether any is.
+        self.curved_contacts = tuple(bool(getattr(e, "curved", False)) for e in self.edges)
+        self.curved = any(self.curved_contacts)
+        nan2 = np.full(2, np.nan)
+        self._origins = np.array([nan2 if c else e.xi_origin for c, e in zip(self.curved_contacts, self.edges)])
+        self._tangents = np.array([nan2 if c else e.xi_direction for c, e in zip(self.curved_contacts, self.edges)])
+        self._normals = np.array([nan2 if c else e.inward_normal for c, e in zip(self.curved_contacts, self.edges)])
         self._frames0 = np.stack([np.column_stack([n, t]) for n, t in zip(self._normals, self._tangents)])
         #: Per contact, as floats for scalar hot paths: its edge's ξ origin [m], ξ direction and inward normal,
-        #: (o_x, o_y, t_x, t_y, n_x, n_y), object frame.
-        self.contact_constants: tuple[tuple[float, ...], ...] = tuple(
-            tuple(float(v) for v in (*o, *t, *n)) for o, t, n in zip(self._origins, self._tangents, self._normals))
+        #: (o_x, o_y, t_x, t_y, n_x, n_y), object frame; None for a contact on a curve (its frame depends on ξ:
+        #: ``polygon.local_floats``).
+        self.contact_constants: tuple[tuple[float, ...] | None, ...] = tuple(
+            None if c else tuple(float(v) for v in (*o, *t, *n))
+            for c, o, t, n in zip(self.curved_contacts, self._origins, self._tangents, self._normals))
         bv = np.zeros((2 * self.m, self.p))
         for j, i in enumerate(self.sliding):
             bv[2 * i + 1, j] = 1.0
@@ -102,11 +118,36 @@ class Grasp:
         return Grasp(self.polygon, [e.index for e in self.edges], modes)
 
     # ------------------------------------------------------------------ kernels (validated input)
-    def _lever(self, beta: float, xi: np.ndarray) -> np.ndarray:
-        return (self._origins + xi[:, None] * self._tangents) @ rotation(beta).T
+    def _in_object(self, xi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Contact points (m, 2) [m], surface frames [n° t°] (m, 2, 2) and curvatures (m,) [1/m], object frame."""
+        if not self.curved:
+            return self._origins + xi[:, None] * self._tangents, self._frames0, np.zeros(self.m)
+        points, frames, kappa = self._origins + xi[:, None] * self._tangents, self._frames0.copy(), np.zeros(self.m)
+        for i, curved in enumerate(self.curved_contacts):
+            if curved:
+                cx, cy, nx, ny, kappa[i] = self.polygon.local_floats(float(xi[i]))
+                points[i] = cx, cy
+                frames[i] = ((nx, -ny), (ny, nx))
+        return points, frames, kappa
 
-    def _frames(self, beta: float) -> np.ndarray:
-        return np.einsum("ij,mjk->mik", rotation(beta), self._frames0)
+    def _lever(self, beta: float, xi: np.ndarray) -> np.ndarray:
+        if not self.curved:
+            return (self._origins + xi[:, None] * self._tangents) @ rotation(beta).T
+        return self._in_object(xi)[0] @ rotation(beta).T
+
+    def _frames(self, beta: float, xi: np.ndarray | None = None) -> np.ndarray:
+        if not self.curved:
+            return np.einsum("ij,mjk->mik", rotation(beta), self._frames0)
+        return np.einsum("ij,mjk->mik", rotation(beta), self._in_object(xi)[1])
+
+    def _xi_for_frames(self, xi: ArrayLike | None) -> np.ndarray | None:
+        """``xi`` validated, required when a contact is on a curve (its frame turns with ξ)."""
+        if xi is None:
+            if self.curved:
+                raise InvalidParameterError("xi", None, "ξ [m] of every contact: a contact on a curve has a surface "
+                                            "frame that depends on ξ")
+            return None
+        return as_finite_array("xi", xi, (self.m,))
 
     def _grasp_matrix(self, r: np.ndarray) -> np.ndarray:
         g = np.zeros((3, 2 * self.m))
@@ -129,11 +170,13 @@ class Grasp:
             rf[2 * i:2 * i + 2, 2 * i:2 * i + 2] = frames[i]
         return rf
 
-    def _surface_rotation_dot(self, frames: np.ndarray, omega: float) -> np.ndarray:
+    def _surface_rotation_dot(self, frames: np.ndarray, omega: float, rates: np.ndarray | None = None) -> np.ndarray:
+        """Ṙ_f with the frames' rotation rates ``rates`` (ω - κ_i ξ̇_i per contact; None: ω for all)."""
         rf = np.zeros((2 * self.m, 2 * self.m))
         for i in self.sliding:
             f = frames[i]
-            rf[2 * i:2 * i + 2, 2 * i:2 * i + 2] = omega * np.array([[-f[1, 0], -f[1, 1]], [f[0, 0], f[0, 1]]])
+            rate = omega if rates is None else rates[i]
+            rf[2 * i:2 * i + 2, 2 * i:2 * i + 2] = rate * np.array([[-f[1, 0], -f[1, 1]], [f[0, 0], f[0, 1]]])
         return rf
 
     # ------------------------------------------------------------------ state helpers
@@ -145,7 +188,13 @@ class Grasp:
     def points_in_object(self, xi: ArrayLike) -> np.ndarray:
         """Contact points c_i(ξ_i) [m] in the object frame, shape (m, 2)."""
         xi = as_finite_array("xi", xi, (self.m,))
-        return self._origins + xi[:, None] * self._tangents
+        if not self.curved:
+            return self._origins + xi[:, None] * self._tangents
+        return self._in_object(xi)[0]
+
+    def curvatures(self, xi: ArrayLike) -> np.ndarray:
+        """κ_i(ξ_i) [1/m] of every contact's face at its ξ (0 on an edge), shape (m,)."""
+        return self._in_object(as_finite_array("xi", xi, (self.m,)))[2]
 
     def lever_arms(self, pose: ArrayLike, xi: ArrayLike) -> np.ndarray:
         """r_i = R(β) c_i(ξ_i) [m], hand-frame orientation, shape (m, 2)."""
@@ -157,9 +206,11 @@ class Grasp:
         pose, xi = self._check(pose, xi)
         return pose[:2] + self._lever(pose[2], xi)
 
-    def surface_frames(self, pose: ArrayLike) -> np.ndarray:
-        """R_fi = R(β) [n_i t_i] per contact, shape (m, 2, 2) (columns: normal, tangent)."""
-        return self._frames(as_finite_array("pose", pose, (3,))[2])
+    def surface_frames(self, pose: ArrayLike, xi: ArrayLike | None = None) -> np.ndarray:
+        """R_fi = R(β) [n_i t_i] per contact, shape (m, 2, 2) (columns: normal, tangent); ``xi`` [m] (every
+        contact's) is needed on a curve, where the frame turns with ξ."""
+        beta = as_finite_array("pose", pose, (3,))[2]
+        return self._frames(beta, self._xi_for_frames(xi))
 
     # ------------------------------------------------------------------ matrices
     def grasp_matrix(self, pose: ArrayLike, xi: ArrayLike) -> np.ndarray:
@@ -172,16 +223,27 @@ class Grasp:
         pose_dot = as_finite_array("pose_dot", pose_dot, (3,))
         xi_dot = as_finite_array("xi_dot", xi_dot, (self.m,))
         r = self._lever(pose[2], xi)
-        return self._grasp_matrix_dot(r, self._frames(pose[2])[:, :, 1], pose_dot[2], xi_dot)
+        return self._grasp_matrix_dot(r, self._frames(pose[2], xi)[:, :, 1], pose_dot[2], xi_dot)
 
-    def surface_rotation(self, pose: ArrayLike) -> np.ndarray:
-        """R_f (2m x 2m): block R_fi for sliding contacts, I_2 for fixed ones (eq. 3.1.7)."""
-        return self._surface_rotation(self.surface_frames(pose))
+    def surface_rotation(self, pose: ArrayLike, xi: ArrayLike | None = None) -> np.ndarray:
+        """R_f (2m x 2m): block R_fi for sliding contacts, I_2 for fixed ones (eq. 3.1.7); ``xi`` as in
+        :meth:`surface_frames`."""
+        return self._surface_rotation(self.surface_frames(pose, xi))
 
-    def surface_rotation_dot(self, pose: ArrayLike, pose_dot: ArrayLike) -> np.ndarray:
-        r"""Exact :math:`\dot R_f`: :math:`\omega \perp R_{fi}` on sliding blocks, 0 elsewhere."""
-        frames = self.surface_frames(pose)
-        return self._surface_rotation_dot(frames, as_finite_array("pose_dot", pose_dot, (3,))[2])
+    def surface_rotation_dot(self, pose: ArrayLike, pose_dot: ArrayLike, xi: ArrayLike | None = None,
+                             xi_dot: ArrayLike | None = None) -> np.ndarray:
+        r"""Exact :math:`\dot R_f`: :math:`(\omega - \kappa_i\dot\xi_i) \perp R_{fi}` on sliding blocks, 0
+        elsewhere (``xi`` and ``xi_dot`` [m/s] needed on a curve; on edges κ = 0)."""
+        frames = self.surface_frames(pose, xi)
+        omega = as_finite_array("pose_dot", pose_dot, (3,))[2]
+        if not self.curved:
+            return self._surface_rotation_dot(frames, omega)
+        if xi_dot is None:
+            raise InvalidParameterError("xi_dot", None, "ξ̇ [m/s] of every contact: a contact on a curve turns its "
+                                        "frame at κ ξ̇")
+        kappa = self._in_object(as_finite_array("xi", xi, (self.m,)))[2]
+        rates = omega - kappa * as_finite_array("xi_dot", xi_dot, (self.m,))
+        return self._surface_rotation_dot(frames, omega, rates)
 
     def sliding_directions(self) -> np.ndarray:
         """B_v (2m x p): the sliding direction (0, 1) of each sliding contact in its surface frame."""
@@ -215,7 +277,7 @@ class Grasp:
     ) -> np.ndarray:
         """G_f = G R_f B_f (3 x (2m - p)), the sliding grasp matrix (eq. 3.4.5; ``friction`` as in
         :meth:`force_basis`)."""
-        return self.grasp_matrix(pose, xi) @ self.surface_rotation(pose) @ self.force_basis(signs, friction)
+        return self.grasp_matrix(pose, xi) @ self.surface_rotation(pose, xi) @ self.force_basis(signs, friction)
 
     def friction_map(self, pose: ArrayLike, xi: ArrayLike, signs: ArrayLike, friction: FrictionLike) -> np.ndarray:
         r"""P = B_v^T B_f G_f^{-1} (p x 3, eq. 3.4.9): :math:`f_\xi = P (M_o \ddot X - f_g)`, with the
@@ -230,5 +292,5 @@ class Grasp:
             )
         frictions = as_frictions(friction, self.m)
         bf = self.force_basis(signs, frictions)
-        gf = self.grasp_matrix(pose, xi) @ self.surface_rotation(pose) @ bf
+        gf = self.grasp_matrix(pose, xi) @ self.surface_rotation(pose, xi) @ bf
         return self._bv.T @ bf @ np.linalg.inv(gf)

@@ -9,6 +9,10 @@ constraints read :math:`J \dot q = A \dot S`, so :math:`\dot q = H \dot S` with
 where :math:`\dot G` and :math:`\dot R_f` are exact (:mod:`regrasp.dynamics.grasp`) and
 :math:`\dot J \dot q` comes from Pinocchio.
 
+On a curved object (:mod:`regrasp.core.curves`) A keeps its form, with the contact point and frame at ξ, and
+:math:`\dot R_f B_v \dot\xi` gains :math:`\kappa_i \dot\xi_i^2 n_i` per sliding contact (the tangent turns
+as the contact moves: :math:`t' = \kappa n`; ``docs/derivations.md``, "Contacts on curves").
+
 Dynamics, by virtual power (``docs/derivations.md``). The fingers obey
 :math:`M \ddot q + N = \tau - J^T f` and the object
 :math:`M_o \ddot X = G f + f_g`, with :math:`f` the contact forces on the object (hand
@@ -139,8 +143,11 @@ class ReducedModel:
         self._bv = grasp.sliding_directions()
         self._identity = np.eye(hand.nq)
         self._sliding_column = {i: 3 + j for j, i in enumerate(grasp.sliding)}  # contact -> column of S
-        #: Whether the terms come from the compiled kernel.
-        self.compiled = hand.use_kernels(compiled)
+        if grasp.curved and compiled:
+            raise InvalidParameterError("compiled", compiled, "False or None for a curved object (the compiled "
+                                        "kernels take straight edges; the reference path takes curves)")
+        #: Whether the terms come from the compiled kernel (never on a curved object).
+        self.compiled = hand.use_kernels(compiled) and not grasp.curved
         self._kernel_constants = None if not self.compiled else (
             hand.kernel_parameters, ik_parameters(hand.fingers),
             contact_edges([e.xi_origin for e in grasp.edges], [e.xi_direction for e in grasp.edges],
@@ -187,7 +194,7 @@ class ReducedModel:
         """A = [G^T | R_f B_v] (2m x (3 + p)): J q̇ = A Ṡ (eq. 3.1.8)."""
         pose, xi = self.split(S)
         return np.hstack([self.grasp.grasp_matrix(pose, xi).T,
-                          self.grasp.surface_rotation(pose) @ self.grasp.sliding_directions()])
+                          self.grasp.surface_rotation(pose, xi) @ self.grasp.sliding_directions()])
 
     def state(self, S: ArrayLike, S_dot: ArrayLike) -> ReducedState:
         """All the model's quantities at (S, Ṡ); raises SingularFingerError at a singular finger."""
@@ -221,8 +228,14 @@ class ReducedModel:
         zeros = [0.0] * (n - 3)
         q, q_dot, tips, tip_velocities, a_rows, h_rows, a_dot, jacobians, inverses, frames, elbows = (
             [], [], [], [], [], [], [], [], [], [], [])
-        for i, (ox, oy, tx, ty, nx, ny) in enumerate(grasp.contact_constants):
-            cx, cy = ox + xi[i] * tx, oy + xi[i] * ty
+        for i, constants in enumerate(grasp.contact_constants):
+            if constants is None:  # on a curve: its point and frame at ξ, and its curvature
+                cx, cy, nx, ny, kappa = grasp.polygon.local_floats(xi[i])
+                tx, ty = -ny, nx
+            else:
+                ox, oy, tx, ty, nx, ny = constants
+                cx, cy = ox + xi[i] * tx, oy + xi[i] * ty
+                kappa = 0.0
             rx, ry = c * cx - s * cy, s * cx + c * cy  # lever arm r_i = R c_i(ξ_i)
             nx, ny = c * nx - s * ny, s * nx + c * ny  # surface frame [n_i t_i] = R [n°_i t°_i]
             tx, ty = c * tx - s * ty, s * tx + c * ty
@@ -259,6 +272,9 @@ class ReducedModel:
             # Ȧ Ṡ = Ġ^T Ẋ + Ṙ_f B_v ξ̇: ω ⊥ṙ_i + ω ξ̇_i ⊥t_i with ṙ_i = ω ⊥r_i + ξ̇_i t_i
             a_dot += (-omega * omega * rx - 2.0 * omega * xi_dot[i] * ty,
                       -omega * omega * ry + 2.0 * omega * xi_dot[i] * tx)
+            if kappa and xi_dot[i]:  # on a curve the tangent turns too: t' = κ n, so (d/dt) t ξ̇ gains κ ξ̇² n
+                a_dot[-2] += kappa * xi_dot[i] * xi_dot[i] * nx
+                a_dot[-1] += kappa * xi_dot[i] * xi_dot[i] * ny
         hand.check_singular_blocks(q, jacobians)
         masses, nonlinear = hand.mass_blocks_and_bias(q, q_dot)
         jdv, h_dot_s_dot = [], []
@@ -363,7 +379,7 @@ class ReducedModel:
         K = np.linalg.solve(J.T, M @ st.H)
         f0 = np.linalg.solve(J.T, tau - M @ st.H_dot_S_dot - st.hand.nonlinear)
         # f_xi = mu_k * s_j * n_j^T f_j = Sn f, row j selects sliding contact j
-        frames = self.grasp.surface_frames(st.S[:3])
+        frames = self.grasp.surface_frames(st.S[:3], st.xi)
         Sn = np.zeros((p, self.hand.nq))
         for j, i in enumerate(self.grasp.sliding):
             Sn[j, 2 * i:2 * i + 2] = kinetic[i] * signs[j] * frames[i][:, 0]

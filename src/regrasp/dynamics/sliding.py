@@ -139,7 +139,7 @@ def sliding_feasibility(
     g = as_finite_array("gravity_in_hand", gravity_in_hand, (2,))
     wrench = np.array([object_mass * (acc[0] - g[0]), object_mass * (acc[1] - g[1]), object_inertia * acc[2]])
 
-    frames = grasp.surface_frames(pose)
+    frames = grasp.surface_frames(pose, xi)
     G = grasp.grasp_matrix(pose, xi)
     row = np.zeros(2 * m)
     n, t = frames[contact][:, 0], frames[contact][:, 1]

@@ -38,7 +38,7 @@ from ..model.finger import Finger
 from .floats import linspace_floats
 from .line import Condition, condition_of, reachable_on_line
 
-__all__ = ["ClosedForm", "EnvelopeEvaluator", "FreeTest", "UrdfCuts", "urdf_pieces"]
+__all__ = ["ClosedForm", "EnvelopeEvaluator", "FreeTest", "UrdfCuts", "urdf_cuts", "urdf_pieces"]
 
 #: The ``urdf`` cuts of reachable ∩ edge: per piece, (whether the tip is free at its start, the free side [m] of
 #: every flip of the verdict, in order).
@@ -85,6 +85,38 @@ def urdf_pieces(base: Intervals, ends: UrdfCuts) -> Intervals:
         if start is not None:
             pieces.append((start, hi))
     return merge(pieces)
+
+
+def urdf_cuts(base: Intervals, hints: Intervals, free: FreeTest, grid: int, tol: float) -> UrdfCuts:
+    """The ``urdf`` cuts of ``base`` (a coordinate along the contact face [m]): grid, then bisection of every flip.
+
+    Per piece of ``base``: (whether ``free`` holds at its start, the free side of every flip of the verdict, in
+    order, each within ``tol`` [m] of the flip). The grid has ``grid`` points per piece plus the ends of ``hints``
+    inside it (the ``ideal`` feasible set). The flips alternate between free → colliding and colliding → free;
+    :func:`urdf_pieces` turns this into intervals.
+    """
+    hint_points = [t for iv in hints for t in iv]
+    out = []
+    for lo, hi in base:
+        points = set(linspace_floats(lo, hi, grid))
+        points.update(t for t in hint_points if lo < t < hi)
+        pts = sorted(points)
+        verdicts = [free(s) for s in pts]
+        ends = []
+        for k in range(1, len(pts)):
+            if verdicts[k] == verdicts[k - 1]:
+                continue
+            a, b = pts[k - 1], pts[k]  # verdict flips in (a, b): bisect
+            fa = verdicts[k - 1]
+            while b - a > tol:
+                m = 0.5 * (a + b)
+                if free(m) == fa:
+                    a = m
+                else:
+                    b = m
+            ends.append(a if fa else b)  # the free side
+        out.append((verdicts[0], tuple(ends)))
+    return tuple(out)
 
 
 class EnvelopeEvaluator:
@@ -294,36 +326,9 @@ class EnvelopeEvaluator:
         return free
 
     def urdf_ends(self, base: Intervals, hints: Intervals, free: FreeTest) -> UrdfCuts:
-        """The ``urdf`` cuts of ``base`` (line coordinates s [m]): grid, then bisection of every flip.
-
-        Per piece of ``base``: (whether ``free`` holds at its start, the free side of every flip of
-        the verdict, in order, each within the bisection tolerance of the flip). The grid has ``urdf_grid``
-        points per piece plus the ends of ``hints`` inside it (the ``ideal`` feasible set). The flips alternate
-        between free → colliding and colliding → free; :func:`urdf_pieces` turns this into intervals.
-        """
-        tol = self.urdf_tolerance * self.edge.length
-        hint_points = [t for iv in hints for t in iv]
-        out = []
-        for lo, hi in base:
-            grid = set(linspace_floats(lo, hi, self.urdf_grid))
-            grid.update(t for t in hint_points if lo < t < hi)
-            pts = sorted(grid)
-            verdicts = [free(s) for s in pts]
-            ends = []
-            for k in range(1, len(pts)):
-                if verdicts[k] == verdicts[k - 1]:
-                    continue
-                a, b = pts[k - 1], pts[k]  # verdict flips in (a, b): bisect
-                fa = verdicts[k - 1]
-                while b - a > tol:
-                    m = 0.5 * (a + b)
-                    if free(m) == fa:
-                        a = m
-                    else:
-                        b = m
-                ends.append(a if fa else b)  # the free side
-            out.append((verdicts[0], tuple(ends)))
-        return tuple(out)
+        """The ``urdf`` cuts of ``base`` (line coordinates s [m]): :func:`urdf_cuts` with ``urdf_grid`` points per piece
+        and the bisection tolerance ``urdf_tolerance`` × the edge length."""
+        return urdf_cuts(base, hints, free, self.urdf_grid, self.urdf_tolerance * self.edge.length)
 
     def urdf_cuts_of(self, part: ClosedForm, x: float, y: float, beta: float) -> UrdfCuts:
         """:meth:`urdf_ends` of the closed-form part ``part`` (with its ``ideal`` set as hints) at the object pose

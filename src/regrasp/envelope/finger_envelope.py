@@ -16,6 +16,12 @@ classified at its midpoint. In ``urdf`` mode the pieces of reachable ∩ edge ar
 on a grid (plus the ``ideal`` feasible ends) and every change of coal's verdict is
 bisected to ``1e-4`` of the edge length or finer.
 
+**Curved objects.** On a :class:`~regrasp.core.curves.CurvedObject` (one face, ξ the arc length) a sample is
+:class:`~regrasp.envelope.curve_evaluator.CurveEvaluator`'s: the same definitions on the tangent line at each ξ
+(:mod:`regrasp.envelope.curve` derives the breakpoints and certifies their bracketing; a disc has them in closed
+form), sets on the window of one perimeter about the foot of the first joint (``near``: unwrapped along a
+trajectory), ``urdf`` cuts bisected to ``urdf_tolerance`` × the perimeter. No compiled path.
+
 **Compiled path.** When every link shape of the finger has a planar footprint (boxes turned
 about z, cylinders and capsules with their axis in the plane, spheres centred in it:
 :mod:`regrasp.kernels.footprint`, which states why the 3-D distance to the prism is then the
@@ -33,14 +39,16 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..core.curves import CurvedObject
 from ..core.exceptions import InvalidParameterError
 from ..core.intervals import Intervals
 from ..core.planar import rotation
 from ..core.polygon import ConvexPolygon
-from ..core.validation import as_finite_array, as_finite_float, as_integer, as_positive_float, expect_type
+from ..core.validation import as_finite_array, as_finite_float, as_flag, as_integer, as_positive_float, expect_type
 from ..model.collision import UrdfCollisionChecker, default_tip_clearance
 from ..model.finger import Finger
 from ..model.geometry import Geometry
+from .curve_evaluator import CurveEvaluator
 from .evaluator import ClosedForm, EnvelopeEvaluator, UrdfCuts, urdf_pieces
 from .floats import pose_floats
 from .line import Condition, EdgeLine, condition_of_floats
@@ -54,17 +62,24 @@ class EnvelopeSample:
 
     All sets are tuples of closed ξ-intervals ``(lo, hi)`` [m] on the edge's ξ axis.
 
+    On a curved object ξ is the arc length and the sets lie in the sample's window ``edge_range`` of one perimeter
+    about ``xi_foot``; ``d`` and ``lam`` are those of the tangent line at ``xi_foot`` (``d`` is the first joint's
+    signed distance from the curve, positive outside; the condition follows from it as on an edge); a closed curve
+    has no edge ends, so the reason is never ``"off the edge"``.
+
     Attributes:
         time: Sample time [s].
         d: Signed line distance [m] (eq. 2.1.2).
         lam: Inward normal angle λ [rad] in the finger base frame.
         condition: Condition I–IV.
-        reachable: Reachable set (Definition 2.1) on the edge's whole line.
-        edge_range: ξ range of the actual edge.
+        reachable: Reachable set (Definition 2.1) on the edge's whole line (a curve: in the window).
+        edge_range: ξ range of the actual edge (a curve: the window (ξ_c - P/2, ξ_c + P/2)).
         feasible: Feasible set (Definition 2.2).
         reason: None when ``feasible`` is non-empty, else why it is empty:
             ``"condition I"``, ``"out of reach"``, ``"off the edge"`` or ``"collision"``.
         seconds: Wall time [s] spent computing this sample.
+        xi_foot: On a curved object, ξ_c [m]: the foot of the first joint on the curve (the window's centre; pass it
+            as the next sample's ``near``); None on an edge.
     """
 
     time: float
@@ -76,6 +91,7 @@ class EnvelopeSample:
     feasible: Intervals
     reason: str | None
     seconds: float = 0.0
+    xi_foot: float | None = None
 
     @property
     def is_feasible(self) -> bool:
@@ -93,7 +109,7 @@ class EnvelopeSample:
 
 
 class FingerEnvelope:
-    r"""Computes the feasible-contact envelope of one finger on one polygon edge.
+    r"""Computes the feasible-contact envelope of one finger on one polygon edge, or on a curved object's boundary.
 
     Build once for a (finger, object, edge) and call :meth:`at` for each object pose.
     :meth:`at` works on plain floats with constants precomputed here (it is called at
@@ -101,8 +117,9 @@ class FingerEnvelope:
 
     Args:
         finger: The finger (its configuration selects the reachable set).
-        polygon: The object.
-        edge: Index of the contact edge (edge k runs from vertex k to vertex k+1).
+        polygon: The object: a :class:`~regrasp.core.polygon.ConvexPolygon` or a
+            :class:`~regrasp.core.curves.CurvedObject` (module docstring).
+        edge: Index of the contact edge (edge k runs from vertex k to vertex k+1; a curve's one face is 0).
         geometry: ``"ideal"`` (links are segments, closed form) or ``"urdf"`` (the URDF
             collision shapes against the object with coal).
         tip_clearance: :math:`\rho` [m] of :mod:`regrasp.model.collision` (``urdf`` only);
@@ -114,20 +131,23 @@ class FingerEnvelope:
             (:mod:`regrasp.kernels.envelope`, closed-form distances) instead of coal. None: when every
             link shape has a planar footprint (:attr:`UrdfCollisionChecker.footprints
             <regrasp.model.collision.UrdfCollisionChecker.footprints>`); True: it must (else an
-            :class:`~regrasp.core.exceptions.InvalidParameterError`); False: never.
+            :class:`~regrasp.core.exceptions.InvalidParameterError`); False: never. A curved object has no
+            compiled path (True raises).
         coal_tolerance: ``urdf`` mode: the tolerance [m] of coal's GJK and EPA iterations
             (:class:`~regrasp.model.collision.UrdfCollisionChecker`; default: coal's, 1e-6).
 
     Attributes:
         compiled: Whether :meth:`at` runs the compiled kernel.
-        evaluator: The steps of one sample on plain floats (:class:`~regrasp.envelope.evaluator.EnvelopeEvaluator`),
-            shared with :class:`~regrasp.envelope.tracker.EnvelopeTracker`.
+        curved: Whether the object is a curved one.
+        evaluator: The steps of one sample on plain floats (:class:`~regrasp.envelope.evaluator.EnvelopeEvaluator`,
+            shared with :class:`~regrasp.envelope.tracker.EnvelopeTracker`; on a curve a
+            :class:`~regrasp.envelope.curve_evaluator.CurveEvaluator`).
     """
 
     def __init__(
         self,
         finger: Finger,
-        polygon: ConvexPolygon,
+        polygon: ConvexPolygon | CurvedObject,
         edge: int,
         *,
         geometry: Geometry | str = Geometry.IDEAL,
@@ -138,7 +158,9 @@ class FingerEnvelope:
         coal_tolerance: float | None = None,
     ):
         self.finger = expect_type("finger", finger, Finger, "a Finger")
-        self.polygon = expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+        self.polygon = expect_type("polygon", polygon, (ConvexPolygon, CurvedObject),
+                                   "a ConvexPolygon or a CurvedObject")
+        self.curved = isinstance(polygon, CurvedObject)
         self.edge = polygon.edge(edge)
         try:
             self.geometry = Geometry(geometry)
@@ -159,13 +181,27 @@ class FingerEnvelope:
                 tip_clearance = default_tip_clearance(finger)
             self.checker = UrdfCollisionChecker(finger, polygon, float(tip_clearance), coal_tolerance=coal_tolerance)
         self.tip_clearance = None if self.checker is None else self.checker.tip_clearance
-        self.evaluator = EnvelopeEvaluator(finger, polygon, self.edge, self.checker, urdf_grid=self.urdf_grid,
-                                           urdf_tolerance=self.urdf_tolerance, compiled=compiled)
+        if self.curved:
+            if compiled is not None and as_flag("compiled", compiled):
+                raise InvalidParameterError("compiled", compiled, "False or None for a curved object: the compiled "
+                                            "kernels take polygon edges")
+            self.evaluator = CurveEvaluator(finger, polygon, self.checker, urdf_grid=self.urdf_grid,
+                                            urdf_tolerance=self.urdf_tolerance)
+        else:
+            self.evaluator = EnvelopeEvaluator(finger, polygon, self.edge, self.checker, urdf_grid=self.urdf_grid,
+                                               urdf_tolerance=self.urdf_tolerance, compiled=compiled)
         self.compiled = self.evaluator.compiled
 
     # ------------------------------------------------------------------ geometry
     def line(self, pose_object_in_hand: ArrayLike) -> EdgeLine:
-        """The edge's line parameters at an object pose ``(x, y, beta)`` in the hand frame."""
+        """The edge's line parameters at an object pose ``(x, y, beta)`` in the hand frame (a curve: its tangent line
+        at the first joint's foot ξ_c, with ``s0 = -ξ_c``: the foot is at s = 0)."""
+        if self.curved:
+            x, y, beta = pose_floats(pose_object_in_hand)
+            solution = self.evaluator.solve(x, y, beta)
+            nx, ny = (rotation(beta) @ np.array(solution.normal)).tolist()
+            return EdgeLine(solution.distance, self.evaluator.normal_angle(solution, beta), np.array([nx, ny]),
+                            np.array([-ny, nx]), -solution.xi_foot)
         d, lam, s0, nx, ny, _, _ = self.evaluator.edge_line(*pose_floats(pose_object_in_hand))
         return EdgeLine(d, lam, np.array([nx, ny]), np.array([-ny, nx]), s0)
 
@@ -185,12 +221,16 @@ class FingerEnvelope:
         return pose[:2] + rotation(pose[2]) @ self.edge.point(as_finite_float("xi", xi))
 
     # ------------------------------------------------------------------ envelope
-    def at(self, pose_object_in_hand: ArrayLike, time: float = 0.0) -> EnvelopeSample:
-        """The envelope at one object pose ``(x [m], y [m], beta [rad])`` in the hand frame."""
+    def at(self, pose_object_in_hand: ArrayLike, time: float = 0.0, *, near: float | None = None) -> EnvelopeSample:
+        """The envelope at one object pose ``(x [m], y [m], beta [rad])`` in the hand frame. On a curved object,
+        ``near`` [m] (the previous sample's ``xi_foot``) picks the window's representative of ξ (unwrapped along a
+        trajectory); on an edge it is ignored."""
         t_start = _time.perf_counter()
         if type(time) is not float or time - time != 0.0:  # (a finite float passes without a call)
             time = as_finite_float("time", time)
         x, y, beta = pose_floats(pose_object_in_hand)
+        if self.curved:
+            return self._at_curve(x, y, beta, time, None if near is None else as_finite_float("near", near), t_start)
         if self.compiled:
             return self._at_compiled(x, y, beta, time, t_start)
         evaluator = self.evaluator
@@ -232,14 +272,31 @@ class FingerEnvelope:
         return self._make_sample(d, lam, tuple(map(tuple, reach[:n_reach].tolist())), n_base > 0,
                                  tuple(map(tuple, feasible[:n_feasible].tolist())), time, t_start)
 
+    def _at_curve(self, x: float, y: float, beta: float, time: float, near: float | None,
+                  t_start: float) -> EnvelopeSample:
+        """:meth:`at` on a curved object."""
+        evaluator = self.evaluator
+        solution = evaluator.solve(x, y, beta, near)
+        feasible = evaluator.feasible(solution, x, y, beta)
+        d = solution.distance
+        condition = condition_of_floats(d, self.l1)
+        return EnvelopeSample(time=float(time), d=d, lam=evaluator.normal_angle(solution, beta), condition=condition,
+                              reachable=solution.reachable, edge_range=solution.window, feasible=feasible,
+                              reason=_reason(feasible, condition, solution.reachable, bool(solution.reachable)),
+                              seconds=_time.perf_counter() - t_start, xi_foot=solution.xi_foot)
+
     def urdf_cuts(self, pose_object_in_hand: ArrayLike) -> UrdfCuts:
         """The ``urdf`` cuts of :meth:`at` at an object pose ``(x [m], y [m], beta [rad])``: per piece of reachable ∩
         edge, whether the tip is free at its start and the free side of every flip of the verdict, in order, in
-        line coordinates s [m] (ξ = s - s0, :class:`~regrasp.envelope.line.EdgeLine`)."""
+        line coordinates s [m] (ξ = s - s0, :class:`~regrasp.envelope.line.EdgeLine`; on a curve in ξ [m], on the
+        window about the foot)."""
         if self.checker is None:
             raise InvalidParameterError("geometry", self.geometry.value, "'urdf' (the 'ideal' geometry has no cuts)")
         x, y, beta = pose_floats(pose_object_in_hand)
         evaluator = self.evaluator
+        if self.curved:
+            solution = evaluator.solve(x, y, beta)
+            return evaluator.urdf_ends(solution, x, y, beta) if solution.reachable else ()
         if self.compiled:
             _, n_base, _ = evaluator.run_kernel(x, y, beta)
             _, _, _, starts, counts, flips, _, _ = evaluator.kernel_outputs
@@ -266,16 +323,20 @@ class FingerEnvelope:
         ``reachable``, whether reachable ∩ edge is not empty, and the feasible set ``feasible`` (both in ξ [m])."""
         if condition is None:
             condition = condition_of_floats(d, self.l1)
-        if feasible:
-            reason = None
-        elif condition is Condition.I:
-            reason = "condition I"
-        elif not reachable:
-            reason = "out of reach"
-        elif not on_edge:
-            reason = "off the edge"
-        else:
-            reason = "collision"
         return EnvelopeSample(time=float(time), d=d, lam=lam, condition=condition, reachable=reachable,
-                              edge_range=self.edge.xi_range, feasible=feasible, reason=reason,
+                              edge_range=self.edge.xi_range, feasible=feasible,
+                              reason=_reason(feasible, condition, reachable, on_edge),
                               seconds=_time.perf_counter() - t_start)
+
+
+def _reason(feasible: Intervals, condition: Condition, reachable: Intervals, on_edge: bool) -> str | None:
+    """Why a feasible set is empty (None when it is not): see :class:`EnvelopeSample`."""
+    if feasible:
+        return None
+    if condition is Condition.I:
+        return "condition I"
+    if not reachable:
+        return "out of reach"
+    if not on_edge:
+        return "off the edge"
+    return "collision"

@@ -22,6 +22,11 @@ the reachable set and the feasible set. The planner adds:
   interval of the last non-empty :math:`P_k` (the contact that stays feasible longest), and
   ``initial_xi_safe_until`` is None. ``initial_xi_feasible_until`` is the last sample up to which the chosen
   contact stays feasible.
+
+**Curved objects** (:class:`~regrasp.core.curves.CurvedObject`): each sample's sets lie in a window of one
+perimeter about the foot of the finger's first joint, and each sample passes its foot to the next as ``near``
+(:meth:`FingerEnvelope.at <regrasp.envelope.finger_envelope.FingerEnvelope.at>`), so ξ is unwrapped continuously
+along the trajectory and the prefix intersections above compare the same material points.
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.curves import CurvedObject
 from ..core.exceptions import InvalidParameterError
 from ..core.intervals import DANGER_FRACTION, Intervals, contains, intersect, widest, without_danger_zones
 from ..core.polygon import ConvexPolygon
@@ -50,17 +56,23 @@ Progress = Callable[[int, int], None]
 COARSE_SAMPLING_FRACTION = 0.25
 
 
-def motion_between_samples(trajectory: Trajectory, polygon: ConvexPolygon, times: np.ndarray) -> float:
+def _outline(polygon: ConvexPolygon | CurvedObject) -> np.ndarray:
+    """The object's vertices (n, 2) [m], or a curve's outline points (object frame)."""
+    return polygon.outline() if isinstance(polygon, CurvedObject) else polygon.vertices
+
+
+def motion_between_samples(trajectory: Trajectory, polygon: ConvexPolygon | CurvedObject, times: np.ndarray) -> float:
     r"""How far [m] a point of the object may move between two consecutive samples (first order):
 
     .. math:: \max_k \; (t_{k+1} - t_k) \max_{j \in \{k, k+1\}} \left(|v(t_j)| + |\dot\beta(t_j)|\, r\right),
 
-    with :math:`r` the largest distance of a vertex from the object frame's origin. Zero for one sample.
+    with :math:`r` the largest distance of a vertex (a curve: of its outline's points) from the object frame's
+    origin. Zero for one sample.
     """
     if len(times) < 2:
         return 0.0
     twist = trajectory.velocity(times)
-    r = float(np.max(np.linalg.norm(polygon.vertices, axis=1)))
+    r = float(np.max(np.linalg.norm(_outline(polygon), axis=1)))
     speed = np.hypot(twist[:, 0], twist[:, 1]) + np.abs(twist[:, 2]) * r
     return float(np.max(np.abs(np.diff(times)) * np.maximum(speed[:-1], speed[1:])))
 
@@ -90,8 +102,8 @@ class FingerPlan:
         configuration: ``"left"`` or ``"right"``.
         base_in_hand: Base pose (x [m], y [m], theta [rad]) in the hand frame.
         link_lengths: (l1, l2) [m].
-        xi_origin_in_object: ξ origin of the edge [m], object frame.
-        xi_direction_in_object: ξ direction of the edge (unit), object frame.
+        xi_origin_in_object: ξ origin of the edge [m], object frame (a curve: its point at ξ = 0).
+        xi_direction_in_object: ξ direction of the edge (unit), object frame (a curve: its tangent at ξ = 0).
         samples: One envelope per time sample.
         infeasible_intervals: Where the feasible set is empty, and why.
         initial_xi: Suggested initial contact ξ [m], or None if the first sample is infeasible.
@@ -131,7 +143,7 @@ class PlanResult:
         feasible: Every finger has a feasible contact at every sample.
         times: Sample times [s], shape (n,).
         poses: Object poses (x [m], y [m], beta [rad]) in the hand frame, shape (n, 3).
-        polygon: The object.
+        polygon: The object (a polygon or a curved object).
         fingers: One plan per finger.
         geometry: The collision geometry used (``ideal`` or ``urdf``).
         seconds_per_sample: Median wall time [s] of one finger's envelope at one sample.
@@ -143,7 +155,7 @@ class PlanResult:
     feasible: bool
     times: np.ndarray
     poses: np.ndarray
-    polygon: ConvexPolygon
+    polygon: ConvexPolygon | CurvedObject
     fingers: tuple[FingerPlan, ...]
     geometry: Geometry
     seconds_per_sample: float
@@ -174,7 +186,7 @@ class PlanResult:
             "geometry": self.geometry.value,
             "times": self.times.tolist(),
             "object": {
-                "vertices_in_object": self.polygon.vertices.tolist(),
+                "vertices_in_object": _outline(self.polygon).tolist(),
                 "mass": self.polygon.mass,
                 "inertia": self.polygon.inertia,
             },
@@ -262,9 +274,17 @@ def _initial_grasp(samples: Sequence[EnvelopeSample],
     return xi, _stays_until(feasible, samples, xi), _stays_until(safe, samples, xi), fixed
 
 
+def _xi_axis(env: FingerEnvelope) -> tuple[np.ndarray, np.ndarray]:
+    """The ξ origin [m] and direction (unit) of the envelope's face, object frame (a curve: at ξ = 0)."""
+    if env.curved:
+        point = env.edge.local(0.0)
+        return point.point, point.tangent
+    return env.edge.xi_origin.copy(), env.edge.xi_direction.copy()
+
+
 def plan(
     contacts: Sequence[FingerContact],
-    polygon: ConvexPolygon,
+    polygon: ConvexPolygon | CurvedObject,
     trajectory: Trajectory,
     *,
     samples: int = 401,
@@ -278,7 +298,7 @@ def plan(
 
     Args:
         contacts: The fingers and their edges.
-        polygon: The object.
+        polygon: The object: a polygon, or a curved object (module docstring).
         trajectory: The object trajectory X(t) in the hand frame.
         samples: Number of uniformly spaced samples over the trajectory's domain
             (ignored when ``times`` is given).
@@ -290,7 +310,7 @@ def plan(
             suggested initial contact keeps out of them longest (module docstring).
     """
     contacts = expect_sequence_of("contacts", contacts, FingerContact, "FingerContact")
-    expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+    expect_type("polygon", polygon, (ConvexPolygon, CurvedObject), "a ConvexPolygon or a CurvedObject")
     expect_type("trajectory", trajectory, Trajectory, "a Trajectory")
     if not contacts:
         raise InvalidParameterError("contacts", contacts, "at least one finger")
@@ -312,10 +332,12 @@ def plan(
     plans, durations = [], []
     for contact, env in zip(contacts, envelopes):
         per_sample = []
+        near = None  # (a curve: the previous foot, so that ξ stays unwrapped)
         for t, pose in zip(times, poses):
             start = _time.perf_counter()
-            per_sample.append(env.at(pose, float(t)))
+            per_sample.append(env.at(pose, float(t), near=near))
             durations.append(_time.perf_counter() - start)
+            near = per_sample[-1].xi_foot
             done += 1
             if progress is not None:
                 progress(done, total)
@@ -329,8 +351,8 @@ def plan(
                 configuration=finger.configuration.value,
                 base_in_hand=finger.base_in_hand.copy(),
                 link_lengths=finger.link_lengths,
-                xi_origin_in_object=env.edge.xi_origin.copy(),
-                xi_direction_in_object=env.edge.xi_direction.copy(),
+                xi_origin_in_object=_xi_axis(env)[0],
+                xi_direction_in_object=_xi_axis(env)[1],
                 samples=per_sample,
                 infeasible_intervals=_infeasible_intervals(per_sample),
                 initial_xi=xi0,

@@ -84,7 +84,11 @@ def _envelope_axes(ax, plan: PlanResult, finger: FingerPlan, feasible: bool):
     times = plan.times
     reach = [s.reachable for s in finger.samples]
     edge_lo, edge_hi = finger.samples[0].edge_range
-    if feasible:  # zoom on the actual edge: that is where contacts can be
+    curved = finger.samples[0].xi_foot is not None  # (a curve: each sample's window of one perimeter)
+    if curved:
+        lo = min(s.edge_range[0] for s in finger.samples)
+        hi = max(s.edge_range[1] for s in finger.samples)
+    elif feasible:  # zoom on the actual edge: that is where contacts can be
         pad = 0.6 * (edge_hi - edge_lo)
         lo, hi = edge_lo - pad, edge_hi + pad
     else:
@@ -103,7 +107,7 @@ def _envelope_axes(ax, plan: PlanResult, finger: FingerPlan, feasible: bool):
     handles = [Patch(color="#c6dbef", label="reachable")]
     if feasible:
         handles.append(Patch(color="#08519c", label="feasible"))
-        for y, name in ((edge_hi, "upper"), (edge_lo, "lower")):
+        for y, name in () if curved else ((edge_hi, "upper"), (edge_lo, "lower")):
             ax.axhline(y * MM, color="#d95f02", ls="--", lw=1.2)
             ax.text(times[0], y * MM, f" ξ_{name} (edge end)", va="bottom", ha="left", fontsize=8, color="#d95f02")
         if finger.initial_xi is not None:

@@ -67,6 +67,9 @@ CLOSED_FORM = "closed form"
 WATCHED = 2
 #: Count key of an update whose cuts were followed from the previous one.
 TRACKED = "tracked"
+#: Count key of an update on a curved object: always :meth:`FingerEnvelope.at` (no cuts are followed on a curve),
+#: with the previous foot as ``near`` so that ξ stays unwrapped.
+CURVE = "curve"
 
 
 class _Cuts(NamedTuple):
@@ -141,7 +144,8 @@ class EnvelopeTracker:
 
     Attributes:
         last: The last sample (None before the first update or after :meth:`reset`).
-        counts: How each update was made: ``"tracked"``, ``"closed form"``, or the reason of a
+        counts: How each update was made: ``"tracked"``, ``"closed form"``, ``"curve"`` (a curved object's
+            envelope: always :meth:`~regrasp.envelope.finger_envelope.FingerEnvelope.at`), or the reason of a
             fallback to the full computation (``"first call"``, ``"pose jump"``, ``"structure"``,
             ``"piece end"``, ``"birth"`` (a watched grid point changed), ``"lost a cut"``,
             ``"narrow piece"``).
@@ -152,8 +156,11 @@ class EnvelopeTracker:
             raise InvalidParameterError("envelope", envelope, "a FingerEnvelope")
         self.envelope = envelope
         self.max_pose_step = as_positive_float("max_pose_step", max_pose_step)
-        self._radius = max(math.hypot(vx, vy) for vx, vy in envelope.polygon.vertices.tolist())
-        self._tol = envelope.urdf_tolerance * envelope.edge.length
+        if envelope.curved:  # (every update is at(): nothing below is used)
+            self._radius, self._tol = 0.0, envelope.urdf_tolerance * envelope.edge.period
+        else:
+            self._radius = max(math.hypot(vx, vy) for vx, vy in envelope.polygon.vertices.tolist())
+            self._tol = envelope.urdf_tolerance * envelope.edge.length
         self.last: EnvelopeSample | None = None
         self.counts: Counter[str] = Counter()
         self._cuts: _Cuts | None = None
@@ -177,6 +184,10 @@ class EnvelopeTracker:
         time = float(time)
         if not math.isfinite(time):
             raise InvalidParameterError("time", time, "a finite number [s]")
+        if env.curved:
+            self.counts[CURVE] += 1
+            self.last = env.at((x, y, beta), time, near=None if self.last is None else self.last.xi_foot)
+            return self.last
         if env.checker is None:
             frame = evaluator.closed_form(x, y, beta)
         else:  # the ideal feasible set only if it falls back (its ends are at()'s extra grid points)

@@ -32,6 +32,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from ..core.curves import CurvedObject
 from ..core.exceptions import FingerModelError
 from ..core.polygon import ConvexPolygon
 from ..core.validation import as_finite_array, as_positive_float, expect_type
@@ -234,7 +235,8 @@ class UrdfCollisionChecker:
 
     Args:
         finger: The finger (its collision model must have a shape on each link).
-        polygon: The object.
+        polygon: The object: a polygon, or a curved object (its :meth:`~regrasp.core.curves.CurvedObject.to_coal`
+            prism: a disc's exact cylinder, else a circumscribed convex polygon).
         tip_clearance: :math:`\rho` [m] removed from the tip end of the distal shapes.
         half_thickness: Half height [m] of the object's prism; default: the finger's
             reach, far larger than any link radius so the 3-D distance is the planar one.
@@ -242,10 +244,10 @@ class UrdfCollisionChecker:
             makes its distances accurate to about 1e-6 m (``tests/kernels/test_footprint.py``).
     """
 
-    def __init__(self, finger: Finger, polygon: ConvexPolygon, tip_clearance: float,
+    def __init__(self, finger: Finger, polygon: ConvexPolygon | CurvedObject, tip_clearance: float,
                  half_thickness: float | None = None, coal_tolerance: float | None = None):
         expect_type("finger", finger, Finger, "a Finger")
-        expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+        expect_type("polygon", polygon, (ConvexPolygon, CurvedObject), "a ConvexPolygon or a CurvedObject")
         tip_clearance = as_positive_float("tip_clearance", tip_clearance, allow_zero=True)
         self.finger = finger
         self.tip_clearance = float(tip_clearance)
@@ -257,7 +259,9 @@ class UrdfCollisionChecker:
         #: coal distance queries asked by the collision tests (:meth:`links_collide`, :meth:`links_collide_kept`) so
         #: far.
         self.queries = 0
-        self._object_radius = float(np.max(np.hypot(polygon.vertices[:, 0], polygon.vertices[:, 1])))
+        # (a curve's collision shape lies within its circumscribed polygon, whose corners bound its radius)
+        corners = polygon.circumscribed_polygon() if isinstance(polygon, CurvedObject) else polygon.vertices
+        self._object_radius = float(np.max(np.hypot(corners[:, 0], corners[:, 1])))
         self._request = coal.DistanceRequest()
         self._request.enable_signed_distance = True
         if coal_tolerance is not None:

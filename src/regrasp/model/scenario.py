@@ -31,8 +31,6 @@ trajectory) is in the scenario reference, ``docs/scenario.md``.
 
 from __future__ import annotations
 
-import difflib
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -40,13 +38,12 @@ from typing import Any
 import numpy as np
 
 from ..core.contact import DEFAULT_FRICTION, Friction
+from ..core.curves import CurvedObject
 from ..core.exceptions import (
     FingerModelError,
     InvalidParameterError,
     PolygonError,
-    RegraspError,
     ScenarioError,
-    TrajectoryError,
     short_repr,
 )
 from ..core.pad import Pad
@@ -65,6 +62,8 @@ from ..core.validation import (
 from .finger import Finger, as_effort_limit
 from .geometry import Geometry, as_geometry
 from .perturbation import Perturbation
+from .scenario_object import SceneObject, read_object
+from .toml_table import TableReader, wrap_errors
 
 __all__ = ["FingerContact", "Scenario", "load_scenario", "scenario_from_document"]
 
@@ -107,7 +106,7 @@ class Scenario:
 
     Attributes:
         name: The scenario's name.
-        polygon: The object.
+        polygon: The object: a convex polygon or a curved object (:mod:`regrasp.core.curves`).
         trajectory: The object's pose (x [m], y [m], β [rad]) in the hand frame over time.
         contacts: The fingers, each with its edge (a sequence of :class:`FingerContact`; kept as a tuple).
         description: Free text.
@@ -120,7 +119,7 @@ class Scenario:
     """
 
     name: str
-    polygon: ConvexPolygon
+    polygon: SceneObject
     trajectory: Trajectory
     contacts: tuple[FingerContact, ...]
     description: str = ""
@@ -138,7 +137,7 @@ class Scenario:
             raise InvalidParameterError("description", self.description, "a string")
         if self.path is not None and not isinstance(self.path, Path):
             object.__setattr__(self, "path", Path(expect_type("path", self.path, str, "a path or None")))
-        expect_type("polygon", self.polygon, ConvexPolygon, "a ConvexPolygon")
+        expect_type("polygon", self.polygon, (ConvexPolygon, CurvedObject), "a ConvexPolygon or a CurvedObject")
         expect_type("trajectory", self.trajectory, Trajectory, "a Trajectory")
         contacts = expect_sequence_of("contacts", self.contacts, FingerContact, "FingerContact")
         if not contacts:
@@ -183,124 +182,16 @@ class Scenario:
         return tuple(c.friction for c in self.contacts)
 
 
-def _finite(value: int | float) -> bool:
-    """Whether a TOML number is a finite float (an integer too large for a float is not)."""
-    try:
-        return math.isfinite(value)
-    except OverflowError:
-        return False
-
-
-class _Reader:
-    """Typed access to one TOML table with error messages that name the key."""
-
-    def __init__(self, path: Path, table: dict, prefix: str):
-        self.path, self.table, self.prefix = path, table, prefix
-        self.used: set[str] = set()
-
-    def key(self, name: str) -> str:
-        return f"{self.prefix}{name}"
-
-    def fail(self, name: str | None, expected: str) -> ScenarioError:
-        return ScenarioError(self.path, self.key(name) if name else self.prefix.rstrip(".") or None, expected)
-
-    def has(self, name: str) -> bool:
-        return name in self.table
-
-    def get(self, name: str, default: Any = ...) -> Any:
-        self.used.add(name)
-        if name not in self.table:
-            if default is ...:
-                near = difflib.get_close_matches(name, [k for k in self.table if isinstance(k, str)], n=1)
-                raise self.fail(name, "this key is required"
-                                + (f" (the table has {near[0]!r}: a typo?)" if near else ""))
-            return default
-        return self.table[name]
-
-    def number(self, name: str, default: Any = ...) -> float:
-        value = self.get(name, default)
-        if value is None:
-            return value
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not _finite(value):
-            raise self.fail(name, f"expected a finite number, got {short_repr(value)}")
-        return float(value)
-
-    def integer(self, name: str, default: Any = ...) -> int:
-        value = self.get(name, default)
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise self.fail(name, f"expected an integer, got {value!r}")
-        return value
-
-    def string(self, name: str, default: Any = ..., choices: tuple[str, ...] | None = None) -> str:
-        value = self.get(name, default)
-        if not isinstance(value, str):
-            raise self.fail(name, f"expected a string, got {value!r}")
-        if choices is not None and value not in choices:
-            raise self.fail(name, f"expected one of {', '.join(repr(c) for c in choices)}, got {value!r}")
-        return value
-
-    def array(self, name: str, shape: tuple[int, ...], default: Any = ...) -> np.ndarray:
-        value = self.get(name, default)
-        want = "x".join("n" if s == -1 else str(s) for s in shape)
-        try:
-            arr = as_finite_array(self.key(name), value)
-        except InvalidParameterError as exc:
-            raise self.fail(name, f"expected an array of finite numbers of shape ({want}), got {short_repr(value)} "
-                                  f"({exc.expected})") from None
-        if arr.ndim != len(shape) or any(s not in (-1, a) for s, a in zip(shape, arr.shape)):
-            raise self.fail(name, f"expected an array of numbers of shape ({want}), got {short_repr(value)}")
-        return arr
-
-    def finish(self) -> None:
-        extra = sorted(set(self.table) - self.used)
-        if extra:
-            raise ScenarioError(self.path, self.key(extra[0]), "unknown key (check its spelling and section)")
-
-
-def _wrap(reader: _Reader, name: str | None, build):
-    """Run ``build()`` and turn a library error into a ScenarioError naming the key."""
-    try:
-        return build()
-    except ScenarioError:
-        raise
-    except RegraspError as exc:
-        param = getattr(exc, "name", None)
-        if isinstance(exc, (InvalidParameterError, TrajectoryError)) and param in reader.table:
-            name = param  # e.g. a negative mass is reported at object.mass, waypoints too close at trajectory.times
-        raise reader.fail(name, str(exc)) from exc
-
-
-def _object(path: Path, table: Any) -> ConvexPolygon:
-    if not isinstance(table, dict):
-        raise ScenarioError(path, "object", "expected a table [object]")
-    r = _Reader(path, table, "object.")
-    mass = r.number("mass", None)
-    inertia = r.number("inertia", None)
-    density = r.number("density", None)
-    if r.has("vertices"):
-        vertices = r.array("vertices", (-1, 2))
-        polygon = _wrap(r, "vertices", lambda: ConvexPolygon.from_vertices(
-            vertices, mass=mass, inertia=inertia, density=density))
-    elif r.has("width") or r.has("height"):
-        width, height = r.number("width"), r.number("height")
-        polygon = _wrap(r, "width", lambda: ConvexPolygon.rectangle(
-            width, height, mass=mass, inertia=inertia, density=density))
-    else:
-        raise r.fail("vertices", "expected 'vertices' (a list of [x, y]) or 'width' and 'height'")
-    r.finish()
-    return polygon
-
-
 def _trajectory(path: Path, table: Any) -> Trajectory:
     if not isinstance(table, dict):
         raise ScenarioError(path, "trajectory", "expected a table [trajectory]")
-    r = _Reader(path, table, "trajectory.")
+    r = TableReader(path, table, "trajectory.")
     kind = r.string("type", choices=("ellipse", "waypoints"))
     if kind == "ellipse":
         args = {k: r.number(k) for k in ("cx", "cy", "a", "b", "omega")}
         args.update(beta0=r.number("beta0", 0.0), beta_a=r.number("beta_a", 0.0),
                     t_start=r.number("t_start", 0.0), t_end=r.number("t_end", None))
-        traj = _wrap(r, None, lambda: EllipseTrajectory(**args))
+        traj = wrap_errors(r, None, lambda: EllipseTrajectory(**args))
     else:
         times = r.array("times", (-1,))
         poses = r.array("poses", (-1, 3))
@@ -308,12 +199,12 @@ def _trajectory(path: Path, table: Any) -> Trajectory:
         unwrap = r.get("unwrap_angle", False)
         if not isinstance(unwrap, bool):
             raise r.fail("unwrap_angle", f"expected true or false, got {unwrap!r}")
-        traj = _wrap(r, "poses", lambda: WaypointTrajectory(times, poses, boundary=boundary, unwrap_angle=unwrap))
+        traj = wrap_errors(r, "poses", lambda: WaypointTrajectory(times, poses, boundary=boundary, unwrap_angle=unwrap))
     r.finish()
     return traj
 
 
-def _friction(r: _Reader, default: Friction) -> Friction:
+def _friction(r: TableReader, default: Friction) -> Friction:
     """A table's friction keys: ``mu`` (both coefficients), or ``mu_static`` and ``mu_kinetic``
     together; ``default`` when it has none."""
     has_mu, has_static, has_kinetic = r.has("mu"), r.has("mu_static"), r.has("mu_kinetic")
@@ -338,7 +229,7 @@ def _friction(r: _Reader, default: Friction) -> Friction:
                                                                    f"{short_repr(exc.value)}") from None
 
 
-def _effort(r: _Reader, default: np.ndarray | None) -> np.ndarray | None:
+def _effort(r: TableReader, default: np.ndarray | None) -> np.ndarray | None:
     """A table's ``effort`` key: the joints' torque limits [N m], a number > 0 for both or one per joint
     (:func:`~regrasp.model.finger.as_effort_limit`); ``default`` when it has none (None: the URDF's)."""
     if not r.has("effort"):
@@ -351,14 +242,14 @@ def _effort(r: _Reader, default: np.ndarray | None) -> np.ndarray | None:
                                f"got {short_repr(value)}") from None
 
 
-def _fingers(path: Path, tables: Any, polygon: ConvexPolygon, friction: Friction,
+def _fingers(path: Path, tables: Any, polygon: SceneObject, friction: Friction,
              effort: np.ndarray | None = None) -> tuple[FingerContact, ...]:
     if not isinstance(tables, list) or not tables or not all(isinstance(t, dict) for t in tables):
         raise ScenarioError(path, "fingers", "expected one or more [[fingers]] tables")
     contacts = []
     names = set()
     for i, table in enumerate(tables):
-        r = _Reader(path, table, f"fingers[{i}].")
+        r = TableReader(path, table, f"fingers[{i}].")
         name = r.string("name", f"finger{i + 1}")
         if name in names:
             raise r.fail("name", f"finger names must be unique; '{name}' is repeated")
@@ -374,15 +265,20 @@ def _fingers(path: Path, tables: Any, polygon: ConvexPolygon, friction: Friction
             urdf = urdf.resolve()
         base = r.array("base", (3,))
         configuration = r.string("configuration", choices=("left", "right"))
-        edge = r.integer("edge")
-        if not 0 <= edge < polygon.n_vertices:
-            raise r.fail("edge", f"edge {edge} does not exist: the object has edges 0..{polygon.n_vertices - 1}")
+        if isinstance(polygon, CurvedObject):  # one face, the whole boundary
+            edge = r.integer("edge", 0)
+            if edge != 0:
+                raise r.fail("edge", f"edge {edge} does not exist: a curved object has one face, 0 (its boundary)")
+        else:
+            edge = r.integer("edge")
+            if not 0 <= edge < polygon.n_vertices:
+                raise r.fail("edge", f"edge {edge} does not exist: the object has edges 0..{polygon.n_vertices - 1}")
         clearance = r.number("tip_clearance", None)
         if clearance is not None and clearance < 0.0:
             raise r.fail("tip_clearance", f"expected a length >= 0 [m], got {clearance!r}")
         own = _friction(r, friction)
         limits = _effort(r, effort)
-        finger = _wrap(r, "urdf", lambda: Finger.from_urdf(
+        finger = wrap_errors(r, "urdf", lambda: Finger.from_urdf(
             urdf, base_in_hand=base, configuration=configuration, name=name, effort_limit=limits))
         r.finish()
         contacts.append(FingerContact(finger, edge, clearance, own))
@@ -395,13 +291,13 @@ def _study(path: Path, table: Any) -> Perturbation:
 
     if not isinstance(table, dict):
         raise ScenarioError(path, "study", "expected a table [study]")
-    r = _Reader(path, table, "study.")
+    r = TableReader(path, table, "study.")
     values = {}
     for f in fields(Perturbation):
         if r.has(f.name):
             values[f.name] = r.integer(f.name) if f.name in ("delay", "slip_delay") else r.number(f.name)
     r.finish()
-    return _wrap(r, None, lambda: Perturbation(**values))
+    return wrap_errors(r, None, lambda: Perturbation(**values))
 
 
 def _pad(path: Path, table: Any) -> Pad | None:
@@ -410,7 +306,7 @@ def _pad(path: Path, table: Any) -> Pad | None:
         return None
     if not isinstance(table, dict):
         raise ScenarioError(path, "pad", "expected a table [pad]")
-    r = _Reader(path, table, "pad.")
+    r = TableReader(path, table, "pad.")
     values: dict[str, Any] = {"stiffness": r.number("stiffness")}
     for name in ("damping", "preload"):
         if r.has(name):
@@ -418,7 +314,7 @@ def _pad(path: Path, table: Any) -> Pad | None:
     if r.has("substeps"):
         values["substeps"] = r.integer("substeps")
     r.finish()
-    return _wrap(r, None, lambda: Pad(**values))
+    return wrap_errors(r, None, lambda: Pad(**values))
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -434,15 +330,15 @@ def scenario_from_document(data: dict, path: str | Path) -> Scenario:
     path = Path(expect_type("path", path, (str, Path), "a path (str or pathlib.Path)"))
     if not isinstance(data, dict):
         raise ScenarioError(path, None, f"expected a TOML document (a table), got {short_repr(data)}")
-    top = _Reader(path, data, "")
+    top = TableReader(path, data, "")
     name = top.string("name", path.stem)
     description = top.string("description", "")
-    polygon = _object(path, top.get("object"))
+    polygon = read_object(path, top.get("object"))
     trajectory = _trajectory(path, top.get("trajectory"))
     hand_table = top.get("hand", {})
     if not isinstance(hand_table, dict):
         raise ScenarioError(path, "hand", "expected a table [hand]")
-    hand = _Reader(path, hand_table, "hand.")
+    hand = TableReader(path, hand_table, "hand.")
     gravity = hand.array("gravity", (2,), [0.0, -9.81])
     friction = _friction(hand, DEFAULT_FRICTION)
     effort = _effort(hand, None)
@@ -452,7 +348,7 @@ def scenario_from_document(data: dict, path: str | Path) -> Scenario:
     planner_table = top.get("planner", {})
     if not isinstance(planner_table, dict):
         raise ScenarioError(path, "planner", "expected a table [planner]")
-    planner = _Reader(path, planner_table, "planner.")
+    planner = TableReader(path, planner_table, "planner.")
     samples = planner.integer("samples", 401)
     if not 2 <= samples <= MAX_SAMPLES:
         raise planner.fail("samples", f"expected an integer in [2, {MAX_SAMPLES}], got {short_repr(samples)}")

@@ -1,6 +1,8 @@
 r"""The joint torques the planned forces need: the regrasp planner's actuator limits.
 
-Contact i's finger holds its tip on the object's point :math:`c = o_i + \xi\, t^o_i` (object frame), i.e. at
+Contact i's finger holds its tip on the object's point :math:`c = o_i + \xi\, t^o_i` (object frame; on a curve
+:math:`c(\xi)`, with the frame at ξ and :math:`\ddot p` gaining :math:`\kappa\dot\xi^2 n`, the centripetal term of
+a slide along it: :mod:`regrasp.core.curves`), i.e. at
 :math:`p = X + R(\beta) c` in the hand frame, and pushes on the object with :math:`f = \lambda n + \tau t`
 (:math:`n = R n^o_i`, :math:`t = R t^o_i`; λ, τ as in :mod:`regrasp.schedule.force_polytope`). Its joint torques
 are affine in (λ, τ) (``docs/derivations.md``, "Actuator limits"):
@@ -97,16 +99,23 @@ class TorqueModel:
         def rotate(v):  # R(β) v for object-frame vectors v (..., 2) per time
             return np.stack([c * v[..., 0] - s * v[..., 1], s * v[..., 0] + c * v[..., 1]], axis=-1)
 
-        point = edge.xi_origin + xi[..., None] * edge.xi_direction  # (T, K, 2), object frame
+        if getattr(edge, "curved", False):  # on a curve the frame turns with ξ: t' = κ n
+            point, normal, kappa = (v.reshape(T, K, *v.shape[1:]) for v in edge.curve.frames(xi.reshape(-1)))
+            n, t = rotate(normal), rotate(np.stack([-normal[..., 1], normal[..., 0]], axis=-1))
+        else:
+            point = edge.xi_origin + xi[..., None] * edge.xi_direction  # (T, K, 2), object frame
+            kappa = None
+            n = rotate(np.broadcast_to(edge.inward_normal, (T, K, 2)))
+            t = rotate(np.broadcast_to(edge.xi_direction, (T, K, 2)))
         r = rotate(point)
-        n = rotate(np.broadcast_to(edge.inward_normal, (T, K, 2)))
-        t = rotate(np.broadcast_to(edge.xi_direction, (T, K, 2)))
         er = np.stack([-r[..., 1], r[..., 0]], axis=-1)  # E R c
         et = np.stack([-t[..., 1], t[..., 0]], axis=-1)
         w, alpha = velocity[:, 2:3, None], acceleration[:, 2:3, None]
         p_dot = velocity[:, None, :2] + w * er + t * xi_dot[..., None]
         p_ddot = (acceleration[:, None, :2] + alpha * er - w * w * r + 2.0 * w * et * xi_dot[..., None]
                   + t * xi_ddot[..., None])
+        if kappa is not None:
+            p_ddot = p_ddot + (kappa * xi_dot * xi_dot)[..., None] * n
         q = self.joint_angles(i, pose, xi) if joints is None else joints
         reachable = np.isfinite(q[..., 0])
         q = np.where(reachable[..., None], q, 0.0).reshape(-1, 2)
@@ -136,7 +145,11 @@ class TorqueModel:
         """Finger i's joint angles [rad] (T, K, 2) with its tip on the contact point at positions ``xi`` [m] (T, K)
         at the object's poses ``pose`` (T, 3) (its configuration); NaN where it cannot reach."""
         edge = self._edges[i]
-        point = edge.xi_origin + np.asarray(xi, dtype=float)[..., None] * edge.xi_direction
+        xi = np.asarray(xi, dtype=float)
+        if getattr(edge, "curved", False):
+            point = edge.curve.frames(xi.reshape(-1))[0].reshape(xi.shape + (2,))
+        else:
+            point = edge.xi_origin + xi[..., None] * edge.xi_direction
         c, s = np.cos(pose[:, 2:3]), np.sin(pose[:, 2:3])
         x = pose[:, 0:1] + c * point[..., 0] - s * point[..., 1]
         y = pose[:, 1:2] + s * point[..., 0] + c * point[..., 1]

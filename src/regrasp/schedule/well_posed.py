@@ -43,7 +43,8 @@ __all__ = ["ContactGeometry", "contact_geometry", "lattice_geometry", "slide_mas
 class ContactGeometry:
     r"""One contact on a grid of samples (T times, K positions): its tip point relative to the object's centre of
     mass ``points`` (T, K, 2) [m] and its finger's tip mobility ``mobility`` (T, K, 2, 2) [1/kg], NaN where the finger
-    cannot reach; the edge's inward ``normal`` and ξ direction ``tangent`` (T, 2); all in the hand frame."""
+    cannot reach; the edge's inward ``normal`` and ξ direction ``tangent`` (T, 2), on a curve per cell (T, K, 2); all in
+    the hand frame."""
 
     points: np.ndarray
     mobility: np.ndarray
@@ -64,9 +65,14 @@ def contact_geometry(torque: TorqueModel, scenario: Scenario, i: int, pose: np.n
     xi = np.asarray(xi, dtype=float)
     c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
     rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], 1)  # (T, 2, 2)
+    q = torque.joint_angles(i, pose, xi) if joints is None else joints
+    if getattr(edge, "curved", False):  # the frame at each cell's ξ
+        local, normal, _ = (v.reshape(xi.shape + v.shape[1:]) for v in edge.curve.frames(xi.reshape(-1)))
+        tangent = np.stack([-normal[..., 1], normal[..., 0]], axis=-1)
+        return ContactGeometry(np.einsum("tij,tkj->tki", rot, local), torque.tip_mobility(i, q),
+                               np.einsum("tij,tkj->tki", rot, normal), np.einsum("tij,tkj->tki", rot, tangent))
     local = edge.xi_origin + xi[..., None] * edge.xi_direction  # (T, K, 2), object frame
     points = np.einsum("tij,tkj->tki", rot, local)
-    q = torque.joint_angles(i, pose, xi) if joints is None else joints
     return ContactGeometry(points, torque.tip_mobility(i, q), rot @ edge.inward_normal, rot @ edge.xi_direction)
 
 
@@ -158,7 +164,10 @@ def _mask(geometry, sliders: list[int], ratios: dict, fixed: tuple, env_ok, mass
     gn, gf, own, free = [], [], [], []
     for i in sliders:
         g = geometry[i]
-        n, push = g.normal[:, None, :], g.normal[:, None, :] + ratios[i] * g.tangent[:, None, :]
+        if g.normal.ndim == 3:  # (on a curve: per cell)
+            n, push = g.normal, g.normal + ratios[i] * g.tangent
+        else:
+            n, push = g.normal[:, None, :], g.normal[:, None, :] + ratios[i] * g.tangent[:, None, :]
         gn.append(_wrenches(g.points, n))
         gf.append(_wrenches(g.points, push))
         own.append(np.einsum("lki,lkij,lkj->lk", np.broadcast_to(n, g.points.shape), g.mobility,
@@ -189,8 +198,8 @@ def violations(torque: TorqueModel, scenario: Scenario, times: np.ndarray, pose:
     m = xi.shape[1]
     geo = [contact_geometry(torque, scenario, i, pose[rows], xi[rows, i:i + 1]) for i in range(m)]
     points = np.stack([g.points[:, 0] for g in geo], 1)
-    normals = np.stack([g.normal for g in geo], 1)
-    tangents = np.stack([g.tangent for g in geo], 1)
+    normals = np.stack([g.normal if g.normal.ndim == 2 else g.normal[:, 0] for g in geo], 1)
+    tangents = np.stack([g.tangent if g.tangent.ndim == 2 else g.tangent[:, 0] for g in geo], 1)
     mobility = np.stack([g.mobility[:, 0] for g in geo], 1)
     mass, inertia = scenario.polygon.mass, scenario.polygon.inertia
     out = []

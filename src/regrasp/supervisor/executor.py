@@ -489,10 +489,10 @@ class SlideExecutor:
         r = self.settings.tip_radius
         if r == 0.0:
             return output
-        c, s = math.cos(meas.X[2]), math.sin(meas.X[2])
-        normals = np.array([e.inward_normal for e in self.grasp.edges])
-        return replace(output, tau=output.tau + sphere_tip_torque(normals @ np.array([[c, s], [-s, c]]),
-                                                                   output.contact_forces, r))
+        c, s = math.cos(meas.X[2]), math.sin(meas.X[2])  # (on a curve: the normals at the measured positions)
+        normals = self.grasp.surface_frames(meas.X, meas.xi)[:, :, 0] if self.grasp.curved else \
+            np.array([e.inward_normal for e in self.grasp.edges]) @ np.array([[c, s], [-s, c]])
+        return replace(output, tau=output.tau + sphere_tip_torque(normals, output.contact_forces, r))
 
 
 def _name(law: ComputedTorqueController) -> str:

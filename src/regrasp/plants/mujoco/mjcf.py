@@ -2,7 +2,7 @@ r"""A scenario as a MuJoCo model (MJCF), for the second, independent plant (:mod
 
 The hand and the object are built with ``mujoco.MjSpec``; :func:`scenario_to_mjcf` writes the same model
 as MJCF text. Nothing here uses the project's reduced model, grasp matrices or plant: the fingers are read
-from their URDF files by MuJoCo's own URDF parser, the object from its polygon.
+from their URDF files by MuJoCo's own URDF parser, the object from its polygon or curve.
 
 **Fingers.** Each finger's URDF (``Finger.source``) is parsed by MuJoCo with ``fusestatic`` off, so its
 ``tip`` frame stays a body, and attached at the finger's base pose in the hand frame (x, y, rotation θ
@@ -14,7 +14,7 @@ the URDF's cylinders, capsules and boxes, the distal one shortened by the tip cl
 contact here is what the planner and the project's plant call a collision.
 
 **Object.** A planar body: joints slide x, slide y and hinge z (in that order, so ``qpos`` is the pose
-X = (x, y, β) of the centre of mass in the hand frame), the polygon's mass and rotational inertia, and
+X = (x, y, β) of the centre of mass in the hand frame), the object's mass and rotational inertia, and
 two prisms of thickness ``object_thickness`` along z:
 
 * ``object`` (the tips touch it): the polygon **eroded by r**, every edge moved inwards by r. A sphere of radius r
@@ -22,6 +22,13 @@ two prisms of thickness ``object_thickness`` along z:
   polygon and the sphere is the polygon, up to its rounded corners), so the tip frame is where the point-contact model
   puts the contact, in the normal direction exactly (``contact_depth`` less, 1 µm);
 * ``hull`` (the links touch it): the polygon itself.
+
+A **curved object** (:mod:`regrasp.core.curves`) gets the same two prisms (:mod:`regrasp.plants.mujoco.curve_mesh`):
+``hull`` the curve, ``object`` its inner parallel curve at distance r − ``contact_depth``, which shares the curve's
+normals, so that a tip touching it has its centre on the curve: a disc's are cylinders, other curves' convex meshes of
+points on those curves, dense enough that every chord stays within ``MESH_SAGITTA`` (0.1 µm) of its curve. The
+parallel curve is convex and smooth only while r − ``contact_depth`` is below the curve's smallest radius of
+curvature: a larger tip radius is an error.
 
 **Contacts.** Each tip touches ``object`` through an explicit contact pair with the finger's friction
 coefficient (MuJoCo has one per contact: μ_k, see :class:`MujocoSettings`), ``condim`` 3 (no torsional
@@ -43,6 +50,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...core.contact import Friction
+from ...core.curves import CurvedObject
 from ...core.exceptions import FingerModelError, InvalidParameterError, MissingDependencyError
 from ...core.polygon import ConvexPolygon
 from ...core.validation import (
@@ -57,6 +65,7 @@ from ...core.validation import (
 )
 from ...model.collision import checked_link_shapes, default_tip_clearance
 from ...model.finger import Finger
+from .curve_mesh import add_curve_prism, check_erosion, curvature_table
 
 if TYPE_CHECKING:
     from ...model.scenario import Scenario
@@ -212,6 +221,8 @@ class MjcfHand:
         object_geom, hull_geom: The prism the tips touch and the one the links touch.
         friction: Each contact's friction coefficient in the model [-].
         settings: The :class:`MujocoSettings` it was built with.
+        sagitta: The chord errors [m] of the ``object`` and ``hull`` meshes of a curved object (0 for a polygon's
+            prisms and a disc's cylinders, which are exact).
     """
 
     spec: object
@@ -224,6 +235,7 @@ class MjcfHand:
     hull_geom: str
     friction: tuple[float, ...]
     settings: MujocoSettings
+    sagitta: tuple[float, float] = (0.0, 0.0)
 
 
 def require_mujoco() -> ModuleType:
@@ -329,7 +341,7 @@ def _add_prism(mujoco, spec, body, name: str, vertices: np.ndarray, thickness: f
                   conaffinity=conaffinity, density=0.0, mass=0.0, group=0)
 
 
-def build_mjcf(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Sequence[Friction], *,
+def build_mjcf(fingers: Sequence[Finger], polygon: ConvexPolygon | CurvedObject, frictions: Sequence[Friction], *,
                gravity_in_hand: Sequence[float] = (0.0, -9.81), object_mass: float | None = None,
                object_inertia: float | None = None, tip_clearance: Sequence[float | None] | None = None,
                link_mass_scale: float = 1.0, settings: MujocoSettings = MujocoSettings()) -> MjcfHand:
@@ -337,22 +349,23 @@ def build_mjcf(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Seq
 
     Args:
         fingers: The fingers (from URDF files), finger i touching contact i.
-        polygon: The object.
+        polygon: The object: a convex polygon or a curved object.
         frictions: Each contact's friction (MuJoCo gets μ_k).
         gravity_in_hand: Gravity [m/s²] in the hand frame.
-        object_mass: The object's mass [kg] (default: the polygon's).
-        object_inertia: The object's inertia [kg m²] (default: the polygon's).
+        object_mass: The object's mass [kg] (default: the object's).
+        object_inertia: The object's inertia [kg m²] (default: the object's).
         tip_clearance: Per finger, the distal link's tip clearance [m] (None: the default).
         link_mass_scale: The links' masses and inertias are this times the URDFs' [-].
         settings: :class:`MujocoSettings`.
 
     Raises:
         FingerModelError: a finger has no URDF file, or a shape MuJoCo cannot take.
-        InvalidParameterError: bad arguments, or a tip radius the object cannot be eroded by.
+        InvalidParameterError: bad arguments, or a tip radius the object cannot be eroded by (a polygon's edge
+            would vanish; a curve's smallest radius of curvature is below r − ``contact_depth``).
     """
     mujoco = _mujoco()
     fingers = expect_sequence_of("fingers", fingers, Finger, "Finger (Finger.from_urdf)")
-    expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+    expect_type("polygon", polygon, (ConvexPolygon, CurvedObject), "a ConvexPolygon or a CurvedObject")
     expect_type("settings", settings, MujocoSettings, "a MujocoSettings")
     frictions = expect_sequence_of("frictions", frictions, Friction, "Friction")
     m = len(fingers)
@@ -366,7 +379,13 @@ def build_mjcf(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Seq
     inertia = as_positive_float("object_inertia", polygon.inertia if object_inertia is None else object_inertia)
     scale = as_positive_float("link_mass_scale", link_mass_scale)
     r = settings.tip_radius
-    tip_vertices = eroded_vertices(polygon, (r if settings.erode else 0.0) - settings.contact_depth, "tip_radius")
+    offset = (r if settings.erode else 0.0) - settings.contact_depth
+    curved = isinstance(polygon, CurvedObject)
+    if curved:
+        kappa = curvature_table(polygon)
+        check_erosion(polygon, offset, r, kappa)
+    else:
+        tip_vertices = eroded_vertices(polygon, offset, "tip_radius")
 
     spec = mujoco.MjSpec()
     spec.modelname = "regrasp_hand"
@@ -394,9 +413,14 @@ def build_mjcf(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Seq
             "object_beta": (mujoco.mjtJoint.mjJNT_HINGE, [0.0, 0.0, 1.0])}
     for name, (kind, axis) in axes.items():
         body.add_joint(name=name, type=kind, axis=axis, limited=mujoco.mjtLimited.mjLIMITED_FALSE)
-    _add_prism(mujoco, spec, body, "object", tip_vertices, settings.object_thickness, 0)
-    _add_prism(mujoco, spec, body, "hull", np.asarray(polygon.vertices, dtype=float), settings.object_thickness,
-               _LINK_BIT)
+    sagitta = (0.0, 0.0)
+    if curved:
+        sagitta = tuple(add_curve_prism(mujoco, spec, body, name, polygon, d, settings.object_thickness, bits, kappa)
+                        for name, d, bits in (("object", offset, 0), ("hull", 0.0, _LINK_BIT)))
+    else:
+        _add_prism(mujoco, spec, body, "object", tip_vertices, settings.object_thickness, 0)
+        _add_prism(mujoco, spec, body, "hull", np.asarray(polygon.vertices, dtype=float), settings.object_thickness,
+                   _LINK_BIT)
 
     joints, sites, tips, links, mus = [], [], [], [], []
     for i, finger in enumerate(fingers):
@@ -420,7 +444,7 @@ def build_mjcf(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Seq
             g.solref = [settings.time_constant, settings.damping_ratio]
             g.solimp = list(settings.solimp)
     return MjcfHand(spec, tuple(joints), tuple(sites), tuple(tips), tuple(links), tuple(axes), "object", "hull",
-                    tuple(mus), settings)
+                    tuple(mus), settings, sagitta)
 
 
 def scenario_to_mjcf(scenario: Scenario, settings: MujocoSettings = MujocoSettings(),

@@ -16,10 +16,13 @@ over ``round(dt / timestep)`` MuJoCo steps, saturated at the joints' limits firs
 * the state: joint angles and rates, the object's pose X = (x, y, β) and twist;
 * each contact's force on the object in its surface frame (inward normal, ξ direction) [N]: MuJoCo's
   contact force averaged over the control step (the impulse over ``dt``: what a 1 kHz force sensor reads);
+  on a curved object the frame is the curve's at the step's mean ξ;
 * ξ and ξ̇ of each tip: its sphere's centre (the tip frame) projected on its edge's line, and its
-  velocity relative to the object along the edge;
+  velocity relative to the object along the edge; on a curved object (:mod:`regrasp.core.curves`) the centre's foot
+  on the curve (the arc length, continuous and unbounded) and its rate
+  (:mod:`regrasp.plants.sphere_sensing`);
 * the contact modes, which are what a **slip sensor** says. Its reading is the slip velocity over the
-  control step: how far the tip's material point at the contact moved along the edge relative to the
+  control step: how far the tip's material point at the contact moved along the edge (or curve) relative to the
   object's, over ``dt`` (a sphere that rolls moves its centre, not that point). A fixed contact whose
   slip exceeds ``slip_speed`` *slips* (it is sliding in that direction), a sliding one whose slip in its
   direction falls below ``stick_speed`` *sticks*. A soft contact creeps inside its cone, far slower than
@@ -48,6 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ...core.contact import DEFAULT_FRICTION, ContactMode, Friction, FrictionLike, as_frictions
+from ...core.curves import CurvedObject
 from ...core.events import Event, EventKind
 from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
@@ -71,12 +75,13 @@ class MujocoPlant(SphereTipSensing):
     Args:
         hand: The fingers (from URDF files) and gravity; only their URDFs, base poses, names, gravity,
             link mass scale and singularity threshold are read.
-        polygon: The object.
-        contacts: One :class:`~regrasp.plants.project.state.PlantContact` per finger: its edge and initial mode.
+        polygon: The object: a convex polygon or a curved object (:mod:`regrasp.core.curves`; its one face, 0).
+        contacts: One :class:`~regrasp.plants.project.state.PlantContact` per finger: its edge and initial mode (on a
+            curve its ``xi`` also picks which of the periodic ξ the sensing continues from).
         friction: Anything :class:`~regrasp.plants.project.plant.Plant` takes; MuJoCo gets μ_k
             (:class:`~regrasp.plants.mujoco.mjcf.MujocoSettings`) and the plant reports ``Friction(μ_k)``.
-        object_mass: Overrides the polygon's mass [kg].
-        object_inertia: Overrides the polygon's inertia [kg m²].
+        object_mass: Overrides the object's mass [kg].
+        object_inertia: Overrides the object's inertia [kg m²].
         dt: Control step [s] (a multiple of ``settings.timestep``).
         settings: :class:`~regrasp.plants.mujoco.mjcf.MujocoSettings` (tip radius, contact parameters, MuJoCo's step).
         tip_clearance: Per finger, the distal link's tip clearance [m] for the collision shapes (None: default).
@@ -93,7 +98,7 @@ class MujocoPlant(SphereTipSensing):
         max_gap: The largest distance [m] a touching tip's centre ended a step off its edge since the last reset.
     """
 
-    def __init__(self, hand: Hand, polygon: ConvexPolygon, contacts: Sequence[PlantContact], *,
+    def __init__(self, hand: Hand, polygon: ConvexPolygon | CurvedObject, contacts: Sequence[PlantContact], *,
                  friction: FrictionLike = DEFAULT_FRICTION, object_mass: float | None = None,
                  object_inertia: float | None = None, dt: float = 1e-3, settings: MujocoSettings = MujocoSettings(),
                  tip_clearance: Sequence[float | None] | None = None, slip_speed: float = 2e-3,
@@ -101,7 +106,7 @@ class MujocoPlant(SphereTipSensing):
                  stop_on: Sequence[str] = ("separation", "left_edge", "collision", "singular")):
         mujoco = require_mujoco()
         expect_type("hand", hand, Hand, "a Hand")
-        expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+        expect_type("polygon", polygon, (ConvexPolygon, CurvedObject), "a ConvexPolygon or a CurvedObject")
         expect_type("settings", settings, MujocoSettings, "a MujocoSettings")
         contacts = expect_sequence_of("contacts", contacts, PlantContact, "PlantContact")
         if len(contacts) != hand.m:
@@ -186,8 +191,8 @@ class MujocoPlant(SphereTipSensing):
 
     # ------------------------------------------------------------------ sensing
     def _measure(self, data, i: int) -> tuple[float, float, float, float]:
-        r"""(ξ, ξ̇, the distance of the tip's centre from the edge's line (positive outside), the distal link's
-        angle relative to the object φ = θ₂ − β) of tip i in ``data`` [m, m/s, m, rad]."""
+        r"""(ξ, ξ̇, the distance of the tip's centre from the edge's line or the curve (positive outside), the distal
+        link's angle relative to the object φ = θ₂ − β) of tip i in ``data`` [m, m/s, m, rad]."""
         site = self._sites[i]
         vel = np.empty(6)
         self._mj.mj_objectVelocity(self.model, data, self._mj.mjtObj.mjOBJ_SITE, site, vel, 0)
@@ -203,12 +208,12 @@ class MujocoPlant(SphereTipSensing):
 
     def contact_xi(self, st: PlantState, i: int, tip: Sequence[float] | np.ndarray | None = None,
                    tip_vel: Sequence[float] | np.ndarray | None = None) -> tuple[float, float]:
-        """ξ [m] of tip i's centre projected on its edge's line, and its velocity along the edge relative
+        """ξ [m] of tip i's centre projected on its edge's line (or curve), and its velocity along the edge relative
         to the object ξ̇ [m/s] (``tip``, ``tip_vel``: ignored, MuJoCo's sites are read)."""
         return self._measure(self._data_at(st), i)[:2]
 
     def constraint_error(self, st: PlantState) -> float:
-        """Largest distance [m] of a touching tip's centre from its edge's line."""
+        """Largest distance [m] of a touching tip's centre from its edge's line (or curve)."""
         data = self._data_at(st)
         return max((abs(self._measure(data, i)[2]) for i, c in enumerate(self.contacts) if c.mode is not _SEPARATED),
                    default=0.0)
@@ -272,7 +277,11 @@ class MujocoPlant(SphereTipSensing):
         surface = np.zeros((m, 2))
         links: dict[int, tuple[int, float]] = {}
         torque_work, damping_work = self.state.torque_work, self.state.damping_work
-        frames = [np.array([e.inward_normal, e.xi_direction]) for e in self.contact_edges]
+        # an edge's surface frame is constant; a curve's turns with ξ: its force is summed in the object frame and
+        # taken into the frame at the step's mean ξ at the end
+        frames = [None if getattr(e, "curved", False) else np.array([e.inward_normal, e.xi_direction])
+                  for e in self.contact_edges]
+        in_object_sum = np.zeros((m, 2))
         before = [self._measure(d, i) for i in range(m)]  # (d is at the step's start: see below)
         for _ in range(self.substeps):
             v = d.qvel[self._finger_v]
@@ -285,24 +294,31 @@ class MujocoPlant(SphereTipSensing):
             c, s = math.cos(beta), math.sin(beta)
             in_object = forces @ np.array([[c, -s], [s, c]])  # R(β)ᵀ f per row
             for i in range(m):
-                surface[i] += frames[i] @ in_object[i]
+                if frames[i] is None:
+                    in_object_sum[i] += in_object[i]
+                else:
+                    surface[i] += frames[i] @ in_object[i]
         surface /= self.substeps
         mj.mj_forward(model, d)  # the end state's kinematics (and its energy) for the sensors
+        after = [self._measure(d, i) for i in range(m)]
+        for i in range(m):
+            if frames[i] is None:
+                surface[i] = self.surface_frame(i, 0.5 * (before[i][0] + after[i][0])) @ in_object_sum[i] \
+                    / self.substeps
         modes = tuple(c.mode for c in self.contacts)
         self.state = self._read_state(torque_work, damping_work)
-        events, xi, xi_dot, err, gap, slip = self._events(surface, links, before)
+        events, xi, xi_dot, err, gap, slip = self._events(surface, links, before, after)
         self.max_constraint_error = max(self.max_constraint_error, err)
         return PlantStep(self.state, surface, np.array(xi), np.array(xi_dot), modes, err, gap, slip,
                          (*saturation, *events))
 
-    def _events(self, surface: np.ndarray, links: dict, before: list) -> tuple[list, list, list, float, np.ndarray,
-                                                                              np.ndarray]:
+    def _events(self, surface: np.ndarray, links: dict, before: list, after: list) -> tuple[list, list, list, float,
+                                                                                          np.ndarray, np.ndarray]:
         """The events at the step's end (module docstring); ξ, ξ̇, the constraint error, each tip's gap [m] (its
         centre's distance from its edge's line: the plant's object is eroded by the tip's radius) and each contact's
-        slip over the step [m] (:meth:`slip_velocity` × dt) there (``before``: each contact's :meth:`_measure` at the
-        step's start)."""
-        out, xis, rates, err, gaps, slips = self.contact_events(surface, links, before,
-                                                               lambda i: self._measure(self.data, i))
+        slip over the step [m] (:meth:`slip_velocity` × dt) there (``before``, ``after``: each contact's
+        :meth:`_measure` at the step's start and end)."""
+        out, xis, rates, err, gaps, slips = self.contact_events(surface, links, before, after.__getitem__)
         jac = np.empty((3, self.model.nv))
         for i in range(self.hand.m):
             self._mj.mj_jacSite(self.model, self.data, jac, None, self._sites[i])

@@ -13,6 +13,10 @@ Contact i joins the tip :math:`p_i(q)` to the object:
   to the object (:math:`s_i` is the sign of that velocity along :math:`t_i`);
 * ``SEPARATED``: no constraint, no force.
 
+On a curved object (:mod:`regrasp.core.curves`) a fixed contact's point is the curve's :math:`c(\xi_i)` and a
+sliding contact's line is the tangent at its tip's foot, re-evaluated at every evaluation, with a curvature term
+in its second derivative (:mod:`regrasp.plants.project.curve`).
+
 **Equations.** :math:`M\ddot q + N = \tau - \sum_i J_i^T f_i`,
 :math:`M_o \ddot X = f_g + \sum_i (f_i,\ (p_i - x_o)\times f_i)`, and every constraint's second
 derivative, Baumgarte-stabilised: :math:`\ddot\phi + 2\alpha\dot\phi + \alpha^2\phi = 0`. One
@@ -33,10 +37,12 @@ import numpy as np
 import pinocchio as pin
 
 from ...core.contact import ContactMode
+from ...core.curves import CurvedObject
 from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
 from ...core.scalar import solve_small
 from ...model.hand import Hand
+from .curve import CURVE_SLIDING, curve_specs, curve_violation, foot, sliding_row
 from .state import EdgeGeometry, PlantContact, PlantState, edge_geometry
 
 __all__ = ["PlantEquations"]
@@ -50,11 +56,14 @@ _LWA = pin.LOCAL_WORLD_ALIGNED
 class PlantEquations:
     """The plant's equations (module docstring) for a hand, an object of ``mass`` [kg] and ``inertia`` [kg m²],
     the contacts' kinetic coefficients ``kinetic`` [-] and the Baumgarte ``alpha`` [1/s]; the plant's own
-    Pinocchio data on the hand's model of all fingers (their gravity and link masses)."""
+    Pinocchio data on the hand's model of all fingers (their gravity and link masses). ``polygon``: the object's
+    geometry, a :class:`~regrasp.core.polygon.ConvexPolygon` or a :class:`~regrasp.core.curves.CurvedObject`."""
 
-    def __init__(self, hand: Hand, polygon: ConvexPolygon, kinetic: Sequence[float], mass: float, inertia: float,
-                 alpha: float):
+    def __init__(self, hand: Hand, polygon: ConvexPolygon | CurvedObject, kinetic: Sequence[float], mass: float,
+                 inertia: float, alpha: float):
         self.hand, self.polygon = hand, polygon
+        #: The object if it is curved (:mod:`regrasp.plants.project.curve`), else None (a polygon).
+        self.curve = polygon if isinstance(polygon, CurvedObject) else None
         self.kinetic = list(kinetic)
         self.mass, self.inertia, self.alpha = mass, inertia, alpha
         self._pin_data = (hand.pinocchio_model, hand.pinocchio_model.createData())
@@ -83,8 +92,11 @@ class PlantEquations:
         tip = f.forward_kinematics(qi)
         return tip, f.tip_jacobian(qi) @ vi
 
-    def gap(self, st: PlantState, i: int, edge: int) -> float:
-        """Tip i's distance [m] from edge ``edge``'s line at state ``st``: positive outside the object."""
+    def gap(self, st: PlantState, i: int, edge: int, near: float | None = None) -> float:
+        """Tip i's distance [m] from edge ``edge``'s line at state ``st``: positive outside the object (a curve's:
+        its signed distance from the curve; ``near``: the contact's last ξ [m], where its foot is sought)."""
+        if self.curve is not None:
+            return foot(self.curve, st.X.tolist(), self.tip(st, i)[0].tolist(), near).delta
         g = self.edge(edge)
         tip = self.tip(st, i)[0].tolist()
         X = st.X.tolist()
@@ -94,7 +106,10 @@ class PlantEquations:
 
     def specs(self, contacts: Sequence[PlantContact]) -> tuple[tuple, ...]:
         """The active contacts as floats (a tuple): ``(i, FIXED, c_x, c_y)`` (the contact point,
-        object frame) or ``(i, SLIDING, n_x, n_y, n·ξ-origin, μ_k s)`` (the edge's normal)."""
+        object frame) or ``(i, SLIDING, n_x, n_y, n·ξ-origin, μ_k s)`` (the edge's normal); on a curve
+        :func:`~regrasp.plants.project.curve.curve_specs`'."""
+        if self.curve is not None:
+            return curve_specs(self.curve, contacts, self.kinetic)
         out, kinetic = [], self.kinetic
         for i, c in enumerate(contacts):
             mode = c.mode
@@ -119,6 +134,8 @@ class PlantEquations:
             if spec[1] is _MODE_FIXED:
                 ex, ey = rx - (c * spec[2] - s * spec[3]), ry - (s * spec[2] + c * spec[3])
                 err = math.sqrt(ex * ex + ey * ey)
+            elif spec[1] is CURVE_SLIDING:
+                err = curve_violation(spec, c, s, rx, ry)
             else:
                 err = abs((c * spec[2] - s * spec[3]) * rx + (s * spec[2] + c * spec[3]) * ry - spec[4])
             worst = max(worst, err)
@@ -189,6 +206,11 @@ class PlantEquations:
                 rhs += (-jax - w_sq * rcx - alpha2 * (pvx - vx + w * rcy) - alpha_sq * (rx - rcx) - (fax - g0),
                         -jay - w_sq * rcy - alpha2 * (pvy - vy - w * rcx) - alpha_sq * (ry - rcy) - (fay - g1))
                 cols += ((i, 1.0, 0.0, 1.0, 0.0, -ry), (i, 0.0, 1.0, 0.0, 1.0, rx))
+            elif kind is CURVE_SLIDING:
+                row, b, col = sliding_row(spec, fingers[i], rx, ry, c, s, V, (fax - g0, fay - g1), self.alpha)
+                rows.append(row)
+                rhs.append(b)
+                cols.append(col)
             else:
                 nx, ny = c * ux - s * uy, s * ux + c * uy
                 nr, tr = nx * rx + ny * ry, nx * ry - ny * rx

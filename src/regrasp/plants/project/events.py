@@ -11,7 +11,9 @@ and detail:
   no link can have reached the object, :meth:`PlantEvents.collisions`);
 * ``singular``: a finger's Jacobian condition number exceeds the hand's threshold.
 
-Kinds in the plant's ``stop_on`` stop it.
+Kinds in the plant's ``stop_on`` stop it. On a curved object (:mod:`regrasp.plants.project.curve`) the forces are
+in each tip's foot's surface frame, ``left_edge`` never fires, a sliding or separated contact's ξ follows its foot
+after every check, and the links are checked against the curve's own coal shape.
 """
 
 from __future__ import annotations
@@ -23,13 +25,15 @@ import coal
 import numpy as np
 
 from ...core.contact import ContactMode, Friction, cone_margin
+from ...core.curves import CurvedObject
 from ...core.events import Event
 from ...core.polygon import ConvexPolygon
 from ...kernels.finger import condition_2x2
 from ...model.collision import UrdfCollisionChecker, default_tip_clearance
 from ...model.hand import Hand
+from .curve import collision_object, curve_contact_xi, foot
 from .equations import PlantEquations
-from .state import PlantContact, PlantLog, PlantState, contact_xi, surface_force
+from .state import EdgeGeometry, PlantContact, PlantLog, PlantState, contact_xi, surface_force
 
 __all__ = ["Accelerations", "PlantEvents"]
 
@@ -61,8 +65,9 @@ class PlantEvents:
     ``collision_check``: check the links against the object with coal (``tip_clearance`` [m] per finger, None:
     :func:`~regrasp.model.collision.default_tip_clearance`)."""
 
-    def __init__(self, hand: Hand, polygon: ConvexPolygon, friction: Sequence[Friction], equations: PlantEquations,
-                 log: PlantLog, *, contact_events: bool, collision_check: bool, tip_clearance: float | None):
+    def __init__(self, hand: Hand, polygon: ConvexPolygon | CurvedObject, friction: Sequence[Friction],
+                 equations: PlantEquations, log: PlantLog, *, contact_events: bool, collision_check: bool,
+                 tip_clearance: float | None):
         m = hand.m
         self.hand, self.equations, self.log, self.contact_events = hand, equations, log, contact_events
         self.static = [f.static for f in friction]
@@ -74,6 +79,7 @@ class PlantEvents:
         self.certificates = np.full((m, 9), np.nan)
         if collision_check:
             self.checkers = []
+            polygon = collision_object(polygon)
             for f in hand.fingers:
                 clearance = default_tip_clearance(f) if tip_clearance is None else tip_clearance
                 self.checkers.append(UrdfCollisionChecker(f, polygon, clearance))
@@ -90,10 +96,17 @@ class PlantEvents:
         V0 = st.V
         X = st.X.tolist()
         c, s = math.cos(X[2]), math.sin(X[2])
-        geometry = [equations.edge(ct.edge) for ct in contacts]
+        curve = equations.curve
+        if curve is None:
+            geometry = [equations.edge(ct.edge) for ct in contacts]
+        else:  # the tangent lines at the tips' feet
+            feet = [foot(curve, X, f[11:13], ct.xi) for ct, f in zip(contacts, fingers)]
+            geometry = [ft.line for ft in feet]
 
         def xis():
             V = st.V.tolist()
+            if curve is not None:
+                return [curve_contact_xi(ft, X, V, c, s, f[11:13], f[13:15]) for ft, f in zip(feet, fingers)]
             return [contact_xi(g, X, V, c, s, f[11:13], f[13:15]) for g, f in zip(geometry, fingers)]
 
         current = xis()
@@ -104,8 +117,12 @@ class PlantEvents:
                 current = xis()
             xi, xi_dot = current[i]
             if self.contact_events:
-                force = surface_force(equations.edge(ct.edge), c, s, forces[i])
-                self.switch_mode(st, tau, i, force, xi, xi_dot, contacts, accelerations, out)
+                if curve is None:
+                    force = surface_force(equations.edge(ct.edge), c, s, forces[i])
+                    self.switch_mode(st, tau, i, force, xi, xi_dot, contacts, accelerations, out)
+                else:
+                    force = surface_force(geometry[i], c, s, forces[i])
+                    self.switch_mode(st, tau, i, force, xi, xi_dot, contacts, accelerations, out, geometry[i])
                 if ct.mode is _MODE_SEPARATED:
                     continue
             g = geometry[i]
@@ -118,7 +135,12 @@ class PlantEvents:
         if self.checkers is not None:
             # the elbows: p - o_2 = (j11, -j01)
             self.collisions(st, [(f[11] - f[8], f[12] + f[6]) for f in fingers], out)
-        return out, (current if st.V is V0 else xis())
+        final = current if st.V is V0 else xis()
+        if curve is not None:  # a sliding or separated contact's ξ follows its foot (a fixed one's is its point)
+            for ct, (xi, _) in zip(contacts, final):
+                if ct.mode is not _MODE_FIXED:
+                    ct.xi = xi
+        return out, final
 
     def collisions(self, st: PlantState, elbows: list, out: list[Event]) -> None:
         r"""Collision events from coal's signed distances of each finger's link shapes.
@@ -172,8 +194,9 @@ class PlantEvents:
 
     def switch_mode(self, st: PlantState, tau: tuple, i: int, force_surface: tuple[float, float], xi: float,
                     xi_dot: float, contacts: list[PlantContact], accelerations: Accelerations,
-                    out: list[Event]) -> None:
-        """Separation, slip (the static cone) and stick (the static cone) of contact i (module docstring)."""
+                    out: list[Event], line: EdgeGeometry | None = None) -> None:
+        """Separation, slip (the static cone) and stick (the static cone) of contact i (module docstring);
+        ``line``: the surface frame's line (a curve's tangent at the foot; None: the contact's edge)."""
         c = contacts[i]
         fn, ft = force_surface
         tol = 1e-9
@@ -189,8 +212,8 @@ class PlantEvents:
             trial = [PlantContact(o.edge, o.mode, o.xi, o.sign) for o in contacts]
             trial[i] = PlantContact(c.edge, _MODE_FIXED, xi, c.sign)
             _, _, f_fixed = accelerations(st, np.array(tau), trial)
-            fn2, ft2 = surface_force(self.equations.edge(c.edge), math.cos(st.X[2]), math.sin(st.X[2]),
-                                     np.asarray(f_fixed).tolist()[i])
+            fn2, ft2 = surface_force(self.equations.edge(c.edge) if line is None else line, math.cos(st.X[2]),
+                                     math.sin(st.X[2]), np.asarray(f_fixed).tolist()[i])
             if fn2 >= 0.0 and cone_margin(static, fn2, ft2) >= 0.0:
                 self.log.add(st.t, i, "stick", f"xi_dot = {xi_dot:.3g} m/s crossed zero; force inside the static cone",
                             out, xi=xi)

@@ -34,6 +34,13 @@ contact whose pad ends a step more than ``Pad.separation_gap`` off its edge sepa
 and touch again, carrying no force while off), :attr:`PlantStep.gap` is each pad's distance from its edge,
 :math:`-\delta`, and :attr:`PlantStep.forces_surface` the forces averaged over the step (as the MuJoCo and Drake
 plants report them: a pad's force can change within a step).
+
+**Curved objects.** The object may be a :class:`~regrasp.core.curves.CurvedObject` (a disc, an ellipse, a rounded
+polygon, a support-function curve): one face (edge 0) whose ξ is the arc length, unbounded
+(:mod:`regrasp.plants.project.curve`: a sliding contact follows its tip's foot on the curve). Such a plant runs the
+reference path (the compiled kernel has straight edges only); a contact's reported ξ is its foot's, continued from
+its last (a sliding or separated contact's :attr:`PlantContact.xi` follows it after every step), its forces are in
+the foot's surface frame and ``left_edge`` never fires (a closed curve has no end).
 """
 
 from __future__ import annotations
@@ -46,6 +53,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ...core.contact import DEFAULT_FRICTION, ContactMode, FrictionLike, as_frictions
+from ...core.curves import CurvedObject
 from ...core.events import Event, EventKind
 from ...core.exceptions import InvalidParameterError, PlantStateError, RegraspError
 from ...core.pad import Pad
@@ -66,8 +74,10 @@ from ...model.collision import UrdfCollisionChecker
 from ...model.hand import Hand
 from ..saturation import Saturation
 from .compiled import PlantKernel
+from .curve import curve_contact_xi, foot
 from .equations import PlantEquations
 from .events import PlantEvents
+from .kinks import kinks, located_step
 from .soft import PadEquations
 from .state import (
     MAX_DT,
@@ -95,7 +105,9 @@ class Plant:
     Args:
         hand: The fingers (its gravity is the plant's gravity; it may differ from the
             controller's hand, e.g. other link masses).
-        polygon: The object (geometry; inertia unless overridden).
+        polygon: The object (geometry; inertia unless overridden): a
+            :class:`~regrasp.core.polygon.ConvexPolygon` or a :class:`~regrasp.core.curves.CurvedObject` (module
+            docstring).
         contacts: One :class:`PlantContact` per finger.
         friction: Coulomb friction: a :class:`~regrasp.core.contact.Friction` (μ_s, μ_k) or a coefficient
             (μ_s = μ_k) [-] for all contacts, or one per contact (default
@@ -117,7 +129,8 @@ class Plant:
             ``tests/kernels/test_finger_and_plant.py`` checks it against the reference path). None (default):
             when the hand's kernels agree with Pinocchio (``hand.kernel_parameters``); False: the
             reference path (Pinocchio and plain floats). A plant with a ``pad`` runs the reference path (None
-            or False; True is an error): the kernel has rigid contacts only.
+            or False; True is an error): the kernel has rigid contacts only; so does a plant on a curved object
+            (the kernel has straight edges only).
         pad: A compliant pad on every fingertip (:class:`~regrasp.core.pad.Pad`; module docstring), or None
             (default): rigid contacts.
     """
@@ -125,7 +138,7 @@ class Plant:
     def __init__(
         self,
         hand: Hand,
-        polygon: ConvexPolygon,
+        polygon: ConvexPolygon | CurvedObject,
         contacts: Sequence[PlantContact],
         *,
         friction: FrictionLike = DEFAULT_FRICTION,
@@ -142,7 +155,8 @@ class Plant:
     ):
 
         expect_type("hand", hand, Hand, "a Hand")
-        expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+        expect_type("polygon", polygon, (ConvexPolygon, CurvedObject),
+                    "a ConvexPolygon or a CurvedObject (regrasp.core.curves)")
         contacts = expect_sequence_of("contacts", contacts, PlantContact, "PlantContact")
         if len(contacts) != hand.m:
             raise InvalidParameterError("contacts", contacts, f"one contact per finger ({hand.m})")
@@ -162,6 +176,13 @@ class Plant:
         self.contact_events = as_flag("contact_events", contact_events)
         #: The events since the last reset, and whether one stopped the plant.
         self.log = PlantLog([f.name for f in hand.fingers], self.stop_on)
+        if isinstance(polygon, CurvedObject):
+            if compiled is not None and as_flag("compiled", compiled):
+                raise InvalidParameterError("compiled", compiled, "None or False with a curved object (the compiled "
+                                            "kernel has straight edges only)")
+            compiled = False
+        #: Where the object's curvature jumps (a rounded polygon's; :mod:`regrasp.plants.project.kinks`), or None.
+        self.kinks = kinks(polygon)
         if pad is not None:
             expect_type("pad", pad, Pad, "a Pad (regrasp.core.pad) or None")
             if compiled is not None and as_flag("compiled", compiled):
@@ -258,10 +279,16 @@ class Plant:
     def contact_xi(self, st: PlantState, i: int, tip: Sequence[float] | np.ndarray | None = None,
                    tip_vel: Sequence[float] | np.ndarray | None = None) -> tuple[float, float]:
         """ξ [m] of tip i's projection on its edge's line, and its relative velocity ξ̇ [m/s]
-        (``tip``/``tip_vel``: the tip's position and velocity if already known)."""
+        (``tip``/``tip_vel``: the tip's position and velocity if already known); on a curve, its foot's ξ within
+        half a perimeter of the contact's :attr:`PlantContact.xi` (module docstring)."""
         if tip is None:
             tip, tip_vel = self.equations.tip(st, i)
         X = st.X.tolist()
+        curve = self.equations.curve
+        if curve is not None:
+            tip, tip_vel = list(tip), list(tip_vel)
+            return curve_contact_xi(foot(curve, X, tip, self.contacts[i].xi), X, st.V.tolist(), math.cos(X[2]),
+                                    math.sin(X[2]), tip, tip_vel)
         return contact_xi(self.equations.edge(self.contacts[i].edge), X, st.V.tolist(), math.cos(X[2]),
                           math.sin(X[2]), tip, tip_vel)
 
@@ -291,6 +318,9 @@ class Plant:
     def surface_forces(self, st: PlantState, forces: np.ndarray) -> np.ndarray:
         """Contact forces (m, 2) in each contact's surface frame (normal, tangential)."""
         c, s = math.cos(st.X[2]), math.sin(st.X[2])
+        if self.equations.curve is not None:
+            return self.curve_surface_forces(st.X.tolist(), [self.equations.tip(st, i)[0].tolist()
+                                                             for i in range(self.hand.m)], c, s, forces)
         edge = self.equations.edge
         return np.array([surface_force(edge(ct.edge), c, s, f)
                          for ct, f in zip(self.contacts, np.asarray(forces).tolist())])
@@ -353,6 +383,8 @@ class Plant:
             k1, forces0, fingers0 = self._last_evaluation
         if self.pad is not None:
             y, forces0 = equations.integrate(y, k1, forces0, fingers0, tau, specs, h)
+        elif self.kinks is not None:  # split at a jump of the curvature
+            y = located_step(equations, self.kinks, y, k1, [f[11:13] for f in fingers0], tau, specs, h)
         else:
             half = h / 2
             k2 = equations.evaluate([a + half * b for a, b in zip(y, k1)], tau, specs)[0]
@@ -366,7 +398,11 @@ class Plant:
         modes = tuple(c.mode for c in self.contacts)
         beta = st.X[2] if self.pad is None else 0.5 * (st.X[2] + y[2 * n + 2])  # (a pad's: the step's mean force)
         c0, s0 = math.cos(beta), math.sin(beta)
-        surface = np.array([surface_force(equations.edge(c.edge), c0, s0, f) for c, f in zip(self.contacts, forces0)])
+        if equations.curve is None:
+            surface = np.array([surface_force(equations.edge(c.edge), c0, s0, f)
+                                for c, f in zip(self.contacts, forces0)])
+        else:  # (the feet at the step's start)
+            surface = self.curve_surface_forces(st.X.tolist(), [f[11:13] for f in fingers0], c0, s0, forces0)
         end = equations.evaluate(y, tau, specs, new.q, new.v)
         self._last_key, self._last_evaluation = (y, params, tau, specs), end
         fingers = end[2]
@@ -406,7 +442,17 @@ class Plant:
 
     def separated_gap(self, i: int) -> float:
         """Contact i's tip's distance from its edge now [m] (positive outside)."""
+        if self.equations.curve is not None:
+            return self.equations.gap(self.state, i, 0, self.contacts[i].xi)
         return self.equations.gap(self.state, i, self.contacts[i].edge)
+
+    def curve_surface_forces(self, X: list, tips: Sequence[Sequence[float]], c: float, s: float,
+                             forces: Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
+        """On a curved object: forces (m, 2) [N] (hand frame) in the surface frames (normal, tangential) of the
+        tips' feet at pose X with tips ``tips`` (floats), the object turned by (c, s) = (cos β, sin β)."""
+        curve = self.equations.curve
+        return np.array([surface_force(foot(curve, X, tip, ct.xi).line, c, s, list(f))
+                         for ct, tip, f in zip(self.contacts, tips, np.asarray(forces).tolist())])
 
     def adopt(self, state: PlantState, constraint_error: float) -> None:
         """Move to ``state``, reached by a compiled step or stretch whose largest constraint violation was

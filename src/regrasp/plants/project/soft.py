@@ -19,6 +19,13 @@ force (:mod:`regrasp.core.pad`): with :math:`r_i = p_i - x_o`, :math:`n_i = R n^
   friction :math:`-\mu_k s_i f_{n,i} t_i` opposes its sliding).
 * ``SEPARATED``: nothing.
 
+**On a curved object** (:mod:`regrasp.plants.project.curve`) the pad's depth is minus the tip's signed distance
+from the curve plus :math:`\delta_0`, along the foot's normal: a sliding contact's :math:`\delta_i` and
+:math:`\dot\delta_i` are the rigid sliding constraint's :math:`\psi + \delta_0` and :math:`\dot\psi` at the
+foot, its force :math:`f_{n,i}(N + \mu_k s_i T)`; a fixed contact's tangential row keeps the tip on the curve's
+normal line through :math:`c(\xi_i)`, where the depth along that normal is exactly :math:`-\delta + \delta_0`, so
+it is the formulas above with the tangent line at :math:`c(\xi_i)` for the edge.
+
 The explicit forces F enter as known generalized forces, :math:`\tau - N - J_i^T F_i` on finger i and
 :math:`(\sum F_i, \sum r_i\times F_i)` on the object; the tangential rows' multipliers then come from the same
 Delassus system as the rigid plant's (:meth:`PlantEquations.multipliers`), whose right-hand side now also carries
@@ -38,10 +45,12 @@ import math
 from collections.abc import Sequence
 
 from ...core.contact import ContactMode
+from ...core.curves import CurvedObject
 from ...core.exceptions import InvalidParameterError
 from ...core.pad import Pad
 from ...core.polygon import ConvexPolygon
 from ...model.hand import Hand
+from .curve import CURVE_SLIDING, curve_depth, curve_specs
 from .equations import PlantEquations
 from .state import PlantContact
 
@@ -60,8 +69,8 @@ class PadEquations(PlantEquations):
     """The plant's equations with a ``pad`` on every fingertip (module docstring); the other arguments are
     :class:`~regrasp.plants.project.equations.PlantEquations`'."""
 
-    def __init__(self, hand: Hand, polygon: ConvexPolygon, kinetic: Sequence[float], mass: float, inertia: float,
-                 alpha: float, pad: Pad):
+    def __init__(self, hand: Hand, polygon: ConvexPolygon | CurvedObject, kinetic: Sequence[float], mass: float,
+                 inertia: float, alpha: float, pad: Pad):
         super().__init__(hand, polygon, kinetic, mass, inertia, alpha)
         if not isinstance(pad, Pad):
             raise InvalidParameterError("pad", pad, "a Pad (regrasp.core.pad)")
@@ -72,7 +81,10 @@ class PadEquations(PlantEquations):
 
     def specs(self, contacts: Sequence[PlantContact]) -> tuple[tuple, ...]:
         """The touching contacts as floats: ``(i, mode, n_x, n_y, e - δ_0, μ_k s)`` (the edge's normal, object frame;
-        s = 0 for a fixed contact), a fixed one followed by ``t_x, t_y, t·o + ξ`` (its tangential row)."""
+        s = 0 for a fixed contact), a fixed one followed by ``t_x, t_y, t·o + ξ`` (its tangential row); on a curve
+        :func:`~regrasp.plants.project.curve.curve_specs`' with the pad's preload depth."""
+        if self.curve is not None:
+            return curve_specs(self.curve, contacts, self.kinetic, self.depth0)
         out, kinetic = [], self.kinetic
         for i, c in enumerate(contacts):
             mode = c.mode
@@ -107,6 +119,9 @@ class PadEquations(PlantEquations):
         c, s = math.cos(beta), math.sin(beta)
         out = []
         for spec in specs:
+            if spec[1] is CURVE_SLIDING:
+                out.append(curve_depth(spec, fingers[spec[0]], x, y, c, s, V))
+                continue
             i, _, ux, uy, offset = spec[:5]
             px, py, pvx, pvy = fingers[i][11:15]
             rx, ry = px - x, py - y

@@ -36,10 +36,12 @@ class PlantContact:
     """One contact's mode and parameters (mutable: the plant switches modes on events).
 
     Attributes:
-        edge: Edge index on the object.
+        edge: Edge index on the object (on a curved object, 0: its one face).
         mode: A :class:`~regrasp.core.contact.ContactMode` (its string, ``"fixed"``, ``"sliding"`` or
             ``"separated"``, is converted).
-        xi: For a fixed contact, its position ξ [m] on the edge (object-fixed).
+        xi: For a fixed contact, its position ξ [m] on the edge (object-fixed). On a curved object any finite ξ
+            (the arc length, unbounded), and a sliding or separated contact's ξ is its tip's foot, which the plant
+            updates after every step (where it seeks the foot next: :mod:`regrasp.plants.project.curve`).
         sign: For a sliding contact, the sliding direction s = ±1 along the edge's ξ.
     """
 
@@ -176,7 +178,13 @@ def rigid_contact_report(modes: Sequence[ContactMode], xi_dot: np.ndarray, dt: f
 
 
 def edge_geometry(polygon: ConvexPolygon, k: int) -> EdgeGeometry:
-    """Edge ``k``'s constants as floats (object frame)."""
+    """Edge ``k``'s constants as floats (object frame); a curved object has no fixed edge line (an
+    :class:`~regrasp.core.exceptions.InvalidParameterError`: its contacts' lines are their feet's,
+    :mod:`regrasp.plants.project.curve`)."""
+    if not isinstance(polygon, ConvexPolygon):
+        raise InvalidParameterError("polygon", polygon, "a ConvexPolygon: a curved object's face has no fixed edge "
+                                    "line (the plant follows each tip's foot on the curve; the compiled kernel has "
+                                    "straight edges only)")
     e = polygon.edge(k)
     (nx, ny), (tx, ty), (ox, oy) = e.inward_normal.tolist(), e.xi_direction.tolist(), e.xi_origin.tolist()
     return EdgeGeometry(nx, ny, tx, ty, ox, oy, float(e.inward_normal @ e.xi_origin), *e.xi_range)
