@@ -139,9 +139,11 @@ def force_lp(polygon, edges, pose, acc, xi, ratios, mu_s, limits, gravity, *, ma
                   (limits.holder_preload if moving else 0.0)) for r in ratios]
     for k, x in zip(edges, xi):
         e = polygon.edge(k)
-        lever.append(R @ e.point(x))
-        normal.append(R @ e.inward_normal)
-        tangent.append(R @ np.array([-e.inward_normal[1], e.inward_normal[0]]))
+        point, inward = (e.local(x).point, e.local(x).normal) if getattr(e, "curved", False) else \
+            (e.point(x), e.inward_normal)  # (on a curve: the point and normal at ξ)
+        lever.append(R @ point)
+        normal.append(R @ inward)
+        tangent.append(R @ np.array([-inward[1], inward[0]]))
     for axis in range(2):  # Σ f_i = m (a - g)
         row = np.zeros(2 * m + 1)
         row[axis:2 * m:2] = 1.0

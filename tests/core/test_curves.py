@@ -798,3 +798,17 @@ def test_off_centre_uniform_density_is_a_curve_error():
         SupportCurve(OFF_COS, OFF_SIN, mass=1.0)
     assert "centred()" in str(info.value)
     RoundedPolygon(CENTRED_PENTAGON, R_PENTAGON, mass=1.0, inertia=1e-4)  # explicit: fine
+
+
+def test_projection_with_a_far_near_still_finds_the_nearest_point():
+    """``near`` only picks the representative: started half a perimeter away, the projection still returns the
+    nearest boundary point (the root it first converges to may be another one, e.g. inside a rounded box)."""
+    box = RoundedPolygon(0.5 * np.array([[0.1, 0.06], [-0.1, 0.06], [-0.1, -0.06], [0.1, -0.06]]), 0.012, mass=0.1)
+    rng = np.random.default_rng(11)
+    P = box.perimeter
+    for xi in rng.uniform(0, P, 40):
+        sp = box.local(xi)
+        p = sp.point - 0.002 * sp.normal  # 2 mm outside
+        found, delta = box.project_floats(*p, near=xi + 0.5 * P - 1e-3)
+        assert abs(delta - 0.002) < 1e-12 and abs(math.remainder(found - xi, P)) < 1e-10
+        assert abs(found - (xi + 0.5 * P - 1e-3)) <= 0.5 * P + 1e-12

@@ -62,7 +62,7 @@ def _summary(plan, scenario, figures) -> str:
     mm = 1000.0
     lines = [
         f"regrasp plan: {plan.scenario}" + (f" ({scenario.path})" if scenario.path else ""),
-        f"  object: {plan.polygon.n_vertices}-gon, {plan.polygon.mass:.3g} kg; trajectory t in "
+        f"  object: {plan.polygon.label}, {plan.polygon.mass:.3g} kg; trajectory t in "
         f"[{times[0]:.4g}, {times[-1]:.4g}] s, {len(times)} samples; geometry: {plan.geometry.value}",
         "",
         "  verdict: " + ("FEASIBLE - every finger has a feasible contact at every sample" if plan.feasible
@@ -72,11 +72,12 @@ def _summary(plan, scenario, figures) -> str:
     for f in plan.fingers:
         widths = np.array([sum(hi - lo for lo, hi in s.feasible) for s in f.samples]) * mm
         l1, l2 = f.link_lengths
-        lines.append(f"  {f.name}: edge {f.edge}, {f.configuration} configuration, l1 = {l1 * mm:.1f} mm, "
+        face = "the boundary" if getattr(plan.polygon.edge(f.edge), "curved", False) else f"edge {f.edge}"
+        lines.append(f"  {f.name}: {face}, {f.configuration} configuration, l1 = {l1 * mm:.1f} mm, "
                      f"l2 = {l2 * mm:.1f} mm")
         lines.append(f"    conditions: {_condition_runs(times, f)}")
         lines.append(f"    feasible width [mm]: min {widths.min():.2f}, median {np.median(widths):.2f}, "
-                     f"max {widths.max():.2f} (edge length "
+                     f"max {widths.max():.2f} ({'perimeter' if face == 'the boundary' else 'edge length'} "
                      f"{(f.samples[0].edge_range[1] - f.samples[0].edge_range[0]) * mm:.1f})")
         for iv in f.infeasible_intervals:
             lines.append(f"    infeasible: t in [{iv.start:.3f}, {iv.end:.3f}] s - {iv.reason}")
@@ -151,7 +152,7 @@ def _cmd_plan(args) -> int:
         options = {k: v for k, v in (("envelope_margin", args.envelope_margin), ("cone_margin", args.cone_margin),
                                      ("geometry", args.geometry)) if v is not None}
         try:
-            schedule = plan_regrasps(scenario, RegraspSettings(**options),
+            schedule = plan_regrasps(scenario, RegraspSettings.of(scenario, **options),
                                      progress=ProgressBar("planning regrasps") if not args.json else None)
         except NoScheduleError as exc:
             error = exc

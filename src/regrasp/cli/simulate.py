@@ -216,7 +216,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         options["envelope_margin"] = args.envelope_margin
     # (the laws know the tips' radius)
     settings = SupervisorSettings.robust(scenario.geometry, cone, tip_radius=plant.tip_radius)
-    common = dict(settings=settings, regrasp_settings=RegraspSettings(**options), plant=plant)
+    common = dict(settings=settings, regrasp_settings=RegraspSettings.of(scenario, **options), plant=plant)
     run = RunSpec(periods=args.periods, duration=args.duration)
     run.resolve(scenario)  # (a run of no step, or past what the trajectory allows: refused before the plan)
     # (a machine's first run compiles them, in worker processes while this one plans: said, with progress)

@@ -376,6 +376,11 @@ class ConvexPolygon:
 
     # ------------------------------------------------------------------ geometry
     @property
+    def label(self) -> str:
+        """A short description for summaries: ``"4-gon"``."""
+        return f"{self.n_vertices}-gon"
+
+    @property
     def n_vertices(self) -> int:
         """Number of vertices (= number of edges)."""
         return int(self.vertices.shape[0])

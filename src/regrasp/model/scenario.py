@@ -114,6 +114,8 @@ class Scenario:
         gravity_in_hand: Gravity (2,) [m/s²] in the hand frame.
         samples: The §2 planner's number of time samples.
         geometry: The planner's link geometry (``ideal`` or ``urdf``).
+        xi_resolution: The regrasp planner's cell [m] for this scenario (None: its default,
+            :class:`~regrasp.schedule.problem.RegraspSettings`); :meth:`RegraspSettings.of` reads it.
         study: The robustness study's perturbations (the ``[study]`` table).
         pad: The fingertips' compliant pad (the ``[pad]`` table), or None: rigid contacts on the project's plant.
     """
@@ -127,6 +129,7 @@ class Scenario:
     gravity_in_hand: np.ndarray = field(default_factory=lambda: np.array([0.0, -9.81]))
     samples: int = 401
     geometry: Geometry = Geometry.IDEAL
+    xi_resolution: float | None = None
     study: Perturbation = Perturbation()
     pad: Pad | None = None
 
@@ -146,6 +149,8 @@ class Scenario:
         object.__setattr__(self, "gravity_in_hand", as_finite_array("gravity_in_hand", self.gravity_in_hand, (2,)))
         object.__setattr__(self, "samples", as_sample_count("samples", self.samples))
         object.__setattr__(self, "geometry", as_geometry("geometry", self.geometry))
+        if self.xi_resolution is not None:
+            object.__setattr__(self, "xi_resolution", as_positive_float("xi_resolution", self.xi_resolution))
         expect_type("study", self.study, Perturbation, "a Perturbation")
         if self.pad is not None:
             expect_type("pad", self.pad, Pad, "a Pad or None")
@@ -353,6 +358,9 @@ def scenario_from_document(data: dict, path: str | Path) -> Scenario:
     if not 2 <= samples <= MAX_SAMPLES:
         raise planner.fail("samples", f"expected an integer in [2, {MAX_SAMPLES}], got {short_repr(samples)}")
     geometry = Geometry(planner.string("geometry", "ideal", choices=("ideal", "urdf")))
+    xi_resolution = planner.number("xi_resolution", None)
+    if xi_resolution is not None and not 1e-5 <= xi_resolution <= 0.01:
+        raise planner.fail("xi_resolution", f"expected a cell in [1e-5, 0.01] m, got {xi_resolution!r}")
     planner.finish()
     study = _study(path, top.get("study", {}))
     pad = _pad(path, top.get("pad", None))
@@ -367,6 +375,7 @@ def scenario_from_document(data: dict, path: str | Path) -> Scenario:
         gravity_in_hand=gravity,
         samples=samples,
         geometry=geometry,
+        xi_resolution=xi_resolution,
         study=study,
         pad=pad,
     )

@@ -212,7 +212,7 @@ def build_rollout(scenario: Scenario, run: RunSpec = RunSpec(), *, policy: str =
     if policy not in POLICIES:
         raise InvalidParameterError("policy", policy, f"one of {', '.join(POLICIES)}")
     plant = PlantSpec.of(plant)
-    regrasp_settings = RegraspSettings() if regrasp_settings is None \
+    regrasp_settings = RegraspSettings.of(scenario) if regrasp_settings is None \
         else expect_type("regrasp_settings", regrasp_settings, RegraspSettings, "a RegraspSettings")
     if schedule is not None:
         expect_type("schedule", schedule, RegraspSchedule, "a RegraspSchedule (regrasp.plan_regrasps)")

@@ -6,7 +6,8 @@
   width at both ends: the same zones the rerun recording draws), the schedule's planned ξ_d and the actual ξ against
   time, the slides shaded, the failure marked where it happened.
 * :func:`plot_frames` (Figs. 4.2 and 4.4): the hand and the object at a few times of the rollout (fingers as their
-  joint chains, named, contacts coloured by phase; gravity as an arrow), the failure's frame last.
+  joint chains, named, contacts coloured by phase; gravity as an arrow), the failure's frame last. A curved object
+  is its outline (:func:`~regrasp.rollout.recording.outline.outline_in`: within 0.05 mm of the curve).
 
 Both titles say what was run (:func:`rollout_title`): the scenario, the plant, the gravity, the policy and the outcome.
 """
@@ -20,8 +21,10 @@ import numpy as np
 
 from ..core.figures import FAILURE_COLOURS, gravity_words, pyplot, save_figure
 from ..core.intervals import DANGER_FRACTION, danger_zones
+from .recording.outline import outline_in
 
 if TYPE_CHECKING:
+    from ..core.curves import CurvedObject
     from ..core.polygon import ConvexPolygon
     from ..model.hand import Hand
     from ..model.scenario import Scenario
@@ -143,7 +146,7 @@ def plot_rollout(result: RolloutResult, path: str | Path, *, scenario: Scenario 
     return save_figure(fig, path, layout=False)
 
 
-def plot_frames(result: RolloutResult, hand: Hand, polygon: ConvexPolygon, path: str | Path, *,
+def plot_frames(result: RolloutResult, hand: Hand, polygon: ConvexPolygon | CurvedObject, path: str | Path, *,
                 scenario: Scenario | None = None, plant: str | None = None, frames: int = 6) -> Path:
     """The hand and the object at ``frames`` times of the rollout (module docstring); the gravity arrow is
     ``scenario``'s (none without one), the title :func:`rollout_title`."""
@@ -157,7 +160,7 @@ def plot_frames(result: RolloutResult, hand: Hand, polygon: ConvexPolygon, path:
     seen = set()
     for ax, k in zip(axes.flat, picks):
         X = result.poses[k]
-        verts = polygon.vertices_in(X) * _MM
+        verts = outline_in(polygon, X) * _MM  # (a curve's outline: within 0.05 mm of it)
         ax.fill(*np.vstack([verts, verts[:1]]).T, color="#bbbbbb", ec="#333333", lw=1.2)
         for i, finger in enumerate(hand.fingers):
             chain = finger.joint_positions_in_hand(result.joint_positions[k, 2 * i:2 * i + 2]) * _MM

@@ -43,7 +43,7 @@ from ..core.exceptions import InvalidParameterError
 from ..core.validation import as_finite_array
 from .force_polytope import ForceGeometry, ForceLimits
 
-__all__ = ["feasible_runs", "mode_polygon", "tangent_geometry", "wrench_maps"]
+__all__ = ["clip_polygons", "feasible_runs", "mode_polygon", "tangent_geometry", "wrench_maps"]
 
 #: The most vertices of a contact's force polygon (the mode's 4, cut by a few joint torque half-planes).
 MAX_POLYGON = 12
@@ -123,9 +123,26 @@ def _clip(poly, count, g0, g1, beta):
 
 
 @numba.njit(cache=True)
-def _meets(gs, betas, keep, q):
+def _slack(a, dirs, betas, keep, q):
+    """The least slack min_d (A^T u_d)·q - β_d of q over the half-planes (``a``: the axis cell's A); >= 0: q meets
+    every one."""
+    x, y, z = a[0, 0] * q[0] + a[0, 1] * q[1], a[1, 0] * q[0] + a[1, 1] * q[1], a[2, 0] * q[0] + a[2, 1] * q[1]
+    least = np.inf
     for d in range(len(betas)):
-        if keep[d] and gs[d, 0] * q[0] + gs[d, 1] * q[1] < betas[d]:
+        if keep[d]:
+            least = min(least, dirs[d, 0] * x + dirs[d, 1] * y + dirs[d, 2] * z - betas[d])
+            if least < 0.0:
+                return least
+    return least
+
+
+@numba.njit(cache=True)
+def _misses(a, u, beta, poly, count):
+    """Whether every vertex of the polygon ``poly[:count]`` violates (A^T u)·q >= β (the polygon misses it)."""
+    g0 = u[0] * a[0, 0] + u[1] * a[1, 0] + u[2] * a[2, 0]
+    g1 = u[0] * a[0, 1] + u[1] * a[1, 1] + u[2] * a[2, 1]
+    for v in range(count):
+        if g0 * poly[v, 0] + g1 * poly[v, 1] >= beta:
             return False
     return True
 
@@ -147,15 +164,20 @@ def _inside(poly, q, tol):
 
 
 @numba.njit(cache=True)
-def _row_run(A, Q, nq, w, env, axis, cells, n_axis, tol):
+def _workspace(m):
+    """The row test's arrays (reused across rows): vertices, plane normals, directions, supports."""
+    n = 4 * m * m * MAX_POLYGON * MAX_POLYGON + 4 * m * MAX_POLYGON + 4 * m
+    return np.zeros((m, MAX_POLYGON, 3)), np.zeros((m, 3)), np.zeros((n, 3)), np.zeros(n), np.zeros(n, dtype=np.bool_)
+
+
+@numba.njit(cache=True)
+def _row_run(A, Q, nq, w, env, axis, cells, n_axis, tol, verts, planes, dirs, support, keep):
     """The longest run (first, last) of feasible axis cells for one layer and one cell of each other contact
-    (``cells``: per contact its cell, the axis's ignored); (-1, -2) when none."""
+    (``cells``: per contact its cell, the axis's ignored); (-1, -2) when none. ``verts`` ... ``keep``: the
+    workspace (:func:`_workspace`), overwritten."""
     m = A.shape[0]
     # the other contacts' summands: vertices (3-D), plane normals, edges
-    verts = np.zeros((m, MAX_POLYGON, 3))
-    planes = np.zeros((m, 3))
     n_dirs = 0
-    dirs = np.zeros((4 * m * m * MAX_POLYGON * MAX_POLYGON + 4 * m * MAX_POLYGON + 4 * m, 3))
     for j in range(m):
         if j == axis:
             continue
@@ -185,9 +207,8 @@ def _row_run(A, Q, nq, w, env, axis, cells, n_axis, tol):
                     dirs[n_dirs], dirs[n_dirs + 1] = d, -d
                     n_dirs += 2
     # normalised, and each direction's support of W
-    support = np.zeros(n_dirs)
-    keep = np.zeros(n_dirs, dtype=np.bool_)
     for d in range(n_dirs):
+        keep[d] = False
         norm = np.sqrt(dirs[d, 0] ** 2 + dirs[d, 1] ** 2 + dirs[d, 2] ** 2)
         if norm < 1e-14:
             continue
@@ -207,36 +228,38 @@ def _row_run(A, Q, nq, w, env, axis, cells, n_axis, tol):
     first, last, best_first, best_last = -1, -2, -1, -2
     witness = np.zeros(2)
     have_witness = False
-    gs = np.zeros((n_dirs, 2))
-    betas = np.zeros(n_dirs)
+    killer = -1
+    betas = support[:n_dirs]  # u·(w - A q) <= h  <=>  (A^T u)·q >= u·w - h: the offsets depend on the row only
+    for d in range(n_dirs):
+        betas[d] = dirs[d, 0] * w[0] + dirs[d, 1] * w[1] + dirs[d, 2] * w[2] - support[d] - tol
     for c in range(n_axis):
         ok = env[axis, c] and nq[axis, c] > 0
         if ok:
+            a = A[axis, c]
+            count = nq[axis, c]
+            # cheap verdicts first: the half-plane that emptied the last infeasible cell (likely this one's too)
+            if killer >= 0 and _misses(a, dirs[killer], betas[killer], Q[axis, c], count):
+                ok = False
+        found = False
+        if ok and have_witness and _inside(Q[axis, c, :count], witness, 1e-12 * (1.0 + abs(witness[0]))):
+            found = _slack(a, dirs, betas, keep, witness) >= 0.0  # (the last feasible cell's witness)
+        if ok and not found:
+            poly = Q[axis, c, :count].copy()
             for d in range(n_dirs):
-                if keep[d]:  # u·(w - A q) <= h  <=>  (A^T u)·q >= u·w - h
-                    a = A[axis, c]
-                    gs[d, 0] = dirs[d, 0] * a[0, 0] + dirs[d, 1] * a[1, 0] + dirs[d, 2] * a[2, 0]
-                    gs[d, 1] = dirs[d, 0] * a[0, 1] + dirs[d, 1] * a[1, 1] + dirs[d, 2] * a[2, 1]
-                    betas[d] = dirs[d, 0] * w[0] + dirs[d, 1] * w[1] + dirs[d, 2] * w[2] - support[d] - tol
-            # a point of Q_a that meets every half-plane proves the cell feasible: the last cell's witness first
-            found = False
-            if have_witness and _inside(Q[axis, c, :nq[axis, c]], witness, 1e-12 * (1.0 + abs(witness[0]))):
-                found = _meets(gs, betas, keep, witness)
-            if not found:
-                poly = Q[axis, c, :nq[axis, c]].copy()
-                count = nq[axis, c]
-                for d in range(n_dirs):
-                    if keep[d]:
-                        poly, count = _clip(poly, count, gs[d, 0], gs[d, 1], betas[d])
-                        if count == 0:
-                            ok = False
-                            break
-                if ok:
-                    witness[0], witness[1] = 0.0, 0.0
-                    for v in range(count):
-                        witness[0] += poly[v, 0] / count
-                        witness[1] += poly[v, 1] / count
-                    have_witness = True
+                if keep[d]:
+                    g0 = dirs[d, 0] * a[0, 0] + dirs[d, 1] * a[1, 0] + dirs[d, 2] * a[2, 0]
+                    g1 = dirs[d, 0] * a[0, 1] + dirs[d, 1] * a[1, 1] + dirs[d, 2] * a[2, 1]
+                    poly, count = _clip(poly, count, g0, g1, betas[d])
+                    if count == 0:
+                        ok = False
+                        killer = d
+                        break
+            if ok:
+                witness[0], witness[1] = 0.0, 0.0
+                for v in range(count):
+                    witness[0] += poly[v, 0] / count
+                    witness[1] += poly[v, 1] / count
+                have_witness = True
         if ok:
             if last == c - 1 and first >= 0:
                 last = c
@@ -260,6 +283,7 @@ def _runs_kernel(A, Q, nq, w, env, axis, counts, tol):
     out = np.full((T, n_rows, 2), -1, dtype=np.int64)
     for k in numba.prange(T):
         cells = np.zeros(m, dtype=np.int64)
+        verts, planes, dirs, support, keep = _workspace(m)
         for row in range(n_rows):
             rem = row
             skip = False
@@ -273,7 +297,8 @@ def _runs_kernel(A, Q, nq, w, env, axis, counts, tol):
             if skip:
                 out[k, row, 0], out[k, row, 1] = -1, -2
                 continue
-            first, last = _row_run(A, Q[k], nq[k], w[k], env[k], axis, cells, counts[axis], tol)
+            first, last = _row_run(A, Q[k], nq[k], w[k], env[k], axis, cells, counts[axis], tol, verts, planes, dirs,
+                                   support, keep)
             out[k, row, 0], out[k, row, 1] = first, last
     return out
 
@@ -303,3 +328,36 @@ def feasible_runs(maps: Sequence[np.ndarray], polygons: np.ndarray, counts: np.n
     return _runs_kernel(A, np.ascontiguousarray(polygons, dtype=float), np.ascontiguousarray(counts, dtype=np.int64),
                         np.ascontiguousarray(wrench, dtype=float), np.ascontiguousarray(admissible, dtype=np.bool_),
                         int(axis), sizes, float(tol))
+
+
+@numba.njit(cache=True)
+def _clip_all(base, nb, g, beta, valid):
+    T, K, H = beta.shape
+    out = np.zeros((T, K, MAX_POLYGON, 2))
+    counts = np.zeros((T, K), dtype=np.int64)
+    for k in range(T):
+        for c in range(K):
+            if not valid[k, c] or nb == 0:
+                continue
+            poly = base[:nb].copy()
+            count = nb
+            for r in range(H):
+                if not np.isfinite(beta[k, c, r]):
+                    continue
+                poly, count = _clip(poly, count, g[k, c, r, 0], g[k, c, r, 1], beta[k, c, r])
+                if count == 0:
+                    break
+            count = min(count, MAX_POLYGON)
+            out[k, c, :count] = poly[:count]
+            counts[k, c] = count
+    return out, counts
+
+
+def clip_polygons(base: np.ndarray, rows: np.ndarray, offsets: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray,
+                                                                                                         np.ndarray]:
+    """A contact's force polygon ``base`` (k, 2) cut, per layer and cell, by the half-planes ``rows[..., r, :]·q >=
+    offsets[..., r]`` (rows (T, K, H, 2), offsets (T, K, H); a NaN offset: no cut): ((T, K, MAX_POLYGON, 2) polygons,
+    (T, K) counts); ``valid`` (T, K) False: no force there (count 0)."""
+    base = np.asarray(base, dtype=float).reshape(-1, 2)
+    return _clip_all(np.ascontiguousarray(base), len(base), np.ascontiguousarray(rows, dtype=float),
+                     np.ascontiguousarray(offsets, dtype=float), np.ascontiguousarray(valid, dtype=np.bool_))

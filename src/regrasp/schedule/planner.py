@@ -45,7 +45,6 @@ and which constraint ran out (:mod:`regrasp.schedule.diagnosis`).
 
 from __future__ import annotations
 
-import itertools
 import math
 import time
 from collections.abc import Callable
@@ -57,9 +56,9 @@ from ..core.exceptions import InvalidParameterError
 from ..model.scenario import Scenario
 from .decomposition import plan_decomposed
 from .diagnosis import diagnose
-from .force_polytope import force_system, force_vertices, torque_excess
+from .force_polytope import force_system
 from .lattice import cells_of, flat_index, move_runs, path, run
-from .problem import Problem, RegraspSettings, breakaway_limits, build_problem, slide_ratios, window_margin
+from .problem import Problem, RegraspSettings, build_problem, slide_ratios, window_margin
 from .schedule import (
     NoScheduleError,
     RegraspSchedule,
@@ -69,8 +68,7 @@ from .schedule import (
     slides_at,
     verification_limit,
 )
-from .torque import TorqueModel
-from .well_posed import violations as well_posed_violations
+from .verification import schedule_torques, verify
 
 __all__ = ["RegraspSettings", "plan_regrasps"]
 
@@ -105,9 +103,9 @@ def _schedule(problem: Problem, cells, moves, seconds: float, lower_bound, verif
     mu_s = [f.static for f in problem.friction]
     normal, cone = np.full((len(times), m), np.nan), np.full((len(times), m), np.nan)
     torque = problem.torque if forces and problem.torque is not None and problem.torque.limited else None
-    torques = _schedule_torques(torque, sample, at) if torque is not None else None
+    torques = schedule_torques(torque, sample, at) if torque is not None else None
     for k in range(len(times) if forces else 0):
-        system = force_system(problem.geometry, sample.pose[k, 2], sample.acceleration[k], at.xi[k],
+        system = force_system(problem.geometry_at(at.xi[k]), sample.pose[k, 2], sample.acceleration[k], at.xi[k],
                               slide_ratios(at.direction[k], problem.friction), mu_s, limits,
                               *((torques[k], torque.effort) if torque is not None else ()))
         normal[k] = system.normal
@@ -123,125 +121,6 @@ def _schedule(problem: Problem, cells, moves, seconds: float, lower_bound, verif
         required_envelope_margin=problem.settings.envelope_margin, required_cone_margin=problem.settings.cone_margin,
         min_envelope_margin=env_min, min_envelope_margin_at=env_at, min_cone_margin=cone_min,
         min_cone_margin_at=cone_at, planning_seconds=seconds, slides_lower_bound=lower_bound)
-
-
-def verify(problem: Problem, schedule: RegraspSchedule, substeps: int) -> tuple[list, tuple]:
-    """The planner's own check of ``schedule`` on ``substeps`` samples per step, with the exact margins:
-    (violations as (time [s], what, contact index or None), (smallest envelope margin [m], (time, name)))."""
-    settings = problem.settings
-    traj = problem.scenario.trajectory
-    n = int(round((schedule.t_end - schedule.t_start) / problem.dt * substeps))
-    times = schedule.t_start + (schedule.t_end - schedule.t_start) * np.arange(n + 1) / max(n, 1)
-    at = schedule.at(times)
-    sample = traj.sample(np.clip(times, traj.t_start, traj.t_end))
-    violations = []
-    q = problem.settings.envelope_substeps
-    step = substeps // q if substeps % q == 0 else 0  # every step-th time is a lattice sub-sample
-
-    def envelope(i: int, j: int):
-        if step and j % step == 0 and j // step < len(problem.sub_samples[i]):
-            return problem.sub_samples[i][j // step]
-        return problem.envelopes[i].at(sample.pose[j], float(times[j]))
-
-    margins = np.array([[envelope(i, j).margin(float(at.xi[j, i])) for i in range(len(problem.envelopes))]
-                        for j in range(len(times))])
-    for k, i in zip(*np.nonzero(margins < settings.envelope_margin - 1e-12)):
-        violations.append((float(times[k]), "envelope", int(i)))
-    limits = settings.force_limits()
-    mu_s = [f.static for f in problem.friction]
-    starts = []
-    for s in schedule.slides:  # break-away: the slider primed past its static edge as it starts, with any other
-        t = np.array([s.start])  # slide that starts with it (the executor primes them together)
-        st = schedule.at(t + 1e-9)
-        together = [o.contact for o in schedule.slides if abs(o.start - s.start) <= 1e-9]
-        starts.append((s, together, float(s.start), st.direction[0], schedule.at(t).xi[0], traj.sample(
-            np.clip(t, traj.t_start, traj.t_end))))
-    groups: dict[tuple, list] = {}  # the sample times by mode
-    for k in range(len(times)):
-        groups.setdefault(tuple(at.direction[k]), []).append(k)
-    torque = problem.torque if problem.torque is not None and problem.torque.limited else None
-    if torque is not None:  # each contact's torques at the schedule's exact positions, rates and accelerations
-        torques = _schedule_torques(torque, sample, at)
-    for direction, ks in groups.items():
-        ks = np.array(ks)
-        spread = _spread(direction, settings.position_margin)
-        fv = force_vertices(problem.geometry, sample.pose[ks, 2], sample.acceleration[ks],
-                            slide_ratios(direction, problem.friction), mu_s, limits)
-        for j, k in enumerate(ks):
-            if not _holds(*fv.at(j), at.xi[k], spread):
-                violations.append((float(times[k]), "forces", None))
-            elif torque is not None:
-                why = _torque_violation(problem, torque, fv, j, torques[k], sample.pose[k, 2], sample.acceleration[k],
-                                        at.xi[k], slide_ratios(direction, problem.friction), mu_s, limits)
-                if why is not None:
-                    violations.append((float(times[k]), *why))
-    factor = settings.sliding_friction_factor
-    if factor is not None:
-        violations += well_posed_violations(problem.torque, problem.scenario, times, sample.pose, at.xi, at.direction,
-                                            problem.friction, factor)
-    for s, together, t, direction, xi, smp in starts:
-        fv = force_vertices(problem.geometry, smp.pose[:, 2], smp.acceleration,
-                            slide_ratios(direction, problem.friction, breaking=together,
-                                         overshoot=settings.prime_overshoot), mu_s, breakaway_limits(limits))
-        if not _holds(*fv.at(0), xi, _spread(direction, settings.position_margin)):
-            violations.append((t, "breakaway", s.contact))
-    return sorted(violations), first_minimum(margins, times, problem.names)
-
-
-def _schedule_torques(torque: TorqueModel, sample, at) -> np.ndarray:
-    """Per sample, contact and joint the torque map (w, a, b) of :class:`~regrasp.schedule.torque.ContactTorques` at
-    the schedule's positions, rates and accelerations ``at``: (n, m, 2, 3)."""
-    out = np.empty((len(at.xi), at.xi.shape[1], 2, 3))
-    for i in range(at.xi.shape[1]):
-        c = torque.contact(i, sample.pose, sample.velocity, sample.acceleration, at.xi[:, i:i + 1],
-                           at.xi_dot[:, i:i + 1], at.xi_ddot[:, i:i + 1])
-        out[:, i] = np.stack([c.wrench[:, 0], c.normal[:, 0], c.tangential[:, 0]], axis=-1)
-    return out
-
-
-def _torque_violation(problem: Problem, torque: TorqueModel, fv, j: int, torques: np.ndarray, beta: float,
-                      acceleration: np.ndarray, xi: np.ndarray, ratios, mu_s, limits) -> tuple[str, int] | None:
-    """Whether no force system at positions ``xi`` keeps the joints within their torque limits (``torques``
-    (m, 2, 3) as :func:`_schedule_torques` gives them): (what, contact) of the violation, or None. Where every
-    vertex of the polytope (``fv`` at its sample j) keeps them, every force system does (|τ_j| is convex); else a
-    linear program decides (:func:`~regrasp.schedule.force_polytope.torque_excess`)."""
-    keep = fv.valid[j]
-    lam, tau = fv.normal[j, keep], fv.tangential[j, keep]  # (V, m)
-    values = torques[None, :, :, 0] + torques[None, :, :, 1] * lam[:, :, None] + torques[None, :, :, 2] \
-        * tau[:, :, None]
-    if np.all(np.abs(values) <= torque.effort[None]):
-        return None
-    found = torque_excess(problem.geometry, beta, acceleration, xi, ratios, mu_s, limits, torques, torque.effort)
-    if not found.excess > 1e-9:
-        return None
-    if found.contact < 0:  # (no force system at all: the forces check's business)
-        return None
-    i, joint = found.contact, found.joint
-    return (f"torque limit ({problem.names[i]} joint {joint + 1} needs at least {found.torque:.4f} N m, "
-            f"its limit is {torque.effort[i, joint]:.4f} N m)", i)
-
-
-def _holds(lam: np.ndarray, offset: np.ndarray, xi: np.ndarray, spread: np.ndarray | None = None) -> bool:
-    """Whether positions ``xi`` (and ``xi`` + each row of ``spread``) admit a force system of the polytope with
-    vertices (λ, q)."""
-    if len(lam) == 0:
-        return False
-    points = xi[None] if spread is None else xi[None] + spread
-    phi = lam @ points.T - offset[:, None]
-    return bool(np.all((phi.min(axis=0) <= 1e-10) & (phi.max(axis=0) >= -1e-10)))
-
-
-def _spread(direction, margin: float) -> np.ndarray | None:
-    """The offsets of the positions a force system must also hold at: every contact that moves in ``direction`` where
-    planned or ``margin`` behind (``RegraspSettings.position_margin``: a slide that lags), the others where planned,
-    (2^p, m); None without a margin or a slider."""
-    sliders = [i for i, d in enumerate(direction) if d != 0]
-    if margin <= 0.0 or not sliders:
-        return None
-    out = np.zeros((2 ** len(sliders), len(direction)))
-    back = -margin * np.array([direction[i] for i in sliders], dtype=float)
-    out[:, sliders] = np.array(list(itertools.product((0.0, 1.0), repeat=len(sliders)))) * back
-    return out
 
 
 def _bans(problem: Problem, violations, cells, moves, width: int = 0) -> dict:
@@ -439,14 +318,14 @@ def _plan_decomposed(problem: Problem, start: float, progress: Progress | None, 
     return schedule
 
 
-def plan_regrasps(scenario: Scenario, settings: RegraspSettings = RegraspSettings(), *,
+def plan_regrasps(scenario: Scenario, settings: RegraspSettings | None = None, *,
                   start_time: float | None = None, xi0: ArrayLike | None = None, t_end: float | None = None,
                   progress: Progress | None = None) -> RegraspSchedule:
     """Plan the slides of every contact over the scenario's trajectory (module docstring).
 
     Args:
         scenario: Fingers, edges, object, trajectory, gravity and friction.
-        settings: Margins, limits and resolution.
+        settings: Margins, limits and resolution (default: :meth:`RegraspSettings.of` the scenario).
         start_time: Start of the horizon [s] (default: the trajectory's start).
         xi0: The contacts' positions at ``start_time`` [m] (default: chosen by the planner).
         t_end: End of the horizon [s] (default: the trajectory's end, or one period).
@@ -457,6 +336,8 @@ def plan_regrasps(scenario: Scenario, settings: RegraspSettings = RegraspSetting
     """
     if not isinstance(scenario, Scenario):
         raise InvalidParameterError("scenario", scenario, "a Scenario (regrasp.load_scenario)")
+    if settings is None:
+        settings = RegraspSettings.of(scenario)
     if not isinstance(settings, RegraspSettings):
         raise InvalidParameterError("settings", settings, "a RegraspSettings")
     start = time.perf_counter()

@@ -45,8 +45,12 @@ def plot_schedule(plan: PlanResult, schedule: RegraspSchedule, path: str | Path,
     margin = schedule.required_envelope_margin
     period = schedule.period
     repeats = [0.0] if period is None else period * np.arange(int(np.ceil((times[-1] - schedule.t_start) / period)) + 1)
+    curved = getattr(plan.polygon.edge(plan.fingers[0].edge), "curved", False)
     for i, (ax, finger) in enumerate(zip(axes, plan.fingers)):
         edge_lo, edge_hi = finger.samples[0].edge_range
+        if curved:  # (no edge ends: the span of the feasible sets, ξ unwrapped along the trajectory)
+            ends = [x for s in finger.samples for iv in s.feasible for x in iv] or [edge_lo, edge_hi]
+            edge_lo, edge_hi = min(ends), max(ends)
         pad = 0.08 * (edge_hi - edge_lo)
         grid = np.linspace(edge_lo - pad, edge_hi + pad, 600)
         feasible = [s.feasible for s in finger.samples]
@@ -58,7 +62,7 @@ def plot_schedule(plan: PlanResult, schedule: RegraspSchedule, path: str | Path,
         cmap = ListedColormap(["white", "#cb181d", "#fc9272", "#c6dbef"])
         ax.imshow(img, origin="lower", aspect="auto", cmap=cmap, vmin=0, vmax=3, interpolation="nearest",
                   extent=(times[0], times[-1], grid[0] * MM, grid[-1] * MM))
-        for y in (edge_lo, edge_hi):
+        for y in () if curved else (edge_lo, edge_hi):
             ax.axhline(y * MM, color="#d95f02", ls="--", lw=1)
         ours = [s for s in schedule.slides if s.contact == i]
         for offset in repeats:
@@ -76,7 +80,7 @@ def plot_schedule(plan: PlanResult, schedule: RegraspSchedule, path: str | Path,
                 ax.text(failure.latest_time, grid[-1] * MM, f" no schedule after t = {failure.latest_time:.2f} s "
                         f"({failure.limit.value})", va="top", ha="left", fontsize=8, color="#cb181d")
         per = f"{len(ours)} slide{'s' if len(ours) != 1 else ''}" + (" per period" if period else "")
-        ax.set_title(f"{finger.name}: edge {finger.edge}, {per}")
+        ax.set_title(f"{finger.name}: {'the boundary' if curved else f'edge {finger.edge}'}, {per}")
         ax.set_ylabel("ξ [mm]")
         ax.set_ylim(grid[0] * MM, grid[-1] * MM)
     handles = [Patch(color="#c6dbef", label="feasible"),
@@ -84,7 +88,7 @@ def plot_schedule(plan: PlanResult, schedule: RegraspSchedule, path: str | Path,
                Patch(color="#cb181d", label=f"within the required margin ({margin * MM:g} mm) of a bound"),
                Patch(color="#969696", alpha=0.25, label="slide (arrow: from, to)"),
                Line2D([], [], color="k", lw=1.8, label="scheduled contact ξ_d(t)"),
-               Line2D([], [], color="#d95f02", ls="--", lw=1, label="edge ends")]
+               *([] if curved else [Line2D([], [], color="#d95f02", ls="--", lw=1, label="edge ends")])]
     axes[-1].set_xlabel("t [s]")
     if failure is None:
         title = (f"{plan.scenario or 'plan'}: regrasp schedule, {len(schedule.slides)} slides"

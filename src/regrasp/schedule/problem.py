@@ -3,38 +3,40 @@ r"""The regrasp planner's problem: its settings, and the lattice built from a sc
 :func:`build_problem` samples each contact's feasible envelope on a fine time grid, turns it into
 the lattice's envelope tables (admissible cells over each layer's window, with the planning buffer,
 and the proximity cost), and computes the force tables of every move vector from the force
-polytope (:mod:`regrasp.schedule.force_polytope`), as :mod:`regrasp.schedule.lattice` reads them. Where a joint has a
-torque limit, the tables also drop the cells that no force within it allows (:func:`_torque_tables`: a necessary
-condition; the planner's verification checks the limits exactly, :mod:`regrasp.schedule.torque`). The
+polytope (:mod:`regrasp.schedule.force_tables`), as :mod:`regrasp.schedule.lattice` reads them. Where a joint has a
+torque limit, the tables also drop the cells that no force within it allows (a necessary condition; the planner's
+verification checks the limits exactly, :mod:`regrasp.schedule.torque`). On a curved object the contacts' frames turn
+with ξ and the tables come from :mod:`regrasp.schedule.curve_tables` instead (the torque limits exact in them). The
 method and its buffers are described in :mod:`regrasp.schedule.planner` and ``docs/derivations.md``
 ("§4, planned ahead").
 """
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.contact import DEFAULT_CONE_MARGIN
+from ..core.curves import CurvedObject
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import as_count, as_finite_array, as_flag, as_positive_float, check_fields
 from ..envelope.finger_envelope import FingerEnvelope
 from ..model.geometry import Geometry, as_geometry
 from ..model.scenario import Scenario
-from .force_polytope import ForceGeometry, ForceLimits, force_vertices, xi_intervals
+from .curve_forces import tangent_geometry
+from .curve_tables import chained_samples, curve_force_tables, feasible_span
+from .force_polytope import ForceGeometry, ForceLimits
+from .force_tables import breakaway_limits, edge_force_tables, slide_ratios, torque_tables
 from .lattice import Lattice, motion_combos
 from .tables import cut_tables, erode_tables
 from .torque import TorqueModel
 from .well_posed import lattice_geometry, slide_mask
 
 if TYPE_CHECKING:
-    from ..core.contact import Friction
     from ..core.trajectory import Trajectory
 
 __all__ = ["Problem", "RegraspSettings", "breakaway_limits", "build_problem", "slide_ratios", "trajectory_period"]
@@ -161,6 +163,14 @@ class RegraspSettings:
                 "max_slide_acceleration", self.max_slide_acceleration,
                 f">= max_slide_speed^2 / xi_resolution = {self.max_slide_speed ** 2 / self.xi_resolution:g} m/s^2")
 
+    @classmethod
+    def of(cls, scenario: Scenario, **options: object) -> "RegraspSettings":
+        """The settings ``options`` (keyword arguments as the constructor's) for ``scenario``: its ``[planner]``
+        ``xi_resolution``, if it gives one, unless ``options`` do."""
+        if scenario.xi_resolution is not None and "xi_resolution" not in options:
+            options = {"xi_resolution": scenario.xi_resolution, **options}
+        return cls(**options)
+
     @property
     def time_step(self) -> float:
         """The lattice's nominal time step [s]: one cell at the fastest slide."""
@@ -200,6 +210,7 @@ class Problem:
     ``free_tables`` the force tables (lo, hi) before the limits cut them (None: they cut nothing), ``posed_tables``
     the tables before the slides' well-posedness cut them (:mod:`regrasp.schedule.well_posed`; None: it cut nothing)
     and ``posed_mask`` its conditions (per cell, per pair of sliders: :func:`~regrasp.schedule.well_posed.slide_mask`).
+    ``geometry`` is None on a curved object (:meth:`geometry_at`).
     """
 
     scenario: Scenario
@@ -213,7 +224,7 @@ class Problem:
     envelopes: list
     sub_times: np.ndarray
     sub_samples: list
-    geometry: ForceGeometry
+    geometry: ForceGeometry | None
     limits: ForceLimits
     envelope_buffer: float
     lattice: Lattice
@@ -225,6 +236,19 @@ class Problem:
     posed_tables: tuple | None = None
     posed_mask: tuple | None = None
 
+    @property
+    def curved(self) -> bool:
+        """Whether the object is curved (its contacts' frames turn with ξ)."""
+        return self.geometry is None
+
+    def geometry_at(self, xi: ArrayLike) -> ForceGeometry:
+        """The force balance's constants with the contacts at ``xi`` [m]: the polygon's ``geometry``, or on a curve
+        the contacts' tangent lines there (:func:`~regrasp.schedule.curve_forces.tangent_geometry`)."""
+        if self.geometry is not None:
+            return self.geometry
+        obj = self.scenario.polygon
+        return tangent_geometry(obj, xi, mass=obj.mass, inertia=obj.inertia, gravity=self.scenario.gravity_in_hand)
+
 
 def _cell_margins(sample, grid: np.ndarray) -> np.ndarray:
     """Each cell's envelope margin [m] in one sample (EnvelopeSample.margin, vectorised)."""
@@ -232,24 +256,6 @@ def _cell_margins(sample, grid: np.ndarray) -> np.ndarray:
     for lo, hi in sample.feasible:
         out = np.maximum(out, np.minimum(grid - lo, hi - grid))
     return out
-
-
-def breakaway_limits(limits: ForceLimits) -> ForceLimits:
-    """The limits a break-away is planned with: what the executor's internal force keeps at a priming in its last
-    fallback (:mod:`regrasp.supervisor.fallbacks`), the held contacts' friction margin (its
-    ``fallback_friction_margin``, the planner's ``friction_margin``) and ``f_min``; its floors are given up first and
-    its cone margin [N] is a target, not a constraint, so ``slider_floor``, ``holder_preload`` and ``cone_margin``
-    do not apply (a priming lasts a few milliseconds on the nominal plant)."""
-    return replace(limits, slider_floor=0.0, holder_preload=0.0, cone_margin=0.0)
-
-
-def slide_ratios(direction: Iterable[int], friction: Iterable[Friction], breaking: int | Iterable[int] | None = None,
-                 overshoot: float = 0.0) -> list[float | None]:
-    """Per contact None (fixed) or the signed force ratio τ/λ = s μ_k (s (μ_s + ``overshoot``) for the contact or
-    contacts ``breaking``: the executor primes a break-away past the static cone's edge)."""
-    primed = set() if breaking is None else {breaking} if isinstance(breaking, (int, np.integer)) else set(breaking)
-    return [None if d == 0 else d * (f.static + overshoot if i in primed else f.kinetic)
-            for i, (d, f) in enumerate(zip(direction, friction))]
 
 
 def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: float | None = None,
@@ -283,23 +289,30 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
     h = settings.xi_resolution
     edges = [scenario.polygon.edge(c.edge) for c in contacts]
     start = None if xi0 is None else as_finite_array("xi0", xi0, (m,))
-    grids = []
-    for i, e in enumerate(edges):
-        anchor = 0.0 if start is None else float(start[i])
-        lo, hi = e.xi_range
-        if start is not None and not lo - 1e-12 <= anchor <= hi + 1e-12:
-            raise InvalidParameterError("xi0", start.tolist(), f"positions on the edges ({contacts[i].finger.name}: "
-                                        f"[{lo:.6g}, {hi:.6g}] m)")
-        cells = np.arange(math.ceil((lo - anchor) / h - 1e-9), math.floor((hi - anchor) / h + 1e-9) + 1)
-        grids.append(anchor + h * cells)
-    start_cells = None if start is None else np.array([int(np.argmin(np.abs(g - x))) for g, x in zip(grids, start)])
+    curved = isinstance(scenario.polygon, CurvedObject)
     geometry = scenario.check_geometry(settings.geometry or scenario.geometry.value)
     envelopes = [FingerEnvelope(c.finger, scenario.polygon, c.edge, geometry=geometry, tip_clearance=c.tip_clearance)
                  for c in contacts]
     q = settings.envelope_substeps
     sub_times = t0 + (dt / q) * np.arange(n_steps * q + 1)
     poses = traj.pose(np.clip(sub_times, traj.t_start, traj.t_end))
-    sub_samples = [[env.at(pose, float(t)) for t, pose in zip(sub_times, poses)] for env in envelopes]
+    if curved:  # (each window next to the last: ξ unwrapped along the trajectory, from the start positions if given)
+        sub_samples = [chained_samples(env, poses, sub_times, None if start is None else float(start[i]))
+                       for i, env in enumerate(envelopes)]
+    else:
+        sub_samples = [[env.at(pose, float(t)) for t, pose in zip(sub_times, poses)] for env in envelopes]
+    grids = []
+    for i, e in enumerate(edges):
+        anchor = 0.0 if start is None else float(start[i])
+        lo, hi = feasible_span(sub_samples[i], h) if curved else e.xi_range
+        if start is not None and not lo - 1e-12 <= anchor <= hi + 1e-12 and not curved:
+            raise InvalidParameterError("xi0", start.tolist(), f"positions on the edges ({contacts[i].finger.name}: "
+                                        f"[{lo:.6g}, {hi:.6g}] m)")
+        if curved and start is not None:  # (the lattice holds the start, wherever the envelopes are)
+            lo, hi = min(lo, anchor), max(hi, anchor)
+        cells = np.arange(math.ceil((lo - anchor) / h - 1e-9), math.floor((hi - anchor) / h + 1e-9) + 1)
+        grids.append(anchor + h * cells)
+    start_cells = None if start is None else np.array([int(np.argmin(np.abs(g - x))) for g, x in zip(grids, start)])
     friction = tuple(c.friction for c in contacts)
     for c in contacts:
         if not settings.friction_margin < c.friction.static:
@@ -312,6 +325,10 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
     table_bytes = 4 * 4 * (n_steps + 1) * int(np.prod(sizes[:-1])) * len(combos)  # lo, hi, mid lo, mid hi
     if force_tables is None:
         force_tables = table_bytes <= _TABLE_BUDGET
+    if curved and not force_tables:
+        raise InvalidParameterError("scenario", scenario.name, "a curved object's lattice with force tables (the "
+                                    "decomposition planner takes polygons only; coarsen xi_resolution or lower "
+                                    "max_sliders so that the tables fit)")
     if not force_tables:
         combos = motion_combos(m, min(settings.max_sliders or 2, m - 1, 2 * m - 3))
     if force_tables and table_bytes > _TABLE_BUDGET:
@@ -324,16 +341,26 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
     speed = h / dt
     envelope_buffer = speed * ramp / 8.0 + 1e-5
     lattice_env, proximity = _envelope_tables(sub_samples, grids, q, n_steps, settings, envelope_buffer, periodic)
-    geo = ForceGeometry.of(scenario.polygon, [c.edge for c in contacts], mass=scenario.polygon.mass,
-                           inertia=scenario.polygon.inertia, gravity=scenario.gravity_in_hand)
+    geo = None if curved else ForceGeometry.of(scenario.polygon, [c.edge for c in contacts],
+                                                mass=scenario.polygon.mass, inertia=scenario.polygon.inertia,
+                                                gravity=scenario.gravity_in_hand)
     sample = traj.sample(np.clip(times, traj.t_start, traj.t_end))
     jerk = np.abs(np.diff(sample.acceleration[:, :2], axis=0)).max(initial=0.0)
-    limits = settings.force_limits(settings.cone_margin * 1.02 + geo.mass * jerk + 1e-4)
+    limits = settings.force_limits(settings.cone_margin * 1.02 + scenario.polygon.mass * jerk + 1e-4)
+    torque = TorqueModel(scenario)
+    joints = [torque.joint_angles(i, sample.pose, np.broadcast_to(g, (len(times), len(g))))
+              for i, g in enumerate(grids)] if force_tables and (torque.limited or settings.sliding_friction_factor
+                                                                  is not None) else None
     axis = int(np.argmax([len(g) for g in grids]))
     middle = traj.sample(np.clip(np.append(times[0], 0.5 * (times[1:] + times[:-1])), traj.t_start, traj.t_end))
     early = traj.sample(np.clip(times - 0.5 * ramp, traj.t_start, traj.t_end))
-    if force_tables:
-        lo, hi, blo, bhi, slots, mid_lo, mid_hi, vertices = _force_tables(
+    if force_tables and curved:  # (the joint torque limits exact in the tables)
+        lo, hi, blo, bhi, slots, mid_lo, mid_hi = curve_force_tables(
+            scenario.polygon, torque, sample, middle, early, 0.5 * ramp / dt, combos, friction, limits, grids, axis,
+            lattice_env, speed, settings.prime_overshoot, joints)
+        vertices = None
+    elif force_tables:
+        lo, hi, blo, bhi, slots, mid_lo, mid_hi, vertices = edge_force_tables(
             geo, sample, middle, early, 0.5 * ramp / dt, combos, friction, limits, grids, axis,
             settings.prime_overshoot)
         cells = math.ceil(settings.position_margin / h - 1e-9)
@@ -351,18 +378,14 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
         lo = hi = mid_lo = mid_hi = np.empty((n_steps + 1, 0, len(combos)), dtype=np.float32)
         blo = bhi = vertices = None
         slots = np.full((len(combos), m), -1, dtype=np.int64)
-    torque = TorqueModel(scenario)
     torque_excess, free_tables, posed_tables, posed = None, None, None, None
-    joints = [torque.joint_angles(i, sample.pose, np.broadcast_to(g, (len(times), len(g))))
-              for i, g in enumerate(grids)] if force_tables and (torque.limited or settings.sliding_friction_factor
-                                                                  is not None) else None
     if force_tables and settings.sliding_friction_factor is not None:  # (the decomposition: its verification's)
         posed, pairs = slide_mask(lattice_geometry(torque, scenario, grids, sample, joints), combos, friction,
                                   settings.sliding_friction_factor, lattice_env, scenario.polygon.mass,
                                   scenario.polygon.inertia)
         posed_tables = cut_tables(posed, grids, axis, lo, hi, pairs)
-    if torque.limited and force_tables:
-        torque_excess, free_tables = _torque_tables(torque, sample, grids, combos, vertices, speed, axis, lo, hi,
+    if torque.limited and force_tables and not curved:
+        torque_excess, free_tables = torque_tables(torque, sample, grids, combos, vertices, speed, axis, lo, hi,
                                                     lattice_env, joints)
     del vertices
     rest_only = np.zeros(n_steps + 1, dtype=bool)
@@ -411,85 +434,3 @@ def _envelope_tables(sub_samples, grids, q, n_steps, settings, buffer, periodic:
             ok[k, i, :len(grid)] = window >= em + buffer
             proximity[k, i, :len(grid)] = np.clip((comfort - window) / (comfort - em), 0.0, 1.0)
     return ok, proximity
-
-
-def _force_tables(geo, sample, middle, early, lead: float, combos, friction, limits, grids, axis,
-                  overshoot: float = 0.0):
-    """The lattice's interval tables (float32): the modes at the layers; for two or more sliders at
-    each interval's middle (``middle``: the trajectory there, layer k's entry for the interval ending
-    at it) with the sliders half a cell back; and where μ_s + ``overshoot`` > μ_k the break-away of the contacts
-    that start together (primed together to μ_s + ``overshoot``, with :func:`breakaway_limits`), both at the layer
-    and where they really start, ``early`` (the trajectory half a ramp before the layer) with the other sliders
-    ``lead`` cells back."""
-    m = len(grids)
-    n_layers = len(sample.pose)
-    vertices: list = []  # per move vector, the polytope's vertices at the layers
-    others = np.array(list(itertools.product(*[grids[i] for i in range(m) if i != axis]))).reshape(-1, m - 1)
-    mu_s = np.array([f.static for f in friction])
-    M = len(combos)
-    h = grids[0][1] - grids[0][0] if len(grids[0]) > 1 else 0.0
-    columns = [i for i in range(m) if i != axis]
-
-    def table(ratios, smp=sample, shift=None, keep=None, lim=limits):
-        """(lo, hi) per layer and cell of the others, with the positions ``shift`` [m] (m,) back (``keep``: a list
-        to append the polytope's vertices to; ``lim``: the limits)."""
-        grid = others if shift is None else others - np.array([shift[i] for i in columns])
-        fv = force_vertices(geo, smp.pose[:, 2], smp.acceleration, ratios, mu_s, lim)
-        if keep is not None:
-            keep.append(fv)
-        out = np.empty((2, n_layers, len(others)), dtype=np.float32)
-        back = 0.0 if shift is None else shift[axis]  # the axis position x - back must be inside
-        for k in range(n_layers):
-            lo, hi = xi_intervals(*fv.at(k), axis, grid)
-            out[0, k], out[1, k] = lo + back, hi + back
-        return out
-
-    lo = np.empty((n_layers, len(others), M), dtype=np.float32)
-    hi = np.empty_like(lo)
-    mid_lo = np.full_like(lo, -np.inf)
-    mid_hi = np.full_like(lo, np.inf)
-    for mu, d in enumerate(combos):
-        lo[:, :, mu], hi[:, :, mu] = table(slide_ratios(d, friction), keep=vertices)
-        if np.count_nonzero(d) >= 2:
-            mid_lo[:, :, mu], mid_hi[:, :, mu] = table(slide_ratios(d, friction), middle, 0.5 * h * np.asarray(d))
-    needs = np.array([[d[i] != 0 and friction[i].static + overshoot > friction[i].kinetic + 1e-12 for i in range(m)]
-                      for d in combos])
-    # one check per move vector u and set S of the contacts that start breaking away in it together (the executor
-    # primes them at once): the slot of every starter mask (bit i: contact i starts) is that of its contacts in need
-    slots = np.full((M, 2 ** m), -1, dtype=np.int64)
-    blo = bhi = None
-    if needs.any():
-        checks: dict[tuple[int, int], int] = {}
-        for mu in range(M):
-            for bits in range(1, 2 ** m):
-                if any((bits >> i) & 1 and combos[mu, i] == 0 for i in range(m)):
-                    continue  # (only sliders start)
-                primed = sum(1 << i for i in range(m) if (bits >> i) & 1 and needs[mu, i])
-                if primed:
-                    slots[mu, bits] = checks.setdefault((mu, primed), len(checks))
-        blo = np.empty((n_layers, len(others), len(checks)), dtype=np.float32)
-        bhi = np.empty_like(blo)
-        for (mu, primed), slot in checks.items():
-            breaking = [i for i in range(m) if (primed >> i) & 1]
-            ratios = slide_ratios(combos[mu], friction, breaking=breaking, overshoot=overshoot)
-            at_layer = table(ratios, lim=breakaway_limits(limits))
-            others_back = lead * h * np.where(np.isin(np.arange(m), breaking), 0, combos[mu])
-            real = table(ratios, early, others_back, lim=breakaway_limits(limits))
-            blo[:, :, slot] = np.maximum(at_layer[0], real[0])
-            bhi[:, :, slot] = np.minimum(at_layer[1], real[1])
-    return lo, hi, blo, bhi, slots, mid_lo, mid_hi, vertices
-
-
-def _torque_tables(torque: TorqueModel, sample, grids, combos, vertices, speed: float, axis: int, lo: np.ndarray,
-                   hi: np.ndarray, env_ok: np.ndarray, joints: list | None = None) -> tuple[np.ndarray, tuple | None]:
-    """The joint torque limits' necessary condition in the force tables (module docstring of
-    :mod:`regrasp.schedule.torque`): per layer and move vector, a state whose other contacts sit on a cell that no
-    force within a joint's limit allows is dropped (its interval emptied), and the axis's interval is cut to the
-    span of its allowed cells (a superset: the verification checks exactly). Changes ``lo`` and ``hi`` in place;
-    returns the excess table (:meth:`~regrasp.schedule.torque.TorqueModel.cell_excess`) and the tables as they were
-    (None when the limits excluded no cell); ``env_ok``: the envelope tables (a cell they exclude is not cut
-    again)."""
-    excess = torque.cell_excess(sample, grids, combos, vertices, speed, joints)
-    # (N + 1, M, m, n_max); NaN: unreachable, and cells outside the envelopes: the envelope's business
-    allowed = ~(excess > 0.0).any(axis=-1) | ~env_ok[:, None]
-    return excess, cut_tables(allowed, grids, axis, lo, hi)

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.curves import CurveFace
 from ..core.events import FailureKind
 from ..core.exceptions import InvalidParameterError
 from ..core.validation import MAX_WORKERS, as_count, as_finite_float, as_integer, expect_type
@@ -45,7 +46,8 @@ if TYPE_CHECKING:
     from ..schedule.schedule import RegraspSchedule
     from ..supervisor.settings import SupervisorSettings
 
-__all__ = ["RunOutcome", "StudyResult", "build_run", "run_once", "run_study", "sweep_study", "wilson_interval"]
+__all__ = ["RunOutcome", "StudyResult", "build_run", "check_placement", "run_once", "run_study", "sweep_study",
+           "wilson_interval"]
 
 #: z of a two-sided 95 % interval.
 Z_95 = 1.959963984540054
@@ -314,8 +316,8 @@ def run_study(scenario: str | Path | Scenario, runs: int, *, seed: int = 0,
     if schedule is None:
         schedule = plan_regrasps(scenario)
     probe = build_rollout(scenario, run, schedule=schedule, settings=settings, plant=plant)
-    _check_offsets(scenario, probe.schedule.at(scenario.trajectory.t_start).xi if probe.schedule else None,
-                   perturbation.contact_position)
+    check_placement(scenario, probe.schedule.at(scenario.trajectory.t_start).xi if probe.schedule else None,
+                    perturbation.contact_position, probe.supervisor.plan)
     plan_seconds = time.perf_counter() - start
     # the schedule and the envelope plan are computed once for every run (they depend on the model only)
     shared = (scenario, probe.schedule, probe.duration, perturbation, settings, plant, probe.supervisor.plan)
@@ -354,16 +356,51 @@ def _checked_finished(finished: Sequence[RunOutcome], draws: tuple[RunDraw, ...]
     return out
 
 
-def _check_offsets(scenario: Scenario, xi0, half_width: float) -> None:
-    """Every placement error a study can draw keeps each fingertip on its edge."""
+def check_placement(scenario: Scenario, xi0: Sequence[float] | np.ndarray | None, half_width: float,
+                    plan: PlanResult | None = None) -> None:
+    """Every placement error a study can draw (ξ0 ± ``half_width`` [m] about each planned ξ0 [m]) keeps each fingertip
+    where it can be placed: on a polygon, on its edge (the edge's ξ range); on a curved object, where every ξ is on
+    the object, inside the finger's feasible envelope at the start (the feasible interval of ``plan``'s sample at the
+    trajectory's start holding ξ0, moved by whole perimeters to it; no check without a plan). Nothing to check
+    without ξ0 or with no error.
+
+    Raises:
+        InvalidParameterError: ``contact_position``, a half-width that can place a fingertip off its edge or
+            outside its envelope (or a planned ξ0 outside that envelope already).
+    """
     if xi0 is None or half_width == 0.0:
         return
-    for c, x in zip(scenario.contacts, xi0):
-        lo, hi = scenario.polygon.edge(c.edge).xi_range
+    for i, (c, x) in enumerate(zip(scenario.contacts, xi0)):
+        edge = scenario.polygon.edge(c.edge)
+        if isinstance(edge, CurveFace):
+            if plan is not None:  # (the plan's sample at the trajectory's start)
+                k = int(np.argmin(np.abs(np.asarray(plan.times) - scenario.trajectory.t_start)))
+                _check_curve_placement(c.finger.name, float(x), half_width, edge.period,
+                                       plan.fingers[i].samples[k].feasible)
+            continue
+        lo, hi = edge.xi_range
         if not (lo <= x - half_width and x + half_width <= hi):
             raise InvalidParameterError("contact_position", half_width,
                                         f"a placement error that keeps {c.finger.name} on its edge (xi0 = "
                                         f"{x * 1e3:.2f} mm on [{lo * 1e3:.2f}, {hi * 1e3:.2f}] mm)")
+
+
+def _check_curve_placement(name: str, x: float, half_width: float, period: float,
+                           feasible: Sequence[tuple[float, float]]) -> None:
+    """:func:`check_placement` of one contact at ξ0 = ``x`` [m] on a curve of perimeter ``period`` [m] whose
+    finger's feasible set at the start is ``feasible`` (intervals [m], any representative of ξ)."""
+    for lo, hi in feasible:
+        shift = period * round((x - 0.5 * (lo + hi)) / period)
+        lo, hi = lo + shift, hi + shift
+        if lo <= x <= hi:
+            if lo <= x - half_width and x + half_width <= hi:
+                return
+            raise InvalidParameterError("contact_position", half_width,
+                                        f"a placement error that keeps {name} inside its feasible envelope at the "
+                                        f"start (xi0 = {x * 1e3:.2f} mm in [{lo * 1e3:.2f}, {hi * 1e3:.2f}] mm)")
+    raise InvalidParameterError("contact_position", half_width,
+                                f"a planned start inside {name}'s feasible envelope to place it around (xi0 = "
+                                f"{x * 1e3:.2f} mm is in none of its feasible intervals at the start)")
 
 
 def sweep_study(scenario: str | Path | Scenario, runs: int, name: str, values: Sequence[float], *,

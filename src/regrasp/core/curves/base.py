@@ -112,6 +112,11 @@ class CurvedObject(ABC):
     def perimeter(self) -> float:
         """Perimeter P [m] (the period of ξ)."""
 
+    @property
+    @abstractmethod
+    def label(self) -> str:
+        """A short description for summaries."""
+
     @abstractmethod
     def _local_floats(self, xi: float) -> tuple[float, float, float, float, float]:
         r"""``(c_x, c_y, n_x, n_y, κ)`` at ξ [m] (any real) as floats: point [m], unit inward normal, curvature."""
@@ -189,6 +194,10 @@ class CurvedObject(ABC):
             lo, hi = start - period / TABLE_SAMPLES, start + period / TABLE_SAMPLES
         xi = bracketed_root(g, lo, hi, start, 1e-13 * period)
         cx, cy, nx, ny, _ = self._local_floats(xi)
+        if near is not None and math.hypot(cx - px, cy - py) > 0.25 * self.scale:  # (far: check it is the nearest)
+            nearest = self.project_floats(px, py)
+            if abs(nearest[1]) < math.hypot(cx - px, cy - py) - 1e-12 * self.scale:
+                return near + math.remainder(nearest[0] - near, period), nearest[1]
         if near is not None:
             xi = near + math.remainder(xi - near, period)
         else:

@@ -56,6 +56,11 @@ class Disc(CurvedObject):
         return f"Disc(radius={self.radius:g}, mass={self.mass:g}, inertia={self.inertia:g})"
 
     @property
+    def label(self) -> str:
+        """``"disc, r = 40 mm"``."""
+        return f"disc, r = {self.radius * 1e3:.4g} mm"
+
+    @property
     def perimeter(self) -> float:
         """2πr [m]."""
         return 2.0 * math.pi * self.radius
@@ -101,6 +106,11 @@ class Ellipse(CurvedObject):
 
     def __repr__(self) -> str:
         return f"Ellipse(a={self.a:g}, b={self.b:g}, mass={self.mass:g}, inertia={self.inertia:g})"
+
+    @property
+    def label(self) -> str:
+        """``"ellipse, 50 x 30 mm semi-axes"``."""
+        return f"ellipse, {self.a * 1e3:.4g} x {self.b * 1e3:.4g} mm semi-axes"
 
     def _arc(self, u: float) -> float:
         """F(u) [m], the arc length from u = 0 (the +x end) counter-clockwise to u."""

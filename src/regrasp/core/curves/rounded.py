@@ -84,6 +84,11 @@ class RoundedPolygon(CurvedObject):
         return (f"RoundedPolygon({self.polygon.n_vertices} vertices, radius={self.radius:g}, mass={self.mass:g}, "
                 f"inertia={self.inertia:g})")
 
+    @property
+    def label(self) -> str:
+        """``"4-gon rounded to r = 10 mm"``."""
+        return f"{self.polygon.n_vertices}-gon rounded to r = {self.radius * 1e3:.4g} mm"
+
     def _largest_radius(self, k: int) -> float:
         """Edge k's straight part vanishes at this radius [m]."""
         e = self.polygon.edges

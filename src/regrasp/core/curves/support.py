@@ -78,6 +78,11 @@ class SupportCurve(CurvedObject):
     def __repr__(self) -> str:
         return f"SupportCurve(K={self.cosines.size - 1}, mass={self.mass:g}, inertia={self.inertia:g})"
 
+    @property
+    def label(self) -> str:
+        """``"support-function curve, K = 4"``."""
+        return f"support-function curve, K = {self.cosines.size - 1}"
+
     @classmethod
     def centred(cls, cosines: ArrayLike, sines: ArrayLike, **mass_properties: float | None) -> "SupportCurve":
         """The curve of these coefficients translated (its a_1, b_1 changed) so that its centroid is the origin."""

@@ -1,7 +1,7 @@
 r"""A scenario as a Drake ``MultibodyPlant``, for the third, independent plant (:mod:`regrasp.plants.drake.plant`).
 
 Nothing here uses the project's reduced model, grasp matrices or plant: the fingers are read from their URDF files
-by Drake's own parser, the object is built from its polygon.
+by Drake's own parser, the object is built from its polygon or curve.
 
 **Fingers.** Each finger's URDF (``Finger.source``) is parsed by ``pydrake.multibody.parsing.Parser`` into a model
 instance of its own (prefix ``f<i>``), without its ``<visual>`` and ``<collision>`` elements (the contact shapes
@@ -15,7 +15,7 @@ and boxes, the distal one shortened by the tip clearance), so a link contact her
 project's plant call a collision.
 
 **Object.** A rigid body on a ``PlanarJoint`` to the world (x, y and a rotation about z: the pose X = (x, y, β) of
-the centre of mass), with the polygon's mass and rotational inertia, and convex prisms of thickness
+the centre of mass), with the object's mass and rotational inertia, and, for a polygon, convex prisms of thickness
 ``object_thickness`` along z (``pydrake.geometry.Convex`` built from the prism's corners):
 
 * one ``tips<i>`` prism per finger, touched only by tip i: the polygon **eroded by r** (less ``contact_depth``), so
@@ -24,6 +24,35 @@ the centre of mass), with the polygon's mass and rotational inertia, and convex 
   friction coefficients (μ = 2 μ_A μ_B / (μ_A + μ_B)): a prism with tip i's own coefficients gives the pair
   exactly them;
 * ``hull`` (the links touch it): the polygon itself.
+
+A **curved object** (:mod:`regrasp.core.curves`; ``docs/derivations.md``, "The plants on curves") is touched on its
+inner parallel curve :math:`c + (r - \text{depth})\,n` (which shares the curve's normals, so that a sphere touching it
+has its centre on the curve ``contact_depth`` in, as on MuJoCo, :mod:`regrasp.plants.mujoco.curve_mesh`), smooth and
+convex only while r − ``contact_depth`` is below the curve's smallest radius of curvature (a larger tip radius is an
+error):
+
+* a **disc**: ``hull`` a ``Cylinder`` of radius R and each ``tips<i>`` one of R − r + depth. Drake's point contact
+  of a sphere and a cylinder is its own exact signed distance: a tip placed on the circle starts ``contact_depth``
+  deep to 1e-16 m, along the circle's normal;
+* **other curves**: ``hull`` a ``Convex`` prism of points on the curve whose chords stay within
+  :data:`~regrasp.plants.mujoco.curve_mesh.MESH_SAGITTA` (0.1 µm) of it (only the links touch it), and each
+  ``tips<i>`` a **tangent face**: a ``Box`` whose face lies on the eroded curve's tangent at the foot ξ of tip i's
+  centre on the curve (:func:`tangent_face`), which the plant puts there before each Drake step
+  (``SceneGraph.ChangeShape`` on its context; :class:`DrakeHand` ``face_filter``). Of the geometry, Drake's discrete
+  solver uses only the pair's penetration, normal and witness points at the step's start (it takes the penetration
+  as linear over the step), and a face tangent at the foot gives exactly the eroded curve's: a tip placed on the
+  curve starts ``contact_depth`` deep to 1e-16 m along its normal, and a finger sliding round an ellipse with a = b
+  on tangent faces takes the disc's path on its cylinders to 1e-12 m. A ``Convex`` mesh of the eroded curve (the
+  MuJoCo plant's) would not do: Drake's sphere–``Convex`` penetration is FCL's GJK/EPA, whose tolerance leaves the
+  normal of a 0.4 µm contact on a mesh of nearly parallel facets off by up to 0.37 rad (by more than 1 mrad at a
+  third of the places on the ellipse of the tests), a friction cone tilted that much.
+
+Drake's step bounds how fast a contact may slide over a curve: the solver's linear penetration misses the surface's
+turning away under a tip sliding at v, by v²h²κ/2 over a step h, a force error of k h² v² κ / 2 that the next step's
+exact penetration undoes. At the defaults (k = 1e7 N/m, h = 0.1 ms) that is 0.3 N at 0.25 m/s over a 1 cm radius,
+where a slide chatters (the normal force swings step to step) and carries about 0.31 f_n of friction for μ = 0.5; at
+h = 20 µs it slides at μ f_n (``tests/plants/drake/test_curved_drake.py``). A held or slowly sliding contact is
+unaffected.
 
 **Contacts.** Drake's point contact (``contact_model="point"``) on its discrete solver: compliant normal force
 :math:`f_n = k x (1 + d \dot x)_+` (penetration x, ``point_contact_stiffness`` k, ``hunt_crossley_dissipation``
@@ -44,6 +73,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from ...core.contact import Friction
+from ...core.curves import CurvedObject, Disc
 from ...core.exceptions import FingerModelError, InvalidParameterError, MissingDependencyError
 from ...core.polygon import ConvexPolygon
 from ...core.validation import (
@@ -56,9 +86,10 @@ from ...core.validation import (
 )
 from ...model.collision import checked_link_shapes, default_tip_clearance
 from ...model.finger import Finger
+from ..mujoco.curve_mesh import MESH_SAGITTA, check_erosion, curvature_table, curve_points
 from ..mujoco.mjcf import eroded_vertices
 
-__all__ = ["APPROXIMATIONS", "DrakeHand", "DrakeSettings", "build_drake", "require_drake"]
+__all__ = ["APPROXIMATIONS", "DrakeHand", "DrakeSettings", "build_drake", "require_drake", "tangent_face"]
 
 #: The discrete contact approximations the plant takes: the two convex ones that use Hunt–Crossley dissipation.
 APPROXIMATIONS = ("lagged", "similar")
@@ -72,7 +103,8 @@ class DrakeSettings:
         tip_radius: r [m], the fingertips' sphere radius (at most 5 cm,
             :data:`~regrasp.core.validation.MAX_TIP_RADIUS`).
         time_step: Drake's discrete step [s]; the plant takes ``round(dt / time_step)`` of them per control step,
-            with the torques held (zero-order hold).
+            with the torques held (zero-order hold). On a curve a contact sliding at v over a curvature κ needs
+            k time_step² v² κ well below its normal force (the module docstring): 20 µs for 0.25 m/s over 1 cm.
         point_contact_stiffness: k [N/m] of every contact (tip–object and link–object).
         hunt_crossley_dissipation: d [s/m] of every contact: the normal force is k x (1 + d ẋ).
         approximation: Drake's discrete contact approximation, ``"lagged"`` (the default: friction bounded by the
@@ -147,6 +179,13 @@ class DrakeHand:
         link_bodies: Per finger, its (proximal, distal) link bodies (their masses scale).
         friction: Each contact's friction coefficient in the model [-] (μ_k: what the discrete solver uses).
         settings: The :class:`DrakeSettings` it was built with.
+        sagitta: The chord error [m] of a curved object's ``hull`` mesh (0 for a disc's cylinder and a polygon's
+            prism).
+        scene_graph: The ``SceneGraph`` (its context holds the tangent faces' poses).
+        faces: Per finger, the geometry id of its ``tips<i>``.
+        face_filter: None, or (a curved object other than a disc) the ``CollisionFilterDeclaration`` that leaves each
+            ``tips<i>``, a tangent face the plant re-places before each Drake step (:func:`tangent_face`), against tip
+            i alone: ``SceneGraph.ChangeShape`` drops a geometry's filters, the plant applies it again after.
     """
 
     diagram: object
@@ -161,6 +200,10 @@ class DrakeHand:
     link_bodies: tuple
     friction: tuple[float, ...]
     settings: DrakeSettings
+    sagitta: float = 0.0
+    scene_graph: object = None
+    faces: tuple = ()
+    face_filter: object = None
 
 
 def _urdf_text(finger: Finger) -> str:
@@ -214,6 +257,38 @@ def _prism(vertices: np.ndarray, thickness: float, label: str):
     return Convex(points.T.copy(), label)
 
 
+def tangent_face(curve: CurvedObject, offset: float, xi: float, thickness: float) -> tuple[object, object]:
+    r"""A tip's face on a curve at ξ [m] (module docstring): (a ``Box`` of side twice the curve's diameter and
+    ``thickness`` [m] along z, its pose in the object's frame), the box's face on the tangent line of the parallel
+    curve ``offset`` [m] inwards at ξ, the box inside it: the face's outward normal is −n(ξ) and it passes through
+    :math:`c(\xi) + \mathrm{offset}\,n(\xi)`."""
+    from pydrake.geometry import Box
+    from pydrake.math import RigidTransform, RotationMatrix
+
+    cx, cy, nx, ny, _ = curve.local_floats(xi)
+    size = 2.0 * curve.scale
+    reach = offset + 0.5 * size  # (the box's centre, inwards from the curve)
+    rotation = RotationMatrix(np.array([[nx, -ny, 0.0], [ny, nx, 0.0], [0.0, 0.0, 1.0]]))  # (box x along n)
+    return Box(size, size, thickness), RigidTransform(rotation, [cx + reach * nx, cy + reach * ny, 0.0])
+
+
+def _curve_prisms(curve: CurvedObject, offset: float, tip_radius: float, thickness: float) -> tuple[object, float,
+                                                                                                    object]:
+    """(the ``hull`` shape, its chord error [m], a function of a finger's index giving its ``tips<i>`` (shape, pose in
+    the object frame)) of a curved object (module docstring), once its erosion by ``offset`` [m] is checked."""
+    from pydrake.geometry import Cylinder
+    from pydrake.math import RigidTransform
+
+    kappa = curvature_table(curve)
+    check_erosion(curve, offset, tip_radius, kappa)
+    if isinstance(curve, Disc):
+        return Cylinder(curve.radius, thickness), 0.0, lambda i: (Cylinder(curve.radius - offset, thickness),
+                                                                  RigidTransform())
+    points, sagitta = curve_points(curve, 0.0, curvature=kappa)
+    assert sagitta <= MESH_SAGITTA, f"the hull mesh's chord error {sagitta:.3g} m exceeds {MESH_SAGITTA:g} m"
+    return _prism(points, thickness, "hull"), sagitta, lambda i: tangent_face(curve, offset, 0.0, thickness)
+
+
 def _add_finger(plant, index: int, finger: Finger, clearance: float, settings: DrakeSettings, props,
                 friction: Friction):
     """Parse and weld finger ``index``; returns its joints, tip body, link bodies and (shape, link, geometry id)s."""
@@ -261,7 +336,7 @@ def _add_finger(plant, index: int, finger: Finger, clearance: float, settings: D
     return (proximal[0], distal), tip, links, tip_id, tuple(shapes)
 
 
-def build_drake(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Sequence[Friction], *,
+def build_drake(fingers: Sequence[Finger], polygon: ConvexPolygon | CurvedObject, frictions: Sequence[Friction], *,
                 gravity_in_hand: Sequence[float] = (0.0, -9.81), object_mass: float | None = None,
                 object_inertia: float | None = None, tip_clearance: Sequence[float | None] | None = None,
                 settings: DrakeSettings = DrakeSettings()) -> DrakeHand:
@@ -269,17 +344,18 @@ def build_drake(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Se
 
     Args:
         fingers: The fingers (from URDF files), finger i touching contact i.
-        polygon: The object.
+        polygon: The object: a convex polygon or a curved object.
         frictions: Each contact's friction (``CoulombFriction(μ_s, μ_k)``; Drake's discrete solver uses μ_k).
         gravity_in_hand: Gravity [m/s²] in the hand frame.
-        object_mass: The object's mass [kg] (default: the polygon's).
-        object_inertia: The object's inertia [kg m²] (default: the polygon's).
+        object_mass: The object's mass [kg] (default: the object's).
+        object_inertia: The object's inertia [kg m²] (default: the object's).
         tip_clearance: Per finger, the distal link's tip clearance [m] (None: the default).
         settings: :class:`DrakeSettings`.
 
     Raises:
         FingerModelError: a finger has no URDF file, or one Drake cannot parse, or a shape Drake cannot take.
-        InvalidParameterError: bad arguments, or a tip radius the object cannot be eroded by.
+        InvalidParameterError: bad arguments, or a tip radius the object cannot be eroded by (a polygon's edge
+            would vanish; a curve's smallest radius of curvature is below r − ``contact_depth``).
     """
     require_drake()
     from pydrake.geometry import CollisionFilterDeclaration, GeometrySet
@@ -289,7 +365,7 @@ def build_drake(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Se
     from pydrake.systems.framework import DiagramBuilder
 
     fingers = expect_sequence_of("fingers", fingers, Finger, "Finger (Finger.from_urdf)")
-    expect_type("polygon", polygon, ConvexPolygon, "a ConvexPolygon")
+    expect_type("polygon", polygon, (ConvexPolygon, CurvedObject), "a ConvexPolygon or a CurvedObject")
     expect_type("settings", settings, DrakeSettings, "a DrakeSettings")
     frictions = expect_sequence_of("frictions", frictions, Friction, "Friction")
     m = len(fingers)
@@ -302,7 +378,15 @@ def build_drake(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Se
     mass = as_positive_float("object_mass", polygon.mass if object_mass is None else object_mass)
     inertia = as_positive_float("object_inertia", polygon.inertia if object_inertia is None else object_inertia)
     s = settings
-    tip_vertices = eroded_vertices(polygon, s.tip_radius - s.contact_depth, "tip_radius")
+    offset, sagitta, curved = s.tip_radius - s.contact_depth, 0.0, isinstance(polygon, CurvedObject)
+    if curved:
+        hull_shape, sagitta, tips_prism = _curve_prisms(polygon, offset, s.tip_radius, s.object_thickness)
+    else:
+        tip_vertices = eroded_vertices(polygon, offset, "tip_radius")
+        hull_shape = _prism(polygon.vertices, s.object_thickness, "hull")
+
+        def tips_prism(i: int):
+            return _prism(tip_vertices, s.object_thickness, f"tips{i}"), RigidTransform()
 
     builder = DiagramBuilder()
     config = MultibodyPlantConfig(time_step=s.time_step, contact_model="point", discrete_contact_approximation=
@@ -314,16 +398,16 @@ def build_drake(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Se
         mass, np.zeros(3), RotationalInertia(inertia, inertia, inertia)))  # (only the z moment matters)
     planar = plant.AddJoint(PlanarJoint("object_planar", plant.world_frame(), body.body_frame()))
     link_props = _properties(s.point_contact_stiffness, s.hunt_crossley_dissipation, None)
-    hull = plant.RegisterCollisionGeometry(body, RigidTransform(), _prism(polygon.vertices, s.object_thickness,
-                                                                          "hull"), "hull", link_props)
+    hull = plant.RegisterCollisionGeometry(body, RigidTransform(), hull_shape, "hull", link_props)
     geometries: dict = {hull: ("object", -1, -1)}
     joints, tips, links, mus, sets = [], [], [], [], []
     for i, finger in enumerate(fingers):
         clearance = default_tip_clearance(finger) if clearances[i] is None else as_positive_float(
             "tip_clearance", clearances[i], allow_zero=True)
         pair, tip, link_bodies, tip_id, shapes = _add_finger(plant, i, finger, clearance, s, link_props, frictions[i])
+        shape, pose = tips_prism(i)
         face = plant.RegisterCollisionGeometry(
-            body, RigidTransform(), _prism(tip_vertices, s.object_thickness, f"tips{i}"), f"tips{i}",
+            body, pose, shape, f"tips{i}",
             _properties(s.point_contact_stiffness, s.hunt_crossley_dissipation, frictions[i]))
         joints.append(pair)
         tips.append(tip)
@@ -342,10 +426,17 @@ def build_drake(fingers: Sequence[Finger], polygon: ConvexPolygon, frictions: Se
     declaration.ExcludeBetween(GeometrySet([g for _, _, shapes in sets for g in shapes]),
                                GeometrySet([face for _, face, _ in sets]))
     manager.Apply(declaration)
+    face_filter = None
+    if curved and not isinstance(polygon, Disc):
+        face_filter = CollisionFilterDeclaration()
+        for i, (tip_id, face, _) in enumerate(sets):
+            face_filter.ExcludeBetween(GeometrySet([face]), GeometrySet([g for g in geometries if g != tip_id]))
+        manager.Apply(face_filter)
     plant.Finalize()
     diagram = builder.Build()
     return DrakeHand(diagram, plant, np.array([j.position_start() for pair in joints for j in pair]),
                      np.array([j.velocity_start() for pair in joints for j in pair]),
                      np.arange(planar.position_start(), planar.position_start() + 3),
                      np.arange(planar.velocity_start(), planar.velocity_start() + 3), tuple(tips), geometries,
-                     body, tuple(links), tuple(mus), s)
+                     body, tuple(links), tuple(mus), s, sagitta, scene_graph, tuple(face for _, face, _ in sets),
+                     face_filter)

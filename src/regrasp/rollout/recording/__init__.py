@@ -31,7 +31,8 @@ phase series are then NaN.
 logs every point as (1000 x, -1000 y): the picture is upright (gravity points down the screen) and values read off
 the viewer are mm with the sign of y flipped.
 
-* ``scene/object``: the polygon at the plant's pose (``polygon.vertices`` through X).
+* ``scene/object``: the object at the plant's pose: a polygon's ``vertices`` through X, a curved object's outline
+  (:mod:`~regrasp.rollout.recording.outline`: evenly in ξ, every chord within 0.05 mm of the curve).
 * ``scene/desired``: the desired pose (``reference(t)``'s first three entries), a faint ghost.
 * ``scene/fingers/<finger>``: each link's URDF collision shape as its outline in the plane
   (cylinders and boxes are rectangles, capsules stadiums): the shape's points, placed by Pinocchio
@@ -46,12 +47,14 @@ the viewer are mm with the sign of y flipped.
   (``ControlOutput.contact_forces``), thinner.
 * ``scene/contacts/cones``: each friction cone as two rays of ``cone_length`` mm around the inward
   normal, at :math:`\pm\arctan\mu_s` and green while the contact is fixed, at
-  :math:`\pm\arctan\mu_k` and orange while it slides, grey (at :math:`\mu_s`) once separated.
-* ``scene/envelope/safe`` and ``scene/envelope/danger``: each drawn edge's feasible set as thick
-  segments drawn just outside the edge, in the finger's colour, with the last ``danger_fraction``
-  of each interval's width at both ends in red: the supervisor's samples (``SupervisorOutput.envelopes``,
-  each contact's own edge) for a supervised record, else :class:`~regrasp.envelope.finger_envelope.FingerEnvelope`
-  ``.at`` the plant's current pose (the ``envelope_edges``).
+  :math:`\pm\arctan\mu_k` and orange while it slides, grey (at :math:`\mu_s`) once separated. On a curved
+  object the normal (and the force arrows' frame) is the one at the contact's ξ of the step.
+* ``scene/envelope/safe`` and ``scene/envelope/danger``: each drawn edge's feasible set as thick segments drawn just
+  outside the edge (3 mm, and 3 mm further for each other envelope drawn along it; on a curved object polylines
+  along the curve at that distance outside it), in the finger's colour, with the last ``danger_fraction`` of each
+  interval's width at both ends in red: the supervisor's samples (``SupervisorOutput.envelopes``, each contact's own
+  edge) for a supervised record, else :class:`~regrasp.envelope.finger_envelope.FingerEnvelope` ``.at`` the plant's
+  current pose (the ``envelope_edges``).
 * ``scene/failure`` (logged once, by ``log_failure``, at the failure's time and the last step): the failure
   marked in red, labelled with its kind, finger and time (short, to stay in the view; the reason is in
   ``events``): a collision's link
@@ -87,10 +90,10 @@ kinds in :data:`~regrasp.rollout.recording.events.WARN_KINDS` (slip, separation,
 or singular, left envelope, slide rejected or aborted, re-plan failed), INFO otherwise; a failure is one ERROR
 line ``FAILURE (<kind>): <reason>``.
 
-**Static data** (logged once; :mod:`~regrasp.rollout.recording.static`): ``model/object`` (the polygon in its own
-frame, mm, with its edge numbers and centre of mass), ``model/setup`` (a Markdown table of the fingers, their
-edges, modes and friction), the styling of every entity above, and the viewer's layout (the blueprint:
-:mod:`~regrasp.rollout.recording.blueprint`).
+**Static data** (logged once; :mod:`~regrasp.rollout.recording.static`): ``model/object`` (the object in its own
+frame, mm, with its edge numbers, a curved object's ξ = 0 marked, and its centre of mass), ``model/setup`` (a
+Markdown table of the fingers, their edges, modes and friction), the styling of every entity above, and the viewer's
+layout (the blueprint: :mod:`~regrasp.rollout.recording.blueprint`).
 
 **Cost.** Per logged step the recorder keeps what the step needs: Pinocchio forward kinematics
 (the joint frames and the chain), without a supervisor one ``FingerEnvelope.at`` per drawn edge

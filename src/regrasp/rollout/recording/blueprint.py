@@ -9,6 +9,7 @@ import rerun.blueprint as rrb
 
 from ...plants.simulation import PlantLike
 from .hand import HandDrawing
+from .outline import outline_in
 from .style import MM
 
 __all__ = ["blueprint", "scene_bounds"]
@@ -21,7 +22,7 @@ def scene_bounds(plant: PlantLike) -> rrb.VisualBounds2D:
     pts = [f.joint1_in_hand for f in fingers]
     st = plant.state
     if st is not None:
-        pts += list(plant.polygon.vertices_in(st.X))
+        pts += list(outline_in(plant.polygon, st.X))
         pts += [p for i, f in enumerate(fingers) for p in f.joint_positions_in_hand(st.q[2 * i:2 * i + 2])]
     else:
         pts += [f.joint1_in_hand + s * f.reach[1] for f in fingers for s in (-1.0, 1.0)]

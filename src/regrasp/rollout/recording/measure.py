@@ -2,6 +2,12 @@
 without ``supervision``): ξ from the fingertips, the envelopes evaluated here
 (:class:`~regrasp.envelope.finger_envelope.FingerEnvelope`, reused while the object moves less than a tolerance),
 the forces from the step's :class:`~regrasp.plants.project.state.PlantStep` or one KKT solve at the logged state.
+
+On a curved object (:mod:`regrasp.core.curves`) a tip's ξ is its foot on the curve
+(:meth:`~regrasp.core.curves.base.CurvedObject.project_floats`) within half a perimeter of the contact's ξ at the
+previous logged step (at first, the plant's :attr:`~regrasp.plants.project.state.PlantContact.xi`), so that ξ is
+continuous however far a contact slides round; each envelope is sampled ``near`` its previous sample's foot (at
+first, the contact's ξ), and the band plotted is the feasible interval nearest ξ modulo the perimeter.
 """
 
 from __future__ import annotations
@@ -12,6 +18,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ...core.contact import ContactMode, coefficients, cone_margin
+from ...core.curves import CurvedObject
 from ...core.exceptions import RegraspError
 from ...dynamics.control import ControlOutput
 from ...envelope.finger_envelope import EnvelopeSample, FingerEnvelope
@@ -52,6 +59,8 @@ class PlantMeasure:
         self.plant_forces = plant_forces
         self._envelopes: dict[tuple[int, int], FingerEnvelope] = {}
         self._samples: dict[tuple[int, int], tuple[tuple[float, float, float], EnvelopeSample]] = {}
+        self.curve = plant.polygon if isinstance(plant.polygon, CurvedObject) else None
+        self._xi = [c.xi for c in plant.contacts]  # a curve's contacts' last ξ (each foot is sought near it)
         for i, c in enumerate(plant.contacts):
             self.envelope(i, c.edge)
             for e in (envelope_edges[i] if envelope_edges is not None else ()):
@@ -85,9 +94,15 @@ class PlantMeasure:
         contacts = plant.contacts
         xi = []
         edges = []
+        curve = self.curve
         for i, c in enumerate(contacts):
-            e = self.edges[c.edge]
             edges.append(c.edge)
+            if curve is not None:  # the foot on the curve, near the contact's last ξ
+                px, py = (RT @ (tips[i] - origin)).tolist()
+                xi.append(curve.project_floats(px, py, self._xi[i])[0])
+                self._xi[i] = xi[-1]
+                continue
+            e = self.edges[c.edge]
             xi.append(float(e.xi_direction @ (RT @ (tips[i] - origin) - e.xi_origin)))
         modes = [c.mode for c in contacts]
         surface = None
@@ -131,7 +146,11 @@ class PlantMeasure:
                     if abs(x - cx) <= tol and abs(y - cy) <= tol and abs(beta - cb) * scale <= tol:
                         samples[(i, edge)] = cached[1]
                         return cached[1]
-                found = samples[(i, edge)] = self.envelope(i, edge).at(X, st.t)
+                if curve is None:
+                    found = self.envelope(i, edge).at(X, st.t)
+                else:  # near the previous sample's foot (at first, the contact's ξ)
+                    found = self.envelope(i, edge).at(X, st.t, near=xi[i] if cached is None else cached[1].xi_foot)
+                samples[(i, edge)] = found
                 self._samples[(i, edge)] = ((x, y, beta), found)
             return found
 
@@ -143,6 +162,8 @@ class PlantMeasure:
             band = (nan, nan)
             if modes[i] is not ContactMode.SEPARATED:
                 feasible = sample(i, contacts[i].edge).feasible
+                if curve is not None:  # each interval's representative nearest ξ (ξ is unbounded)
+                    feasible = [_nearest_turn(iv, xi[i], curve.perimeter) for iv in feasible]
                 if feasible:
                     band = min(feasible, key=lambda iv: 0.0 if iv[0] <= xi[i] <= iv[1]
                                else min(abs(xi[i] - iv[0]), abs(xi[i] - iv[1])))
@@ -156,4 +177,11 @@ class PlantMeasure:
                         fn + ft + pfn + pft, margin + pmargin, bands, law_xi, nan_m, nan_m)
         pose, ghost = poses(X, desired)
         return StepRow(pose, ghost, frames, chains, np.array(edges, dtype=np.intp), mode_codes(modes), surface,
-                       predicted, drawn_segments, values)
+                       predicted, drawn_segments, values, np.array(xi, dtype=float))
+
+
+def _nearest_turn(interval: tuple[float, float], xi: float, period: float) -> tuple[float, float]:
+    """``interval`` [m] moved by the whole number of periods [m] that brings its middle nearest ``xi`` [m]."""
+    lo, hi = interval
+    shift = period * round((xi - 0.5 * (lo + hi)) / period)
+    return lo + shift, hi + shift

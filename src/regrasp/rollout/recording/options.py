@@ -176,10 +176,11 @@ def checked_desired(desired_pose: ArrayLike | None) -> np.ndarray | None:
 
 
 def checked_plant_state(plant: object, recorder_plant: PlantLike) -> PlantState:
-    """The state of ``plant``: the recorder's plant, or one with as many fingers and an object of as many edges."""
+    """The state of ``plant``: the recorder's plant, or one with as many fingers and an object of as many edges (a
+    curved object: one face)."""
     m = recorder_plant.hand.m
     if plant is not recorder_plant and (not isinstance(plant, PlantLike) or plant.hand.m != m
-                                        or plant.polygon.n_vertices != recorder_plant.polygon.n_vertices):
+                                        or len(plant.polygon.edges) != len(recorder_plant.polygon.edges)):
         raise InvalidParameterError("plant", plant, f"a plant with the recorder's {m} fingers and object")
     if plant.state is None:
         raise InvalidParameterError("plant.state", None, "a state: call plant.reset() first")

@@ -61,6 +61,7 @@ from .events import WARN_KINDS, PlantEventCursor, event_line, failure_line
 from .hand import HandDrawing
 from .measure import PlantMeasure
 from .options import checked_desired, checked_options, checked_plant_state, checked_step, checked_time
+from .outline import closed_outline
 from .rows import MODE_CODES, PHASE_CODES, Layout, StepRow, SupervisedStep, supervised_row
 from .scene import Scene, failure_marker
 from .static import log_static
@@ -167,7 +168,7 @@ class RolloutRecorder:
             self._layout, plant, envelope_edges=options.envelope_edges, geometry=options.envelope_geometry,
             tolerance=options.envelope_tolerance, plant_forces=options.plant_forces)
         polygon = plant.polygon
-        self._object_closed = np.vstack([polygon.vertices, polygon.vertices[:1]])
+        self._object_closed = closed_outline(polygon)  # (a curve's: its outline within 0.05 mm)
         scene = Scene(self._object_closed, hand, polygon.edges, plant.friction, force_scale=options.force_scale,
                       cone_length=options.cone_length, danger_fraction=options.danger_fraction)
 

@@ -91,6 +91,8 @@ class StepRow(NamedTuple):
         predicted: The controller's predicted contact forces in the hand frame (m, 2) [N], or None.
         segments: The feasible intervals drawn (S, 5) (:func:`segments`).
         series: The plotted values.
+        xi: Each contact's ξ now (m,) [m]: where a curved object's contacts' frames are drawn (an edge's frame is
+            the same along it), or None.
     """
 
     pose: np.ndarray
@@ -103,6 +105,7 @@ class StepRow(NamedTuple):
     predicted: np.ndarray | None
     segments: np.ndarray
     series: Series
+    xi: np.ndarray | None = None
 
 
 class SupervisedStep(NamedTuple):
@@ -233,7 +236,7 @@ def supervised_row(layout: Layout, contacts: Sequence[PlantContact], step: Super
     pose, ghost = poses(step.X, desired)
     return StepRow(pose, ghost, frames, chains, np.array(edges, dtype=np.intp), mode_codes(modes), surface,
                    np.array(step.predicted, dtype=float), segments(enumerate(edges), lambda i, _edge: feasible[i]),
-                   values)
+                   values, np.array(step.xi, dtype=float))
 
 
 def mode_codes(modes: Sequence[ContactMode]) -> np.ndarray:

@@ -2,6 +2,10 @@
 :mod:`regrasp.rollout.recording`): :class:`Scene` turns a block of logged steps' rows into each scene entity's
 columns with whole-block numpy operations (outlines, arrows, cones, envelope segments), and
 :func:`failure_marker` draws a failure.
+
+On a curved object (:mod:`regrasp.core.curves`) the outline is the curve's (:mod:`~regrasp.rollout.recording.outline`),
+each contact's cone and forces are drawn in the surface frame at its ξ of the step, and each feasible interval is a
+polyline along the curve, its slot's distance outside it (:func:`~regrasp.rollout.recording.outline.curve_path`).
 """
 
 from __future__ import annotations
@@ -18,17 +22,25 @@ from rerun.components import LineStrip2D, LineStrip2DBatch
 from rerun.encodings import Vec2DBatch
 
 from ...core.contact import ContactMode, Friction
+from ...core.curves import CurvedObject, CurveFace
 from ...core.events import EventKind, Failure, FailureKind
 from ...core.intervals import danger_zones
 from ...core.polygon import Edge
 from .hand import HandDrawing, circle
+from .outline import curve_path
 from .rows import MODE_CODES, StepRow
 from .style import DANGER, MM, MODE_RGBA, colours, rgba
 
 if TYPE_CHECKING:
     from ...plants.simulation import PlantLike
 
-__all__ = ["Scene", "arrows_columns", "failure_label", "failure_marker", "strips_array", "strips_columns"]
+__all__ = ["ENVELOPE_GAP", "Scene", "arrows_columns", "failure_label", "failure_marker", "ragged_strips_array",
+           "strips_array", "strips_columns"]
+
+#: How far outside the edge [m] the first envelope drawn along it is, and each next one further.
+ENVELOPE_GAP = 0.003
+#: The most arcs a scene keeps drawn (object frame) for the next steps that draw the same intervals.
+_ARC_CACHE = 4096
 
 _SIGN = np.sign(MM)  # a vector [m] -> scene [mm]: MM with the force scale instead of 1000
 _CODE_RGBA = np.zeros(max(MODE_CODES.values()) + 1, dtype=np.uint32)  # a mode code's cone colour
@@ -50,11 +62,24 @@ def strips_array(strips: np.ndarray) -> pa.Array:
     return pa.ListArray.from_arrays(offsets, points, type=strip_type)
 
 
-def strips_columns(strips: np.ndarray, lengths: Sequence[int], colours: ArrayLike | None = None
+def ragged_strips_array(points: np.ndarray, sizes: Sequence[int]) -> pa.Array:
+    """Line strips of any lengths, their points one after the other (sum(sizes), 2), ``sizes[k]`` points in strip k,
+    as rerun's line-strip component array (as :func:`strips_array` builds it)."""
+    points = np.ascontiguousarray(points, dtype=np.float32).reshape(-1, 2)
+    sizes = np.asarray(sizes, dtype=np.int64)
+    strip_type = LineStrip2D.arrow_type()
+    values = Vec2DBatch(points).as_arrow_array()
+    if not (pa.types.is_list(strip_type) and strip_type.value_type == values.type):
+        return LineStrip2DBatch(np.split(points, np.cumsum(sizes)[:-1]) if sizes.size else []).as_arrow_array()
+    offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int32)
+    return pa.ListArray.from_arrays(offsets, values, type=strip_type)
+
+
+def strips_columns(strips: np.ndarray | pa.Array, lengths: Sequence[int], colours: ArrayLike | None = None
                    ) -> rr.ComponentColumnList:
-    """``LineStrips2D`` columns of equal-length strips (count, points, 2) [mm], ``lengths[k]`` strips in row k,
-    with a packed colour per strip if given."""
-    batch = strips_array(strips)
+    """``LineStrips2D`` columns of equal-length strips (count, points, 2) [mm] (or strips already as rerun's array,
+    :func:`ragged_strips_array`), ``lengths[k]`` strips in row k, with a packed colour per strip if given."""
+    batch = strips if isinstance(strips, pa.Array) else strips_array(strips)
     if colours is None:
         return rr.LineStrips2D.columns(strips=batch).partition(lengths)
     return rr.LineStrips2D.columns(strips=batch, colors=np.asarray(colours, dtype=np.uint32)).partition(lengths)
@@ -75,9 +100,11 @@ class Scene:
     """How a block of logged steps is drawn.
 
     Args:
-        object_closed: The object's outline, closed (nv + 1, 2) [m], object frame.
+        object_closed: The object's outline, closed (nv + 1, 2) [m], object frame
+            (:func:`~regrasp.rollout.recording.outline.closed_outline`).
         hand: The fingers as drawn.
-        edges: The object's edges (their inward normals and ξ axes, object frame).
+        edges: The object's edges (their inward normals and ξ axes, object frame), or a curved object's one face
+            (its frames at each contact's ξ).
         frictions: Each contact's friction (a fixed contact's cone at μ_s, a sliding one's at μ_k).
         force_scale: Arrow length per newton [mm/N].
         cone_length: Length of the friction cones' rays [mm].
@@ -88,9 +115,14 @@ class Scene:
                  frictions: Sequence[Friction], *, force_scale: float, cone_length: float, danger_fraction: float):
         self.object_closed = object_closed
         self.hand = hand
-        self.normals = np.array([e.inward_normal for e in edges])
-        self.xi_directions = np.array([e.xi_direction for e in edges])
-        self.xi_origins = np.array([e.xi_origin for e in edges])
+        self.curve: CurvedObject | None = None
+        if isinstance(edges[0], CurveFace):
+            self.curve = edges[0].curve
+        else:
+            self.normals = np.array([e.inward_normal for e in edges])
+            self.xi_directions = np.array([e.xi_direction for e in edges])
+            self.xi_origins = np.array([e.xi_origin for e in edges])
+        self._arcs: dict[tuple[float, float, float], np.ndarray] = {}  # a curve's arcs drawn (object frame)
         self.static = np.array([f.static for f in frictions])  # (m,): a fixed contact's cone
         self.kinetic = np.array([f.kinetic for f in frictions])  # a sliding one's
         self.finger_colours = np.array([rgba(f.colour, 200) for f in hand.fingers], dtype=np.uint32)
@@ -146,10 +178,17 @@ class Scene:
     def _contacts(self, rows, c, s, tips):
         """Each contact's force (the plant's and the predicted) as an arrow from its tip, and its friction cone."""
         n, m = tips.shape[:2]
-        edges = np.array([r.edges for r in rows], dtype=np.intp).reshape(n, m)
         cc, ss = c[:, None], s[:, None]
-        normals = _rotate(cc, ss, self.normals[edges])  # (n, m, 2), hand frame
-        tangents = _rotate(cc, ss, self.xi_directions[edges])
+        if self.curve is not None:  # the inward normal at each contact's ξ of the step (none at a ξ not finite)
+            frame = self.curve.local_floats
+            local = np.array([frame(x)[2:4] if math.isfinite(x) else (math.nan, math.nan)
+                              for r in rows for x in r.xi.tolist()]).reshape(n, m, 2)
+            normals = _rotate(cc, ss, local)
+            tangents = np.stack([-normals[..., 1], normals[..., 0]], axis=-1)
+        else:
+            edges = np.array([r.edges for r in rows], dtype=np.intp).reshape(n, m)
+            normals = _rotate(cc, ss, self.normals[edges])  # (n, m, 2), hand frame
+            tangents = _rotate(cc, ss, self.xi_directions[edges])
         have = [k for k, r in enumerate(rows) if r.surface is not None]
         if have:
             f = np.array([rows[k].surface for k in have])  # (h, m, 2)
@@ -182,6 +221,9 @@ class Scene:
         """Each drawn interval as safe and danger segments just outside its edge (3 mm further per slot)."""
         n = len(rows)
         counts = [len(r.segments) for r in rows]
+        if self.curve is not None:
+            yield from self._curve_envelopes(rows, counts, RT, origin)
+            return
         if sum(counts):
             finger, edge, slot, lo, hi = np.concatenate([r.segments for r in rows]).T
             step = np.repeat(np.arange(n), counts)
@@ -189,7 +231,7 @@ class Scene:
             RTs = RT[step.astype(np.intp)]
             nrm = np.stack([c[step] * self.normals[edge, 0] - s[step] * self.normals[edge, 1],
                             s[step] * self.normals[edge, 0] + c[step] * self.normals[edge, 1]], axis=-1)
-            offset = -(0.003 + 0.003 * slot)[:, None] * nrm
+            offset = -(ENVELOPE_GAP + ENVELOPE_GAP * slot)[:, None] * nrm
             (_, lo_zone), (hi_zone, _) = danger_zones(lo, hi, self.danger_fraction)
             wdt = lo_zone - lo
             u = np.stack([lo, lo_zone, hi_zone, hi], axis=1)  # (S, 4)
@@ -207,6 +249,48 @@ class Scene:
             danger_counts = [0] * n
         yield "scene/envelope/safe", strips_columns(safe, counts, safe_colours)
         yield "scene/envelope/danger", strips_columns(danger, danger_counts)
+
+    def _curve_envelopes(self, rows, counts, RT, origin):
+        """:meth:`_envelopes` on a curve: each interval's safe part and danger zones as polylines along the curve,
+        :data:`ENVELOPE_GAP` × (1 + slot) outside it (:func:`~regrasp.rollout.recording.outline.curve_path`)."""
+        n = len(rows)
+        safe, danger, safe_colours, danger_counts = [], [], [], [0] * n
+        if sum(counts):
+            finger, _, slot, lo, hi = np.concatenate([r.segments for r in rows]).T
+            step = np.repeat(np.arange(n), counts)
+            offset = ENVELOPE_GAP + ENVELOPE_GAP * slot
+            (_, lo_zone), (hi_zone, _) = danger_zones(lo, hi, self.danger_fraction)
+            for k, (a, b, c, d, o) in enumerate(zip(lo.tolist(), lo_zone.tolist(), hi_zone.tolist(), hi.tolist(),
+                                                    offset.tolist())):
+                safe.append((step[k], self._arc(b, c, o)))
+                if b > a:
+                    danger += [(step[k], self._arc(a, b, o)), (step[k], self._arc(c, d, o))]
+                    danger_counts[step[k]] += 2
+            safe_colours = self.finger_colours[finger.astype(np.intp)]
+        yield "scene/envelope/safe", strips_columns(_placed(safe, RT, origin), counts, safe_colours)
+        yield "scene/envelope/danger", strips_columns(_placed(danger, RT, origin), danger_counts)
+
+    def _arc(self, lo: float, hi: float, offset: float) -> np.ndarray:
+        """The curve's arc ξ in [lo, hi] [m], ``offset`` [m] outside it, object frame (kept for the next steps)."""
+        key = (lo, hi, offset)
+        arc = self._arcs.get(key)
+        if arc is None:
+            if len(self._arcs) >= _ARC_CACHE:
+                self._arcs.clear()
+            arc = self._arcs[key] = curve_path(self.curve, lo, hi, offset)
+        return arc
+
+
+def _placed(arcs: list[tuple[int, np.ndarray]], RT: np.ndarray, origin: np.ndarray) -> pa.Array:
+    """Polylines (step, points (k, 2) [m], object frame) placed at their step's pose (``RT`` its R(β)ᵀ, ``origin``)
+    as rerun's strips in the scene's millimetres (:func:`ragged_strips_array`)."""
+    if not arcs:
+        return ragged_strips_array(np.zeros((0, 2)), [])
+    sizes = [len(a) for _, a in arcs]
+    at = np.repeat(np.array([k for k, _ in arcs], dtype=np.intp), sizes)
+    points = np.concatenate([a for _, a in arcs])
+    placed = np.einsum("pi,pij->pj", points, RT[at]) + origin[at]
+    return ragged_strips_array(placed * MM, sizes)
 
 
 def _pad_last(points: np.ndarray, n: int) -> np.ndarray:

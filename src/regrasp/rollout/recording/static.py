@@ -9,6 +9,7 @@ import math
 import numpy as np
 import rerun as rr
 
+from ...core.curves import CurvedObject
 from ...plants.simulation import PlantLike
 from .hand import HandDrawing
 from .options import RecorderOptions
@@ -20,7 +21,8 @@ __all__ = ["log_static"]
 
 def log_static(stream: rr.RecordingStream, plant: PlantLike, hand: HandDrawing, options: RecorderOptions,
                object_closed: np.ndarray) -> None:
-    """Log the static data of a recording of ``plant`` (``object_closed``: its outline, closed, [m])."""
+    """Log the static data of a recording of ``plant`` (``object_closed``: its outline, closed, [m]: a curve's as
+    :func:`~regrasp.rollout.recording.outline.closed_outline` samples it)."""
     _log_model(stream, plant, hand, options, object_closed)
     _log_scene_styles(stream, hand)
     _log_series_styles(stream, hand, options)
@@ -28,16 +30,21 @@ def log_static(stream: rr.RecordingStream, plant: PlantLike, hand: HandDrawing, 
 
 def _log_model(stream: rr.RecordingStream, plant: PlantLike, hand: HandDrawing, options: RecorderOptions,
                object_closed: np.ndarray) -> None:
-    """The object in its own frame (outline, edge numbers, centre of mass) and the set-up table."""
+    """The object in its own frame (outline, edge numbers, centre of mass; a curved object's one face marked at
+    ξ = 0) and the set-up table."""
     log = stream.log
     polygon = plant.polygon
-    n_edges = polygon.n_vertices
     log("model/object/outline", rr.LineStrips2D([object_closed * MM], radii=0.6,
                                                 colors=colours([rgba(OBJECT)]), labels=["object"]), static=True)
-    mids = np.array([0.5 * (e.start + e.end) for e in polygon.edges]) * MM
-    log("model/object/edges", rr.Points2D(mids, radii=1.0, colors=colours([rgba(OBJECT)]),
-                                          labels=[f"edge {k}" for k in range(n_edges)], show_labels=True),
-        static=True)
+    if isinstance(polygon, CurvedObject):
+        marks, labels = polygon.points(np.zeros(1)) * MM, ["edge 0 (the boundary): ξ = 0, ξ grows clockwise"]
+        shape = f"{type(polygon).__name__} (perimeter {polygon.perimeter * 1e3:.1f} mm)"
+    else:
+        marks = np.array([0.5 * (e.start + e.end) for e in polygon.edges]) * MM
+        labels = [f"edge {k}" for k in range(polygon.n_vertices)]
+        shape = f"{polygon.n_vertices}-gon"
+    log("model/object/edges", rr.Points2D(marks, radii=1.0, colors=colours([rgba(OBJECT)]), labels=labels,
+                                          show_labels=True), static=True)
     log("model/object/centre_of_mass", rr.Points2D([[0.0, 0.0]], radii=1.5, labels=["centre of mass"]),
         static=True)
     rows = ["| finger | entity | l1, l2 [mm] | base [mm, deg] | configuration | edge | mode | friction |",
@@ -50,7 +57,7 @@ def _log_model(stream: rr.RecordingStream, plant: PlantLike, hand: HandDrawing, 
                     f"| {f.configuration.value} | {c.edge} | {c.mode.value} | {plant.friction[i]} |")
     text = "\n".join([
         "# Rollout set-up", "",
-        f"Object: {n_edges}-gon, mass {polygon.mass:g} kg, inertia {polygon.inertia:.3g} kg m², "
+        f"Object: {shape}, mass {polygon.mass:g} kg, inertia {polygon.inertia:.3g} kg m², "
         f"plant step {plant.dt * 1e3:g} ms.", "",
         *rows, "",
         f"Scene in mm with y flipped (rerun draws y down). Force arrows {options.force_scale:g} mm/N; "
