@@ -133,6 +133,9 @@ T1, T2 = "examples/scenarios/paper_trajectory_1.toml", "examples/scenarios/paper
 T3 = "examples/scenarios/paper_trajectory_2_three_fingers.toml"
 UP = "examples/scenarios/paper_trajectory_2_gravity_up.toml"
 F4, F5 = "examples/scenarios/four_fingers.toml", "examples/scenarios/five_fingers.toml"
+DISC = "examples/scenarios/disc.toml"
+#: The lines of a curved scenario's rollout that the README shows: the result, the tracking error and the margins.
+CURVE_LINES = (r"^\s+result:", r"^\s+object error", r"^\s+smallest")
 STUDY = f"regrasp study {T3} --runs 200 --periods 2 --workers 2 --seed 1 --plot {{out}}"
 STUDY_FIGURES = {n: n for n in ("study_success.png", "study_failure_times.png", "study_margins.png", "study.json")}
 ROBUSTNESS = {k: f"docs/images/robustness/{v}" for k, v in STUDY_FIGURES.items()}
@@ -205,6 +208,13 @@ BLOCKS: dict[str, Block] = {
                          figures=_under("suite_small", SUITE_FIGURES)),
     "suite": Block("regrasp suite --workers 2 --plot {out}", as_printed, slow=True, measured=True,
                    figures=_under("suite", SUITE_FIGURES)),
+    # curved objects (issue 28): minutes each (a curve's force tables)
+    "schedule-disc": Block(f"regrasp plan {DISC} --regrasp --plot {{out}}", after(r"regrasp schedule"), slow=True,
+                           figures={"regrasp.png": "docs/images/curves/disc_regrasp.png"}),
+    "simulate-disc": Block(f"regrasp simulate {DISC} --periods 2 --plot {{out}}", lines(*CURVE_LINES), slow=True,
+                           figures={"regrasp_rollout.png": "docs/images/curves/disc_rollout.png"}),
+    "simulate-disc-mujoco": Block(f"regrasp simulate {DISC} --periods 2 --plant mujoco", lines(*CURVE_LINES),
+                                  slow=True),
     # speed: measured, never checked
     "benchmarks": Block("python benchmarks/run.py", as_printed, slow=True, measured=True),
     "first-run": Block("python benchmarks/first_run.py", slow=True, measured=True),

@@ -118,7 +118,8 @@ def _envelope_axes(ax, plan: PlanResult, finger: FingerPlan, feasible: bool):
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8,
               frameon=False)  # (beside the plot: it hid the sets)
     ax.set_ylabel("ξ [mm]")
-    ax.set_title(f"{finger.name}: edge {finger.edge}, {finger.configuration} configuration")
+    ax.set_title(f"{finger.name}: {'the boundary' if curved else f'edge {finger.edge}'}, {finger.configuration} "
+                 "configuration")
 
 
 def plot_reachable(plan: PlanResult, path: str | Path) -> Path:
