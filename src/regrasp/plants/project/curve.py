@@ -45,8 +45,7 @@ its surface frame is the foot's (:math:`n^*, t^*`), its gap δ. The tangent line
 surface-frame forces and the ``left_edge`` check (which never fires: a closed curve has no end).
 
 **Collision checks** run against the curve's own coal shape
-(:meth:`~regrasp.core.curves.base.CurvedObject.to_coal`; :class:`CurveCollisionShape`), or, where coal cannot build
-that hull (an ellipse's at the curve's tolerance has too many vertices), a coarser circumscribed polygon's.
+(:meth:`~regrasp.core.curves.base.CurvedObject.to_coal`; :class:`CurveCollisionShape`).
 """
 
 from __future__ import annotations
@@ -60,7 +59,7 @@ import coal
 
 from ...core.contact import ContactMode
 from ...core.curves import CurvedObject
-from ...core.exceptions import InvalidParameterError, PolygonError
+from ...core.exceptions import InvalidParameterError
 from ...core.polygon import ConvexPolygon
 from .state import EdgeGeometry, PlantContact, contact_xi
 
@@ -73,9 +72,6 @@ __all__ = ["CURVE_SLIDING", "CurveCollisionShape", "Foot", "collision_object", "
 #: seventh entry, a curvature [1/m], overrides the foot's (:mod:`regrasp.plants.project.kinks`).
 CURVE_SLIDING = "sliding on a curve"
 
-#: The coarser circumscribed polygons' gaps (times the diameter) a collision shape falls back to, and the most
-#: vertices coal's hull of a prism takes (:meth:`ConvexPolygon.to_coal`: 252, measured with coal 3).
-COARSE_SAGITTA_RTOL, MAX_COAL_VERTICES = (1e-4, 1e-3, 1e-2), 250
 
 _MODE_FIXED, _MODE_SLIDING, _MODE_SEPARATED = ContactMode.FIXED, ContactMode.SLIDING, ContactMode.SEPARATED
 
@@ -207,17 +203,8 @@ class CurveCollisionShape(ConvexPolygon):
     curve: CurvedObject | None = None
 
     def to_coal(self, half_thickness: float) -> coal.CollisionGeometry:
-        """The curve's coal shape, z in ``[-h, h]`` [m] (object frame); where coal cannot build it (a hull of more
-        than about 250 vertices: its vertices' neighbour counts overflow), the prism of a coarser circumscribed
-        polygon (its corners at most 1e-4, 1e-3 or 1e-2 × the diameter off the curve, the first coal takes)."""
-        try:
-            return self.curve.to_coal(half_thickness)
-        except PolygonError:
-            for rtol in COARSE_SAGITTA_RTOL:
-                corners = self.curve.circumscribed_polygon(rtol)
-                if len(corners) <= MAX_COAL_VERTICES:
-                    return ConvexPolygon(corners, self.mass, self.inertia).to_coal(half_thickness)
-            raise
+        """The curve's coal shape, z in ``[-h, h]`` [m] (object frame)."""
+        return self.curve.to_coal(half_thickness)
 
 
 def collision_object(obj: ConvexPolygon | CurvedObject) -> ConvexPolygon:
