@@ -34,46 +34,61 @@ def _runs_of(flags):
     return runs
 
 
-@pytest.mark.parametrize("name", list(CURVES))
-@pytest.mark.parametrize("mode", range(len(MODES)))
-def test_feasible_runs_match_a_linear_program(name, mode):
-    rng = np.random.default_rng(7 + mode)
-    curve = CURVES[name]
-    P = curve.perimeter
-    grids = [c + 0.002 * np.arange(-5, 6) for c in (0.75 * P, 0.25 * P, 0.5 * P)]
-    n = len(grids[0])
+def _check_against_lp(curve, grids, ratios, mu_s, axis, rng, scale=1.0):
+    """Compares feasible_runs's runs with the LP's on sampled rows of two layers (a random required wrench, its
+    accelerations times ``scale``); returns the number of feasible cells seen."""
+    m, n = len(grids), len(grids[0])
     maps = [wrench_maps(curve, g) for g in grids]
-    ratios, mu_s = MODES[mode], (0.6, 0.7, 0.6)
     floors = LIMITS.floors(ratios)
     T = 2
-    polygons, counts = np.zeros((T, 3, n, 12, 2)), np.zeros((T, 3, n), dtype=int)
-    for i in range(3):
+    polygons, counts = np.zeros((T, m, n, 12, 2)), np.zeros((T, m, n), dtype=int)
+    for i in range(m):
         q = mode_polygon(ratios[i], mu_s[i], floors[i], LIMITS)
         polygons[:, i, :, :len(q)], counts[:, i] = q, len(q)
     beta = rng.uniform(-0.5, 0.5, T)
-    acc = np.column_stack([rng.normal(size=(T, 2)) * 3, rng.normal(size=T) * 30])
-    gravity = np.array([0.0, -9.81])
+    acc = np.column_stack([rng.normal(size=(T, 2)) * 3, rng.normal(size=T) * 30]) * scale
+    gravity = np.array([0.0, -9.81]) * scale
     F = curve.mass * (acc[:, :2] - gravity)
     c, s = np.cos(beta), np.sin(beta)
     wrench = np.column_stack([c * F[:, 0] + s * F[:, 1], -s * F[:, 0] + c * F[:, 1], curve.inertia * acc[:, 2]])
-    axis = mode % 3
-    runs = feasible_runs(maps, polygons, counts, wrench, np.ones((T, 3, n), dtype=bool), axis, 1e-9)
-    others = list(itertools.product(*[range(n) for j in range(3) if j != axis]))
+    runs = feasible_runs(maps, polygons, counts, wrench, np.ones((T, m, n), dtype=bool), axis, 1e-9)
+    others = list(itertools.product(*[range(n) for j in range(m) if j != axis]))
     checked = 0
     for k in range(T):
-        for row in rng.choice(len(others), 6, replace=False):
+        for row in rng.choice(len(others), min(6, len(others)), replace=False):
             flags = []
             for cell in range(n):
                 cells = list(others[row])
                 cells.insert(axis, cell)
-                xi = np.array([grids[i][cells[i]] for i in range(3)])
+                xi = np.array([grids[i][cells[i]] for i in range(m)])
                 geo = tangent_geometry(curve, xi, mass=curve.mass, inertia=curve.inertia, gravity=gravity)
                 flags.append(force_system(geo, beta[k], acc[k], xi, ratios, mu_s, LIMITS).feasible)
             lp = _runs_of(flags)
             longest = max(lp, key=lambda r: r[1] - r[0]) if lp else [-1, -2]
             assert list(runs[k, row]) == longest, (k, row, flags)
             checked += sum(flags)
+    return checked
+
+
+@pytest.mark.parametrize("name", list(CURVES))
+@pytest.mark.parametrize("mode", range(len(MODES)))
+def test_feasible_runs_match_a_linear_program(name, mode):
+    curve = CURVES[name]
+    P = curve.perimeter
+    grids = [c + 0.002 * np.arange(-5, 6) for c in (0.75 * P, 0.25 * P, 0.5 * P)]
+    checked = _check_against_lp(curve, grids, MODES[mode], (0.6, 0.7, 0.6), mode % 3, np.random.default_rng(7 + mode))
     assert checked > 0  # (some cells are feasible: the test sees both verdicts)
+
+
+@pytest.mark.parametrize("name", ["disc", "rounded box"])
+def test_two_contacts_one_sliding_match_a_linear_program(name):
+    """Two contacts, the other one sliding: its summand is a segment and so is W, whose ends (the slider's force
+    bounds) take half-planes along it (a segment's own direction among the candidates)."""
+    curve = CURVES[name]
+    P = curve.perimeter
+    grids = [c + 0.004 * np.arange(-10, 11) for c in (0.25 * P, 0.75 * P)]
+    checked = _check_against_lp(curve, grids, (None, 0.4), (0.8, 0.8), 0, np.random.default_rng(11), scale=0.3)
+    assert checked > 0
 
 
 def test_tangent_geometry_reproduces_the_wrench_of_a_force_at_the_point():

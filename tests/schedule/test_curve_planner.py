@@ -35,23 +35,36 @@ def test_a_disc_turned_past_any_fixed_grasp_gets_a_schedule_that_passes_the_inde
     assert margins["envelope"] >= SETTINGS.envelope_margin - 1e-9
 
 
-def test_the_curve_force_tables_agree_with_the_lp_on_sampled_states(disc):
+@pytest.fixture(scope="module")
+def disc_problem(disc):
+    return build_problem(disc, SETTINGS, t_end=0.6)
+
+
+@pytest.mark.parametrize("which", ["layer", "middle"])
+def test_the_curve_force_tables_agree_with_the_lp_on_sampled_states(disc, disc_problem, which):
     """Every cell the layer tables admit has forces by the LP: the tables never admit an infeasible state (they may
-    refuse more: the envelopes, the joint torque limits, the position margin and Painlevé's condition cut them)."""
-    problem = build_problem(disc, SETTINGS, t_end=0.6)
+    refuse more: the envelopes, the joint torque limits, the position margin and Painlevé's condition cut them).
+    The middle tables likewise at the middle of each move, the sliders half a cell back, one slider's moves too (on
+    an arc the normal turns between the cells)."""
+    problem = disc_problem
     lat, rng = problem.lattice, np.random.default_rng(3)
     friction = problem.friction
     limits = dataclasses.replace(problem.limits)
     mu_s = [f.static for f in friction]
-    sample = disc.trajectory.sample(problem.times)
+    times = problem.times if which == "layer" else np.append(problem.times[0],
+                                                             0.5 * (problem.times[1:] + problem.times[:-1]))
+    sample = disc.trajectory.sample(times)
+    lo_table, hi_table = (lat.lo, lat.hi) if which == "layer" else (lat.mid_lo, lat.mid_hi)
+    h = problem.settings.xi_resolution
     axis, m = lat.axis, len(problem.grids)
     others = [i for i in range(m) if i != axis]
     sizes = [len(problem.grids[i]) for i in others]
+    movers = [mu for mu, d in enumerate(lat.combos) if which == "layer" or np.count_nonzero(d) == 1]
     checked = 0
     for _ in range(60):
-        k, mu = int(rng.integers(len(problem.times))), int(rng.integers(len(lat.combos)))
+        k, mu = int(rng.integers(1, len(problem.times))), int(rng.choice(movers))
         row = int(rng.integers(int(np.prod(sizes))))
-        lo, hi = float(lat.lo[k, row, mu]), float(lat.hi[k, row, mu])
+        lo, hi = float(lo_table[k, row, mu]), float(hi_table[k, row, mu])
         if not lo <= hi:
             continue
         cells = np.unravel_index(row, sizes)
@@ -59,12 +72,13 @@ def test_the_curve_force_tables_agree_with_the_lp_on_sampled_states(disc):
         for i, c in zip(others, cells):
             xi[i] = problem.grids[i][c]
         d = lat.combos[mu]
+        back = 0.0 if which == "layer" else 0.5 * h * d
         ratios = [None if d[i] == 0 else d[i] * friction[i].kinetic for i in range(m)]
         grid = problem.grids[axis]
         inside = np.flatnonzero((grid >= lo) & (grid <= hi))
         for c in inside:
             xi[axis] = grid[c]
-            assert force_lp(disc.polygon, [0] * m, sample.pose[k], sample.acceleration[k], xi, ratios, mu_s,
+            assert force_lp(disc.polygon, [0] * m, sample.pose[k], sample.acceleration[k], xi - back, ratios, mu_s,
                             ForceLimits(limits.f_min, limits.f_max, limits.cone_margin,
                                         friction_margin=limits.friction_margin,
                                         slider_floor=limits.slider_floor, holder_preload=limits.holder_preload),

@@ -32,6 +32,8 @@ def _random_lattice(rng, m, cells, layers, p_max, breakaway):
 
     lo, hi = table()
     mid_lo, mid_hi = table()
+    single = np.count_nonzero(combos, axis=1) < 2  # (as on edges: no middle table for fewer than two sliders)
+    mid_lo[:, :, single], mid_hi[:, :, single] = -np.inf, np.inf
     break_lo = break_hi = None
     slots = np.full((M, 2 ** m), -1, dtype=np.int64)
     if breakaway:  # a random check (or none) per move vector and starter mask
@@ -83,8 +85,8 @@ def _transition_ok(lat, k, prev_cells, prev_mu, cells, mu):
     u = index[union]
     if u not in (mu, prev_mu) and not _inside(lat.lo, lat.hi, k - 1, _other(lat, prev_cells), u, x_old):
         return False
-    if np.count_nonzero(d) >= 2 and not _inside(lat.mid_lo, lat.mid_hi, k, _other(lat, cells), mu, x_new):
-        return False  # (the middle's table is indexed by the new cells)
+    if not _inside(lat.mid_lo, lat.mid_hi, k, _other(lat, cells), mu, x_new):
+        return False  # (the middle's table is indexed by the new cells; +-inf where no middle is checked)
     if lat.break_lo is not None:  # the starting contacts break away together, the others in the union move
         bits = sum(1 << i for i, (di, ei) in enumerate(zip(d, e)) if di != 0 and ei == 0)
         slot = lat.breakaway_slot[u, bits]

@@ -15,14 +15,16 @@ and :math:`q_i` ranges over a convex polygon :math:`Q_i` of the mode (a fixed co
 :math:`w = (R(\beta)^T m_o (a - g),\ I_o\alpha)` lies in the Minkowski sum :math:`\sum_i A_i Q_i`.
 
 **Exact test per cell.** With the other contacts' cells given, their sum :math:`W = \sum_{j \ne a} A_j Q_j` is a
-3-D polytope whose facet normals are among: each summand's plane normal :math:`A_j e_1 \times A_j e_2`, the
-cross products of two summands' edges, and a summand's edge crossed with its own plane normal (its in-plane
-facets when W is flat). So :math:`w - A_a q_a \in W` iff :math:`u \cdot (w - A_a q_a) \le h_W(u)` for each such
-u (:math:`h_W` the support function, a sum over the summands' vertices): half-planes in :math:`q_a`. The axis
-contact's cell is feasible iff :math:`Q_a` clipped by them is not empty. The compiled kernel
-(:func:`feasible_runs`) does this for every layer, cell of the other contacts and cell of the axis contact, and
-reports per row the longest run of consecutive feasible cells (the lattice's tables hold one interval per row:
-a shorter second run is dropped, so the tables never admit an infeasible cell).
+3-D polytope whose facet normals are among: each summand's plane normal :math:`A_j e_1 \times A_j e_2`, the cross
+products of two summands' edges, a summand's edge crossed with its own plane normal (its in-plane facets when W is
+flat) and a segment summand's own direction (the ends of a W of one dimension). A candidate is kept only if the
+summand edges it comes from lie in its face (the others' half-planes repeat the facets'). So :math:`w - A_a q_a \in
+W` iff :math:`u \cdot (w - A_a q_a) \le h_W(u)` for each such u (:math:`h_W` the support function, a sum over the
+summands' vertices): half-planes in :math:`q_a`. The axis contact's cell is feasible iff :math:`Q_a` clipped by
+them is not empty. The compiled kernel (:func:`feasible_runs`) does this for every layer, cell of the other
+contacts and cell of the axis contact, and reports per row the longest run of consecutive feasible cells (the
+lattice's tables hold one interval per row: a shorter second run is dropped, so the tables never admit an
+infeasible cell).
 
 :func:`tangent_geometry` turns positions on a curve into the :class:`~regrasp.schedule.force_polytope.ForceGeometry`
 of the contacts' tangent lines there: at those positions its force balance is the curve's exactly (the moment
@@ -94,90 +96,73 @@ def mode_polygon(ratio: float | None, static_mu: float, floor: float, limits: Fo
 
 
 @numba.njit(cache=True)
-def _cross3(a, b):
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+def _clip_into(src, count, g0, g1, beta, dst):
+    """The convex polygon ``src[:count]`` cut to g·q >= beta (Sutherland–Hodgman) written to ``dst``; returns its
+    vertex count (``dst`` holds at least count + 1 rows)."""
+    k = 0
+    for i in range(count):
+        j = i + 1 if i + 1 < count else 0
+        px, py, qx, qy = src[i, 0], src[i, 1], src[j, 0], src[j, 1]
+        sp, sq = g0 * px + g1 * py - beta, g0 * qx + g1 * qy - beta
+        if sp >= 0.0:
+            dst[k, 0], dst[k, 1] = px, py
+            k += 1
+        if (sp >= 0.0) != (sq >= 0.0):
+            s = sp / (sp - sq)
+            dst[k, 0], dst[k, 1] = px + s * (qx - px), py + s * (qy - py)
+            k += 1
+        if count == 2:  # a segment: its one edge, once
+            if sq >= 0.0:
+                dst[k, 0], dst[k, 1] = qx, qy
+                k += 1
+            break
+    return k
 
 
 @numba.njit(cache=True)
 def _clip(poly, count, g0, g1, beta):
-    """The convex polygon ``poly[:count]`` cut to g·q >= beta (Sutherland–Hodgman); returns (polygon, count)."""
-    out = np.empty((2 * count + 2, 2))
-    k = 0
-    for i in range(count):
-        p, q = poly[i], poly[(i + 1) % count]
-        sp, sq = g0 * p[0] + g1 * p[1] - beta, g0 * q[0] + g1 * q[1] - beta
-        if sp >= 0.0:
-            out[k] = p
-            k += 1
-        if (sp >= 0.0) != (sq >= 0.0):
-            s = sp / (sp - sq)
-            out[k, 0] = p[0] + s * (q[0] - p[0])
-            out[k, 1] = p[1] + s * (q[1] - p[1])
-            k += 1
-        if count == 2:  # a segment: its one edge, once
-            if sq >= 0.0:
-                out[k] = q
-                k += 1
-            break
-    return out, k
+    """:func:`_clip_into` to a new array; returns (polygon, count)."""
+    out = np.empty((count + 2, 2))
+    return out, _clip_into(poly, count, g0, g1, beta, out)
 
 
 @numba.njit(cache=True)
-def _slack(a, dirs, betas, keep, q):
-    """The least slack min_d (A^T u_d)·q - β_d of q over the half-planes (``a``: the axis cell's A); >= 0: q meets
-    every one."""
-    x, y, z = a[0, 0] * q[0] + a[0, 1] * q[1], a[1, 0] * q[0] + a[1, 1] * q[1], a[2, 0] * q[0] + a[2, 1] * q[1]
-    least = np.inf
-    for d in range(len(betas)):
-        if keep[d]:
-            least = min(least, dirs[d, 0] * x + dirs[d, 1] * y + dirs[d, 2] * z - betas[d])
-            if least < 0.0:
-                return least
-    return least
+def _push(dirs, refs, n, x, y, z, j1, v1, j2, v2):
+    """Appends ±(x, y, z) to the candidate directions, each with the summand edges (j, v) it comes from (-1: none;
+    a candidate is a facet normal only if those edges lie in its face)."""
+    dirs[n, 0], dirs[n, 1], dirs[n, 2] = x, y, z
+    dirs[n + 1, 0], dirs[n + 1, 1], dirs[n + 1, 2] = -x, -y, -z
+    for r in range(2):
+        refs[n + r, 0], refs[n + r, 1], refs[n + r, 2], refs[n + r, 3] = j1, v1, j2, v2
+    return n + 2
 
 
 @numba.njit(cache=True)
-def _misses(a, u, beta, poly, count):
-    """Whether every vertex of the polygon ``poly[:count]`` violates (A^T u)·q >= β (the polygon misses it)."""
-    g0 = u[0] * a[0, 0] + u[1] * a[1, 0] + u[2] * a[2, 0]
-    g1 = u[0] * a[0, 1] + u[1] * a[1, 1] + u[2] * a[2, 1]
-    for v in range(count):
-        if g0 * poly[v, 0] + g1 * poly[v, 1] >= beta:
-            return False
-    return True
-
-
-@numba.njit(cache=True)
-def _inside(poly, q, tol):
-    """Whether q lies in the convex CCW polygon (a segment: on it, within ``tol``)."""
-    count = len(poly)
-    if count == 2:
-        dx, dy = poly[1, 0] - poly[0, 0], poly[1, 1] - poly[0, 1]
-        cross = dx * (q[1] - poly[0, 1]) - dy * (q[0] - poly[0, 0])
-        dot = dx * (q[0] - poly[0, 0]) + dy * (q[1] - poly[0, 1])
-        return abs(cross) <= tol * (abs(dx) + abs(dy)) and -tol <= dot <= dx * dx + dy * dy + tol
-    for i in range(count):
-        p, r = poly[i], poly[(i + 1) % count]
-        if (r[0] - p[0]) * (q[1] - p[1]) - (r[1] - p[1]) * (q[0] - p[0]) < -tol:
-            return False
-    return True
+def _on_face(verts, nj, v, d, best, tol):
+    """Whether summand edge (v, v + 1) of the ``nj`` vertices ``verts`` is in its face in direction d (value best)."""
+    w = v + 1 if v + 1 < nj else 0
+    a = d[0] * verts[v, 0] + d[1] * verts[v, 1] + d[2] * verts[v, 2]
+    b = d[0] * verts[w, 0] + d[1] * verts[w, 1] + d[2] * verts[w, 2]
+    return a >= best - tol and b >= best - tol
 
 
 @numba.njit(cache=True)
 def _workspace(m):
-    """The row test's arrays (reused across rows): vertices, plane normals, directions, supports."""
-    n = 4 * m * m * MAX_POLYGON * MAX_POLYGON + 4 * m * MAX_POLYGON + 4 * m
-    return np.zeros((m, MAX_POLYGON, 3)), np.zeros((m, 3)), np.zeros((n, 3)), np.zeros(n), np.zeros(n, dtype=np.bool_)
+    """The row test's arrays (reused across rows): vertices, plane normals, directions, their source edges, supports,
+    kept flags, per-summand maxima, and two polygon buffers."""
+    n = 4 * m * m * MAX_POLYGON * MAX_POLYGON + 6 * m * MAX_POLYGON + 4 * m
+    return (np.zeros((m, MAX_POLYGON, 3)), np.zeros((m, 3)), np.zeros((n, 3)), np.zeros((n, 4), dtype=np.int64),
+            np.zeros(n), np.zeros(n, dtype=np.int64), np.zeros(m), np.zeros((MAX_POLYGON + n + 2, 2)),
+            np.zeros((MAX_POLYGON + n + 2, 2)))
 
 
 @numba.njit(cache=True)
-def _row_run(A, Q, nq, w, env, axis, cells, n_axis, tol, verts, planes, dirs, support, keep):
-    """The longest run (first, last) of feasible axis cells for one layer and one cell of each other contact
-    (``cells``: per contact its cell, the axis's ignored); (-1, -2) when none. ``verts`` ... ``keep``: the
-    workspace (:func:`_workspace`), overwritten."""
+def _directions(A, Q, nq, axis, cells, verts, planes, dirs, refs):
+    """The other contacts' summands A_j Q_j (their vertices in ``verts``, plane normals in ``planes``) and W's
+    candidate facet normals (module docstring; a segment's own direction too, for a W of one dimension); returns
+    their count."""
     m = A.shape[0]
-    # the other contacts' summands: vertices (3-D), plane normals, edges
-    n_dirs = 0
+    n = 0
     for j in range(m):
         if j == axis:
             continue
@@ -185,80 +170,133 @@ def _row_run(A, Q, nq, w, env, axis, cells, n_axis, tol, verts, planes, dirs, su
         for v in range(nq[j, c]):
             for r in range(3):
                 verts[j, v, r] = A[j, c, r, 0] * Q[j, c, v, 0] + A[j, c, r, 1] * Q[j, c, v, 1]
-        planes[j] = _cross3(A[j, c, :, 0], A[j, c, :, 1])
-        dirs[n_dirs] = planes[j]
-        dirs[n_dirs + 1] = -planes[j]
-        n_dirs += 2
+        planes[j, 0] = A[j, c, 1, 0] * A[j, c, 2, 1] - A[j, c, 2, 0] * A[j, c, 1, 1]
+        planes[j, 1] = A[j, c, 2, 0] * A[j, c, 0, 1] - A[j, c, 0, 0] * A[j, c, 2, 1]
+        planes[j, 2] = A[j, c, 0, 0] * A[j, c, 1, 1] - A[j, c, 1, 0] * A[j, c, 0, 1]
+        n = _push(dirs, refs, n, planes[j, 0], planes[j, 1], planes[j, 2], -1, -1, -1, -1)
     for j in range(m):
         if j == axis:
             continue
         nj = nq[j, cells[j]]
+        px, py, pz = planes[j, 0], planes[j, 1], planes[j, 2]
         for v in range(nj):
-            e = verts[j, (v + 1) % nj] - verts[j, v]
-            d = _cross3(e, planes[j])
-            dirs[n_dirs], dirs[n_dirs + 1] = d, -d
-            n_dirs += 2
+            w = v + 1 if v + 1 < nj else 0
+            ex, ey = verts[j, w, 0] - verts[j, v, 0], verts[j, w, 1] - verts[j, v, 1]
+            ez = verts[j, w, 2] - verts[j, v, 2]
+            if nj == 2 and v == 0:
+                n = _push(dirs, refs, n, ex, ey, ez, -1, -1, -1, -1)
+            n = _push(dirs, refs, n, ey * pz - ez * py, ez * px - ex * pz, ex * py - ey * px, j, v, -1, -1)
             for k in range(j + 1, m):
                 if k == axis:
                     continue
                 nk = nq[k, cells[k]]
                 for u in range(nk):
-                    d = _cross3(e, verts[k, (u + 1) % nk] - verts[k, u])
-                    dirs[n_dirs], dirs[n_dirs + 1] = d, -d
-                    n_dirs += 2
-    # normalised, and each direction's support of W
+                    x = u + 1 if u + 1 < nk else 0
+                    fx, fy, fz = verts[k, x, 0] - verts[k, u, 0], verts[k, x, 1] - verts[k, u, 1], \
+                        verts[k, x, 2] - verts[k, u, 2]
+                    n = _push(dirs, refs, n, ey * fz - ez * fy, ez * fx - ex * fz, ex * fy - ey * fx, j, v, k, u)
+    return n
+
+
+@numba.njit(cache=True)
+def _facets(nq, axis, cells, verts, dirs, refs, n_dirs, support, keep, best, w, tol):
+    """Normalises the candidates, keeps W's facet normals among them (a candidate whose source edges are not in its
+    face only repeats the facets' half-planes) and writes the kept ones' offsets (A^T u)·q >= u·w - h_W(u) - tol to
+    ``support``; returns the number kept (their indices first in ``keep``)."""
+    m = verts.shape[0]
+    kept = 0
     for d in range(n_dirs):
-        keep[d] = False
         norm = np.sqrt(dirs[d, 0] ** 2 + dirs[d, 1] ** 2 + dirs[d, 2] ** 2)
         if norm < 1e-14:
             continue
-        dirs[d] /= norm
-        keep[d] = True
-        h = 0.0
+        dirs[d, 0], dirs[d, 1], dirs[d, 2] = dirs[d, 0] / norm, dirs[d, 1] / norm, dirs[d, 2] / norm
+        h, scale = 0.0, 0.0
         for j in range(m):
             if j == axis:
                 continue
-            best = -np.inf
+            top = -np.inf
             for v in range(nq[j, cells[j]]):
                 s = dirs[d, 0] * verts[j, v, 0] + dirs[d, 1] * verts[j, v, 1] + dirs[d, 2] * verts[j, v, 2]
-                if s > best:
-                    best = s
-            h += best
-        support[d] = h
+                top = max(top, s)
+                scale = max(scale, abs(s))
+            best[j] = top
+            h += top
+        slack = 1e-9 * (1.0 + scale)  # (keeping a redundant half-plane is harmless; dropping a facet is not)
+        facet = True
+        for r in range(0, 4, 2):
+            j = refs[d, r]
+            if j >= 0 and not _on_face(verts[j], nq[j, cells[j]], refs[d, r + 1], dirs[d], best[j], slack):
+                facet = False
+        if facet:
+            support[d] = dirs[d, 0] * w[0] + dirs[d, 1] * w[1] + dirs[d, 2] * w[2] - h - tol
+            keep[kept] = d
+            kept += 1
+    return kept
+
+
+@numba.njit(cache=True)
+def _row_run(A, Q, nq, w, env, axis, cells, stretch, tol, work):
+    """The longest run (first, last) of feasible axis cells for one layer and one cell of each other contact
+    (``cells``: per contact its cell, the axis's ignored); (-1, -2) when none. ``stretch``: per axis cell the number
+    of admissible cells from it on without a gap; ``work``: the workspace (:func:`_workspace`), overwritten.
+
+    A cell is feasible iff its polygon Q_a clipped by the half-planes (A_a^T u)·q >= u·w - h_W(u) is not empty; two
+    shortcuts first: the half-plane that emptied the last infeasible cell, and the last feasible cell's witness. A
+    stretch that cannot hold a run longer than the longest so far is skipped (the same result: the first longest
+    run)."""
+    verts, planes, dirs, refs, offsets, keep, best, buf0, buf1 = work
+    n_dirs = _directions(A, Q, nq, axis, cells, verts, planes, dirs, refs)
+    kept = _facets(nq, axis, cells, verts, dirs, refs, n_dirs, offsets, keep, best, w, tol)
     first, last, best_first, best_last = -1, -2, -1, -2
-    witness = np.zeros(2)
-    have_witness = False
-    killer = -1
-    betas = support[:n_dirs]  # u·(w - A q) <= h  <=>  (A^T u)·q >= u·w - h: the offsets depend on the row only
-    for d in range(n_dirs):
-        betas[d] = dirs[d, 0] * w[0] + dirs[d, 1] * w[1] + dirs[d, 2] * w[2] - support[d] - tol
-    for c in range(n_axis):
-        ok = env[axis, c] and nq[axis, c] > 0
-        if ok:
-            a = A[axis, c]
-            count = nq[axis, c]
-            # cheap verdicts first: the half-plane that emptied the last infeasible cell (likely this one's too)
-            if killer >= 0 and _misses(a, dirs[killer], betas[killer], Q[axis, c], count):
-                ok = False
+    wx, wy, have_witness, killer = 0.0, 0.0, False, -1
+    c = -1
+    while c + 1 < len(stretch):
+        c += 1
+        run = c - first if last == c - 1 and first >= 0 else 0
+        if run + stretch[c] <= best_last - best_first + 1:
+            c += stretch[c]  # (to the gap that ends this stretch)
+            first, last = -1, -2
+            continue
+        count = nq[axis, c]
+        ok = env[axis, c] and count > 0
+        a00, a01, a10, a11, a20, a21 = (A[axis, c, 0, 0], A[axis, c, 0, 1], A[axis, c, 1, 0], A[axis, c, 1, 1],
+                                        A[axis, c, 2, 0], A[axis, c, 2, 1])
+        if ok and killer >= 0:  # (the half-plane that emptied the last infeasible cell: likely this one's too)
+            g0 = dirs[killer, 0] * a00 + dirs[killer, 1] * a10 + dirs[killer, 2] * a20
+            g1 = dirs[killer, 0] * a01 + dirs[killer, 1] * a11 + dirs[killer, 2] * a21
+            ok = False
+            for v in range(count):
+                if g0 * Q[axis, c, v, 0] + g1 * Q[axis, c, v, 1] >= offsets[killer]:
+                    ok = True
+                    break
         found = False
-        if ok and have_witness and _inside(Q[axis, c, :count], witness, 1e-12 * (1.0 + abs(witness[0]))):
-            found = _slack(a, dirs, betas, keep, witness) >= 0.0  # (the last feasible cell's witness)
+        if ok and have_witness and _inside(Q[axis, c], count, wx, wy, 1e-12 * (1.0 + abs(wx))):
+            x, y, z = a00 * wx + a01 * wy, a10 * wx + a11 * wy, a20 * wx + a21 * wy
+            found = True
+            for i in range(kept):
+                d = keep[i]
+                if dirs[d, 0] * x + dirs[d, 1] * y + dirs[d, 2] * z < offsets[d]:
+                    found = False
+                    break
         if ok and not found:
-            poly = Q[axis, c, :count].copy()
-            for d in range(n_dirs):
-                if keep[d]:
-                    g0 = dirs[d, 0] * a[0, 0] + dirs[d, 1] * a[1, 0] + dirs[d, 2] * a[2, 0]
-                    g1 = dirs[d, 0] * a[0, 1] + dirs[d, 1] * a[1, 1] + dirs[d, 2] * a[2, 1]
-                    poly, count = _clip(poly, count, g0, g1, betas[d])
-                    if count == 0:
-                        ok = False
-                        killer = d
-                        break
+            src, dst = buf0, buf1
+            for v in range(count):
+                src[v, 0], src[v, 1] = Q[axis, c, v, 0], Q[axis, c, v, 1]
+            for i in range(kept):
+                d = keep[i]
+                g0 = dirs[d, 0] * a00 + dirs[d, 1] * a10 + dirs[d, 2] * a20
+                g1 = dirs[d, 0] * a01 + dirs[d, 1] * a11 + dirs[d, 2] * a21
+                count = _clip_into(src, count, g0, g1, offsets[d], dst)
+                src, dst = dst, src
+                if count == 0:
+                    ok = False
+                    killer = d
+                    break
             if ok:
-                witness[0], witness[1] = 0.0, 0.0
+                wx, wy = 0.0, 0.0
                 for v in range(count):
-                    witness[0] += poly[v, 0] / count
-                    witness[1] += poly[v, 1] / count
+                    wx += src[v, 0] / count
+                    wy += src[v, 1] / count
                 have_witness = True
         if ok:
             if last == c - 1 and first >= 0:
@@ -272,6 +310,21 @@ def _row_run(A, Q, nq, w, env, axis, cells, n_axis, tol, verts, planes, dirs, su
     return best_first, best_last
 
 
+@numba.njit(cache=True)
+def _inside(poly, count, qx, qy, tol):
+    """Whether q lies in the convex CCW polygon ``poly[:count]`` (a segment: on it, within ``tol``)."""
+    if count == 2:
+        dx, dy = poly[1, 0] - poly[0, 0], poly[1, 1] - poly[0, 1]
+        cross = dx * (qy - poly[0, 1]) - dy * (qx - poly[0, 0])
+        dot = dx * (qx - poly[0, 0]) + dy * (qy - poly[0, 1])
+        return abs(cross) <= tol * (abs(dx) + abs(dy)) and -tol <= dot <= dx * dx + dy * dy + tol
+    for i in range(count):
+        j = i + 1 if i + 1 < count else 0
+        if (poly[j, 0] - poly[i, 0]) * (qy - poly[i, 1]) - (poly[j, 1] - poly[i, 1]) * (qx - poly[i, 0]) < -tol:
+            return False
+    return True
+
+
 @numba.njit(cache=True, parallel=True)
 def _runs_kernel(A, Q, nq, w, env, axis, counts, tol):
     T = w.shape[0]
@@ -283,7 +336,11 @@ def _runs_kernel(A, Q, nq, w, env, axis, counts, tol):
     out = np.full((T, n_rows, 2), -1, dtype=np.int64)
     for k in numba.prange(T):
         cells = np.zeros(m, dtype=np.int64)
-        verts, planes, dirs, support, keep = _workspace(m)
+        work = _workspace(m)
+        stretch = np.zeros(counts[axis], dtype=np.int64)
+        for c in range(counts[axis] - 1, -1, -1):
+            if env[k, axis, c] and nq[k, axis, c] > 0:
+                stretch[c] = 1 + (stretch[c + 1] if c + 1 < counts[axis] else 0)
         for row in range(n_rows):
             rem = row
             skip = False
@@ -297,8 +354,7 @@ def _runs_kernel(A, Q, nq, w, env, axis, counts, tol):
             if skip:
                 out[k, row, 0], out[k, row, 1] = -1, -2
                 continue
-            first, last = _row_run(A, Q[k], nq[k], w[k], env[k], axis, cells, counts[axis], tol, verts, planes, dirs,
-                                   support, keep)
+            first, last = _row_run(A, Q[k], nq[k], w[k], env[k], axis, cells, stretch, tol, work)
             out[k, row, 0], out[k, row, 1] = first, last
     return out
 

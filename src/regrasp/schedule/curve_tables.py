@@ -1,11 +1,12 @@
 r"""The lattice's force tables on a curved object (:mod:`regrasp.schedule.curve_forces` does the exact test).
 
 The same tables as on polygons (:func:`~regrasp.schedule.force_tables.edge_force_tables`: per layer, cell of the
-other contacts and move vector, the axis contact's feasible positions; the middle of two sliders' moves; the
-break-aways), each entry the longest run of feasible cells of the axis contact, widened by a quarter cell on both
-sides (the tables are float32; a quarter cell never reaches a neighbour). In the layer tables each contact's force
-polygon is also cut by its joints' torque limits at that layer and cell (exact: the torques are affine in the
-contact's own force, :mod:`regrasp.schedule.torque`), where polygons only take a necessary condition.
+other contacts and move vector, the axis contact's feasible positions; the middle of every move, one slider's too:
+on an arc the normal turns between the cells; the break-aways), each entry the longest run of feasible cells of the
+axis contact, widened by a quarter cell on both sides (the tables are float32; a quarter cell never reaches a
+neighbour). In the layer tables each contact's force polygon is also cut by its joints' torque limits at that layer
+and cell (exact: the torques are affine in the contact's own force, :mod:`regrasp.schedule.torque`), where polygons
+only take a necessary condition.
 """
 
 from __future__ import annotations
@@ -129,7 +130,7 @@ def curve_force_tables(curve: CurvedObject, torque: TorqueModel, sample: Traject
         return out
 
     return assemble_tables(table, sample, middle, early, lead, combos, friction, limits, h, (n_layers, rows),
-                           overshoot)
+                           overshoot, middle_from=1)
 
 
 

@@ -79,11 +79,12 @@ def edge_force_tables(geo: ForceGeometry, sample: TrajectorySample, middle: Traj
 
 def assemble_tables(table: Callable, sample: TrajectorySample, middle: TrajectorySample, early: TrajectorySample,
                     lead: float, combos: np.ndarray, friction: tuple[Friction, ...], limits: ForceLimits, h: float,
-                    shape: tuple[int, int], overshoot: float = 0.0) -> tuple:
+                    shape: tuple[int, int], overshoot: float = 0.0, middle_from: int = 2) -> tuple:
     """The lattice's interval tables (:func:`edge_force_tables`) from ``table(ratios, smp=sample, shift=None,
     keep=False, lim=limits)``, which gives (lo, hi) (2, layers, rows) for a mode (``ratios``, the trajectory ``smp``,
     the positions ``shift`` [m] (m,) back, ``keep``: the mode's own tables, ``lim``: the limits); ``shape``: (layers,
-    rows of the other contacts' cells); ``h``: the cell [m]. Returns (lo, hi, blo, bhi, slots, mid_lo, mid_hi)."""
+    rows of the other contacts' cells); ``h``: the cell [m]; ``middle_from``: the fewest sliders whose moves get a
+    middle table (the others': +-inf). Returns (lo, hi, blo, bhi, slots, mid_lo, mid_hi)."""
     n_layers, rows = shape
     M, m = combos.shape
     lo = np.empty((n_layers, rows, M), dtype=np.float32)
@@ -92,7 +93,7 @@ def assemble_tables(table: Callable, sample: TrajectorySample, middle: Trajector
     mid_hi = np.full_like(lo, np.inf)
     for mu, d in enumerate(combos):
         lo[:, :, mu], hi[:, :, mu] = table(slide_ratios(d, friction), keep=True)
-        if np.count_nonzero(d) >= 2:
+        if np.count_nonzero(d) >= middle_from:
             mid_lo[:, :, mu], mid_hi[:, :, mu] = table(slide_ratios(d, friction), middle, 0.5 * h * np.asarray(d))
     needs = np.array([[d[i] != 0 and friction[i].static + overshoot > friction[i].kinetic + 1e-12 for i in range(m)]
                       for d in combos])

@@ -18,7 +18,8 @@ contact that starts a slide must also break away: a force system with it on its 
 at :math:`t_{k-1}`, the others in the union move (checked when μ_s + the priming overshoot > μ_k); contacts that
 start together break away together (the executor primes them at once). With two or more sliders the
 feasible positions need not be convex (the plane less two convex sets), so the middle of their
-move is checked too.
+move is checked too; on a curve the middle of every move (one slider's feasible positions on an arc
+need not be an interval: its normal turns between the cells).
 
 **Cost.** A transition costs ``K`` per slide it starts (a contact moving after resting), plus the
 new state's secondary cost: per contact its envelope proximity (0 with at least the comfortable
@@ -199,10 +200,10 @@ def _layer(V_old, alive_old, lo_old, n_old, lo_new, n_new, env_new, prox_new, tl
             x_old = axis_grid[cells[p, axis] - combos[mu, axis]]
             if not (tlo_old[other_old, mu] - _TOL <= x_old <= thi_old[other_old, mu] + _TOL):
                 continue
-            if moving[mu] >= 2.0:  # two sliders: their feasible set need not hold the segment between
-                # (the table holds the middle's positions under the new layer's cells)
-                if not (mlo_new[other, mu] - _TOL <= x_new <= mhi_new[other, mu] + _TOL):
-                    continue
+            # the middle of the move (the tables: the middle's positions under the new layer's cells; +-inf where
+            # the ends suffice: on edges with fewer than two sliders)
+            if not (mlo_new[other, mu] - _TOL <= x_new <= mhi_new[other, mu] + _TOL):
+                continue
             best, arg = np.inf, -1
             for r in range(pair_ptr[mu], pair_ptr[mu + 1]):
                 value = V_old[q_old, pair_old[r]] + K * pair_starts[r]
