@@ -16,6 +16,7 @@ from regrasp import load_scenario
 from regrasp.schedule.force_polytope import ForceLimits
 from regrasp.schedule.planner import RegraspSettings, plan_regrasps
 from regrasp.schedule.problem import build_problem
+from regrasp.schedule.schedule import NoScheduleError, ScheduleLimit
 from schedule_checks import check_schedule
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "examples" / "scenarios"
@@ -33,6 +34,20 @@ def test_a_disc_turned_past_any_fixed_grasp_gets_a_schedule_that_passes_the_inde
     assert any(s.name != "palm" for s in schedule.slides)  # (the side fingers must slide round the disc)
     margins = check_schedule(disc, schedule, SETTINGS)
     assert margins["envelope"] >= SETTINGS.envelope_margin - 1e-9
+
+
+def test_a_disc_turned_too_far_gets_the_reason_not_a_traceback(tmp_path):
+    """Turned 1.2 rad either way, finger1 must slide -xi round the disc where no force system allows it: the
+    diagnosis names the slide and the contacts pushing along gravity, read from the curve at the relaxed path's
+    positions (a curve has no fixed edges to read them from)."""
+    text = (SCENARIOS / "disc.toml").read_text().replace("beta_a = 0.8", "beta_a = 1.2")
+    path = tmp_path / "disc.toml"
+    path.write_text(text.replace('"../../urdf/', f'"{SCENARIOS.parents[1] / "urdf"}/'))
+    with pytest.raises(NoScheduleError) as failure:
+        plan_regrasps(load_scenario(path), SETTINGS, start_time=0.7, t_end=2.45)
+    error = failure.value
+    assert error.limit is ScheduleLimit.FORCES and error.contacts == ("finger1",)
+    assert "slide -xi" in str(error) and "along gravity" in str(error)
 
 
 @pytest.fixture(scope="module")

@@ -59,8 +59,8 @@ def _speed_limited(problem, last: int) -> int | None:
 
 def _rule(problem, slider: int, direction: int, when: float) -> str | None:
     """The two-finger slide rule for contact ``slider`` sliding ``direction`` (None unless two
-    contacts on parallel edges)."""
-    if len(problem.names) != 2:
+    contacts on parallel edges; a curve has none)."""
+    if len(problem.names) != 2 or problem.curved:
         return None
     geo = problem.geometry
     n0, n1 = geo.normals
@@ -106,10 +106,10 @@ def _rule(problem, slider: int, direction: int, when: float) -> str | None:
             f"(slider mu_k = {fs.kinetic:g}, holder mu_s = {fh.static:g}): {verdict}{lower}")
 
 
-def _along_gravity(problem, when: float) -> str:
-    """Which contacts push the object the way gravity pulls it (their normal force adds to the
+def _along_gravity(problem, when: float, xi: np.ndarray) -> str:
+    """Which contacts, at ``xi`` [m], push the object the way gravity pulls it (their normal force adds to the
     weight instead of carrying it), as a clause, or ''."""
-    geo = problem.geometry
+    geo = problem.geometry_at(xi)
     g = np.asarray(geo.gravity, dtype=float)
     if not np.linalg.norm(g) > 0:
         return ""
@@ -194,7 +194,8 @@ def diagnose(problem: Problem, free: LatticeRun, partial: RegraspSchedule | None
     return NoScheduleError(latest, ScheduleLimit.FORCES, (names[i],),
                            f"after t = {latest:.3f} s the envelopes need {names[i]} to slide {sign}xi "
                            f"(in [{times[max(first - 1, 0)]:.3f}, {when:.3f}] s), and {how}"
-                           + _along_gravity(problem, when), rule=rule, partial=partial)
+                           + _along_gravity(problem, when, np.array([g[c] for g, c in zip(problem.grids, cells[end])])),
+                           rule=rule, partial=partial)
 
 
 def _outlives(problem, tables: tuple | None, last: int) -> tuple | None:

@@ -363,6 +363,7 @@ def build_problem(scenario: Scenario, settings: RegraspSettings, *, start_time: 
         lo, hi, blo, bhi, slots, mid_lo, mid_hi, vertices = edge_force_tables(
             geo, sample, middle, early, 0.5 * ramp / dt, combos, friction, limits, grids, axis,
             settings.prime_overshoot)
+    if force_tables:
         cells = math.ceil(settings.position_margin / h - 1e-9)
         if cells:  # (every position of the sliders up to the margin behind a state's has forces too)
             sizes = [len(grids[i]) for i in range(m) if i != axis]
