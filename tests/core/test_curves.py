@@ -253,6 +253,24 @@ def test_rounded_polygon_xi_is_the_polygon_edge_xi_and_pieces_sit_on_the_polygon
         np.testing.assert_allclose(point(c, 0.0), edge0.xi_origin, atol=1e-15)
 
 
+@pytest.mark.parametrize("name", ["rounded_rect", "rounded_pentagon"])
+def test_pieces_between_tile_any_interval_with_the_pieces_piece_reports(name):
+    """Over several turns round the boundary (ξ unbounded, negative too): the clipped pieces tile [lo, hi] without
+    gaps, and each one's middle is on the piece that ``piece`` names."""
+    c, rng = curve(name), np.random.default_rng(5)
+    for _ in range(20):
+        lo = float(rng.uniform(-2.0, 2.0) * c.perimeter)
+        hi = lo + float(rng.uniform(0.0, 3.0) * c.perimeter)
+        pieces = c.pieces_between(lo, hi)
+        assert pieces[0][2] == lo and pieces[-1][3] == hi
+        for (_, _, _, end), (_, _, start, _) in zip(pieces, pieces[1:]):
+            assert end == pytest.approx(start, abs=1e-15)
+        for kind, k, a, b in pieces:
+            assert a <= b and c.piece(0.5 * (a + b)) == (kind, k)
+    with pytest.raises(InvalidParameterError, match="lo <= hi"):
+        c.pieces_between(0.1, 0.0)
+
+
 # ---------------------------------------------------------------------- 2. perimeter
 def closed_form_perimeter(name: str) -> float:
     if name == "disc":

@@ -101,8 +101,15 @@ def _summary(plan, scenario, figures) -> str:
     return "\n".join(lines)
 
 
-def _schedule_summary(schedule, error) -> str:
-    """The ``--regrasp`` lines of the summary."""
+def _piece(obj, xi: float) -> str:
+    """Which piece of a rounded polygon ``obj`` ξ [m] falls on ("edge k" or "arc k"), or '' on other objects."""
+    piece = getattr(obj, "piece", None)
+    return "" if piece is None else "{} {}".format(*piece(xi))
+
+
+def _schedule_summary(schedule, error, obj=None) -> str:
+    """The ``--regrasp`` lines of the summary (on a rounded polygon ``obj``, the piece each slide starts and ends
+    on)."""
     mm = 1000.0
     if error is not None:
         lines = [f"  regrasp schedule: NONE ({error.limit.value}) - {error.reason}"]
@@ -119,10 +126,16 @@ def _schedule_summary(schedule, error) -> str:
     for i, name in enumerate(schedule.names):
         ours = [s for s in schedule.slides if s.contact == i]
         if not ours:
-            lines.append(f"    {name}: no slide (fixed at xi = {schedule.xi_start[i] * mm:.1f} mm)")
+            on = _piece(obj, schedule.xi_start[i])
+            lines.append(f"    {name}: no slide (fixed at xi = {schedule.xi_start[i] * mm:.1f} mm"
+                         + (f", {on})" if on else ")"))
             continue
-        parts = [f"{'+' if s.direction > 0 else '-'}xi {s.start_xi * mm:.1f} -> {s.end_xi * mm:.1f} mm in "
-                 f"[{s.start:.3f}, {s.end:.3f}] s" for s in ours]
+        parts = []
+        for s in ours:
+            pieces = (_piece(obj, s.start_xi), _piece(obj, s.end_xi))
+            parts.append(f"{'+' if s.direction > 0 else '-'}xi {s.start_xi * mm:.1f} -> {s.end_xi * mm:.1f} mm "
+                         + (f"({' -> '.join(dict.fromkeys(pieces))}) " if pieces[0] else "")
+                         + f"in [{s.start:.3f}, {s.end:.3f}] s")
         lines.append(f"    {name}: {len(ours)} slide{'s' if len(ours) != 1 else ''}: " + "; ".join(parts))
     t, who = schedule.min_envelope_margin_at
     lines.append(f"    smallest envelope margin {schedule.min_envelope_margin * mm:.2f} mm ({who}, t = {t:.3f} s; "
@@ -176,6 +189,6 @@ def _cmd_plan(args) -> int:
     else:
         text = _summary(result, scenario, figures)
         if args.regrasp:
-            text += "\n\n" + _schedule_summary(schedule, error)
+            text += "\n\n" + _schedule_summary(schedule, error, scenario.polygon)
         print(text)
     return 0 if result.feasible and error is None else 1

@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = ["FAILURE_COLOURS", "FAILURE_COLOUR", "MM", "SUCCESS_COLOUR", "gravity_words", "membership", "pyplot",
-           "save_figure", "say_instead", "stacked_axes"]
+           "save_figure", "say_instead", "shade_arcs", "stacked_axes"]
 
 #: Millimetres per metre: the figures' lengths are in mm.
 MM = 1000.0
@@ -73,6 +73,23 @@ def membership(times: np.ndarray, sets_per_sample: Sequence[Intervals], grid: np
         for lo, hi in intervals:
             img[:, k] |= (grid >= lo) & (grid <= hi)
     return img
+
+
+#: How an object's arcs are drawn across a ξ axis (:func:`shade_arcs`).
+ARC_STYLE = dict(color="#6a51a3", alpha=0.13, lw=0)
+
+
+def shade_arcs(ax: object, obj: object, lo: float, hi: float) -> bool:
+    """Shade, across an axis of ξ [mm] from ``lo`` to ``hi`` [m], the arcs of a rounded polygon ``obj`` (its corners,
+    labelled "arc k" at the axis' right end): where a contact on it is on a corner, not on an edge's straight part.
+    Other objects have no pieces to tell apart (nothing drawn); whether any arc was drawn."""
+    pieces = getattr(obj, "pieces_between", None)
+    arcs = [] if pieces is None else [(k, a, b) for kind, k, a, b in pieces(lo, hi) if kind == "arc"]
+    for k, a, b in arcs:
+        ax.axhspan(a * MM, b * MM, **ARC_STYLE)
+        ax.text(1.0, 0.5 * (a + b) * MM, f"arc {k} ", transform=ax.get_yaxis_transform(), ha="right", va="center",
+                fontsize=7, color="#54278f")
+    return bool(arcs)
 
 
 def say_instead(ax: object, text: str) -> None:

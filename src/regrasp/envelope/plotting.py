@@ -2,9 +2,10 @@
 
 * ``d.png`` (Fig. 2.9): d(t) of each finger, the bands ±l1, and the condition I–IV
   intervals shaded.
-* ``reachable.png`` (Fig. 2.10): the reachable set on the edge's line versus time.
+* ``reachable.png`` (Fig. 2.10): the reachable set on the edge's line (a curve's boundary) versus time.
 * ``feasible.png`` (Fig. 2.14): the feasible set inside the reachable set versus time,
-  with the edge's ends (ξ_lower, ξ_upper) and the suggested initial contact.
+  with the edge's ends (ξ_lower, ξ_upper) and the suggested initial contact. On a rounded polygon both shade its
+  corners' arcs.
 
 The regrasp schedule's figure (Fig. 4.3) is :func:`regrasp.schedule.plotting.plot_schedule`. matplotlib is
 imported on first use (:mod:`regrasp.core.figures`).
@@ -16,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.figures import MM, membership, save_figure, stacked_axes
+from ..core.figures import ARC_STYLE, MM, membership, save_figure, shade_arcs, stacked_axes
 from .planner import FingerPlan, PlanResult
 
 __all__ = ["plot_conditions", "plot_feasible", "plot_reachable", "write_plan_figures"]
@@ -105,6 +106,8 @@ def _envelope_axes(ax, plan: PlanResult, finger: FingerPlan, feasible: bool):
               interpolation="nearest")
     _shade_conditions(ax, times, finger, alpha=0.08)
     handles = [Patch(color="#c6dbef", label="reachable")]
+    if curved and shade_arcs(ax, plan.polygon, lo, hi):
+        handles.append(Patch(**ARC_STYLE, label="a corner's arc"))
     if feasible:
         handles.append(Patch(color="#08519c", label="feasible"))
         for y, name in () if curved else ((edge_hi, "upper"), (edge_lo, "lower")):
@@ -128,7 +131,8 @@ def plot_reachable(plan: PlanResult, path: str | Path) -> Path:
     for ax, finger in zip(axes, plan.fingers):
         _envelope_axes(ax, plan, finger, feasible=False)
     axes[-1].set_xlabel("t [s]")
-    fig.suptitle(f"{plan.scenario or 'plan'}: reachable contacts on the edge's line (paper Fig. 2.10)")
+    where = "boundary" if plan.fingers[0].samples[0].xi_foot is not None else "edge's line"
+    fig.suptitle(f"{plan.scenario or 'plan'}: reachable contacts on the {where} (paper Fig. 2.10)")
     return save_figure(fig, path)
 
 

@@ -2,7 +2,8 @@
 
 * ``regrasp.png`` (Fig. 4.3, :func:`plot_schedule`): per finger its feasible band, its danger zones
   (:func:`~regrasp.core.intervals.danger_zones`: the same zones the rollout figures and the rerun recording draw),
-  the part within the schedule's required margin of its bounds, the scheduled contact and its slides.
+  the part within the schedule's required margin of its bounds, the scheduled contact and its slides; on a rounded
+  polygon its corners' arcs (a slide from an edge onto an arc crosses into one).
 
 matplotlib is imported on first use (:mod:`regrasp.core.figures`).
 """
@@ -14,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.figures import MM, membership, save_figure, stacked_axes
+from ..core.figures import ARC_STYLE, MM, membership, save_figure, shade_arcs, stacked_axes
 from ..core.intervals import DANGER_FRACTION, without_danger_zones
 
 if TYPE_CHECKING:
@@ -46,6 +47,7 @@ def plot_schedule(plan: PlanResult, schedule: RegraspSchedule, path: str | Path,
     period = schedule.period
     repeats = [0.0] if period is None else period * np.arange(int(np.ceil((times[-1] - schedule.t_start) / period)) + 1)
     curved = getattr(plan.polygon.edge(plan.fingers[0].edge), "curved", False)
+    arcs = False
     for i, (ax, finger) in enumerate(zip(axes, plan.fingers)):
         edge_lo, edge_hi = finger.samples[0].edge_range
         if curved:  # (no edge ends: the span of the feasible sets, ξ unwrapped along the trajectory)
@@ -64,6 +66,7 @@ def plot_schedule(plan: PlanResult, schedule: RegraspSchedule, path: str | Path,
                   extent=(times[0], times[-1], grid[0] * MM, grid[-1] * MM))
         for y in () if curved else (edge_lo, edge_hi):
             ax.axhline(y * MM, color="#d95f02", ls="--", lw=1)
+        arcs = (curved and shade_arcs(ax, plan.polygon, grid[0], grid[-1])) or arcs
         ours = [s for s in schedule.slides if s.contact == i]
         for offset in repeats:
             for s in ours:
@@ -88,7 +91,8 @@ def plot_schedule(plan: PlanResult, schedule: RegraspSchedule, path: str | Path,
                Patch(color="#cb181d", label=f"within the required margin ({margin * MM:g} mm) of a bound"),
                Patch(color="#969696", alpha=0.25, label="slide (arrow: from, to)"),
                Line2D([], [], color="k", lw=1.8, label="scheduled contact ξ_d(t)"),
-               *([] if curved else [Line2D([], [], color="#d95f02", ls="--", lw=1, label="edge ends")])]
+               *([] if curved else [Line2D([], [], color="#d95f02", ls="--", lw=1, label="edge ends")]),
+               *([Patch(**ARC_STYLE, label="a corner's arc")] if arcs else [])]
     axes[-1].set_xlabel("t [s]")
     if failure is None:
         title = (f"{plan.scenario or 'plan'}: regrasp schedule, {len(schedule.slides)} slides"

@@ -24,7 +24,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..exceptions import CurveError
+from ..exceptions import CurveError, InvalidParameterError
 from ..polygon import ConvexPolygon
 from ..validation import as_finite_float
 from .base import CurvedObject, uniform_mass_properties
@@ -151,6 +151,22 @@ class RoundedPolygon(CurvedObject):
         """Every piece as (kind, edge or corner index, ξ start [m], ξ end [m]), clockwise over one period from
         edge 0's straight part."""
         return [(kind, int(data[0]), start, start + length) for start, length, kind, data in self._pieces]
+
+    def pieces_between(self, lo: float, hi: float) -> list[tuple[str, int, float, float]]:
+        """The pieces that meet ξ in [lo, hi] [m] (ξ unbounded: every turn round the boundary), in order, as (kind,
+        edge or corner index, ξ start [m], ξ end [m]) clipped to [lo, hi]."""
+        lo, hi = as_finite_float("lo", lo), as_finite_float("hi", hi)
+        if not lo <= hi:
+            raise InvalidParameterError("hi", hi, f"an interval [lo, hi] [m] with lo <= hi (lo = {lo:g} m)")
+        ranges, out = self.piece_ranges(), []
+        turn = math.floor((lo - ranges[0][2]) / self._period)
+        while ranges[0][2] + turn * self._period <= hi:
+            for kind, k, a, b in ranges:
+                a, b = a + turn * self._period, b + turn * self._period
+                if b > lo and a < hi:
+                    out.append((kind, k, max(a, lo), min(b, hi)))
+            turn += 1
+        return out
 
     def _moments(self) -> tuple[float, np.ndarray, float]:
         nodes, weights = _GAUSS
