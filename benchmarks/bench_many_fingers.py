@@ -30,12 +30,11 @@ from __future__ import annotations
 import argparse
 import json
 import resource
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from common import child_json
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "examples" / "scenarios"
@@ -63,9 +62,7 @@ def child(scenario: str, method: str, options: str) -> None:
 
 
 def run_child(scenario: str, method: str | None, options: dict) -> dict:
-    done = subprocess.run([sys.executable, __file__, "--child", scenario, method or "default", json.dumps(options)],
-                          capture_output=True, text=True, check=True)
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return child_json(__file__, scenario, method or "default", json.dumps(options))
 
 
 def main() -> None:

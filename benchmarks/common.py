@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import json
+import subprocess
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -12,6 +15,13 @@ import numpy as np
 from regrasp import Grasp, Hand, Plant, PlantContact, ReducedModel, load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def child_json(script: str, *args: str) -> dict:
+    """Run ``python SCRIPT --child *ARGS`` in a fresh process (its own imports, compiles and memory); the JSON document
+    on the last line of its stdout."""
+    done = subprocess.run([sys.executable, script, "--child", *args], capture_output=True, text=True, check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def median_us(fn, n: int) -> float:

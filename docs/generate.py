@@ -133,7 +133,7 @@ T1, T2 = "examples/scenarios/paper_trajectory_1.toml", "examples/scenarios/paper
 T3 = "examples/scenarios/paper_trajectory_2_three_fingers.toml"
 UP = "examples/scenarios/paper_trajectory_2_gravity_up.toml"
 F4, F5 = "examples/scenarios/four_fingers.toml", "examples/scenarios/five_fingers.toml"
-DISC = "examples/scenarios/disc.toml"
+DISC, BOX = "examples/scenarios/disc.toml", "examples/scenarios/rounded_box.toml"
 #: The lines of a curved scenario's rollout that the README shows: the result, the tracking error and the margins.
 CURVE_LINES = (r"^\s+result:", r"^\s+object error", r"^\s+smallest")
 STUDY = f"regrasp study {T3} --runs 200 --periods 2 --workers 2 --seed 1 --plot {{out}}"
@@ -210,15 +210,25 @@ BLOCKS: dict[str, Block] = {
                    figures=_under("suite", SUITE_FIGURES)),
     # curved objects (issue 28): minutes each (a curve's force tables)
     "schedule-disc": Block(f"regrasp plan {DISC} --regrasp --plot {{out}}", after(r"regrasp schedule"), slow=True,
-                           figures={"regrasp.png": "docs/images/curves/disc_regrasp.png"}),
-    "simulate-disc": Block(f"regrasp simulate {DISC} --periods 2 --plot {{out}}", lines(*CURVE_LINES), slow=True,
+                           figures={"regrasp.png": "docs/images/curves/disc_regrasp.png",
+                                    "feasible.png": "docs/images/curves/disc_feasible.png"}),
+    "schedule-rounded-box": Block(f"regrasp plan {BOX} --regrasp --plot {{out}}", after(r"regrasp schedule"),
+                                  slow=True, figures={"regrasp.png": "docs/images/curves/rounded_box_regrasp.png",
+                                                      "feasible.png": "docs/images/curves/rounded_box_feasible.png"}),
+    "simulate-disc": Block(f"regrasp simulate {DISC} --periods 2 --plot {{out}}", None, slow=True,
                            figures={"regrasp_rollout.png": "docs/images/curves/disc_rollout.png"}),
-    "simulate-disc-mujoco": Block(f"regrasp simulate {DISC} --periods 2 --plant mujoco", lines(*CURVE_LINES),
-                                  slow=True),
+    "simulate-rounded-box": Block(f"regrasp simulate {BOX} --periods 2 --plot {{out}}", None, slow=True,
+                                  figures={"regrasp_rollout.png": "docs/images/curves/rounded_box_rollout.png"}),
+    "rounded-box-corner": Block("python examples/16_rounded_box_corner.py --plot {out}",
+                                stripped(r"^figures: .*\n"), slow=True,
+                                figures={"frames.png": "docs/images/curves/rounded_box_frames.png"}),
+    "curves": Block("python docs/curves.py", slow=True),
+    "curves-model-errors": Block("python docs/curves.py --model-errors", slow=True),
     # speed: measured, never checked
     "benchmarks": Block("python benchmarks/run.py", as_printed, slow=True, measured=True),
     "first-run": Block("python benchmarks/first_run.py", slow=True, measured=True),
     "many-fingers": Block("python benchmarks/bench_many_fingers.py", as_printed, slow=True, measured=True),
+    "curves-planning": Block("python benchmarks/bench_curves.py", as_printed, slow=True, measured=True),
 }
 
 

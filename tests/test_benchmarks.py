@@ -84,3 +84,13 @@ def test_many_fingers_benchmark_quick_smoke():
     (four,) = json.loads(proc.stdout).values()
     assert four["fingers"] == 4 and four["planner"] == "decomposition" and four["slides"] > 0
     assert four["median_s"] > 0 and four["median_peak_mib"] > 0
+
+
+def test_curves_benchmark_quick_smoke():
+    """benchmarks/bench_curves.py --quick --json: the disc planned over one swing in a fresh process, its slides
+    and time reported (no timing assertions)."""
+    proc = subprocess.run([sys.executable, str(BENCH / "bench_curves.py"), "--quick", "--json"],
+                          capture_output=True, text=True, timeout=HANG_SECONDS, check=False)
+    assert proc.returncode == 0, proc.stderr
+    (disc,) = json.loads(proc.stdout).values()
+    assert disc["slides"] > 0 and disc["median_s"] > 0

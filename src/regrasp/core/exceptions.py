@@ -8,7 +8,7 @@ key, the joint, the offending value) as attributes, not only in the message.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from pathlib import Path
+from pathlib import Path, PurePath
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -39,7 +39,10 @@ class InvalidParameterError(RegraspError, ValueError):
 
 def short_repr(value: Any, limit: int = 80) -> str:
     """``repr(value)`` on one line, cut to ``limit`` characters (a 400-digit integer or a large array stays
-    readable in a one-line error)."""
+    readable in a one-line error); a string or a path is cut only past 4096 characters (PATH_MAX: the user needs
+    to see which file)."""
+    if isinstance(value, (str, PurePath)):
+        limit = max(limit, 4096)
     try:
         text = " ".join(repr(value).split())
     except Exception:  # noqa: BLE001 (a broken __repr__ must not hide the real error)

@@ -4,12 +4,13 @@
   (:func:`band_samples`: the monitor's samples at their own times, joined by straight lines, filled), its danger
   zones (:func:`~regrasp.core.intervals.danger_zones`, :data:`~regrasp.core.intervals.DANGER_FRACTION` of the band's
   width at both ends: the same zones the rerun recording draws), the schedule's planned ξ_d and the actual ξ against
-  time, the slides shaded, the failure marked where it happened.
+  time, the slides shaded, the failure marked where it happened; with the scenario, a rounded polygon's arcs shaded.
 * :func:`plot_frames` (Figs. 4.2 and 4.4): the hand and the object at a few times of the rollout (fingers as their
   joint chains, named, contacts coloured by phase; gravity as an arrow), the failure's frame last. A curved object
   is its outline (:func:`~regrasp.rollout.recording.outline.outline_in`: within 0.05 mm of the curve).
 
-Both titles say what was run (:func:`rollout_title`): the scenario, the plant, the gravity, the policy and the outcome.
+:func:`write_rollout_figures` writes both. Both titles say what was run (:func:`rollout_title`): the scenario, the
+plant, the gravity, the policy and the outcome.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..core.figures import FAILURE_COLOURS, gravity_words, pyplot, save_figure
+from ..core.figures import ARC_STYLE, FAILURE_COLOURS, gravity_words, pyplot, save_figure, shade_arcs
 from ..core.intervals import DANGER_FRACTION, danger_zones
 from .recording.outline import outline_in
 
@@ -28,9 +29,10 @@ if TYPE_CHECKING:
     from ..core.polygon import ConvexPolygon
     from ..model.hand import Hand
     from ..model.scenario import Scenario
+    from .build import Rollout
     from .result import RolloutResult
 
-__all__ = ["band_samples", "plot_frames", "plot_rollout", "rollout_title"]
+__all__ = ["band_samples", "plot_frames", "plot_rollout", "rollout_title", "write_rollout_figures"]
 
 _MM = 1000.0
 _PHASE_COLOURS = {"fixed": "#2ca02c", "priming": "#9467bd", "sliding": "#ff7f0e", "settling": "#8c564b"}
@@ -139,6 +141,10 @@ def plot_rollout(result: RolloutResult, path: str | Path, *, scenario: Scenario 
                                         label=f"failure ({failure.kind.value})")
         ax.set_ylabel(f"{name}\nξ [mm]")
         ax.grid(alpha=0.3)
+        ylim = ax.get_ylim()
+        if scenario is not None and shade_arcs(ax, scenario.polygon, ylim[0] / _MM, ylim[1] / _MM):
+            handles["arc"] = Patch(**ARC_STYLE, label="a corner's arc")
+        ax.set_ylim(*ylim)
     axes[-1, 0].set_xlabel("t [s]")
     fig.suptitle(rollout_title(result, scenario, plant), fontsize=10)
     fig.tight_layout(rect=(0, 0.5 / (2.3 * m + 0.6), 1, 1))
@@ -198,6 +204,16 @@ def plot_frames(result: RolloutResult, hand: Hand, polygon: ConvexPolygon | Curv
     fig.tight_layout(rect=(0, 0.06, 1, 0.97))
     fig.legend(handles=handles, loc="lower center", ncol=len(handles) or 1, fontsize=8, frameon=False)
     return save_figure(fig, path, layout=False)
+
+
+def write_rollout_figures(rollout: Rollout, result: RolloutResult, directory: str | Path, *,
+                          plant: str | None = None) -> list[Path]:
+    """Write ``rollout.png`` (:func:`plot_rollout`) and ``frames.png`` (:func:`plot_frames`) of ``result``, a run of
+    ``rollout`` on the plant named ``plant``, into ``directory``; their paths."""
+    directory = Path(directory)
+    named = dict(scenario=rollout.scenario, plant=plant)
+    return [plot_rollout(result, directory / "rollout.png", **named),
+            plot_frames(result, rollout.supervisor.hand, rollout.plant.polygon, directory / "frames.png", **named)]
 
 
 def _gravity_arrow(ax, gravity) -> None:

@@ -153,8 +153,8 @@ class RoundedPolygon(CurvedObject):
         return [(kind, int(data[0]), start, start + length) for start, length, kind, data in self._pieces]
 
     def pieces_between(self, lo: float, hi: float) -> list[tuple[str, int, float, float]]:
-        """The pieces that meet ξ in [lo, hi] [m] (ξ unbounded: every turn round the boundary), in order, as (kind,
-        edge or corner index, ξ start [m], ξ end [m]) clipped to [lo, hi]."""
+        """The pieces that meet ξ from ``lo`` to ``hi`` [m] (ξ unbounded: every turn round the boundary), in order,
+        as (kind, edge or corner index, ξ start [m], ξ end [m]) clipped to that interval."""
         lo, hi = as_finite_float("lo", lo), as_finite_float("hi", hi)
         if not lo <= hi:
             raise InvalidParameterError("hi", hi, f"an interval [lo, hi] [m] with lo <= hi (lo = {lo:g} m)")
