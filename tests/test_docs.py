@@ -32,7 +32,7 @@ def test_every_page_is_in_the_navigation():
 def test_the_readme_opens_with_the_two_commands_and_is_short():
     lines = (ROOT / "README.md").read_text().splitlines()
     assert lines[2:6] == ["```bash", "pip install -e . && regrasp simulate --periods 3 --rrd rollout.rrd",
-                          "pip install -e '.[test]' && python -m pytest -q", "```"]
+                          "pip install -e '.[test]' && python -m pytest -q -n 2", "```"]
     assert len(lines) <= 200
 
 

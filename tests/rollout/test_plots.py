@@ -110,7 +110,7 @@ def test_rollout_danger_zones_are_the_core_ones(figures):
 
 
 def test_titles_name_scenario_plant_gravity_and_policy(figures):
-    up = SimpleNamespace(name="paper_trajectory_2_gravity_up", gravity_in_hand=np.array([0.0, 9.81]))
+    up = SimpleNamespace(name="paper_trajectory_2_gravity_up", gravity_in_hand=np.array([0.0, 9.81]), polygon=None)
     title = rollout_title(result(), up, "project")
     for word in ("paper_trajectory_2_gravity_up", "project plant", "gravity up", "scheduled policy", "left_envelope",
                  "0.090 s"):
