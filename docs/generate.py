@@ -219,6 +219,7 @@ BLOCKS: dict[str, Block] = {
                            figures={"regrasp_rollout.png": "docs/images/curves/disc_rollout.png"}),
     "simulate-rounded-box": Block(f"regrasp simulate {BOX} --periods 2 --plot {{out}}", None, slow=True,
                                   figures={"regrasp_rollout.png": "docs/images/curves/rounded_box_rollout.png"}),
+    "turn-a-disc": Block("python examples/15_turn_a_disc.py", slow=True),
     "rounded-box-corner": Block("python examples/16_rounded_box_corner.py --plot {out}",
                                 stripped(r"^figures: .*\n"), slow=True,
                                 figures={"frames.png": "docs/images/curves/rounded_box_frames.png"}),

@@ -20,8 +20,8 @@ from .intervals import Intervals
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["FAILURE_COLOURS", "FAILURE_COLOUR", "MM", "SUCCESS_COLOUR", "gravity_words", "membership", "pyplot",
-           "save_figure", "say_instead", "shade_arcs", "stacked_axes"]
+__all__ = ["ARC_STYLE", "FAILURE_COLOURS", "FAILURE_COLOUR", "MM", "SUCCESS_COLOUR", "gravity_words", "membership",
+           "pyplot", "save_figure", "say_instead", "shade_arcs", "stacked_axes"]
 
 #: Millimetres per metre: the figures' lengths are in mm.
 MM = 1000.0
