@@ -3,7 +3,7 @@
 a user runs it, in a subprocess, two at a time.
 
 Run: python docs/curves.py [--model-errors]
-Without options: the disc and the rounded box on the project plant and on MuJoCo. With ``--model-errors``: both on
+Without options: the disc and the rounded box on the project plant, on MuJoCo and on Drake. With ``--model-errors``: both on
 the project plant whose object is 10 % lighter or heavier, or whose friction is 10 % lower or higher, than the model
 the hand plans and controls with.
 """
@@ -45,13 +45,13 @@ def row(scenario: str, plant: str, doc: dict) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--model-errors", action="store_true",
-                        help="the project plant 10 %% off the model in mass or friction, instead of the two plants")
+                        help="the project plant 10 %% off the model in mass or friction, instead of the three plants")
     args = parser.parse_args()
     if args.model_errors:
         plants = {f"project, {what} x {s:g}": ("--plant-mass-scale" if what == "mass" else "--plant-mu-scale", f"{s:g}")
                   for what in ("mass", "mu") for s in (0.9, 1.1)}
     else:
-        plants = {"project": (), "mujoco": ("--plant", "mujoco")}
+        plants = {"project": (), "mujoco": ("--plant", "mujoco"), "drake": ("--plant", "drake")}
     runs = [(scenario, plant, extra) for scenario in SCENARIOS for plant, extra in plants.items()]
     with ThreadPoolExecutor(2) as pool:
         docs = list(pool.map(lambda r: simulate(r[0], r[2]), runs))
