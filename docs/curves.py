@@ -3,9 +3,9 @@
 a user runs it, in a subprocess, two at a time.
 
 Run: python docs/curves.py [--model-errors]
-Without options: the disc and the rounded box on the project plant, on MuJoCo and on Drake. With ``--model-errors``: both on
-the project plant whose object is 10 % lighter or heavier, or whose friction is 10 % lower or higher, than the model
-the hand plans and controls with.
+Without options: the disc and the rounded box on the project plant, on MuJoCo and on Drake. With
+``--model-errors``: both on the project plant whose object is 10 % lighter or heavier, or whose friction is 10 % lower
+or higher, than the model the hand plans and controls with.
 """
 
 import argparse
